@@ -1,0 +1,37 @@
+/* bigstep — finite elements for deformable solids at large time steps. */
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+
+#ifndef BS_VERSION
+#define BS_VERSION "unknown"
+#endif
+
+static const char *main_help =
+    "usage: bigstep COMMAND [ARGS]\n"
+    "\n"
+    "commands:\n"
+    "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
+    "\n"
+    "  bigstep COMMAND --help   help on a command\n"
+    "  bigstep --version        the version\n";
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fputs(main_help, stderr);
+    return BS_EXIT_USAGE;
+  }
+  const char *cmd = argv[1];
+  if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+    fputs(main_help, stdout);
+    return 0;
+  }
+  if (!strcmp(cmd, "--version")) {
+    printf("bigstep %s\n", BS_VERSION);
+    return 0;
+  }
+  if (!strcmp(cmd, "mesh")) return bs_cmd_mesh(argc - 1, argv + 1);
+  fprintf(stderr, "bigstep: unknown command '%s' (see 'bigstep --help')\n", cmd);
+  return BS_EXIT_USAGE;
+}

@@ -1,0 +1,67 @@
+#define _POSIX_C_SOURCE 200809L
+#include "bs_base.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+void bs_error_clear(bs_error *err) {
+  if (!err) return;
+  err->code = 0;
+  err->msg[0] = '\0';
+}
+
+int bs_error_set(bs_error *err, int code, const char *fmt, ...) {
+  if (!err) return code;
+  err->code = code;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+  va_end(ap);
+  return code;
+}
+
+void bs_error_prefix(bs_error *err, const char *fmt, ...) {
+  if (!err) return;
+  char pre[BS_ERROR_MSG], old[BS_ERROR_MSG];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(pre, sizeof pre, fmt, ap);
+  va_end(ap);
+  memcpy(old, err->msg, sizeof old);
+  snprintf(err->msg, sizeof err->msg, "%s: %s", pre, old);
+}
+
+const char *bs_status_name(int code) {
+  switch (code) {
+  case BS_OK: return "ok";
+  case BS_EIO: return "io";
+  case BS_EINPUT: return "input";
+  case BS_ENOMEM: return "memory";
+  case BS_ENUMERIC: return "numeric";
+  case BS_EGMSH: return "gmsh";
+  case BS_EINTERNAL: return "internal";
+  default: return code > 0 ? "warning" : "error";
+  }
+}
+
+double bs_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+size_t bs_peak_rss(void) {
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+  return (size_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
+}
+
+void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err) {
+  void *p = calloc(n ? n : 1, size ? size : 1);
+  if (!p) bs_error_set(err, BS_ENOMEM, "out of memory allocating %zu x %zu bytes for %s", n, size, what);
+  return p;
+}

@@ -1,0 +1,74 @@
+/* bs_base.h — what every bigstep library shares: the error record, status
+ * codes, a wall clock, and checked allocation.
+ *
+ * Conventions (all of bigstep):
+ *  - A function that can fail returns int status: 0 (BS_OK) on success, a
+ *    negative BS_E* code on error. It then has filled the caller's bs_error
+ *    (when non-NULL) with a one-line message naming the file, key, element or
+ *    value at fault. Nothing in a library prints, exits or aborts.
+ *  - Positive return values are warnings (e.g. a solve that did not converge is
+ *    reported through its statistics, not as an error).
+ *  - Objects come as bs_x_create / bs_x_destroy pairs; destroy takes T **,
+ *    accepts NULL and nulls the pointer. The caller owns what it creates.
+ */
+#ifndef BS_BASE_H
+#define BS_BASE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum {
+  BS_OK = 0,
+  BS_EIO = -1,      /* a file is missing, unreadable or unwritable        */
+  BS_EINPUT = -2,   /* malformed input: a scene key, a mesh, a value        */
+  BS_ENOMEM = -3,   /* allocation failed                                    */
+  BS_ENUMERIC = -4, /* NaN/Inf, a singular or degenerate quantity           */
+  BS_EGMSH = -5,    /* Gmsh reported an error                               */
+  BS_EINTERNAL = -6 /* an invariant was broken (a bug: please report)       */
+};
+
+#define BS_ERROR_MSG 1024
+
+typedef struct bs_error {
+  int code;                /* the status last set; 0 if none */
+  char msg[BS_ERROR_MSG];  /* one line, no trailing newline  */
+} bs_error;
+
+/* Clears err (may be NULL). */
+void bs_error_clear(bs_error *err);
+
+/* Records code and a printf-style message in err (may be NULL); returns code,
+ * so that `return bs_error_set(err, BS_EINPUT, "...")` reads naturally. */
+int bs_error_set(bs_error *err, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Prepends "prefix: " to the message already in err (context on the way up). */
+void bs_error_prefix(bs_error *err, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Name of a status code ("io", "input", ...). */
+const char *bs_status_name(int code);
+
+/* Seconds on a monotonic wall clock. */
+double bs_seconds(void);
+
+/* Peak resident memory of this process in bytes (0 if unknown). */
+size_t bs_peak_rss(void);
+
+/* calloc that records a BS_ENOMEM message naming `what` on failure. */
+void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

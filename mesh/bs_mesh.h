@@ -1,0 +1,206 @@
+/* bs_mesh.h — the tetrahedral mesh of bigstep (deal.II's Triangulation).
+ *
+ * A bs_mesh holds first-order tetrahedra (P1) and what is derived from them:
+ * boundary triangles (outward), boundary edges, vertex-to-tet adjacency, and
+ * the Gmsh physical groups, keyed by (dimension, tag) and kept with names.
+ *
+ * Conventions
+ *  - SI units; coordinates are doubles, x[3*v + k].
+ *  - Indices are int32_t (METIS uses 32-bit idx_t), 0-based.
+ *  - Every tet is oriented so that its rest volume
+ *      V = det[x1-x0, x2-x0, x3-x0] / 6
+ *    is positive. A zero-volume tet is an error (it names the tet).
+ *  - Tet local faces: face f is opposite vertex f; bs_tet_face[f] lists its
+ *    three local vertices in the order whose normal points out of the tet.
+ *  - Boundary faces are oriented outward: (b-a) x (c-a) points out.
+ *  - Groups: a 3-D group is a material (each tet's material id is the tag of
+ *    its 3-D group, 0 when in none); a 2-D group is a boundary part (each
+ *    boundary face's boundary id is the tag of its 2-D group, 0 when in none)
+ *    and names a vertex set; 0-D and 1-D groups name vertex sets. Every group
+ *    stores its elements as vertex tuples of dim+1 vertices (for dim 3, as
+ *    tet indices instead), and the sorted set of vertices they touch.
+ *  - Ownership: bs_mesh_create* returns a mesh that the caller owns and frees
+ *    with bs_mesh_destroy. Every array inside is owned by the mesh.
+ *
+ * Status: functions return BS_OK (0) or a negative BS_E* code and fill the
+ * bs_error, whose message names the file, the element or the group at fault.
+ */
+#ifndef BS_MESH_H
+#define BS_MESH_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Local faces of a tet, face f opposite local vertex f, outward orientation. */
+extern const int bs_tet_face[4][3];
+
+typedef struct bs_group {
+  int dim;      /* 0, 1, 2 or 3                                          */
+  int tag;      /* Gmsh physical tag (positive)                          */
+  char *name;   /* Gmsh physical name; never NULL (may be "")            */
+  int32_t n_elems;
+  int32_t *elems;      /* dim < 3: (dim+1) vertex indices per element;
+                          dim = 3: one tet index per element            */
+  int32_t n_vertices;
+  int32_t *vertices;   /* sorted, unique: the vertices the elements use  */
+} bs_group;
+
+typedef struct bs_mesh {
+  int32_t n_vertices;
+  double *x;           /* 3 * n_vertices, rest positions                 */
+
+  int32_t n_tets;
+  int32_t *tets;       /* 4 * n_tets, positively oriented                */
+  int32_t *material;   /* n_tets: tag of the tet's 3-D group, 0 if none  */
+
+  int32_t n_faces;     /* boundary triangles                             */
+  int32_t *faces;      /* 3 * n_faces, outward                           */
+  int32_t *face_tet;   /* n_faces: the tet each face belongs to          */
+  int32_t *boundary;   /* n_faces: tag of the face's 2-D group, 0 if none */
+
+  int32_t n_edges;     /* boundary edges (edges of boundary faces)       */
+  int32_t *edges;      /* 2 * n_edges, smaller index first               */
+
+  int32_t *v2t_ptr;    /* n_vertices + 1: CSR vertex -> tets             */
+  int32_t *v2t;        /* v2t_ptr[n_vertices]                            */
+
+  int n_groups;
+  bs_group *groups;
+
+  int32_t n_dropped;   /* vertices of the input that no tet used          */
+} bs_mesh;
+
+/* ---- creation -------------------------------------------------------- */
+
+/* Options for reading through Gmsh. */
+typedef struct bs_mesh_read_opts {
+  double size;   /* target mesh size for geometry inputs (.geo, .step, .stl,
+                    ...); <= 0 means the file's own settings            */
+  int refine;    /* uniform 1->8 refinements after reading (>= 0)        */
+} bs_mesh_read_opts;
+
+/* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep,
+ * .stl and .off (closed surfaces are meshed into a volume) through Gmsh. Only
+ * 4-node tets are simulated: other 3-D elements are an error naming their
+ * type and count. opts may be NULL (defaults). */
+int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
+/* Builds a mesh from raw arrays (copied): vertices, tets (any orientation:
+ * they are reoriented) and optional groups (may be NULL / 0). Derives the
+ * boundary, edges and adjacency; drops unused vertices. */
+int bs_mesh_create(int32_t n_vertices, const double *x, int32_t n_tets, const int32_t *tets,
+                   int n_groups, const bs_group *groups, bs_mesh **out, bs_error *err);
+
+/* Structured box [lo, hi] of nx x ny x nz cells (so (nx+1)(ny+1)(nz+1)
+ * vertices), each cell split into 6 tets (Kuhn split, conforming). Groups:
+ * 2-D boundary groups "xmin" (tag 1), "xmax" (2), "ymin" (3), "ymax" (4),
+ * "zmin" (5), "zmax" (6) and the 3-D group "body" (tag 1). */
+int bs_mesh_create_box(const double lo[3], const double hi[3], int nx, int ny, int nz,
+                       bs_mesh **out, bs_error *err);
+
+/* Copies a mesh. */
+int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err);
+
+void bs_mesh_destroy(bs_mesh **m);
+
+/* ---- derived topology ------------------------------------------------ */
+
+/* (Re)derives faces, face_tet, boundary, edges, v2t from vertices, tets and
+ * groups; reorients tets to positive volume (error on zero volume). Called
+ * by every creator; exposed for code that edits tets in place. */
+int bs_mesh_finalize(bs_mesh *m, bs_error *err);
+
+/* The group with this name (any dimension; the first by (dim, tag) order if
+ * several share it), or NULL. */
+const bs_group *bs_mesh_group(const bs_mesh *m, const char *name);
+
+/* The group with this (dim, tag), or NULL. */
+const bs_group *bs_mesh_group_by_tag(const bs_mesh *m, int dim, int tag);
+
+/* Signed volume of tet t at positions x (3 * n_vertices). */
+double bs_mesh_tet_volume(const bs_mesh *m, const double *x, int32_t t);
+
+/* Total rest volume (sum over tets). */
+double bs_mesh_volume(const bs_mesh *m);
+
+/* Volume enclosed by the boundary triangles (divergence theorem). */
+double bs_mesh_boundary_volume(const bs_mesh *m);
+
+/* Invariant checker (CHOLMOD's Check): positive volumes, every interior face
+ * shared by exactly two tets and no face by more, a closed boundary (every
+ * boundary edge in an even number >= 2 of boundary faces, consistently
+ * oriented), groups in range, adjacency consistent. */
+int bs_mesh_check(const bs_mesh *m, bs_error *err);
+
+/* ---- refinement, reordering ------------------------------------------ */
+
+/* Uniform 1 -> 8 red refinement, interior octahedron split along its shortest
+ * diagonal; new vertices at edge midpoints, appended after the old ones in a
+ * deterministic order (so coarse vertex i is fine vertex i). Children inherit
+ * their parent's material; groups of every dimension are refined with the
+ * mesh. Volume is preserved exactly (up to round-off). */
+int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err);
+
+typedef enum { BS_ORDER_NONE = 0, BS_ORDER_METIS = 1, BS_ORDER_RCM = 2 } bs_order;
+
+/* Bandwidth (max |i - j| over vertex-graph edges) and profile (sum over rows
+ * of i - min neighbour) of the vertex graph. */
+void bs_mesh_bandwidth(const bs_mesh *m, int64_t *bandwidth, int64_t *profile);
+
+/* Renumbers vertices by `order` (METIS_NodeND or reverse Cuthill-McKee on the
+ * vertex graph) and tets by their smallest new vertex; groups, faces and
+ * adjacency follow. If perm is non-NULL it receives new -> old vertex ids. */
+int bs_mesh_reorder(bs_mesh *m, bs_order order, int32_t *perm, bs_error *err);
+
+/* Applies an explicit vertex permutation (perm[new] = old). */
+int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err);
+
+/* Vertex graph in CSR (no self loops, sorted rows): the neighbours of each
+ * vertex through tets. Arrays are malloc'ed; the caller frees them. */
+int bs_mesh_vertex_graph(const bs_mesh *m, int32_t **ptr, int32_t **adj, bs_error *err);
+
+/* ---- quality --------------------------------------------------------- */
+
+typedef struct bs_mesh_quality {
+  double vol_min, vol_max;          /* signed volumes                      */
+  double dihedral_min, dihedral_max;/* degrees                             */
+  double radius_ratio_min;          /* 3 r_in / r_circ, 1 for regular       */
+  double radius_ratio_mean;
+  int32_t n_inverted;               /* volume <= 0                         */
+  int32_t n_degenerate;             /* radius ratio < 1e-2 or dihedral < 1 deg */
+  int32_t n_sliver;                 /* min dihedral angle below 1 degree   */
+} bs_mesh_quality;
+
+/* Quality of the mesh at positions x (NULL: rest positions). */
+void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality *q);
+
+/* ---- output ---------------------------------------------------------- */
+
+/* Fields written with a VTU file; any pointer may be NULL. */
+typedef struct bs_vtu_fields {
+  const double *x;             /* current positions (NULL: rest)          */
+  const double *velocity;      /* 3 per vertex                            */
+  const double *cell_detF;     /* per tet; computed from x when NULL     */
+} bs_vtu_fields;
+
+/* VTU (XML UnstructuredGrid, binary appended raw data): points at f->x,
+ * point data "displacement" (x - rest) and "velocity", cell data
+ * "material", "detF", "inverted". */
+int bs_mesh_write_vtu(const bs_mesh *m, const bs_vtu_fields *f, const char *path, bs_error *err);
+
+/* PVD collection: n entries (time, file relative to the PVD's folder). */
+int bs_pvd_write(const char *path, int n, const double *times, const char *const *files, bs_error *err);
+
+/* .msh (Gmsh format 4.1) through the Gmsh API, with the groups, so results
+ * open in Gmsh; x may be NULL (rest). */
+int bs_mesh_write_msh(const bs_mesh *m, const double *x, const char *path, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# bigstep set-up on Debian 12 (as root): installs what is missing, builds, and
+#   bash setup.sh run    runs the main job on the default scene
+#   bash setup.sh test   runs the whole test suite (CTest)
+#   bash setup.sh build  only installs and builds
+# Environment: BUILD_DIR (default build), BUILD_TYPE (default Release), JOBS.
+set -euo pipefail
+cd "$(dirname "$0")"
+mode=${1:-run}
+BUILD_DIR=${BUILD_DIR:-build}
+BUILD_TYPE=${BUILD_TYPE:-Release}
+JOBS=${JOBS:-$(nproc)}
+
+# Debian packages bigstep needs (build, run, tests, plots).
+pkgs=(build-essential cmake pkg-config libgmsh-dev gmsh libmetis-dev libsuitesparse-dev
+      libcgal-dev libcjson-dev libcriterion-dev libopenblas0-pthread libopenblas-dev
+      gnuplot-nox)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -q
+  apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" ${CMAKE_ARGS:-} >/dev/null
+cmake --build "$BUILD_DIR" -j "$JOBS"
+
+case "$mode" in
+  build) ;;
+  run)  "$BUILD_DIR/app/bigstep" mesh info data/geo/cube.geo ;;
+  test) ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
+  *) echo "usage: bash setup.sh run|test|build" >&2; exit 2 ;;
+esac
