@@ -1,0 +1,42 @@
+/* mesh_internal.h — helpers shared by the files of mesh/ (not public API).
+ *
+ * Ownership: a bs_group array is one malloc'ed block of n groups, each owning
+ * its name, elems and vertices (all malloc'ed). bs__groups_free releases the
+ * lot; bs__groups_copy makes an independent deep copy.
+ *
+ * Status: functions return BS_OK or a negative BS_E* code and fill err.
+ */
+#ifndef BS_MESH_INTERNAL_H
+#define BS_MESH_INTERNAL_H
+
+#include <stdint.h>
+
+#include "bs_mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Number of int32 entries per element of a group of dimension dim:
+ * dim + 1 vertex indices for dim < 3, one tet index for dim 3. */
+static inline int bs__group_elem_size(int dim) { return dim < 3 ? dim + 1 : 1; }
+
+/* Frees every group's name, elems and vertices, then the array (g may be NULL). */
+void bs__groups_free(bs_group *g, int n);
+
+/* Deep copy of n groups into a new array *out (NULL when n == 0). A NULL
+ * name is copied as "". Vertex sets are copied as they are (possibly NULL). */
+int bs__groups_copy(const bs_group *src, int n, bs_group **out, bs_error *err);
+
+/* Recomputes g->vertices / g->n_vertices (sorted, unique) from g->elems:
+ * the element vertices for dim < 3, the vertices of the tets m->tets[elems]
+ * for dim 3. Indices are assumed in range (bs_mesh_check verifies them). */
+int bs__group_update_vertices(const bs_mesh *m, bs_group *g, bs_error *err);
+
+/* Copy of a C string into malloc'ed memory ("" for NULL); NULL on ENOMEM. */
+char *bs__strdup(const char *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
