@@ -637,7 +637,7 @@ int bs_mesh_create(int32_t n_vertices, const double *x, int32_t n_tets, const in
     }
     g->n_elems = kept;
   }
-  qsort(m->groups, (size_t)n_groups, sizeof *m->groups, cmp_group);
+  if (n_groups > 1) qsort(m->groups, (size_t)n_groups, sizeof *m->groups, cmp_group);
   for (int i = 1; i < n_groups; ++i)
     if (m->groups[i].dim == m->groups[i - 1].dim && m->groups[i].tag == m->groups[i - 1].tag) {
       rc = bs_error_set(err, BS_EINPUT, "groups \"%s\" and \"%s\" share (dim %d, tag %d)", gname(&m->groups[i - 1]),

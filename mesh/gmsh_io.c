@@ -1,0 +1,961 @@
+/* gmsh_io.c — meshes in and out through the Gmsh C API (deal.II's GridIn /
+ * GridOut): bs_mesh_read and bs_mesh_write_msh.
+ *
+ * Gmsh keeps one global state. Every use of it here runs under one mutex,
+ * between gmshInitialize (no configuration files) and gmshFinalize, with
+ * General.Terminal = 0 so that the library prints nothing; Gmsh's messages go
+ * to its logger, and its last error is copied into the bs_error. Gmsh sets LC_NUMERIC to "C"; the
+ * caller's setting is restored afterwards.
+ *
+ * Inputs, by extension (case-insensitive):
+ *   .msh                              taken as is (v2 / v4, ASCII / binary);
+ *   .geo .step .stp .brep .iges .igs  meshed in 3-D; STEP and IGES lengths are
+ *                                     converted to metres (OCCTargetUnit "M");
+ *   .stl                              a closed triangulated surface, merged by Gmsh;
+ *   .off .obj .ply                    a closed surface read by CGAL (the shim) and
+ *                                     handed to Gmsh as a discrete surface.
+ * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
+ * are kept as the boundary of the volume mesh; with size > 0 it is classified
+ * into patches (40 degree feature angle), reparametrized and remeshed at that
+ * size. For geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size
+ * after the file is read (so it overrides the file's settings).
+ *
+ * The model becomes a bs_mesh: node tags (possibly sparse) map to vertex
+ * indices in increasing tag order; the 4-node tets of every volume entity, in
+ * entity order, become tets; any other 3-D element is an error. Physical groups
+ * become bs_group (3-D: the tets of the group's entities; 2-D / 1-D / 0-D: the
+ * triangles / lines / points of its entities as vertex tuples). A model with no
+ * physical group at all gets default groups: (3, 1, "body") for a single volume
+ * entity or (3, tag, "volume_<tag>") per volume entity when there are several,
+ * and (2, tag, "surface_<tag>") per surface entity.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <locale.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include <gmshc.h>
+
+#include "bs_mesh.h"
+#include "bs_shim.h"
+#include "mesh_internal.h"
+
+#define BS_PI 3.14159265358979323846
+
+/* Gmsh element types used here (Gmsh's numbering). */
+enum { GMSH_LINE = 1, GMSH_TRIANGLE = 2, GMSH_TET = 4, GMSH_POINT = 15 };
+
+/* First-order simplex of dimension d: point, line, triangle, tet. */
+static const int simplex_type[4] = {GMSH_POINT, GMSH_LINE, GMSH_TRIANGLE, GMSH_TET};
+
+/* ---- the Gmsh session --------------------------------------------------- */
+
+static pthread_mutex_t gmsh_mutex = PTHREAD_MUTEX_INITIALIZER;
+static char gmsh_saved_locale[256]; /* guarded by gmsh_mutex */
+
+/* The last error Gmsh logged in this session (or a note that there is none)
+ * into buf. The session's own log is used, not gmshLoggerGetLastError, which
+ * keeps the last error of any earlier session. */
+static void gmsh_last_error(char *buf, size_t n) {
+  char **log = NULL;
+  size_t n_log = 0;
+  int ierr = 0;
+  static const char prefix[] = "Error: ";
+  snprintf(buf, n, "%s", "Gmsh gave no message");
+  gmshLoggerGet(&log, &n_log, &ierr);
+  for (size_t i = 0; !ierr && i < n_log; i++)
+    if (log[i] && strncmp(log[i], prefix, sizeof prefix - 1) == 0)
+      snprintf(buf, n, "%s", log[i] + sizeof prefix - 1);
+  for (size_t i = 0; i < n_log; i++)
+    if (log && log[i]) gmshFree(log[i]);
+  if (log) gmshFree(log);
+  size_t len = strlen(buf);
+  while (len > 0 && (buf[len - 1] == ' ' || buf[len - 1] == '\n' || buf[len - 1] == '\r')) buf[--len] = '\0';
+}
+
+/* Records "<path>: Gmsh could not <what>: <Gmsh's last error>". */
+static int gmsh_fail(bs_error *err, int code, const char *path, const char *what) {
+  char msg[800];
+  gmsh_last_error(msg, sizeof msg);
+  return bs_error_set(err, code, "%s: Gmsh could not %s: %s", path, what, msg);
+}
+
+/* Silences Gmsh (the options a file may have changed are set again after it is read). */
+static void gmsh_quiet(void) {
+  int ierr = 0;
+  gmshOptionSetNumber("General.Terminal", 0, &ierr);
+  gmshOptionSetNumber("General.Verbosity", 1, &ierr); /* errors only, and only to the logger */
+}
+
+static void gmsh_end(void) {
+  int ierr = 0;
+  gmshLoggerStop(&ierr);
+  gmshFinalize(&ierr);
+  setlocale(LC_NUMERIC, gmsh_saved_locale);
+  pthread_mutex_unlock(&gmsh_mutex);
+}
+
+/* Takes the Gmsh lock and initializes Gmsh; on failure the lock is released. */
+static int gmsh_begin(const char *path, bs_error *err) {
+  pthread_mutex_lock(&gmsh_mutex);
+  const char *loc = setlocale(LC_NUMERIC, NULL);
+  snprintf(gmsh_saved_locale, sizeof gmsh_saved_locale, "%s", loc ? loc : "C");
+  int ierr = 0;
+  gmshInitialize(0, NULL, 0, &ierr);
+  if (ierr) {
+    gmsh_end();
+    return bs_error_set(err, BS_EGMSH, "%s: Gmsh failed to initialize", path);
+  }
+  gmsh_quiet();
+  gmshLoggerStart(&ierr);
+  return BS_OK;
+}
+
+/* ---- small helpers ------------------------------------------------------ */
+
+/* The extension of path (after the last '.' of its last component), or "". */
+static const char *file_ext(const char *path) {
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  const char *dot = strrchr(base, '.');
+  return dot ? dot + 1 : "";
+}
+
+static int ext_is(const char *ext, const char *const *list) {
+  for (; *list; list++)
+    if (strcasecmp(ext, *list) == 0) return 1;
+  return 0;
+}
+
+typedef enum { IN_MESH, IN_GEOMETRY, IN_STL, IN_SOUP, IN_UNKNOWN } input_kind;
+
+static input_kind classify_input(const char *path) {
+  static const char *const mesh[] = {"msh", NULL};
+  static const char *const geometry[] = {"geo", "step", "stp", "brep", "iges", "igs", NULL};
+  static const char *const stl[] = {"stl", NULL};
+  static const char *const soup[] = {"off", "obj", "ply", NULL};
+  const char *ext = file_ext(path);
+  if (ext_is(ext, mesh)) return IN_MESH;
+  if (ext_is(ext, geometry)) return IN_GEOMETRY;
+  if (ext_is(ext, stl)) return IN_STL;
+  if (ext_is(ext, soup)) return IN_SOUP;
+  return IN_UNKNOWN;
+}
+
+/* A growable int32 array. */
+typedef struct ivec {
+  int32_t *a;
+  size_t n, cap;
+} ivec;
+
+static int ivec_reserve(ivec *v, size_t extra, bs_error *err) {
+  if (v->n + extra <= v->cap) return BS_OK;
+  size_t cap = v->cap ? v->cap : 64;
+  while (cap < v->n + extra) cap *= 2;
+  int32_t *a = realloc(v->a, cap * sizeof *a);
+  if (!a) return bs_error_set(err, BS_ENOMEM, "out of memory for %zu mesh indices", cap);
+  v->a = a;
+  v->cap = cap;
+  return BS_OK;
+}
+
+/* ---- node tags -> vertex indices ---------------------------------------- */
+
+/* Vertices are numbered in increasing node-tag order. Lookup goes through a
+ * dense table when the tags are dense enough, else by binary search. */
+typedef struct node_map {
+  size_t n;
+  size_t *tags;   /* n, sorted ascending                */
+  int32_t *dense; /* max tag + 1 entries (-1: no node) or NULL */
+  size_t dense_n;
+} node_map;
+
+typedef struct tag_pos {
+  size_t tag;
+  size_t pos;
+} tag_pos;
+
+static int cmp_tag_pos(const void *a, const void *b) {
+  const tag_pos *p = a, *q = b;
+  return (p->tag > q->tag) - (p->tag < q->tag);
+}
+
+static void node_map_free(node_map *nm) {
+  free(nm->tags);
+  free(nm->dense);
+  memset(nm, 0, sizeof *nm);
+}
+
+static int32_t node_map_find(const node_map *nm, size_t tag) {
+  if (nm->dense) return tag < nm->dense_n ? nm->dense[tag] : -1;
+  size_t lo = 0, hi = nm->n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (nm->tags[mid] < tag) lo = mid + 1;
+    else hi = mid;
+  }
+  return (lo < nm->n && nm->tags[lo] == tag) ? (int32_t)lo : -1;
+}
+
+/* All nodes of the model: *x (3 per vertex, tag order) and the map. */
+static int read_nodes(const char *path, node_map *nm, double **x_out, bs_error *err) {
+  size_t *tags = NULL, n_tags = 0, n_coord = 0, n_par = 0;
+  double *coord = NULL, *par = NULL;
+  int ierr = 0, rc = BS_OK;
+  tag_pos *tp = NULL;
+  double *x = NULL;
+  gmshModelMeshGetNodes(&tags, &n_tags, &coord, &n_coord, &par, &n_par, -1, -1, 0, 0, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the mesh nodes");
+    goto done;
+  }
+  if (n_coord != 3 * n_tags) {
+    rc = bs_error_set(err, BS_EINTERNAL, "%s: Gmsh returned %zu coordinates for %zu nodes", path, n_coord, n_tags);
+    goto done;
+  }
+  if (n_tags > (size_t)INT32_MAX) {
+    rc = bs_error_set(err, BS_EINPUT, "%s: %zu nodes exceed the 32-bit index range", path, n_tags);
+    goto done;
+  }
+  tp = malloc((n_tags ? n_tags : 1) * sizeof *tp);
+  x = malloc((n_tags ? 3 * n_tags : 1) * sizeof *x);
+  nm->tags = malloc((n_tags ? n_tags : 1) * sizeof *nm->tags);
+  if (!tp || !x || !nm->tags) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for %zu nodes", path, n_tags);
+    goto done;
+  }
+  for (size_t i = 0; i < n_tags; i++) tp[i] = (tag_pos){tags[i], i};
+  qsort(tp, n_tags, sizeof *tp, cmp_tag_pos);
+  size_t max_tag = 0;
+  for (size_t i = 0; i < n_tags; i++) {
+    if (i > 0 && tp[i].tag == tp[i - 1].tag) {
+      rc = bs_error_set(err, BS_EINPUT, "%s: node tag %zu is defined twice", path, tp[i].tag);
+      goto done;
+    }
+    nm->tags[i] = tp[i].tag;
+    for (int k = 0; k < 3; k++) x[3 * i + k] = coord[3 * tp[i].pos + k];
+    if (tp[i].tag > max_tag) max_tag = tp[i].tag;
+  }
+  nm->n = n_tags;
+  if (n_tags > 0 && max_tag <= 4 * n_tags + 1024) {
+    nm->dense_n = max_tag + 1;
+    nm->dense = malloc(nm->dense_n * sizeof *nm->dense);
+    if (!nm->dense) {
+      rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the node table", path);
+      goto done;
+    }
+    for (size_t t = 0; t < nm->dense_n; t++) nm->dense[t] = -1;
+    for (size_t i = 0; i < n_tags; i++) nm->dense[nm->tags[i]] = (int32_t)i;
+  }
+  *x_out = x;
+  x = NULL;
+done:
+  free(tp);
+  free(x);
+  if (tags) gmshFree(tags);
+  if (coord) gmshFree(coord);
+  if (par) gmshFree(par);
+  return rc;
+}
+
+/* Appends the elements of type `type` (n_nodes nodes each) on entity `tag`
+ * to v as vertex indices; element tags to etags if non-NULL. */
+static int append_elements(const char *path, int type, int n_nodes, int tag, const node_map *nm, ivec *v,
+                           size_t **etags_out, size_t *n_etags_out, bs_error *err) {
+  size_t *etags = NULL, ne = 0, *ntags = NULL, nn = 0;
+  int ierr = 0, rc = BS_OK;
+  gmshModelMeshGetElementsByType(type, &etags, &ne, &ntags, &nn, tag, 0, 1, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the elements");
+    goto done;
+  }
+  if (nn != (size_t)n_nodes * ne) {
+    rc = bs_error_set(err, BS_EINTERNAL, "%s: Gmsh returned %zu nodes for %zu elements of type %d", path, nn, ne,
+                      type);
+    goto done;
+  }
+  if ((rc = ivec_reserve(v, nn, err))) goto done;
+  for (size_t e = 0; e < ne; e++)
+    for (int k = 0; k < n_nodes; k++) {
+      size_t nt = ntags[(size_t)n_nodes * e + k];
+      int32_t i = node_map_find(nm, nt);
+      if (i < 0) {
+        rc = bs_error_set(err, BS_EINPUT, "%s: element %zu refers to node %zu, which is not defined", path, etags[e],
+                          nt);
+        goto done;
+      }
+      v->a[v->n++] = i;
+    }
+  if (etags_out) {
+    *etags_out = etags;
+    *n_etags_out = ne;
+    etags = NULL;
+  }
+done:
+  if (etags) gmshFree(etags);
+  if (ntags) gmshFree(ntags);
+  return rc;
+}
+
+/* The Gmsh name of an element type ("Tetrahedron 10", ...). */
+static void element_name(int type, char *buf, size_t n) {
+  char *name = NULL;
+  int dim = 0, order = 0, nn = 0, np = 0, ierr = 0;
+  double *lc = NULL;
+  size_t nlc = 0;
+  gmshModelMeshGetElementProperties(type, &name, &dim, &order, &nn, &lc, &nlc, &np, &ierr);
+  snprintf(buf, n, "%s", (!ierr && name) ? name : "unknown");
+  if (name) gmshFree(name);
+  if (lc) gmshFree(lc);
+}
+
+/* Number of elements of a type in the whole model (0 on error). */
+static size_t count_elements(int type) {
+  size_t *etags = NULL, ne = 0, *ntags = NULL, nn = 0;
+  int ierr = 0;
+  gmshModelMeshGetElementsByType(type, &etags, &ne, &ntags, &nn, -1, 0, 1, &ierr);
+  if (etags) gmshFree(etags);
+  if (ntags) gmshFree(ntags);
+  return ierr ? 0 : ne;
+}
+
+/* Only 4-node tets are simulated: any other 3-D element type is an error
+ * naming the types and counts; no 3-D element at all is an error too. */
+static int check_volume_types(const char *path, bs_error *err) {
+  int *types = NULL, ierr = 0, rc = BS_OK;
+  size_t n = 0;
+  gmshModelMeshGetElementTypes(&types, &n, 3, -1, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the element types");
+    goto done;
+  }
+  if (n == 0) {
+    rc = bs_error_set(err, BS_EINPUT, "%s: no volume elements (the file holds no 3-D mesh, only %s)", path,
+                      "lower-dimensional elements or none");
+    goto done;
+  }
+  char list[700] = "";
+  size_t used = 0;
+  int bad = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (types[i] == GMSH_TET) continue;
+    char name[64];
+    element_name(types[i], name, sizeof name);
+    int w = snprintf(list + used, sizeof list - used, "%s%zu \"%s\" (Gmsh type %d)", bad ? ", " : "",
+                     count_elements(types[i]), name, types[i]);
+    if (w > 0 && (size_t)w < sizeof list - used) used += (size_t)w;
+    bad++;
+  }
+  if (bad)
+    rc = bs_error_set(err, BS_EINPUT,
+                      "%s: unsupported volume elements: %s; only 4-node tetrahedra (\"Tetrahedron 4\") are simulated "
+                      "(mesh with Mesh.ElementOrder = 1 and no recombination)",
+                      path, list);
+done:
+  if (types) gmshFree(types);
+  return rc;
+}
+
+/* ---- closed surfaces into volumes --------------------------------------- */
+
+/* Hands a triangle soup to Gmsh as the discrete surface (2, 1). */
+static int add_discrete_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                                bs_error *err) {
+  int ierr = 0, rc = BS_OK;
+  size_t *ntag = malloc((size_t)(np > 0 ? np : 1) * sizeof *ntag);
+  size_t *etag = malloc((size_t)(nt > 0 ? nt : 1) * sizeof *etag);
+  size_t *enodes = malloc((size_t)(nt > 0 ? 3 * nt : 1) * sizeof *enodes);
+  if (!ntag || !etag || !enodes) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the surface", path);
+    goto done;
+  }
+  for (int64_t i = 0; i < np; i++) ntag[i] = (size_t)i + 1;
+  for (int64_t e = 0; e < nt; e++) {
+    etag[e] = (size_t)e + 1;
+    for (int k = 0; k < 3; k++) enodes[3 * e + k] = (size_t)tris[3 * e + k] + 1;
+  }
+  gmshModelAdd("surface", &ierr);
+  if (!ierr) gmshModelAddDiscreteEntity(2, 1, NULL, 0, &ierr);
+  if (!ierr) gmshModelMeshAddNodes(2, 1, ntag, (size_t)np, (double *)pts, 3 * (size_t)np, NULL, 0, &ierr);
+  if (!ierr) gmshModelMeshAddElementsByType(1, GMSH_TRIANGLE, etag, (size_t)nt, enodes, 3 * (size_t)nt, &ierr);
+  if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "take the surface triangles");
+done:
+  free(ntag);
+  free(etag);
+  free(enodes);
+  return rc;
+}
+
+/* Meshes the volume bounded by the model's surfaces (see the file comment). */
+static int surface_to_volume(const char *path, double size, bs_error *err) {
+  int ierr = 0, rc = BS_OK;
+  int *dt = NULL, *tags = NULL;
+  size_t ndt = 0;
+  if (size > 0) {
+    gmshModelMeshClassifySurfaces(40.0 * BS_PI / 180.0, 1, 1, BS_PI, 0, &ierr);
+    if (ierr) return gmsh_fail(err, BS_EGMSH, path, "classify the surface into patches");
+    gmshModelMeshCreateGeometry(NULL, 0, &ierr);
+    if (ierr) return gmsh_fail(err, BS_EGMSH, path, "parametrize the surface patches");
+  }
+  gmshModelGetEntities(&dt, &ndt, 2, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the surfaces");
+    goto done;
+  }
+  size_t ns = ndt / 2;
+  if (ns == 0) {
+    rc = bs_error_set(err, BS_EINPUT, "%s: no surface triangles to mesh a volume from", path);
+    goto done;
+  }
+  tags = malloc(ns * sizeof *tags);
+  if (!tags) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
+    goto done;
+  }
+  for (size_t i = 0; i < ns; i++) tags[i] = dt[2 * i + 1];
+  int loop = gmshModelGeoAddSurfaceLoop(tags, ns, -1, &ierr);
+  if (!ierr) gmshModelGeoAddVolume(&loop, 1, -1, &ierr);
+  if (!ierr) gmshModelGeoSynchronize(&ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "make a volume bounded by the surface");
+    goto done;
+  }
+  if (size > 0) {
+    gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
+    gmshOptionSetNumber("Mesh.MeshSizeMax", size, &ierr);
+  }
+  gmshModelMeshGenerate(3, &ierr);
+  if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "mesh the volume inside the surface (is it closed?)");
+done:
+  if (dt) gmshFree(dt);
+  free(tags);
+  return rc;
+}
+
+/* ---- the model as a bs_mesh --------------------------------------------- */
+
+typedef struct volume_range {
+  int tag;
+  size_t first, count; /* tets [first, first + count) */
+} volume_range;
+
+/* Elements of dimension dim < 3 on the given entities as vertex tuples. */
+static int group_simplices(const char *path, int dim, const int *ents, size_t n_ents, const char *gname, int gtag,
+                           const node_map *nm, ivec *v, bs_error *err) {
+  int rc = BS_OK;
+  for (size_t i = 0; i < n_ents && !rc; i++) {
+    int *types = NULL, ierr = 0;
+    size_t nt = 0;
+    gmshModelMeshGetElementTypes(&types, &nt, dim, ents[i], &ierr);
+    if (ierr) {
+      rc = gmsh_fail(err, BS_EGMSH, path, "list the element types of a group");
+      break;
+    }
+    for (size_t k = 0; k < nt && !rc; k++) {
+      if (types[k] != simplex_type[dim]) {
+        char name[64];
+        element_name(types[k], name, sizeof name);
+        rc = bs_error_set(err, BS_EINPUT,
+                          "%s: physical group \"%s\" (dim %d, tag %d) holds \"%s\" elements (Gmsh type %d); groups "
+                          "may hold only points, 2-node lines and 3-node triangles",
+                          path, gname, dim, gtag, name, types[k]);
+        break;
+      }
+      rc = append_elements(path, types[k], dim + 1, ents[i], nm, v, NULL, NULL, err);
+    }
+    if (types) gmshFree(types);
+  }
+  return rc;
+}
+
+/* Tet indices of the given volume entities. */
+static int group_tets(const int *ents, size_t n_ents, const volume_range *vr, size_t n_vol, ivec *v, bs_error *err) {
+  for (size_t i = 0; i < n_ents; i++)
+    for (size_t j = 0; j < n_vol; j++) {
+      if (vr[j].tag != ents[i]) continue;
+      int rc = ivec_reserve(v, vr[j].count, err);
+      if (rc) return rc;
+      for (size_t t = 0; t < vr[j].count; t++) v->a[v->n++] = (int32_t)(vr[j].first + t);
+    }
+  return BS_OK;
+}
+
+/* Moves v into a new group (dim, tag, name). */
+static int push_group(bs_group *groups, int *n_groups, int dim, int tag, const char *name, ivec *v, bs_error *err) {
+  bs_group *g = &groups[*n_groups];
+  memset(g, 0, sizeof *g);
+  g->name = bs__strdup(name);
+  if (!g->name) return bs_error_set(err, BS_ENOMEM, "out of memory for group \"%s\"", name);
+  g->dim = dim;
+  g->tag = tag;
+  g->n_elems = (int32_t)(v->n / (size_t)bs__group_elem_size(dim));
+  g->elems = v->a;
+  memset(v, 0, sizeof *v);
+  (*n_groups)++;
+  return BS_OK;
+}
+
+/* The model's physical groups, or the default groups when it has none. */
+static int read_groups(const char *path, const node_map *nm, const volume_range *vr, size_t n_vol,
+                       bs_group **groups_out, int *n_groups_out, bs_error *err) {
+  int *pg = NULL, *sdt = NULL, ierr = 0, rc = BS_OK, n_groups = 0;
+  size_t npg = 0, nsdt = 0;
+  bs_group *groups = NULL;
+  ivec v = {0};
+  gmshModelGetPhysicalGroups(&pg, &npg, -1, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the physical groups");
+    goto done;
+  }
+  npg /= 2;
+  if (npg > 0) {
+    groups = calloc(npg, sizeof *groups);
+    if (!groups) {
+      rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for %zu groups", path, npg);
+      goto done;
+    }
+    for (size_t i = 0; i < npg && !rc; i++) {
+      int dim = pg[2 * i], tag = pg[2 * i + 1];
+      char *name = NULL;
+      int *ents = NULL;
+      size_t n_ents = 0;
+      gmshModelGetPhysicalName(dim, tag, &name, &ierr);
+      if (!ierr) gmshModelGetEntitiesForPhysicalGroup(dim, tag, &ents, &n_ents, &ierr);
+      if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "read a physical group");
+      else if (dim == 3) rc = group_tets(ents, n_ents, vr, n_vol, &v, err);
+      else if (dim >= 0 && dim < 3)
+        rc = group_simplices(path, dim, ents, n_ents, name ? name : "", tag, nm, &v, err);
+      else
+        rc = bs_error_set(err, BS_EINPUT, "%s: physical group %d has dimension %d", path, tag, dim);
+      if (!rc) rc = push_group(groups, &n_groups, dim, tag, name ? name : "", &v, err);
+      if (name) gmshFree(name);
+      if (ents) gmshFree(ents);
+    }
+    goto done;
+  }
+
+  /* Default groups: the volumes, then one group per surface entity. */
+  gmshModelGetEntities(&sdt, &nsdt, 2, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the surfaces");
+    goto done;
+  }
+  nsdt /= 2;
+  groups = calloc(n_vol + nsdt + 1, sizeof *groups);
+  if (!groups) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the default groups", path);
+    goto done;
+  }
+  for (size_t j = 0; j < n_vol && !rc; j++) {
+    char name[64];
+    int tag = n_vol == 1 ? 1 : vr[j].tag;
+    snprintf(name, sizeof name, n_vol == 1 ? "body" : "volume_%d", vr[j].tag);
+    rc = group_tets(&vr[j].tag, 1, vr, n_vol, &v, err);
+    if (!rc) rc = push_group(groups, &n_groups, 3, tag, name, &v, err);
+  }
+  for (size_t j = 0; j < nsdt && !rc; j++) {
+    char name[64];
+    int tag = sdt[2 * j + 1];
+    snprintf(name, sizeof name, "surface_%d", tag);
+    rc = group_simplices(path, 2, &tag, 1, name, tag, nm, &v, err);
+    if (!rc) rc = push_group(groups, &n_groups, 2, tag, name, &v, err);
+  }
+done:
+  free(v.a);
+  if (pg) gmshFree(pg);
+  if (sdt) gmshFree(sdt);
+  if (rc) {
+    bs__groups_free(groups, n_groups);
+    groups = NULL;
+    n_groups = 0;
+  }
+  *groups_out = groups;
+  *n_groups_out = n_groups;
+  return rc;
+}
+
+/* A tet whose |volume| <= 1e-14 (longest edge)^3 is degenerate (the threshold
+ * of bs_mesh_finalize); named here by its Gmsh element and node tags. */
+static int check_zero_volume(const char *path, const double *x, const ivec *tets, const size_t *etags,
+                             const node_map *nm, bs_error *err) {
+  size_t nt = tets->n / 4;
+  for (size_t t = 0; t < nt; t++) {
+    const int32_t *v = tets->a + 4 * t;
+    const double *p0 = x + 3 * v[0];
+    double e[3][3], l2max = 0;
+    for (int i = 0; i < 3; i++)
+      for (int k = 0; k < 3; k++) e[i][k] = x[3 * v[i + 1] + k] - p0[k];
+    for (int a = 0; a < 4; a++)
+      for (int b = a + 1; b < 4; b++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) {
+          double d = x[3 * v[a] + k] - x[3 * v[b] + k];
+          d2 += d * d;
+        }
+        if (d2 > l2max) l2max = d2;
+      }
+    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                 e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    double vol = fabs(det) / 6.0;
+    if (vol <= 1e-14 * l2max * sqrt(l2max))
+      return bs_error_set(err, BS_EINPUT,
+                          "%s: tetrahedron element %zu (tet %zu, nodes %zu %zu %zu %zu) has zero volume (%.3g m^3)",
+                          path, etags[t], t, nm->tags[v[0]], nm->tags[v[1]], nm->tags[v[2]], nm->tags[v[3]], vol);
+  }
+  return BS_OK;
+}
+
+/* The current Gmsh model as a bs_mesh. */
+static int model_to_mesh(const char *path, bs_mesh **out, bs_error *err) {
+  int rc, ierr = 0;
+  node_map nm = {0};
+  double *x = NULL;
+  int *vdt = NULL;
+  size_t nvdt = 0, n_vol = 0, *etags = NULL, n_etags = 0;
+  volume_range *vr = NULL;
+  ivec tets = {0};
+  bs_group *groups = NULL;
+  int n_groups = 0;
+
+  if ((rc = check_volume_types(path, err))) goto done;
+  if ((rc = read_nodes(path, &nm, &x, err))) goto done;
+
+  gmshModelGetEntities(&vdt, &nvdt, 3, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "list the volumes");
+    goto done;
+  }
+  n_vol = nvdt / 2;
+  vr = calloc(n_vol ? n_vol : 1, sizeof *vr);
+  if (!vr) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
+    goto done;
+  }
+  for (size_t j = 0; j < n_vol; j++) {
+    size_t *et = NULL, ne = 0;
+    vr[j].tag = vdt[2 * j + 1];
+    vr[j].first = tets.n / 4;
+    if ((rc = append_elements(path, GMSH_TET, 4, vr[j].tag, &nm, &tets, &et, &ne, err))) goto done;
+    vr[j].count = ne;
+    size_t *grown = realloc(etags, (n_etags + ne + 1) * sizeof *etags);
+    if (!grown) {
+      gmshFree(et);
+      rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for %zu element tags", path, n_etags + ne);
+      goto done;
+    }
+    etags = grown;
+    if (ne) memcpy(etags + n_etags, et, ne * sizeof *et);
+    n_etags += ne;
+    gmshFree(et);
+  }
+  if (tets.n == 0) {
+    rc = bs_error_set(err, BS_EINPUT, "%s: no volume elements (no tetrahedra in any volume)", path);
+    goto done;
+  }
+  if (tets.n / 4 > (size_t)INT32_MAX) {
+    rc = bs_error_set(err, BS_EINPUT, "%s: %zu tets exceed the 32-bit index range", path, tets.n / 4);
+    goto done;
+  }
+  if ((rc = check_zero_volume(path, x, &tets, etags, &nm, err))) goto done;
+  if ((rc = read_groups(path, &nm, vr, n_vol, &groups, &n_groups, err))) goto done;
+
+  rc = bs_mesh_create((int32_t)nm.n, x, (int32_t)(tets.n / 4), tets.a, n_groups, groups, out, err);
+  if (rc) bs_error_prefix(err, "%s", path);
+done:
+  node_map_free(&nm);
+  free(x);
+  if (vdt) gmshFree(vdt);
+  free(vr);
+  free(tets.a);
+  free(etags);
+  bs__groups_free(groups, n_groups);
+  return rc;
+}
+
+/* ---- bs_mesh_read ------------------------------------------------------- */
+
+int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
+  *out = NULL;
+  if (!path || !path[0]) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: no file name given");
+  double size = opts ? opts->size : 0.0;
+  int refine = opts ? opts->refine : 0;
+  if (!isfinite(size)) return bs_error_set(err, BS_EINPUT, "%s: mesh size %g is not finite", path, size);
+  if (refine < 0) return bs_error_set(err, BS_EINPUT, "%s: refine = %d (must be >= 0)", path, refine);
+
+  /* Gmsh silently accepts a missing file: check first. */
+  struct stat st;
+  if (stat(path, &st) != 0)
+    return bs_error_set(err, BS_EIO, "%s: cannot open the mesh file: %s", path, strerror(errno));
+  if (!S_ISREG(st.st_mode)) return bs_error_set(err, BS_EIO, "%s: not a regular file", path);
+  FILE *f = fopen(path, "rb");
+  if (!f) return bs_error_set(err, BS_EIO, "%s: cannot read the mesh file: %s", path, strerror(errno));
+  fclose(f);
+
+  input_kind kind = classify_input(path);
+  if (kind == IN_UNKNOWN)
+    return bs_error_set(err, BS_EINPUT,
+                        "%s: unsupported mesh format '.%s' (expected .msh, .geo, .step, .stp, .brep, .iges, .igs, "
+                        ".stl, .off, .obj or .ply)",
+                        path, file_ext(path));
+
+  /* Surfaces Gmsh does not read: CGAL reads them, before Gmsh is locked. */
+  double *pts = NULL;
+  int32_t *tris = NULL;
+  int64_t np = 0, ntri = 0;
+  int rc;
+  if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
+
+  bs_mesh *m = NULL;
+  if ((rc = gmsh_begin(path, err))) goto out;
+  int ierr = 0;
+  gmshOptionSetString("Geometry.OCCTargetUnit", "M", &ierr);
+  switch (kind) {
+  case IN_MESH:
+    gmshOpen(path, &ierr);
+    if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
+    break;
+  case IN_GEOMETRY:
+    gmshOpen(path, &ierr);
+    if (ierr) {
+      rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
+      break;
+    }
+    gmsh_quiet();
+    if (size > 0) {
+      gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
+      gmshOptionSetNumber("Mesh.MeshSizeMax", size, &ierr);
+    }
+    gmshModelMeshGenerate(3, &ierr);
+    if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "mesh the geometry in 3-D");
+    break;
+  case IN_STL:
+    gmshOpen(path, &ierr);
+    if (ierr) {
+      rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
+      break;
+    }
+    rc = surface_to_volume(path, size, err);
+    break;
+  case IN_SOUP:
+    rc = add_discrete_surface(path, pts, np, tris, ntri, err);
+    if (!rc) rc = surface_to_volume(path, size, err);
+    break;
+  case IN_UNKNOWN:
+    break;
+  }
+  gmsh_quiet();
+  if (!rc) rc = model_to_mesh(path, &m, err);
+  gmsh_end();
+
+  for (int level = 0; level < refine && !rc; level++) {
+    bs_mesh *fine = NULL;
+    rc = bs_mesh_refine(m, &fine, err);
+    if (rc) bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
+    bs_mesh_destroy(&m);
+    m = fine;
+  }
+out:
+  bs_shim_free(pts);
+  bs_shim_free(tris);
+  if (rc) bs_mesh_destroy(&m);
+  else *out = m;
+  return rc;
+}
+
+/* ---- bs_mesh_write_msh -------------------------------------------------- */
+
+/* Tets are grouped into classes of equal 3-D group membership; each class is
+ * one discrete volume entity, so that every 3-D physical group is exactly a
+ * union of entities (with non-overlapping 3-D groups, one class per
+ * material). Groups of lower dimension get one discrete entity each, holding
+ * exactly their elements. Nodes are tagged vertex + 1. */
+typedef struct tet_classes {
+  int n3;          /* number of 3-D groups                       */
+  size_t words;    /* 64-bit words per membership signature      */
+  uint64_t *sig;   /* n_tets * words                             */
+  int32_t *cls;    /* n_tets: class of each tet                  */
+  int32_t n_cls;
+  int32_t *rep;    /* n_cls: a tet of each class                 */
+} tet_classes;
+
+static int sig_equal(const tet_classes *c, int32_t a, int32_t b) {
+  return c->words == 0 || memcmp(c->sig + (size_t)a * c->words, c->sig + (size_t)b * c->words,
+                                 c->words * sizeof(uint64_t)) == 0;
+}
+
+static int build_classes(const bs_mesh *m, tet_classes *c, bs_error *err) {
+  memset(c, 0, sizeof *c);
+  for (int g = 0; g < m->n_groups; g++) c->n3 += m->groups[g].dim == 3;
+  c->words = (size_t)(c->n3 + 63) / 64;
+  size_t nt = (size_t)m->n_tets;
+  c->sig = calloc(nt * c->words + 1, sizeof *c->sig);
+  c->cls = malloc((nt + 1) * sizeof *c->cls);
+  c->rep = malloc((nt + 1) * sizeof *c->rep);
+  if (!c->sig || !c->cls || !c->rep) return bs_error_set(err, BS_ENOMEM, "out of memory for %zu tets", nt);
+  int k = 0;
+  for (int g = 0; g < m->n_groups; g++) {
+    const bs_group *gr = &m->groups[g];
+    if (gr->dim != 3) continue;
+    for (int32_t e = 0; e < gr->n_elems; e++) {
+      int32_t t = gr->elems[e];
+      if (t < 0 || t >= m->n_tets)
+        return bs_error_set(err, BS_EINPUT, "group \"%s\" (dim 3, tag %d) refers to tet %d of %d", gr->name, gr->tag,
+                            t, m->n_tets);
+      c->sig[(size_t)t * c->words + (size_t)k / 64] |= (uint64_t)1 << (k % 64);
+    }
+    k++;
+  }
+  for (int32_t t = 0; t < m->n_tets; t++) {
+    int32_t found = -1;
+    if (t > 0 && sig_equal(c, t, c->rep[c->cls[t - 1]])) found = c->cls[t - 1];
+    for (int32_t j = 0; j < c->n_cls && found < 0; j++)
+      if (sig_equal(c, t, c->rep[j])) found = j;
+    if (found < 0) {
+      found = c->n_cls++;
+      c->rep[found] = t;
+    }
+    c->cls[t] = found;
+  }
+  return BS_OK;
+}
+
+static void free_classes(tet_classes *c) {
+  free(c->sig);
+  free(c->cls);
+  free(c->rep);
+  memset(c, 0, sizeof *c);
+}
+
+/* Builds the Gmsh model of m at positions x (inside a Gmsh session). */
+static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, const char *path, bs_error *err) {
+  int ierr = 0, rc = BS_OK;
+  size_t nv = (size_t)m->n_vertices, nt = (size_t)m->n_tets;
+  size_t max_elems = nt;
+  for (int g = 0; g < m->n_groups; g++)
+    if (m->groups[g].dim < 3 && (size_t)m->groups[g].n_elems > max_elems) max_elems = (size_t)m->groups[g].n_elems;
+  size_t *ntag = malloc((nv + 1) * sizeof *ntag);
+  size_t *etag = malloc((max_elems + 1) * sizeof *etag);
+  size_t *enodes = malloc((4 * max_elems + 1) * sizeof *enodes);
+  int *ents = malloc(((size_t)c->n_cls + 1) * sizeof *ents);
+  if (!ntag || !etag || !enodes || !ents) {
+    rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the Gmsh model", path);
+    goto done;
+  }
+  gmshModelAdd("bigstep", &ierr);
+  for (int32_t j = 0; j < c->n_cls && !ierr; j++) gmshModelAddDiscreteEntity(3, j + 1, NULL, 0, &ierr);
+  if (c->n_cls == 0 && !ierr) gmshModelAddDiscreteEntity(3, 1, NULL, 0, &ierr);
+  for (size_t i = 0; i < nv; i++) ntag[i] = i + 1;
+  if (!ierr) gmshModelMeshAddNodes(3, 1, ntag, nv, (double *)x, 3 * nv, NULL, 0, &ierr);
+  if (ierr) {
+    rc = gmsh_fail(err, BS_EGMSH, path, "take the mesh nodes");
+    goto done;
+  }
+
+  /* Tets, class by class; element tags run over all entities. */
+  size_t next_tag = 1;
+  for (int32_t j = 0; j < c->n_cls; j++) {
+    size_t n = 0;
+    for (size_t t = 0; t < nt; t++) {
+      if (c->cls[t] != j) continue;
+      etag[n] = next_tag++;
+      for (int k = 0; k < 4; k++) enodes[4 * n + k] = (size_t)m->tets[4 * t + k] + 1;
+      n++;
+    }
+    gmshModelMeshAddElementsByType(j + 1, GMSH_TET, etag, n, enodes, 4 * n, &ierr);
+    if (ierr) {
+      rc = gmsh_fail(err, BS_EGMSH, path, "take the tetrahedra");
+      goto done;
+    }
+  }
+
+  /* Groups. */
+  int k3 = 0, next_ent[3] = {1, 1, 1};
+  for (int g = 0; g < m->n_groups; g++) {
+    const bs_group *gr = &m->groups[g];
+    int pdim = gr->dim;
+    if (pdim == 3) {
+      size_t n = 0;
+      for (int32_t j = 0; j < c->n_cls; j++)
+        if (c->sig[(size_t)c->rep[j] * c->words + (size_t)k3 / 64] >> (k3 % 64) & 1) ents[n++] = j + 1;
+      k3++;
+      gmshModelAddPhysicalGroup(3, ents, n, gr->tag, &ierr);
+    } else if (pdim >= 0 && pdim < 3) {
+      int ent = next_ent[pdim]++;
+      size_t nn = (size_t)pdim + 1, n = (size_t)gr->n_elems;
+      for (size_t e = 0; e < n; e++) {
+        etag[e] = next_tag++;
+        for (size_t k = 0; k < nn; k++) {
+          int32_t v = gr->elems[nn * e + k];
+          if (v < 0 || v >= m->n_vertices) {
+            rc = bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d) refers to vertex %d of %d", path,
+                              gr->name, pdim, gr->tag, v, m->n_vertices);
+            goto done;
+          }
+          enodes[nn * e + k] = (size_t)v + 1;
+        }
+      }
+      gmshModelAddDiscreteEntity(pdim, ent, NULL, 0, &ierr);
+      if (!ierr) gmshModelMeshAddElementsByType(ent, simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
+      if (!ierr) gmshModelAddPhysicalGroup(pdim, &ent, 1, gr->tag, &ierr);
+    } else {
+      rc = bs_error_set(err, BS_EINPUT, "%s: group \"%s\" has dimension %d", path, gr->name, pdim);
+      goto done;
+    }
+    if (!ierr && gr->name && gr->name[0]) gmshModelSetPhysicalName(pdim, gr->tag, gr->name, &ierr);
+    if (ierr) {
+      rc = gmsh_fail(err, BS_EGMSH, path, "take a physical group");
+      goto done;
+    }
+  }
+done:
+  free(ntag);
+  free(etag);
+  free(enodes);
+  free(ents);
+  return rc;
+}
+
+int bs_mesh_write_msh(const bs_mesh *m, const double *x, const char *path, bs_error *err) {
+  if (!m) return bs_error_set(err, BS_EINPUT, "bs_mesh_write_msh: NULL mesh");
+  if (!path || !path[0]) return bs_error_set(err, BS_EINPUT, "bs_mesh_write_msh: no file name given");
+  if (strcasecmp(file_ext(path), "msh") != 0)
+    return bs_error_set(err, BS_EINPUT, "%s: bs_mesh_write_msh writes .msh files (the name must end in .msh)", path);
+  if (!x) x = m->x;
+  FILE *f = fopen(path, "wb");
+  if (!f) return bs_error_set(err, BS_EIO, "%s: cannot write: %s", path, strerror(errno));
+  fclose(f);
+
+  tet_classes c;
+  int rc = build_classes(m, &c, err);
+  if (rc) {
+    free_classes(&c);
+    bs_error_prefix(err, "%s", path);
+    return rc;
+  }
+  if ((rc = gmsh_begin(path, err))) {
+    free_classes(&c);
+    return rc;
+  }
+  rc = build_model(m, x, &c, path, err);
+  if (!rc) {
+    int ierr = 0;
+    gmshOptionSetNumber("Mesh.MshFileVersion", 4.1, &ierr);
+    if (!ierr) gmshOptionSetNumber("Mesh.Binary", 0, &ierr);
+    if (!ierr) gmshOptionSetNumber("Mesh.SaveAll", 1, &ierr); /* tets outside any 3-D group too */
+    if (!ierr) gmshWrite(path, &ierr);
+    if (ierr) rc = gmsh_fail(err, BS_EIO, path, "write the file");
+  }
+  gmsh_end();
+  free_classes(&c);
+  return rc;
+}

@@ -1,0 +1,132 @@
+// shim_surface.cpp — triangulated surfaces read by CGAL, handed to C.
+//
+// CGAL::IO::read_polygon_soup reads the file as a polygon soup (points +
+// polygons of point indices, no topology), choosing the reader by extension
+// (.off, .obj, .ply, .stl, .ts). Polygons of k > 3 vertices are split into the
+// k - 2 triangles of a fan from their first vertex (exact for the convex,
+// planar faces that OFF/OBJ/PLY writers emit).
+//
+// Every entry point catches every exception; nothing is printed (the readers
+// run with verbose = false).
+
+#include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "bs_shim.h"
+
+namespace {
+
+typedef CGAL::Simple_cartesian<double> Kernel;
+typedef Kernel::Point_3 Point;
+typedef std::vector<std::size_t> Polygon;
+
+std::string lower_extension(const char *path) {
+  std::string p(path);
+  std::size_t dot = p.find_last_of('.');
+  std::size_t slash = p.find_last_of('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return std::string();
+  std::string ext = p.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+  return ext;
+}
+
+int read_surface(const char *path, double **points_out, int64_t *n_points_out, int32_t **tris_out,
+                 int64_t *n_tris_out, bs_error *err) {
+  std::FILE *f = std::fopen(path, "rb");
+  if (!f) return bs_error_set(err, BS_EIO, "%s: cannot open the surface file", path);
+  std::fclose(f);
+
+  const std::string ext = lower_extension(path);
+  std::vector<Point> points;
+  std::vector<Polygon> polygons;
+  if (ext != "off" && ext != "obj" && ext != "ply" && ext != "stl" && ext != "ts")
+    return bs_error_set(err, BS_EINPUT,
+                        "%s: unsupported surface format '.%s' (expected .off, .obj, .ply, .stl or .ts)", path,
+                        ext.c_str());
+  bool ok = CGAL::IO::read_polygon_soup(std::string(path), points, polygons, CGAL::parameters::verbose(false));
+  if (!ok) return bs_error_set(err, BS_EINPUT, "%s: CGAL could not read the file as .%s", path, ext.c_str());
+  if (points.empty() || polygons.empty())
+    return bs_error_set(err, BS_EINPUT, "%s: the surface is empty (%zu points, %zu polygons)", path, points.size(),
+                        polygons.size());
+  if (points.size() > (std::size_t)INT32_MAX)
+    return bs_error_set(err, BS_EINPUT, "%s: %zu points exceed the 32-bit index range", path, points.size());
+
+  for (std::size_t i = 0; i < points.size(); i++) {
+    const Point &p = points[i];
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()))
+      return bs_error_set(err, BS_EINPUT, "%s: point %zu has a non-finite coordinate", path, i);
+  }
+  std::size_t n_tris = 0;
+  for (std::size_t i = 0; i < polygons.size(); i++) {
+    const Polygon &poly = polygons[i];
+    if (poly.size() < 3)
+      return bs_error_set(err, BS_EINPUT, "%s: polygon %zu has %zu vertices (at least 3 needed)", path, i,
+                          poly.size());
+    for (std::size_t k = 0; k < poly.size(); k++)
+      if (poly[k] >= points.size())
+        return bs_error_set(err, BS_EINPUT, "%s: polygon %zu refers to point %lld, but there are %zu points", path,
+                            i, (long long)(int64_t)poly[k], points.size());
+    n_tris += poly.size() - 2;
+  }
+
+  double *x = (double *)std::malloc(3 * points.size() * sizeof(double));
+  int32_t *t = (int32_t *)std::malloc(3 * n_tris * sizeof(int32_t));
+  if (!x || !t) {
+    std::free(x);
+    std::free(t);
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory for %zu points and %zu triangles", path, points.size(),
+                        n_tris);
+  }
+  for (std::size_t i = 0; i < points.size(); i++) {
+    x[3 * i + 0] = points[i].x();
+    x[3 * i + 1] = points[i].y();
+    x[3 * i + 2] = points[i].z();
+  }
+  std::size_t k = 0;
+  for (const Polygon &poly : polygons)
+    for (std::size_t j = 1; j + 1 < poly.size(); j++) { // fan (v0, vj, vj+1)
+      t[3 * k + 0] = (int32_t)poly[0];
+      t[3 * k + 1] = (int32_t)poly[j];
+      t[3 * k + 2] = (int32_t)poly[j + 1];
+      k++;
+    }
+  *points_out = x;
+  *n_points_out = (int64_t)points.size();
+  *tris_out = t;
+  *n_tris_out = (int64_t)n_tris;
+  return BS_OK;
+}
+
+} // namespace
+
+extern "C" void bs_shim_free(void *p) { std::free(p); }
+
+extern "C" int bs_shim_read_surface(const char *path, double **points, int64_t *n_points, int32_t **tris,
+                                    int64_t *n_tris, bs_error *err) {
+  if (!path || !points || !n_points || !tris || !n_tris)
+    return bs_error_set(err, BS_EINPUT, "bs_shim_read_surface: NULL argument");
+  *points = NULL;
+  *tris = NULL;
+  *n_points = 0;
+  *n_tris = 0;
+  try {
+    return read_surface(path, points, n_points, tris, n_tris, err);
+  } catch (const std::bad_alloc &) {
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory while reading the surface", path);
+  } catch (const std::exception &e) {
+    return bs_error_set(err, BS_EINPUT, "%s: CGAL failed to read the surface: %s", path, e.what());
+  } catch (...) {
+    return bs_error_set(err, BS_EINPUT, "%s: CGAL failed to read the surface (unknown exception)", path);
+  }
+}
