@@ -1,0 +1,95 @@
+/* The `bigstep` command line: help, version, `mesh` subcommands, exit statuses
+ * (0 ok, 1 failed job, 2 usage error) and one-line messages naming the culprit. */
+#define _POSIX_C_SOURCE 200809L
+#include <criterion/criterion.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+#include "cli_util.h"
+
+Test(cli_mesh, help_and_version) {
+  char *out = NULL;
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " --help", &out), 0);
+  cr_expect(strstr(out, "mesh") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " --version", &out), 0);
+  cr_expect(strstr(out, "bigstep ") == out, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh --help", &out), 0);
+  cr_expect(strstr(out, "mesh info FILE") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " frobnicate", &out), 2);
+  cr_expect(strstr(out, "unknown command 'frobnicate'") != NULL, "%s", out);
+  free(out);
+}
+
+Test(cli_mesh, info_box_counts) {
+  char *out = NULL;
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:4x3x2 --refine 1", &out), 0, "%s", out);
+  /* 8x6x4 cells: 9*7*5 vertices, 6*192 tets */
+  cr_expect(strstr(out, "vertices 315 (dofs 945), tets 1152") != NULL, "%s", out);
+  cr_expect(strstr(out, "check: ok") != NULL, "%s", out);
+  cr_expect(strstr(out, "xmin") != NULL, "%s", out);
+  free(out);
+}
+
+Test(cli_mesh, info_step_part) {
+  char *out = NULL;
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info data/geo/bracket.step", &out), 0, "%s", out);
+  cr_expect(strstr(out, "(3, 1) body") != NULL, "%s", out);
+  cr_expect(strstr(out, "inverted 0") != NULL, "%s", out);
+  cr_expect(strstr(out, "check: ok") != NULL, "%s", out);
+  free(out);
+}
+
+Test(cli_mesh, refine_reorder_convert_round_trip) {
+  char *out = NULL;
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh refine data/geo/cube.geo /tmp/bs_cli_refined.msh", &out), 0, "%s", out);
+  free(out);
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh reorder /tmp/bs_cli_refined.msh /tmp/bs_cli_rcm.msh --method rcm", &out),
+               0, "%s", out);
+  cr_expect(strstr(out, "bandwidth") != NULL, "%s", out);
+  free(out);
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh convert /tmp/bs_cli_rcm.msh /tmp/bs_cli_rcm.vtu", &out), 0, "%s", out);
+  free(out);
+  char *a = NULL, *b = NULL;
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info data/geo/cube.geo --refine 1", &a), 0);
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info /tmp/bs_cli_rcm.msh", &b), 0);
+  /* same counts and volume line after refine -> reorder -> write -> read */
+  const char *ka = strstr(a, "  vertices"), *kb = strstr(b, "  vertices");
+  cr_assert(ka && kb);
+  cr_expect(strncmp(ka, kb, strcspn(ka, "\n")) == 0, "%.*s vs %.*s", (int)strcspn(ka, "\n"), ka,
+            (int)strcspn(kb, "\n"), kb);
+  free(a);
+  free(b);
+}
+
+Test(cli_mesh, errors) {
+  char *out = NULL;
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info /nonexistent/part.msh", &out), 1);
+  cr_expect(strstr(out, "/nonexistent/part.msh") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:2 --size -1", &out), 2);
+  cr_expect(strstr(out, "--size") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:2 --refine x", &out), 2);
+  cr_expect(strstr(out, "--refine") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:2 --frob 1", &out), 2);
+  cr_expect(strstr(out, "--frob") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh refine box:2", &out), 2);
+  cr_expect(strstr(out, "IN and OUT") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh convert box:2 /tmp/x.txt", &out), 1);
+  cr_expect(strstr(out, "/tmp/x.txt") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:0", &out), 1);
+  cr_expect(strstr(out, "box:0") != NULL, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh explode box:2", &out), 2);
+  cr_expect(strstr(out, "explode") != NULL, "%s", out);
+  free(out);
+}
