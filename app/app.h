@@ -33,5 +33,6 @@ int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, b
 int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err);
 
 int bs_cmd_mesh(int argc, char **argv);
+int bs_cmd_run(int argc, char **argv);
 
 #endif

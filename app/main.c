@@ -12,6 +12,7 @@ static const char *main_help =
     "usage: bigstep COMMAND [ARGS]\n"
     "\n"
     "commands:\n"
+    "  run SCENE                          simulate a scene (JSON) and report per frame\n"
     "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
@@ -32,6 +33,7 @@ int main(int argc, char **argv) {
     return 0;
   }
   if (!strcmp(cmd, "mesh")) return bs_cmd_mesh(argc - 1, argv + 1);
+  if (!strcmp(cmd, "run")) return bs_cmd_run(argc - 1, argv + 1);
   fprintf(stderr, "bigstep: unknown command '%s' (see 'bigstep --help')\n", cmd);
   return BS_EXIT_USAGE;
 }

@@ -1,0 +1,556 @@
+/* scene.c — strict JSON scene parsing (cJSON). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cJSON.h>
+
+#include "app.h"
+#include "scene.h"
+
+/* ---- small strict accessors -------------------------------------------- */
+
+typedef struct ctx {
+  const char *file;
+  bs_error *err;
+} ctx;
+
+static int fail(ctx *c, const char *where, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+#include <stdarg.h>
+static int fail(ctx *c, const char *where, const char *fmt, ...) {
+  char msg[768];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  return bs_error_set(c->err, BS_EINPUT, "%s: %s: %s", c->file, where, msg);
+}
+
+static void join(char *out, size_t n, const char *where, const char *key) {
+  if (where[0]) snprintf(out, n, "%s.%s", where, key);
+  else snprintf(out, n, "%s", key);
+}
+
+/* Every key of obj must be in allowed (NULL-terminated). */
+static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *const *allowed) {
+  if (!cJSON_IsObject(obj)) return fail(c, where[0] ? where : "(top level)", "must be an object");
+  for (const cJSON *it = obj->child; it; it = it->next) {
+    int ok = 0;
+    for (int i = 0; allowed[i]; i++)
+      if (strcmp(it->string, allowed[i]) == 0) ok = 1;
+    if (!ok) {
+      char w[512], list[512] = "";
+      join(w, sizeof w, where, it->string);
+      for (int i = 0; allowed[i]; i++) {
+        strncat(list, allowed[i], sizeof list - strlen(list) - 1);
+        if (allowed[i + 1]) strncat(list, ", ", sizeof list - strlen(list) - 1);
+      }
+      return fail(c, w, "unknown key (allowed here: %s)", list);
+    }
+  }
+  return 0;
+}
+
+static int get_num(ctx *c, const cJSON *obj, const char *where, const char *key, int required, double *out) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  char w[512];
+  join(w, sizeof w, where, key);
+  if (!it) return required ? fail(c, w, "missing (a number is required)") : 0;
+  if (!cJSON_IsNumber(it)) return fail(c, w, "must be a number");
+  if (!isfinite(it->valuedouble)) return fail(c, w, "must be finite, got %g", it->valuedouble);
+  *out = it->valuedouble;
+  return 0;
+}
+
+static int get_int(ctx *c, const cJSON *obj, const char *where, const char *key, int required, long lo, long hi,
+                   int *out) {
+  double v = *out;
+  char w[512];
+  join(w, sizeof w, where, key);
+  if (!cJSON_GetObjectItemCaseSensitive(obj, key) && !required) return 0;
+  int st = get_num(c, obj, where, key, required, &v);
+  if (st) return st;
+  if (v != floor(v) || v < lo || v > hi) return fail(c, w, "must be an integer in [%ld, %ld], got %g", lo, hi, v);
+  *out = (int)v;
+  return 0;
+}
+
+static int get_str(ctx *c, const cJSON *obj, const char *where, const char *key, int required, char *out,
+                   size_t n) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  char w[512];
+  join(w, sizeof w, where, key);
+  if (!it) return required ? fail(c, w, "missing (a string is required)") : 0;
+  if (!cJSON_IsString(it)) return fail(c, w, "must be a string");
+  if (strlen(it->valuestring) >= n) return fail(c, w, "string too long");
+  snprintf(out, n, "%s", it->valuestring);
+  return 0;
+}
+
+static int get_bool(ctx *c, const cJSON *obj, const char *where, const char *key, int *out) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  char w[512];
+  join(w, sizeof w, where, key);
+  if (!it) return 0;
+  if (!cJSON_IsBool(it)) return fail(c, w, "must be true or false");
+  *out = cJSON_IsTrue(it);
+  return 0;
+}
+
+static int get_vec3(ctx *c, const cJSON *obj, const char *where, const char *key, int required, double out[3]) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  char w[512];
+  join(w, sizeof w, where, key);
+  if (!it) return required ? fail(c, w, "missing (an array of 3 numbers is required)") : 0;
+  if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3) return fail(c, w, "must be an array of 3 numbers");
+  for (int k = 0; k < 3; k++) {
+    const cJSON *e = cJSON_GetArrayItem(it, k);
+    if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) return fail(c, w, "element %d must be a finite number", k);
+    out[k] = e->valuedouble;
+  }
+  return 0;
+}
+
+/* ---- sections ------------------------------------------------------------ */
+
+static int parse_material(ctx *c, const cJSON *o, const char *where, bs_scene_material *m) {
+  static const char *const keys[] = {"model", "youngs", "poisson", "density", "rayleigh", NULL};
+  int st;
+  if ((st = check_keys(c, o, where, keys))) return st;
+  char model[64] = "fixed_corotated";
+  if ((st = get_str(c, o, where, "model", 0, model, sizeof model))) return st;
+  bs_error e2;
+  if (bs_model_parse(model, &m->model, &e2)) {
+    char w[512];
+    join(w, sizeof w, where, "model");
+    return fail(c, w, "%s", e2.msg);
+  }
+  m->rayleigh = 0;
+  if ((st = get_num(c, o, where, "youngs", 1, &m->youngs)) || (st = get_num(c, o, where, "poisson", 1, &m->poisson)) ||
+      (st = get_num(c, o, where, "density", 1, &m->density)) || (st = get_num(c, o, where, "rayleigh", 0, &m->rayleigh)))
+    return st;
+  bs_material tmp;
+  if (bs_material_init(m->model, m->youngs, m->poisson, m->density, &tmp, &e2)) return fail(c, where, "%s", e2.msg);
+  if (m->rayleigh < 0) {
+    char w[512];
+    join(w, sizeof w, where, "rayleigh");
+    return fail(c, w, "must be >= 0, got %g", m->rayleigh);
+  }
+  return 0;
+}
+
+static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_script *s) {
+  static const char *const keys[] = {"group", "velocity", "fixed", "keyframes", NULL};
+  int st;
+  if ((st = check_keys(c, o, where, keys))) return st;
+  if ((st = get_str(c, o, where, "group", 1, s->group, sizeof s->group))) return st;
+  int has_v = cJSON_HasObjectItem(o, "velocity"), has_k = cJSON_HasObjectItem(o, "keyframes");
+  int fixed = 0;
+  if ((st = get_bool(c, o, where, "fixed", &fixed))) return st;
+  if (has_v + has_k + fixed != 1)
+    return fail(c, where, "give exactly one of \"velocity\", \"keyframes\" or \"fixed\": true");
+  if (fixed) s->kind = BS_SCRIPT_FIXED;
+  if (has_v) {
+    s->kind = BS_SCRIPT_VELOCITY;
+    if ((st = get_vec3(c, o, where, "velocity", 1, s->velocity))) return st;
+  }
+  if (has_k) {
+    s->kind = BS_SCRIPT_KEYFRAMES;
+    char w[512];
+    join(w, sizeof w, where, "keyframes");
+    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
+    if (!cJSON_IsArray(arr) || cJSON_GetArraySize(arr) < 1) return fail(c, w, "must be a non-empty array");
+    s->n_keys = cJSON_GetArraySize(arr);
+    s->key_t = calloc((size_t)s->n_keys, sizeof(double));
+    s->key_offset = calloc(3 * (size_t)s->n_keys, sizeof(double));
+    if (!s->key_t || !s->key_offset) return bs_error_set(c->err, BS_ENOMEM, "out of memory reading %s", w);
+    for (int i = 0; i < s->n_keys; i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%d", w, i);
+      const cJSON *k = cJSON_GetArrayItem(arr, i);
+      static const char *const kk[] = {"t", "offset", NULL};
+      if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &s->key_t[i])) ||
+          (st = get_vec3(c, k, wi, "offset", 1, s->key_offset + 3 * i)))
+        return st;
+      if (i > 0 && !(s->key_t[i] > s->key_t[i - 1])) return fail(c, wi, "keyframe times must increase");
+    }
+  }
+  return 0;
+}
+
+static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
+  static const char *const keys[] = {"mesh", "box", "mesh_size", "refine", "reorder", "translate", "rotate", "scale",
+                                     "material", "materials", "velocity", "angular_velocity", "initial_state",
+                                     "scripted", NULL};
+  int st;
+  if ((st = check_keys(c, o, where, keys))) return st;
+  if ((st = get_str(c, o, where, "mesh", 1, b->mesh, sizeof b->mesh))) return st;
+  char w[512];
+  b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 4;
+  b->box_size[0] = b->box_size[1] = b->box_size[2] = 1;
+  const cJSON *box = cJSON_GetObjectItemCaseSensitive(o, "box");
+  join(w, sizeof w, where, "box");
+  if (strcmp(b->mesh, "box") == 0) {
+    if (!box) return fail(c, w, "missing: \"mesh\": \"box\" needs \"box\": {\"cells\": [nx, ny, nz], \"size\": [lx, ly, lz]}");
+    static const char *const bk[] = {"cells", "size", NULL};
+    if ((st = check_keys(c, box, w, bk))) return st;
+    double cells[3];
+    if ((st = get_vec3(c, box, w, "cells", 1, cells)) || (st = get_vec3(c, box, w, "size", 0, b->box_size))) return st;
+    for (int k = 0; k < 3; k++) {
+      if (cells[k] != floor(cells[k]) || cells[k] < 1 || cells[k] > 4096) return fail(c, w, "cells must be integers in [1, 4096]");
+      if (!(b->box_size[k] > 0)) return fail(c, w, "size must be positive");
+      b->box_cells[k] = (int)cells[k];
+    }
+  } else if (box) {
+    return fail(c, w, "only allowed with \"mesh\": \"box\"");
+  }
+  b->mesh_size = 0;
+  if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size))) return st;
+  if (b->mesh_size < 0) {
+    join(w, sizeof w, where, "mesh_size");
+    return fail(c, w, "must be > 0, got %g", b->mesh_size);
+  }
+  if ((st = get_int(c, o, where, "refine", 0, 0, 6, &b->refine))) return st;
+  char reorder[32] = "none";
+  if ((st = get_str(c, o, where, "reorder", 0, reorder, sizeof reorder))) return st;
+  if (!strcmp(reorder, "none")) b->reorder = BS_ORDER_NONE;
+  else if (!strcmp(reorder, "metis")) b->reorder = BS_ORDER_METIS;
+  else if (!strcmp(reorder, "rcm")) b->reorder = BS_ORDER_RCM;
+  else {
+    join(w, sizeof w, where, "reorder");
+    return fail(c, w, "must be \"none\", \"metis\" or \"rcm\", got \"%s\"", reorder);
+  }
+  b->scale[0] = b->scale[1] = b->scale[2] = 1;
+  const cJSON *sc = cJSON_GetObjectItemCaseSensitive(o, "scale");
+  if (cJSON_IsNumber(sc)) b->scale[0] = b->scale[1] = b->scale[2] = sc->valuedouble;
+  else if ((st = get_vec3(c, o, where, "scale", 0, b->scale))) return st;
+  for (int k = 0; k < 3; k++)
+    if (!(b->scale[k] > 0) || !isfinite(b->scale[k])) {
+      join(w, sizeof w, where, "scale");
+      return fail(c, w, "must be positive and finite");
+    }
+  if ((st = get_vec3(c, o, where, "translate", 0, b->translate)) || (st = get_vec3(c, o, where, "rotate", 0, b->rotate)) ||
+      (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
+      (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
+    return st;
+
+  /* materials: "material" (default, required) and "materials": {group: {...}} */
+  const cJSON *mats = cJSON_GetObjectItemCaseSensitive(o, "materials");
+  int nm = 1 + (mats ? cJSON_GetArraySize(mats) : 0);
+  b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
+  if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  b->n_materials = nm;
+  const cJSON *mat = cJSON_GetObjectItemCaseSensitive(o, "material");
+  join(w, sizeof w, where, "material");
+  if (!mat) return fail(c, w, "missing (an object with model, youngs, poisson, density is required)");
+  if ((st = parse_material(c, mat, w, &b->materials[0]))) return st;
+  if (mats) {
+    join(w, sizeof w, where, "materials");
+    if (!cJSON_IsObject(mats)) return fail(c, w, "must be an object {group name: material}");
+    int i = 1;
+    for (const cJSON *it = mats->child; it; it = it->next, i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%s", w, it->string);
+      snprintf(b->materials[i].group, sizeof b->materials[i].group, "%s", it->string);
+      if ((st = parse_material(c, it, wi, &b->materials[i]))) return st;
+    }
+  }
+
+  const cJSON *is = cJSON_GetObjectItemCaseSensitive(o, "initial_state");
+  b->init = BS_INIT_REST;
+  if (is) {
+    join(w, sizeof w, where, "initial_state");
+    static const char *const ik[] = {"type", "lo", "hi", "point", "seed", NULL};
+    if ((st = check_keys(c, is, w, ik))) return st;
+    char type[32];
+    if ((st = get_str(c, is, w, "type", 1, type, sizeof type))) return st;
+    int seed = 1;
+    if ((st = get_int(c, is, w, "seed", 0, 0, 2147483647L, &seed))) return st;
+    b->init_seed = (unsigned)seed;
+    if (!strcmp(type, "rest")) b->init = BS_INIT_REST;
+    else if (!strcmp(type, "random")) {
+      b->init = BS_INIT_RANDOM;
+      if ((st = get_vec3(c, is, w, "lo", 1, b->init_lo)) || (st = get_vec3(c, is, w, "hi", 1, b->init_hi))) return st;
+      for (int k = 0; k < 3; k++)
+        if (!(b->init_hi[k] >= b->init_lo[k])) return fail(c, w, "hi must be >= lo in every component");
+    } else if (!strcmp(type, "point")) {
+      b->init = BS_INIT_POINT;
+      if ((st = get_vec3(c, is, w, "point", 0, b->init_lo))) return st;
+    } else {
+      char wt[600];
+      snprintf(wt, sizeof wt, "%s.type", w);
+      return fail(c, wt, "must be \"rest\", \"random\" or \"point\", got \"%s\"", type);
+    }
+  }
+
+  const cJSON *scr = cJSON_GetObjectItemCaseSensitive(o, "scripted");
+  if (scr) {
+    join(w, sizeof w, where, "scripted");
+    if (!cJSON_IsArray(scr)) return fail(c, w, "must be an array");
+    b->n_scripts = cJSON_GetArraySize(scr);
+    b->scripts = calloc((size_t)(b->n_scripts ? b->n_scripts : 1), sizeof(bs_scene_script));
+    if (!b->scripts) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+    for (int i = 0; i < b->n_scripts; i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%d", w, i);
+      if ((st = parse_script(c, cJSON_GetArrayItem(scr, i), wi, &b->scripts[i]))) return st;
+    }
+  }
+  return 0;
+}
+
+static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
+  static const char *const keys[] = {"time", "solver", "gravity", "drag", "bodies", "output", "obstacles",
+                                     "self_collision", "description", NULL};
+  int st;
+  if ((st = check_keys(c, root, "", keys))) return st;
+  if (cJSON_HasObjectItem(root, "obstacles") || cJSON_HasObjectItem(root, "self_collision")) {
+    const char *k = cJSON_HasObjectItem(root, "obstacles") ? "obstacles" : "self_collision";
+    return fail(c, k, "collisions are not part of this build of bigstep (they land with the collision module)");
+  }
+  const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
+  if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
+
+  /* time */
+  s->fps = 24;
+  s->frames = 24;
+  s->steps_per_frame = 1;
+  const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
+  if (t) {
+    static const char *const tk[] = {"fps", "frames", "steps_per_frame", "dt", NULL};
+    if ((st = check_keys(c, t, "time", tk)) || (st = get_num(c, t, "time", "fps", 0, &s->fps)) ||
+        (st = get_int(c, t, "time", "frames", 0, 0, 10000000, &s->frames)) ||
+        (st = get_int(c, t, "time", "steps_per_frame", 0, 1, 1000000, &s->steps_per_frame)))
+      return st;
+    if (!(s->fps > 0)) return fail(c, "time.fps", "must be > 0, got %g", s->fps);
+    double dt = 0;
+    if ((st = get_num(c, t, "time", "dt", 0, &dt))) return st;
+    if (cJSON_HasObjectItem(t, "dt")) {
+      if (!(dt > 0)) return fail(c, "time.dt", "must be > 0, got %g", dt);
+      if (cJSON_HasObjectItem(t, "steps_per_frame")) return fail(c, "time.dt", "give either dt or steps_per_frame, not both");
+      double spf = 1.0 / (s->fps * dt);
+      if (fabs(spf - floor(spf + 0.5)) > 1e-9 * spf || floor(spf + 0.5) < 1)
+        return fail(c, "time.dt", "1/(fps*dt) must be a whole number of steps per frame, got %g", spf);
+      s->steps_per_frame = (int)floor(spf + 0.5);
+    }
+  }
+  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+
+  /* solver */
+  bs_integrator_opts_default(&s->solver);
+  s->mode = BS_MODE_DYNAMIC;
+  s->load_steps = 1;
+  const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
+  if (so) {
+    static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
+                                     "newton_k", "mode", "load_steps", "project_hessian", NULL};
+    if ((st = check_keys(c, so, "solver", sk))) return st;
+    char buf[64];
+    bs_error e2;
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "method", 0, buf, sizeof buf))) return st;
+    if (buf[0] && bs_method_parse(buf, &s->solver.method, &e2)) return fail(c, "solver.method", "%s", e2.msg);
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "linear", 0, buf, sizeof buf))) return st;
+    if (buf[0] && (bs_lin_kind_parse(buf, &s->solver.min.linear, &e2) || s->solver.min.linear == BS_LIN_MINRES))
+      return fail(c, "solver.linear", "must be \"cg\", \"pcg\" or \"cholmod\", got \"%s\"", buf);
+    if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
+    if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
+    if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
+        (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||
+        (st = get_int(c, so, "solver", "newton_k", 0, 1, 1000000, &s->solver.newton_k)) ||
+        (st = get_int(c, so, "solver", "load_steps", 0, 1, 100000, &s->load_steps)) ||
+        (st = get_bool(c, so, "solver", "project_hessian", &s->project_hessian)))
+      return st;
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "mode", 0, buf, sizeof buf))) return st;
+    if (buf[0]) {
+      if (!strcmp(buf, "dynamic")) s->mode = BS_MODE_DYNAMIC;
+      else if (!strcmp(buf, "static")) s->mode = BS_MODE_STATIC;
+      else return fail(c, "solver.mode", "must be \"dynamic\" or \"static\", got \"%s\"", buf);
+    }
+  }
+
+  s->gravity[0] = 0;
+  s->gravity[1] = -9.8;
+  s->gravity[2] = 0;
+  if ((st = get_vec3(c, root, "", "gravity", 0, s->gravity))) return st;
+  s->drag = 0;
+  if ((st = get_num(c, root, "", "drag", 0, &s->drag))) return st;
+  if (s->drag < 0) return fail(c, "drag", "must be >= 0, got %g", s->drag);
+
+  const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
+  if (!bodies) return fail(c, "bodies", "missing (an array of at least one body is required)");
+  if (!cJSON_IsArray(bodies) || cJSON_GetArraySize(bodies) < 1) return fail(c, "bodies", "must be a non-empty array");
+  s->n_bodies = cJSON_GetArraySize(bodies);
+  s->bodies = calloc((size_t)s->n_bodies, sizeof(bs_scene_body));
+  if (!s->bodies) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  for (int i = 0; i < s->n_bodies; i++) {
+    char w[64];
+    snprintf(w, sizeof w, "bodies.%d", i);
+    if ((st = parse_body(c, cJSON_GetArrayItem(bodies, i), w, &s->bodies[i]))) return st;
+  }
+
+  s->vtu_every = 1;
+  s->stats_csv = 1;
+  const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
+  if (out) {
+    static const char *const ok[] = {"dir", "vtu_every", "stats", NULL};
+    if ((st = check_keys(c, out, "output", ok)) || (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
+        (st = get_int(c, out, "output", "vtu_every", 0, 0, 1000000, &s->vtu_every)) ||
+        (st = get_bool(c, out, "output", "stats", &s->stats_csv)))
+      return st;
+  }
+  return 0;
+}
+
+/* ---- --set overrides ------------------------------------------------------ */
+
+static int apply_set(ctx *c, cJSON *root, const char *set) {
+  const char *eq = strchr(set, '=');
+  if (!eq || eq == set) return bs_error_set(c->err, BS_EINPUT, "--set '%s': expected key.path=value", set);
+  char path[512];
+  snprintf(path, sizeof path, "%.*s", (int)(eq - set), set);
+  const char *val = eq + 1;
+  cJSON *v = cJSON_Parse(val);
+  if (!v) v = cJSON_CreateString(val);
+  if (!v) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  cJSON *node = root;
+  char *save = NULL, *tok = strtok_r(path, ".", &save);
+  while (tok) {
+    char *next = strtok_r(NULL, ".", &save);
+    char *end;
+    long idx = strtol(tok, &end, 10);
+    int is_index = (*end == '\0' && end != tok);
+    if (cJSON_IsArray(node)) {
+      if (!is_index || idx < 0 || idx >= cJSON_GetArraySize(node)) {
+        cJSON_Delete(v);
+        return bs_error_set(c->err, BS_EINPUT, "--set %.*s: '%s' is not an index of an array of %d elements",
+                            (int)(eq - set), set, tok, cJSON_GetArraySize(node));
+      }
+      if (!next) {
+        cJSON_ReplaceItemInArray(node, (int)idx, v);
+        return 0;
+      }
+      node = cJSON_GetArrayItem(node, (int)idx);
+    } else if (cJSON_IsObject(node)) {
+      cJSON *child = cJSON_GetObjectItemCaseSensitive(node, tok);
+      if (!next) {
+        if (child) cJSON_ReplaceItemInObjectCaseSensitive(node, tok, v);
+        else cJSON_AddItemToObject(node, tok, v);
+        return 0;
+      }
+      if (!child) {
+        child = cJSON_CreateObject();
+        cJSON_AddItemToObject(node, tok, child);
+      }
+      node = child;
+    } else {
+      cJSON_Delete(v);
+      return bs_error_set(c->err, BS_EINPUT, "--set %.*s: '%s' is inside a value that is neither an object nor an array",
+                          (int)(eq - set), set, tok);
+    }
+    tok = next;
+  }
+  cJSON_Delete(v);
+  return bs_error_set(c->err, BS_EINPUT, "--set '%s': empty key path", set);
+}
+
+/* ---- load ----------------------------------------------------------------- */
+
+void bs_scene_destroy(bs_scene **ps) {
+  if (!ps || !*ps) return;
+  bs_scene *s = *ps;
+  for (int i = 0; i < s->n_bodies; i++) {
+    bs_scene_body *b = &s->bodies[i];
+    free(b->materials);
+    for (int k = 0; k < b->n_scripts; k++) {
+      free(b->scripts[k].key_t);
+      free(b->scripts[k].key_offset);
+    }
+    free(b->scripts);
+  }
+  free(s->bodies);
+  free(s);
+  *ps = NULL;
+}
+
+int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scene **out, bs_error *err) {
+  *out = NULL;
+  FILE *f = fopen(path, "rb");
+  if (!f) return bs_error_set(err, BS_EIO, "cannot open scene '%s'", path);
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  if (n < 0) {
+    fclose(f);
+    return bs_error_set(err, BS_EIO, "cannot read scene '%s'", path);
+  }
+  char *text = malloc((size_t)n + 1);
+  if (!text) {
+    fclose(f);
+    return bs_error_set(err, BS_ENOMEM, "out of memory reading '%s'", path);
+  }
+  size_t got = fread(text, 1, (size_t)n, f);
+  fclose(f);
+  text[got] = '\0';
+  cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
+  if (!root) {
+    const char *at = cJSON_GetErrorPtr();
+    int line = 1;
+    if (at)
+      for (const char *p = text; p < at && *p; p++) line += (*p == '\n');
+    free(text);
+    return bs_error_set(err, BS_EINPUT, "%s: line %d: malformed JSON", path, line);
+  }
+  free(text);
+  ctx c = {path, err};
+  int st = 0;
+  for (int i = 0; i < n_sets && !st; i++) st = apply_set(&c, root, sets[i]);
+  bs_scene *s = NULL;
+  if (!st) {
+    s = calloc(1, sizeof *s);
+    if (!s) st = bs_error_set(err, BS_ENOMEM, "out of memory");
+  }
+  if (!st) {
+    snprintf(s->path, sizeof s->path, "%s", path);
+    st = parse_scene(&c, root, s);
+  }
+  cJSON_Delete(root);
+  if (st) {
+    bs_scene_destroy(&s);
+    return st;
+  }
+  /* resolve mesh paths relative to the scene file's folder when not found as given */
+  for (int i = 0; i < s->n_bodies; i++) {
+    bs_scene_body *b = &s->bodies[i];
+    if (!strcmp(b->mesh, "box")) continue;
+    FILE *mf = fopen(b->mesh, "rb");
+    if (mf) {
+      fclose(mf);
+      continue;
+    }
+    const char *slash = strrchr(path, '/');
+    if (slash && b->mesh[0] != '/') {
+      char alt[2048];
+      snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - path), path, b->mesh);
+      mf = fopen(alt, "rb");
+      if (mf) {
+        fclose(mf);
+        snprintf(b->mesh, sizeof b->mesh, "%s", alt);
+        continue;
+      }
+    }
+    st = bs_error_set(err, BS_EIO, "%s: bodies.%d.mesh: cannot open mesh file '%s'", path, i, b->mesh);
+    bs_scene_destroy(&s);
+    return st;
+  }
+  *out = s;
+  return 0;
+}

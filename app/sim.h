@@ -1,0 +1,45 @@
+/* sim.h — a scene turned into a simulation: the merged mesh of all bodies,
+ * the fem cache, the energy terms the scene asks for, the scripted vertices
+ * and the integrator. Used by `bigstep run` (and later `study`, `check`).
+ *
+ * The simulation owns everything it creates; free with bs_sim_destroy. */
+#ifndef BS_SIM_H
+#define BS_SIM_H
+
+#include <stdint.h>
+
+#include "bs_fem.h"
+#include "bs_mesh.h"
+#include "bs_step.h"
+#include "bs_terms.h"
+#include "scene.h"
+
+typedef struct bs_sim_script {
+  const bs_scene_script *script;
+  int32_t n;           /* vertices scripted by it            */
+  int32_t *vertices;
+} bs_sim_script;
+
+typedef struct bs_sim {
+  const bs_scene *scene;
+  bs_mesh *mesh;        /* all bodies merged                  */
+  double *x0;           /* 3n: positions at t = 0 (transformed rest) */
+  double *x, *v;        /* 3n: current state                   */
+  uint8_t *mask;        /* n: 1 free, 0 scripted               */
+  int n_scripts;
+  bs_sim_script *scripts;
+  int n_materials;
+  bs_material *materials;
+  int32_t *tet_material;
+  bs_fem *fem;
+  int n_terms;
+  bs_term *terms[8];
+  bs_step_data step;    /* filled by the integrator each step */
+  bs_integrator *integrator;
+  double time;
+} bs_sim;
+
+int bs_sim_create(const bs_scene *scene, bs_sim **out, bs_error *err);
+void bs_sim_destroy(bs_sim **s);
+
+#endif

@@ -1,0 +1,94 @@
+/* bs_step.h — the backward Euler step (and statics) handed to the minimizer.
+ *
+ * One step from (xⁿ, vⁿ) at tⁿ to tⁿ⁺¹ = tⁿ + Δt (paper, sections 2 and 3.1):
+ *  1. step data: x̂ = xⁿ + Δt vⁿ; each term's begin_step (lagged damping);
+ *  2. scripted (constrained) vertices placed at their positions at tⁿ⁺¹;
+ *  3. two initial guesses, xⁿ + Δt vⁿ and xⁿ + Δt vⁿ + Δt² M⁻¹ f(xⁿ), keeping
+ *     the one with the smaller E (the first is "naive": at least one
+ *     iteration is then taken); the guess is projected when a projection
+ *     hook is set (constraint collisions);
+ *  4. the solve: the optimization integrator (bs_minimize), or the Newton
+ *     baseline (bs_newton, to convergence or k steps);
+ *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt, then the post-solve hooks (friction).
+ * Statics minimizes Φ alone (terms marked dynamic_only are left out), under
+ * the same constraints, optionally in load steps (gravity scaled by i/L).
+ *
+ * The integrator owns its minimizer and work vectors; it borrows the fem, the
+ * terms and the step data (bs_step_data, which the terms were created with
+ * and read, and which the integrator fills before each solve); it copies the
+ * mask.
+ */
+#ifndef BS_STEP_H
+#define BS_STEP_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+#include "bs_fem.h"
+#include "bs_minimize.h"
+#include "bs_terms.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { BS_METHOD_OPTIMIZATION = 0, BS_METHOD_NEWTON, BS_METHOD_NEWTON_K } bs_method;
+
+int bs_method_parse(const char *name, bs_method *out, bs_error *err); /* optimization|newton|newton_k */
+const char *bs_method_name(bs_method m);
+
+typedef struct bs_integrator_opts {
+  bs_method method;
+  int newton_k;           /* steps for BS_METHOD_NEWTON_K (1: linearized backward Euler) */
+  bs_minimize_opts min;   /* tolerance, caps, linear solver                          */
+} bs_integrator_opts;
+
+void bs_integrator_opts_default(bs_integrator_opts *o);
+
+/* Scripted vertices: sets x of the constrained vertices (mask 0) at time t. */
+typedef void (*bs_script_fn)(double t, double *x, void *ctx);
+
+/* Hooks of the constrained formulation and friction (collision/ sets them). */
+typedef struct bs_step_hooks {
+  void (*project)(double *x, void *ctx);                             /* P(x) in place     */
+  void (*register_active)(const double *x, const double *g, void *ctx);
+  /* after the solve: may change v only (friction), never positions */
+  int (*post_solve)(const double *x_n, const double *x, double *v, double dt, void *ctx, bs_error *err);
+  void *ctx;
+} bs_step_hooks;
+
+typedef struct bs_step_stats {
+  bs_minimize_stats min;  /* of the solve                                        */
+  int guess;              /* 0: xⁿ + Δt vⁿ, 1: with Δt² M⁻¹ f(xⁿ)                  */
+  int failed;             /* the solve did not converge (reason in min)          */
+  double seconds;         /* the whole step                                      */
+} bs_step_stats;
+
+typedef struct bs_integrator bs_integrator;
+
+/* mask: n_vertices bytes, 1 free / 0 scripted or fixed (NULL: all free);
+ * script: positions of the masked vertices in time (NULL: they stay put). */
+int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_term *const *terms, const uint8_t *mask,
+                         bs_script_fn script, void *script_ctx, const bs_integrator_opts *opts,
+                         bs_integrator **out, bs_error *err);
+void bs_integrator_destroy(bs_integrator **I);
+void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks);
+
+/* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
+ * Returns 0 when the step ran (st->failed says whether it converged), a
+ * negative code on errors (NaN in the state: refused before the solve). */
+int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
+                       bs_error *err);
+
+/* Statics: minimizes Φ from x (in/out) at time t (scripted positions at t),
+ * in load_steps load increments (>= 1). */
+int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
+                         bs_error *err);
+
+/* The objective value E at x for the current step data (for tests/diagnostics). */
+double bs_integrator_energy(bs_integrator *I, const double *x);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

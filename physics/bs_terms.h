@@ -1,0 +1,82 @@
+/* bs_terms.h — the objective as a list of energy terms.
+ *
+ * A scene becomes a list of terms; a term exists only when the scene asks for
+ * it. Each term offers, at a configuration x (3 doubles per vertex, metres):
+ *   value(x)                  its energy (J);
+ *   gradient(x, g)            its energy, and its gradient ADDED into g;
+ *   hessian(x, H)             its Hessian ADDED into the block matrix H (the
+ *                             fem pattern);
+ *   begin_step(step)          optional: refresh what it lags on (xⁿ, Δt).
+ * Terms read the step data (Δt, x̂, xⁿ) through the bs_step_data pointer
+ * given at creation, which the integrator owns and updates each step.
+ *
+ * The terms of this module (paper sections 2.1, 4.1, 4.2):
+ *   inertia     1/(2Δt²) (x − x̂)ᵀ M (x − x̂)
+ *   gravity     −Σ m_v gᵀ x_v
+ *   elasticity  Σ_tets V Ψ(F), one model and parameter set per material group
+ *   damping     1/(2Δt) (x − xⁿ)ᵀ D (x − xⁿ), D = Σ_tets k_material H_tet⁺(xⁿ),
+ *               H⁺ the PSD-projected elastic Hessian at xⁿ (lagged Rayleigh
+ *               damping, refreshed each step; k in seconds)
+ *   drag        k/(2Δt) (x − xⁿ)ᵀ M (x − xⁿ)
+ *
+ * Ownership: a term is created by its bs_term_*_create, owned by the caller
+ * and freed with bs_term_destroy. It keeps pointers to the fem cache and the
+ * step data, which must outlive it.
+ */
+#ifndef BS_TERMS_H
+#define BS_TERMS_H
+
+#include "bs_base.h"
+#include "bs_bsr.h"
+#include "bs_fem.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What the integrator sets before each solve. */
+typedef struct bs_step_data {
+  double dt;           /* time step (s); 0 in a static solve                   */
+  const double *x_hat; /* xⁿ + Δt vⁿ                                           */
+  const double *x_n;   /* positions at the start of the step                    */
+  double time;         /* tⁿ⁺¹                                                  */
+  double load;         /* load factor on external loads (gravity); 1 normally  */
+} bs_step_data;
+
+typedef struct bs_term bs_term;
+
+typedef struct bs_term_ops {
+  double (*value)(const bs_term *t, const double *x);
+  double (*gradient)(const bs_term *t, const double *x, double *g);
+  void (*hessian)(const bs_term *t, const double *x, bs_bsr *H);
+  int (*begin_step)(bs_term *t, bs_error *err); /* may be NULL */
+  void (*destroy_data)(void *data);             /* may be NULL */
+} bs_term_ops;
+
+struct bs_term {
+  const char *name;          /* "inertia", "gravity", ...                          */
+  const bs_term_ops *ops;
+  const bs_fem *fem;
+  const bs_step_data *step;
+  int dynamic_only;          /* 1: skipped in static solves (inertia, damping, drag) */
+  int expensive;             /* 1: may be skipped in line searches (section 3.3)    */
+  void *data;
+};
+
+int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err);
+/* Gravity scaled by step->load (step may be NULL: factor 1). */
+int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const double g[3], bs_term **out,
+                           bs_error *err);
+/* project_psd: use the PSD-projected element Hessians (an option for Newton). */
+int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err);
+/* k: one coefficient per fem material (seconds, >= 0). */
+int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const double *k, bs_term **out,
+                           bs_error *err);
+int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err);
+
+void bs_term_destroy(bs_term **t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,287 @@
+/* step.c — backward Euler as a minimization (paper sections 2, 3.1), statics. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_step.h"
+
+struct bs_integrator {
+  const bs_fem *fem;
+  int n_terms;
+  bs_term **terms;
+  uint8_t *mask;          /* owned copy (n_vertices)                 */
+  bs_script_fn script;
+  void *script_ctx;
+  bs_integrator_opts opts;
+  bs_step_hooks hooks;
+  bs_step_data *step;     /* what the terms read (borrowed)          */
+  int static_mode;        /* 1 while solving statics                 */
+  bs_minimizer *min;
+  double *x_n, *x_hat, *g1, *g2, *grad;
+  int has_expensive;
+};
+
+static const char *method_names[] = {"optimization", "newton", "newton_k"};
+
+int bs_method_parse(const char *name, bs_method *out, bs_error *err) {
+  for (int i = 0; i < 3; i++)
+    if (strcmp(name, method_names[i]) == 0) {
+      *out = (bs_method)i;
+      return 0;
+    }
+  return bs_error_set(err, BS_EINPUT, "unknown method '%s' (optimization, newton, newton_k)", name);
+}
+
+const char *bs_method_name(bs_method m) { return (unsigned)m < 3 ? method_names[m] : "?"; }
+
+void bs_integrator_opts_default(bs_integrator_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->method = BS_METHOD_OPTIMIZATION;
+  o->newton_k = 1;
+  bs_minimize_opts_default(&o->min);
+}
+
+void bs_integrator_destroy(bs_integrator **pI) {
+  if (!pI || !*pI) return;
+  bs_integrator *I = *pI;
+  free(I->terms);
+  free(I->mask);
+  bs_minimizer_destroy(&I->min);
+  free(I->x_n);
+  free(I->x_hat);
+  free(I->g1);
+  free(I->g2);
+  free(I->grad);
+  free(I);
+  *pI = NULL;
+}
+
+int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_term *const *terms, const uint8_t *mask,
+                         bs_script_fn script, void *script_ctx, const bs_integrator_opts *opts,
+                         bs_integrator **out, bs_error *err) {
+  *out = NULL;
+  bs_integrator *I = calloc(1, sizeof *I);
+  if (!I) return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator");
+  size_t nv = (size_t)fem->n_vertices, n3 = 3 * nv;
+  I->fem = fem;
+  I->step = step;
+  I->n_terms = n_terms;
+  I->terms = malloc(sizeof(bs_term *) * (size_t)(n_terms ? n_terms : 1));
+  I->mask = malloc(nv ? nv : 1);
+  I->x_n = malloc(sizeof(double) * (n3 ? n3 : 1));
+  I->x_hat = malloc(sizeof(double) * (n3 ? n3 : 1));
+  I->g1 = malloc(sizeof(double) * (n3 ? n3 : 1));
+  I->g2 = malloc(sizeof(double) * (n3 ? n3 : 1));
+  I->grad = malloc(sizeof(double) * (n3 ? n3 : 1));
+  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad) {
+    bs_integrator_destroy(&I);
+    return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%zu vertices)", nv);
+  }
+  for (int i = 0; i < n_terms; i++) {
+    I->terms[i] = terms[i];
+    if (terms[i]->expensive) I->has_expensive = 1;
+  }
+  if (mask) memcpy(I->mask, mask, nv);
+  else memset(I->mask, 1, nv);
+  I->script = script;
+  I->script_ctx = script_ctx;
+  if (opts) I->opts = *opts;
+  else bs_integrator_opts_default(&I->opts);
+  step->x_hat = I->x_hat;
+  step->x_n = I->x_n;
+  step->load = 1.0;
+  step->dt = 0;
+  int st = bs_minimizer_create(fem->pattern, &I->opts.min, &I->min, err);
+  if (st) {
+    bs_integrator_destroy(&I);
+    return st;
+  }
+  *out = I;
+  return 0;
+}
+
+void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks) {
+  if (hooks) I->hooks = *hooks;
+  else memset(&I->hooks, 0, sizeof I->hooks);
+}
+
+static int term_active(const bs_integrator *I, const bs_term *t) { return !(I->static_mode && t->dynamic_only); }
+
+/* ---- the objective handed to the minimizer ----------------------------- */
+static int obj_value(const double *x, double *E, void *ctx) {
+  bs_integrator *I = ctx;
+  double s = 0;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i])) s += I->terms[i]->ops->value(I->terms[i], x);
+  *E = s;
+  return isfinite(s) ? 0 : 1;
+}
+
+static int obj_lower_bound(const double *x, double *E, void *ctx) {
+  bs_integrator *I = ctx;
+  double s = 0;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
+  *E = s;
+  return isfinite(s) ? 0 : 1;
+}
+
+static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
+  bs_integrator *I = ctx;
+  memset(g, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
+  double s = 0;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i])) s += I->terms[i]->ops->gradient(I->terms[i], x, g);
+  *E = s;
+  return isfinite(s) ? 0 : 1;
+}
+
+static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
+  bs_integrator *I = ctx;
+  bs_bsr_zero(H);
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i])) I->terms[i]->ops->hessian(I->terms[i], x, H);
+  return 0;
+}
+
+static void hook_project(double *x, void *ctx) {
+  bs_integrator *I = ctx;
+  I->hooks.project(x, I->hooks.ctx);
+}
+
+static void hook_register(const double *x, const double *g, void *ctx) {
+  bs_integrator *I = ctx;
+  I->hooks.register_active(x, g, I->hooks.ctx);
+}
+
+static void make_objective(bs_integrator *I, bs_objective *o) {
+  memset(o, 0, sizeof *o);
+  o->n = I->fem->n_vertices;
+  o->mask = I->mask;
+  o->value = obj_value;
+  o->gradient = obj_gradient;
+  o->hessian = obj_hessian;
+  o->project = I->hooks.project ? hook_project : NULL;
+  o->register_active = I->hooks.register_active ? hook_register : NULL;
+  o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
+  o->ctx = I;
+}
+
+double bs_integrator_energy(bs_integrator *I, const double *x) {
+  double E;
+  obj_value(x, &E, I);
+  return E;
+}
+
+static int check_finite(const double *a, size_t n, const char *what, bs_error *err) {
+  for (size_t i = 0; i < n; i++)
+    if (!isfinite(a[i]))
+      return bs_error_set(err, BS_ENUMERIC, "%s of vertex %zu (component %zu) is not finite (%g)", what, i / 3, i % 3,
+                          a[i]);
+  return 0;
+}
+
+static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st, bs_error *err) {
+  bs_objective obj;
+  make_objective(I, &obj);
+  int rc;
+  I->opts.min.naive_guess = naive;
+  if ((rc = bs_minimizer_set_opts(I->min, &I->opts.min, err))) return rc;
+  if (I->opts.method == BS_METHOD_OPTIMIZATION) rc = bs_minimize(I->min, &obj, x, &st->min, err);
+  else rc = bs_newton(I->min, &obj, I->opts.method == BS_METHOD_NEWTON_K ? I->opts.newton_k : 0, x, &st->min, err);
+  if (rc) return rc;
+  st->failed = st->min.reason != BS_MIN_CONVERGED;
+  return 0;
+}
+
+int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
+                       bs_error *err) {
+  double t0 = bs_seconds();
+  memset(st, 0, sizeof *st);
+  const bs_fem *fem = I->fem;
+  size_t nv = (size_t)fem->n_vertices, n3 = 3 * nv;
+  if (!(dt > 0) || !isfinite(dt)) return bs_error_set(err, BS_EINPUT, "time step must be positive and finite, got %g", dt);
+  int rc;
+  if ((rc = check_finite(x, n3, "position", err)) || (rc = check_finite(v, n3, "velocity", err))) return rc;
+  I->static_mode = 0;
+  I->step->dt = dt;
+  I->step->time = t + dt;
+  I->step->load = 1.0;
+  memcpy(I->x_n, x, sizeof(double) * n3);
+  for (size_t i = 0; i < n3; i++) I->x_hat[i] = x[i] + dt * v[i];
+  for (int i = 0; i < I->n_terms; i++)
+    if (I->terms[i]->ops->begin_step && (rc = I->terms[i]->ops->begin_step(I->terms[i], err))) return rc;
+
+  /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
+  memset(I->grad, 0, sizeof(double) * n3);
+  for (int i = 0; i < I->n_terms; i++)
+    if (strcmp(I->terms[i]->name, "inertia") != 0) I->terms[i]->ops->gradient(I->terms[i], I->x_n, I->grad);
+  memcpy(I->g1, I->x_hat, sizeof(double) * n3);
+  for (size_t vtx = 0; vtx < nv; vtx++) {
+    double c = fem->mass[vtx] > 0 ? dt * dt / fem->mass[vtx] : 0;
+    for (int k = 0; k < 3; k++) I->g2[3 * vtx + k] = I->x_hat[3 * vtx + k] - c * I->grad[3 * vtx + k];
+  }
+  if (I->script) {
+    I->script(t + dt, I->g1, I->script_ctx);
+    I->script(t + dt, I->g2, I->script_ctx);
+  }
+  /* Scripted vertices keep their scripted positions in both guesses. */
+  for (size_t vtx = 0; vtx < nv; vtx++)
+    if (!I->mask[vtx])
+      for (int k = 0; k < 3; k++) {
+        if (!I->script) I->g1[3 * vtx + k] = I->g2[3 * vtx + k] = I->x_n[3 * vtx + k];
+        else I->g2[3 * vtx + k] = I->g1[3 * vtx + k];
+      }
+  if (I->hooks.project) {
+    I->hooks.project(I->g1, I->hooks.ctx);
+    I->hooks.project(I->g2, I->hooks.ctx);
+  }
+  double E1 = bs_integrator_energy(I, I->g1), E2 = bs_integrator_energy(I, I->g2);
+  int naive = 1;
+  if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
+    memcpy(x, I->g2, sizeof(double) * n3);
+    st->guess = 1;
+    naive = 0;
+  } else {
+    memcpy(x, I->g1, sizeof(double) * n3);
+  }
+  if ((rc = run_solver(I, x, naive, st, err))) return rc;
+  for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
+  if (I->hooks.post_solve && (rc = I->hooks.post_solve(I->x_n, x, v, dt, I->hooks.ctx, err))) return rc;
+  st->seconds = bs_seconds() - t0;
+  return 0;
+}
+
+int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err) {
+  double t0 = bs_seconds();
+  memset(st, 0, sizeof *st);
+  size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  int rc;
+  if ((rc = check_finite(x, n3, "position", err))) return rc;
+  if (load_steps < 1) return bs_error_set(err, BS_EINPUT, "load_steps must be >= 1, got %d", load_steps);
+  I->static_mode = 1;
+  I->step->dt = 0;
+  I->step->time = t;
+  memcpy(I->x_n, x, sizeof(double) * n3);
+  memcpy(I->x_hat, x, sizeof(double) * n3);
+  if (I->script) I->script(t, x, I->script_ctx);
+  if (I->hooks.project) I->hooks.project(x, I->hooks.ctx);
+  bs_step_stats sub;
+  for (int l = 1; l <= load_steps; l++) {
+    I->step->load = (double)l / load_steps;
+    if ((rc = run_solver(I, x, 1, &sub, err))) break;
+    st->min.iterations += sub.min.iterations;
+    st->min.cg_iterations += sub.min.cg_iterations;
+    st->min.ls_evaluations += sub.min.ls_evaluations;
+    st->min.indefinite_exits += sub.min.indefinite_exits;
+    st->min.reason = sub.min.reason;
+    st->min.reason_text = sub.min.reason_text;
+    st->min.grad_norm = sub.min.grad_norm;
+    st->min.E = sub.min.E;
+    st->failed |= sub.failed;
+  }
+  I->static_mode = 0;
+  I->step->load = 1.0;
+  st->seconds = bs_seconds() - t0;
+  return rc;
+}

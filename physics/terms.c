@@ -1,0 +1,246 @@
+/* terms.c — inertia, gravity, elasticity, lagged Rayleigh damping, drag. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_element.h"
+#include "bs_terms.h"
+
+static int term_new(const char *name, const bs_term_ops *ops, const bs_fem *fem, const bs_step_data *step,
+                    void *data, bs_term **out, bs_error *err) {
+  bs_term *t = calloc(1, sizeof *t);
+  if (!t) {
+    if (data && ops->destroy_data) ops->destroy_data(data);
+    return bs_error_set(err, BS_ENOMEM, "out of memory creating the %s term", name);
+  }
+  t->name = name;
+  t->ops = ops;
+  t->fem = fem;
+  t->step = step;
+  t->data = data;
+  *out = t;
+  return 0;
+}
+
+void bs_term_destroy(bs_term **pt) {
+  if (!pt || !*pt) return;
+  bs_term *t = *pt;
+  if (t->data && t->ops->destroy_data) t->ops->destroy_data(t->data);
+  free(t);
+  *pt = NULL;
+}
+
+/* Adds c * m_v to the diagonal blocks of H. */
+static void add_mass_diagonal(const bs_fem *fem, double c, bs_bsr *H) {
+#pragma omp parallel for schedule(static)
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    double *blk = H->val + 9 * (size_t)H->diag[v];
+    double d = c * fem->mass[v];
+    blk[0] += d;
+    blk[4] += d;
+    blk[8] += d;
+  }
+}
+
+/* c/2 Σ m_v |x_v − y_v|², gradient c m_v (x_v − y_v). */
+static double mass_quadratic(const bs_fem *fem, double c, const double *x, const double *y, double *g) {
+  double E = 0;
+#pragma omp parallel for schedule(static) reduction(+ : E)
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    double cm = c * fem->mass[v];
+    for (int k = 0; k < 3; k++) {
+      double d = x[3 * v + k] - y[3 * v + k];
+      E += 0.5 * cm * d * d;
+      if (g) g[3 * v + k] += cm * d;
+    }
+  }
+  return E;
+}
+
+/* ---- inertia ---------------------------------------------------------- */
+static double inertia_value(const bs_term *t, const double *x) {
+  double dt = t->step->dt;
+  return mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, NULL);
+}
+static double inertia_gradient(const bs_term *t, const double *x, double *g) {
+  double dt = t->step->dt;
+  return mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, g);
+}
+static void inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  double dt = t->step->dt;
+  add_mass_diagonal(t->fem, 1.0 / (dt * dt), H);
+}
+static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL};
+
+int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err) {
+  int st = term_new("inertia", &inertia_ops, fem, step, NULL, out, err);
+  if (!st) (*out)->dynamic_only = 1;
+  return st;
+}
+
+/* ---- gravity ---------------------------------------------------------- */
+static double gravity_load(const bs_term *t) { return t->step ? t->step->load : 1.0; }
+static double gravity_value(const bs_term *t, const double *x) {
+  const double *gd = t->data;
+  double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
+  const bs_fem *fem = t->fem;
+  double E = 0;
+#pragma omp parallel for schedule(static) reduction(+ : E)
+  for (int32_t v = 0; v < fem->n_vertices; v++)
+    E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
+  return E;
+}
+static double gravity_gradient(const bs_term *t, const double *x, double *grad) {
+  const double *gd = t->data;
+  double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
+  const bs_fem *fem = t->fem;
+#pragma omp parallel for schedule(static)
+  for (int32_t v = 0; v < fem->n_vertices; v++)
+    for (int k = 0; k < 3; k++) grad[3 * v + k] -= fem->mass[v] * g[k];
+  return gravity_value(t, x);
+}
+static void gravity_hessian(const bs_term *t, const double *x, bs_bsr *H) {}
+static const bs_term_ops gravity_ops = {gravity_value, gravity_gradient, gravity_hessian, NULL, free};
+
+int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const double g[3], bs_term **out,
+                           bs_error *err) {
+  for (int k = 0; k < 3; k++)
+    if (!isfinite(g[k])) return bs_error_set(err, BS_EINPUT, "gravity component %d is not finite (%g)", k, g[k]);
+  double *gc = malloc(3 * sizeof(double));
+  if (!gc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the gravity term");
+  memcpy(gc, g, 3 * sizeof(double));
+  return term_new("gravity", &gravity_ops, fem, step, gc, out, err);
+}
+
+/* ---- elasticity ------------------------------------------------------- */
+static double elastic_value(const bs_term *t, const double *x) { return bs_fem_elastic_energy(t->fem, x); }
+static double elastic_gradient(const bs_term *t, const double *x, double *g) {
+  return bs_fem_elastic_gradient(t->fem, x, g);
+}
+static void elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  bs_fem_elastic_hessian(t->fem, x, *(const int *)t->data, 1.0, H);
+}
+static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, free};
+
+int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err) {
+  int *p = malloc(sizeof(int));
+  if (!p) return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
+  *p = project_psd ? 1 : 0;
+  return term_new("elasticity", &elastic_ops, fem, NULL, p, out, err);
+}
+
+/* ---- lagged Rayleigh damping ------------------------------------------ */
+typedef struct damping_data {
+  bs_bsr *D;     /* Σ k H⁺(xⁿ), assembled at begin_step                   */
+  double *k;     /* per material                                           */
+  double *work;  /* 3n: D (x − xⁿ)                                          */
+  double *d;     /* 3n: x − xⁿ                                              */
+} damping_data;
+
+static void damping_free(void *p) {
+  damping_data *d = p;
+  bs_bsr_destroy(&d->D);
+  free(d->k);
+  free(d->work);
+  free(d->d);
+  free(d);
+}
+
+static int damping_begin(bs_term *t, bs_error *err) {
+  damping_data *dd = t->data;
+  const bs_fem *fem = t->fem;
+  bs_bsr_zero(dd->D);
+  for (int c = 0; c < fem->n_colors; c++) {
+    int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
+#pragma omp parallel for schedule(static)
+    for (int32_t k = lo; k < hi; k++) {
+      int32_t e = fem->color_tets[k];
+      int32_t mi = fem->tet_material[e];
+      if (dd->k[mi] == 0) continue;
+      double xt[12], He[144];
+      bs_fem_gather(fem, t->step->x_n, e, xt);
+      bs_tet_hessian(&fem->materials[mi], xt, fem->Dm_inv + 9 * (size_t)e, fem->volume[e], 1, He);
+      bs_fem_scatter_hessian(fem, e, He, dd->k[mi], dd->D);
+    }
+  }
+  return 0;
+}
+
+/* 1/(2Δt) dᵀ D d with d = x − xⁿ; D d left in work. */
+static double damping_eval(const bs_term *t, const double *x) {
+  damping_data *dd = t->data;
+  size_t n3 = 3 * (size_t)t->fem->n_vertices;
+  const double *xn = t->step->x_n;
+  for (size_t i = 0; i < n3; i++) dd->d[i] = x[i] - xn[i];
+  bs_bsr_mul(dd->D, NULL, dd->d, dd->work);
+  double E = 0;
+  for (size_t i = 0; i < n3; i++) E += dd->d[i] * dd->work[i];
+  return E / (2.0 * t->step->dt);
+}
+static double damping_value(const bs_term *t, const double *x) { return damping_eval(t, x); }
+static double damping_gradient(const bs_term *t, const double *x, double *g) {
+  damping_data *dd = t->data;
+  double E = damping_eval(t, x);
+  size_t n3 = 3 * (size_t)t->fem->n_vertices;
+  double c = 1.0 / t->step->dt;
+  for (size_t i = 0; i < n3; i++) g[i] += c * dd->work[i];
+  return E;
+}
+static void damping_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  damping_data *dd = t->data;
+  double c = 1.0 / t->step->dt;
+  size_t nv = 9 * (size_t)H->nnzb;
+  for (size_t i = 0; i < nv; i++) H->val[i] += c * dd->D->val[i];
+}
+static const bs_term_ops damping_ops = {damping_value, damping_gradient, damping_hessian, damping_begin,
+                                        damping_free};
+
+int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const double *k, bs_term **out,
+                           bs_error *err) {
+  for (int m = 0; m < fem->n_materials; m++)
+    if (!(k[m] >= 0) || !isfinite(k[m]))
+      return bs_error_set(err, BS_EINPUT, "damping coefficient of material %d must be finite and >= 0, got %g", m,
+                          k[m]);
+  damping_data *dd = calloc(1, sizeof *dd);
+  size_t n3 = 3 * (size_t)fem->n_vertices;
+  if (!dd) return bs_error_set(err, BS_ENOMEM, "out of memory creating the damping term");
+  dd->k = malloc(sizeof(double) * (size_t)fem->n_materials);
+  dd->work = malloc(sizeof(double) * (n3 ? n3 : 1));
+  dd->d = malloc(sizeof(double) * (n3 ? n3 : 1));
+  int st = 0;
+  if (!dd->k || !dd->work || !dd->d) st = bs_error_set(err, BS_ENOMEM, "out of memory creating the damping term");
+  if (!st) st = bs_fem_matrix(fem, &dd->D, err);
+  if (st) {
+    damping_free(dd);
+    return st;
+  }
+  memcpy(dd->k, k, sizeof(double) * (size_t)fem->n_materials);
+  st = term_new("damping", &damping_ops, fem, step, dd, out, err);
+  if (!st) (*out)->dynamic_only = 1;
+  return st;
+}
+
+/* ---- drag --------------------------------------------------------------- */
+static double drag_value(const bs_term *t, const double *x) {
+  double k = *(const double *)t->data;
+  return mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, NULL);
+}
+static double drag_gradient(const bs_term *t, const double *x, double *g) {
+  double k = *(const double *)t->data;
+  return mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, g);
+}
+static void drag_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  double k = *(const double *)t->data;
+  add_mass_diagonal(t->fem, k / t->step->dt, H);
+}
+static const bs_term_ops drag_ops = {drag_value, drag_gradient, drag_hessian, NULL, free};
+
+int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err) {
+  if (!(k >= 0) || !isfinite(k)) return bs_error_set(err, BS_EINPUT, "drag coefficient must be finite and >= 0, got %g", k);
+  double *kc = malloc(sizeof(double));
+  if (!kc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the drag term");
+  *kc = k;
+  int st = term_new("drag", &drag_ops, fem, step, kc, out, err);
+  if (!st) (*out)->dynamic_only = 1;
+  return st;
+}

@@ -1,0 +1,196 @@
+/* The backward Euler step and statics: free fall is exact with zero Newton
+ * iterations; linear momentum is conserved; the static cantilever approaches
+ * Euler–Bernoulli from below under refinement; NaN states are refused. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_fem.h"
+#include "bs_step.h"
+#include "bs_terms.h"
+
+typedef struct sys {
+  bs_mesh *mesh;
+  bs_fem *fem;
+  bs_material mat;
+  bs_step_data step;
+  bs_term *terms[4];
+  int n_terms;
+  bs_integrator *I;
+  uint8_t *mask;
+} sys;
+
+static void sys_create(sys *s, const double hi[3], int nx, int ny, int nz, int refine, double youngs, const double g[3],
+                       int dynamic, const char *fixed_group, double tol) {
+  bs_error err;
+  memset(s, 0, sizeof *s);
+  double lo[3] = {0, 0, 0};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, nx, ny, nz, &s->mesh, &err), 0, "%s", err.msg);
+  for (int r = 0; r < refine; r++) {
+    bs_mesh *f;
+    cr_assert_eq(bs_mesh_refine(s->mesh, &f, &err), 0, "%s", err.msg);
+    bs_mesh_destroy(&s->mesh);
+    s->mesh = f;
+  }
+  cr_assert_eq(bs_material_init(BS_MODEL_FIXED_COROTATED, youngs, 0.3, 1000, &s->mat, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_create(s->mesh, 1, &s->mat, NULL, &s->fem, &err), 0, "%s", err.msg);
+  if (dynamic) cr_assert_eq(bs_term_inertia_create(s->fem, &s->step, &s->terms[s->n_terms++], &err), 0);
+  if (g) cr_assert_eq(bs_term_gravity_create(s->fem, &s->step, g, &s->terms[s->n_terms++], &err), 0);
+  cr_assert_eq(bs_term_elastic_create(s->fem, 0, &s->terms[s->n_terms++], &err), 0);
+  s->mask = malloc((size_t)s->mesh->n_vertices);
+  memset(s->mask, 1, (size_t)s->mesh->n_vertices);
+  if (fixed_group) {
+    const bs_group *gr = bs_mesh_group(s->mesh, fixed_group);
+    cr_assert_not_null(gr);
+    for (int32_t i = 0; i < gr->n_vertices; i++) s->mask[gr->vertices[i]] = 0;
+  }
+  bs_integrator_opts o;
+  bs_integrator_opts_default(&o);
+  o.min.tol = tol;
+  cr_assert_eq(bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask, NULL, NULL, &o, &s->I, &err), 0,
+               "%s", err.msg);
+}
+
+static void sys_destroy(sys *s) {
+  bs_integrator_destroy(&s->I);
+  for (int i = 0; i < s->n_terms; i++) bs_term_destroy(&s->terms[i]);
+  bs_fem_destroy(&s->fem);
+  bs_mesh_destroy(&s->mesh);
+  free(s->mask);
+}
+
+Test(step, free_fall_is_exact) {
+  sys s;
+  double hi[3] = {1, 0.5, 0.5}, g[3] = {0, -9.8, 0};
+  sys_create(&s, hi, 3, 2, 2, 0, 1e5, g, 1, NULL, 1e-3);
+  size_t n3 = 3 * (size_t)s.mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+  memcpy(x, s.mesh->x, sizeof(double) * n3);
+  for (size_t i = 0; i < n3; i += 3) {
+    v[i] = 0.3;
+    v[i + 1] = 2.0;
+    v[i + 2] = -0.1;
+  }
+  double dt = 1.0 / 24;
+  bs_step_stats st;
+  bs_error err;
+  cr_assert_eq(bs_integrator_step(s.I, 0, dt, x, v, &st, &err), 0, "%s", err.msg);
+  cr_expect_eq(st.failed, 0);
+  cr_expect_eq(st.guess, 1, "the second initial guess should be chosen");
+  cr_expect_eq(st.min.iterations, 0, "free fall took %d Newton iterations", st.min.iterations);
+  double v0[3] = {0.3, 2.0, -0.1};
+  for (size_t i = 0; i < n3; i++) {
+    double expect = s.mesh->x[i] + dt * v0[i % 3] + dt * dt * g[i % 3];
+    cr_expect(fabs(x[i] - expect) <= 1e-13 * (1 + fabs(expect)), "x[%zu] = %.17g, expected %.17g", i, x[i], expect);
+    double vexp = v0[i % 3] + dt * g[i % 3];
+    cr_expect(fabs(v[i] - vexp) <= 1e-10 * (1 + fabs(vexp)), "v[%zu] = %.17g, expected %.17g", i, v[i], vexp);
+  }
+  free(x);
+  free(v);
+  sys_destroy(&s);
+}
+
+Test(step, momentum_conserved_spinning_body) {
+  sys s;
+  double hi[3] = {1, 0.6, 0.4};
+  sys_create(&s, hi, 4, 3, 2, 0, 1e4, NULL, 1, NULL, 1e-9);
+  size_t n = (size_t)s.mesh->n_vertices, n3 = 3 * n;
+  double *x = malloc(sizeof(double) * n3), *v = malloc(sizeof(double) * n3);
+  memcpy(x, s.mesh->x, sizeof(double) * n3);
+  double w[3] = {0.5, 3.0, -1.0}, c[3] = {0.5, 0.3, 0.2};
+  for (size_t i = 0; i < n; i++) {
+    double r[3] = {x[3 * i] - c[0], x[3 * i + 1] - c[1], x[3 * i + 2] - c[2]};
+    v[3 * i] = 1.0 + w[1] * r[2] - w[2] * r[1];
+    v[3 * i + 1] = -0.5 + w[2] * r[0] - w[0] * r[2];
+    v[3 * i + 2] = 0.25 + w[0] * r[1] - w[1] * r[0];
+    /* a deformation so that elastic forces act */
+    x[3 * i] *= 1.1;
+  }
+  double P0[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) P0[k] += s.fem->mass[i] * v[3 * i + k];
+  double P0n = sqrt(P0[0] * P0[0] + P0[1] * P0[1] + P0[2] * P0[2]);
+  bs_error err;
+  int failed = 0;
+  for (int step = 0; step < 50; step++) {
+    bs_step_stats st;
+    cr_assert_eq(bs_integrator_step(s.I, step / 24.0, 1.0 / 24, x, v, &st, &err), 0, "%s", err.msg);
+    failed += st.failed;
+  }
+  cr_expect_eq(failed, 0, "%d steps failed", failed);
+  double P[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++) P[k] += s.fem->mass[i] * v[3 * i + k];
+  for (int k = 0; k < 3; k++)
+    cr_expect(fabs(P[k] - P0[k]) <= 1e-10 * P0n, "momentum component %d: %.17g -> %.17g", k, P0[k], P[k]);
+  free(x);
+  free(v);
+  sys_destroy(&s);
+}
+
+/* Euler–Bernoulli: tip deflection w L⁴ / (8 E I) of a cantilever of length L
+ * under its weight w = ρ g A per length. P1 tets are too stiff in bending, so
+ * the computed deflection grows towards it under refinement. */
+Test(step, static_beam_approaches_euler_bernoulli, .timeout = 600) {
+  double L = 1, b = 0.1, E = 1e9, rho = 1000, gy = 9.8;
+  double I2 = b * b * b * b / 12, w = rho * gy * b * b;
+  double eb = w * L * L * L * L / (8 * E * I2);
+  double prev = 0;
+  double defl[3];
+  for (int r = 0; r < 3; r++) {
+    sys s;
+    double hi[3] = {L, b, b}, g[3] = {0, -gy, 0};
+    sys_create(&s, hi, 10, 1, 1, r, E, g, 0, "xmin", 1e-7);
+    size_t n3 = 3 * (size_t)s.mesh->n_vertices;
+    double *x = malloc(sizeof(double) * n3);
+    memcpy(x, s.mesh->x, sizeof(double) * n3);
+    bs_step_stats st;
+    bs_error err;
+    cr_assert_eq(bs_integrator_static(s.I, 0, 1, x, &st, &err), 0, "%s", err.msg);
+    cr_expect_eq(st.failed, 0, "static solve failed at refinement %d: %s", r, st.min.reason_text);
+    /* mean deflection of the tip face */
+    const bs_group *tip = bs_mesh_group(s.mesh, "xmax");
+    double d = 0;
+    for (int32_t i = 0; i < tip->n_vertices; i++) {
+      int32_t vtx = tip->vertices[i];
+      d += s.mesh->x[3 * vtx + 1] - x[3 * vtx + 1];
+    }
+    d /= tip->n_vertices;
+    defl[r] = d;
+    cr_log_info("refine %d: %d dofs, tip deflection %.6e m (Euler-Bernoulli %.6e), %d iterations\n", r,
+                (int)n3, d, eb, st.min.iterations);
+    cr_expect(d > prev, "deflection must grow under refinement: %g after %g", d, prev);
+    cr_expect(d < 1.02 * eb, "deflection %g above Euler-Bernoulli %g", d, eb);
+    prev = d;
+    free(x);
+    sys_destroy(&s);
+  }
+  cr_expect(defl[2] > 0.5 * eb, "finest deflection %g too far below Euler-Bernoulli %g", defl[2], eb);
+  /* the gap to Euler–Bernoulli shrinks by a factor each refinement */
+  cr_expect((eb - defl[2]) < 0.8 * (eb - defl[1]), "gap did not shrink: %g, %g", eb - defl[1], eb - defl[2]);
+}
+
+Test(step, refuses_nan_state) {
+  sys s;
+  double hi[3] = {1, 1, 1};
+  sys_create(&s, hi, 1, 1, 1, 0, 1e4, NULL, 1, NULL, 1e-3);
+  size_t n3 = 3 * (size_t)s.mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3), *v = calloc(n3, sizeof(double));
+  memcpy(x, s.mesh->x, sizeof(double) * n3);
+  v[7] = NAN;
+  bs_step_stats st;
+  bs_error err;
+  cr_expect_neq(bs_integrator_step(s.I, 0, 0.04, x, v, &st, &err), 0);
+  cr_expect(strstr(err.msg, "velocity of vertex 2") != NULL, "%s", err.msg);
+  v[7] = 0;
+  x[0] = INFINITY;
+  cr_expect_neq(bs_integrator_step(s.I, 0, 0.04, x, v, &st, &err), 0);
+  cr_expect(strstr(err.msg, "position of vertex 0") != NULL, "%s", err.msg);
+  x[0] = 0;
+  cr_expect_neq(bs_integrator_step(s.I, 0, -1, x, v, &st, &err), 0);
+  cr_expect(strstr(err.msg, "time step") != NULL, "%s", err.msg);
+  free(x);
+  free(v);
+  sys_destroy(&s);
+}
