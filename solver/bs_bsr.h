@@ -1,0 +1,83 @@
+/* bs_bsr.h — 3x3 block compressed sparse row matrices (BSR) for the Hessians
+ * of bigstep: one block row and one block column per vertex, 3 dofs per vertex.
+ *
+ * Units: none of its own (the entries carry whatever the assembler puts in,
+ * e.g. N/m for a stiffness). Vectors have 3n doubles, dof 3i+a is component a
+ * of vertex i.
+ *
+ * Storage: full (both triangles), blocks sorted by column within each row, the
+ * diagonal block always present. Each block is row-major:
+ *     val[9*s + 3*a + b] = A(3i+a, 3j+b)  for slot s of block (i,j).
+ * row_ptr is int32_t, so a pattern holds fewer than 2^31 blocks (checked by
+ * bs_bsr_create); nnzb is int64_t for convenience in size arithmetic.
+ *
+ * Masks: a mask is n bytes, 1 = free vertex, 0 = constrained vertex (all three
+ * dofs); NULL means all free.
+ *
+ * Ownership: bs_bsr_create allocates the struct and its arrays; the caller owns
+ * it and frees it with bs_bsr_destroy (accepts NULL, nulls the pointer). The
+ * pattern (row_ptr, col, diag) never changes after creation; assemblers write
+ * val only.
+ *
+ * Status: 0 ok; BS_EINPUT for a malformed graph (index out of range, negative
+ * count) or a failed check (bs_bsr_check: asymmetry, unsorted or missing
+ * diagonal, the message names the block (i,j)); BS_ENUMERIC for a non-finite
+ * value (named by block and entry); BS_ENOMEM when allocation fails.
+ *
+ * Threads: bs_bsr_mul and bs_bsr_zero use OpenMP over rows with a static
+ * schedule; each output entry is computed by one thread in a fixed order, so the
+ * product is bitwise independent of the thread count.
+ */
+#ifndef BS_BSR_H
+#define BS_BSR_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct bs_bsr {
+  int32_t n;        /* block rows = block columns (vertices); vectors have 3n doubles     */
+  int64_t nnzb;     /* stored blocks                                                       */
+  int32_t *row_ptr; /* n + 1: blocks of row i are slots row_ptr[i] .. row_ptr[i+1]-1       */
+  int32_t *col;     /* nnzb, sorted within each row, the diagonal always present          */
+  int32_t *diag;    /* n: slot of block (i,i)                                              */
+  double *val;      /* 9 * nnzb, each block row-major: val[9*s + 3*a + b] = A(3i+a, 3j+b)  */
+} bs_bsr;
+
+/* Pattern from a vertex adjacency graph in CSR (adj_ptr: n + 1 offsets, adj:
+ * adj_ptr[n] neighbour indices; no self loops needed; duplicates allowed):
+ * block (i,j) exists iff i == j or j in adj(i). Full (both triangles) storage:
+ * pass a symmetric graph to get a symmetric pattern (the graph is not
+ * symmetrized). Values start at zero. n = 0 is allowed (an empty matrix). */
+int bs_bsr_create(int32_t n, const int32_t *adj_ptr, const int32_t *adj, bs_bsr **out,
+                  bs_error *err);
+void bs_bsr_destroy(bs_bsr **A);
+
+/* Slot of block (i,j), -1 if absent or out of range (binary search; for setup,
+ * not hot loops). */
+int32_t bs_bsr_slot(const bs_bsr *A, int32_t i, int32_t j);
+
+/* Sets every stored value to 0 (the pattern stays). */
+void bs_bsr_zero(bs_bsr *A);
+
+/* y = A x. With mask (n bytes, 1 = free, 0 = constrained; NULL = all free):
+ * y_i = sum over free j of A_ij x_j for free i, and y_i = 0 for constrained i.
+ * x and y have 3n entries and must not overlap. OpenMP over rows. */
+void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
+
+/* Checker (an invariant test, not for hot loops): row_ptr monotone, columns in
+ * range and strictly increasing within each row, diag[i] pointing at (i,i),
+ * pattern symmetric ((i,j) stored iff (j,i) stored), values finite, and values
+ * symmetric to relative tolerance: |A_ij - A_ji^T| <= tol * max|A| entrywise.
+ * Returns 0, BS_EINPUT (structure or symmetry) or BS_ENUMERIC (non-finite);
+ * the message names the block (i,j) and, for values, the entry. */
+int bs_bsr_check(const bs_bsr *A, double tol, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,101 @@
+/* bs_linsolve.h — linear solvers on bs_bsr matrices: conjugate gradient (CG),
+ * block-Jacobi preconditioned CG (PCG), MINRES (Paige–Saunders) and CHOLMOD's
+ * supernodal Cholesky.
+ *
+ * Units: x has the units of b divided by those of A; tolerances are relative.
+ *
+ * Masks: n bytes, 1 = free vertex, 0 = constrained (all three dofs); NULL means
+ * all free. The solvers act on the free dofs only: A restricted to the free
+ * rows and columns, b restricted to the free entries; constrained entries of x
+ * are set to 0 on return (except when CHOLMOD reports not_pd: x is untouched).
+ * All norms are masked 2-norms.
+ *
+ * CG/PCG and negative curvature (paper, section 3.1): the Newton system of a
+ * nonconvex energy may be indefinite. CG starts from x = 0; if a search
+ * direction p has p^T A p <= 0, it stops, returns the last iterate and sets
+ * stats.indefinite = 1. On the very first iteration (no iterate yet) it returns
+ * x = b, the right-hand side (for the Newton system H dx = -g this is the
+ * steepest-descent direction). Every CG iterate x_k (k >= 1) satisfies
+ * b^T x_k > 0, so the result is a descent direction of the quadratic
+ * 1/2 x^T A x - b^T x at 0 (and of E when b = -grad E).
+ * PCG preconditioner: block Jacobi with the inverse of each free 3x3 diagonal
+ * block. A diagonal block that is not symmetric positive definite (Cholesky of
+ * its symmetric part meets a pivot <= 1e-14 times its largest diagonal
+ * magnitude) falls back to the inverse of its diagonal entries
+ * if they are all positive, else to the identity for that block; so M^-1 is
+ * always SPD and PCG's early exit keeps the same meaning.
+ *
+ * MINRES: for symmetric (possibly indefinite, nonsingular) A; iterates until
+ * ||b - A x|| <= rel_tol ||b|| (recomputed explicitly at exit) or max_iter.
+ *
+ * CHOLMOD: the scalar lower-triangular CSC pattern of the free dofs (3x3 blocks
+ * expanded, constrained dofs removed) and the symbolic analysis (ordering,
+ * supernodes) are built once per mask and reused; a call with a different mask
+ * from the previous one redoes them (this allocates). The numeric
+ * factorization runs per call (allocation only inside CHOLMOD). If CHOLMOD
+ * reports "not positive definite", stats.not_pd = 1, status 0, x untouched:
+ * the caller falls back to CG. rel_tol and max_iter are ignored.
+ *
+ * Ownership: bs_linsolve_create sizes all workspace for the pattern it is
+ * given (the pattern's arrays are copied or referenced only during create; any
+ * bs_bsr with the same pattern may be passed to solve). The caller owns the
+ * workspace and frees it with bs_linsolve_destroy (accepts NULL, nulls).
+ * A workspace is not thread-safe: one solve at a time (each solve is itself
+ * parallel through OpenMP; results do not depend on the thread count beyond
+ * round-off, reductions use static schedules).
+ *
+ * Status: 0 when the solver ran (converged or not: see stats.converged,
+ * stats.indefinite, stats.not_pd); BS_ENUMERIC when b or A holds a NaN/Inf in
+ * a free entry (the message names the entry or block), or a breakdown produces
+ * one; BS_EINPUT for a bad argument (unknown kind name, a matrix whose pattern
+ * differs in size from the workspace's, rel_tol < 0); BS_ENOMEM; BS_EINTERNAL
+ * if CHOLMOD fails for another reason (its status is named).
+ */
+#ifndef BS_LINSOLVE_H
+#define BS_LINSOLVE_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+#include "bs_bsr.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { BS_LIN_CG = 0, BS_LIN_PCG, BS_LIN_CHOLMOD, BS_LIN_MINRES } bs_lin_kind;
+
+/* "cg", "pcg", "cholmod", "minres" (exact, lower case); BS_EINPUT naming the
+ * string otherwise. */
+int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err);
+/* The name parsed above, or "unknown". */
+const char *bs_lin_kind_name(bs_lin_kind k);
+
+typedef struct bs_lin_stats {
+  int iterations;      /* Krylov iterations (0 for a direct solve)                          */
+  int indefinite;      /* 1: CG/PCG met p^T A p <= 0 and returned early (see above)          */
+  int not_pd;          /* 1: CHOLMOD found A not positive definite (x untouched)            */
+  int converged;       /* 1: reached rel_tol (a direct solve counts as converged)           */
+  double rel_residual; /* ||b - A x|| / ||b|| at exit (masked norms; 0 when b = 0)          */
+  double seconds;      /* wall time of the call                                              */
+} bs_lin_stats;
+
+typedef struct bs_linsolve bs_linsolve; /* workspace sized once for a pattern */
+
+int bs_linsolve_create(const bs_bsr *pattern, bs_lin_kind kind, bs_linsolve **out,
+                       bs_error *err);
+void bs_linsolve_destroy(bs_linsolve **ls);
+
+/* Solves A x = b on the free dofs (see the top of this header). b and x have
+ * 3n entries and must not overlap; st may be NULL. b = 0 (on the free dofs)
+ * gives x = 0, converged, 0 iterations. max_iter <= 0 means 3n (the dimension).
+ * stats.rel_residual: CG/PCG report the recursively updated residual (equal to
+ * ||b - A x|| in exact arithmetic; recomputed explicitly after an indefinite
+ * exit on the first iteration); MINRES and CHOLMOD recompute ||b - A x||. */
+int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
+                      double rel_tol, int max_iter, double *x, bs_lin_stats *st, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,261 @@
+/* bsr.c — 3x3 block CSR matrices: pattern from a graph, product, checker. */
+#include "bs_bsr.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Sorts a short int32 array in place (rows hold tens of entries: insertion
+ * sort beats qsort there; long rows fall back to qsort). */
+static int cmp_i32(const void *a, const void *b) {
+  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+static void sort_i32(int32_t *v, int64_t m) {
+  if (m > 32) {
+    qsort(v, (size_t)m, sizeof *v, cmp_i32);
+    return;
+  }
+  for (int64_t k = 1; k < m; ++k) {
+    int32_t t = v[k];
+    int64_t l = k - 1;
+    while (l >= 0 && v[l] > t) {
+      v[l + 1] = v[l];
+      --l;
+    }
+    v[l + 1] = t;
+  }
+}
+
+void bs_bsr_destroy(bs_bsr **A) {
+  if (!A || !*A) return;
+  free((*A)->row_ptr);
+  free((*A)->col);
+  free((*A)->diag);
+  free((*A)->val);
+  free(*A);
+  *A = NULL;
+}
+
+int bs_bsr_create(int32_t n, const int32_t *adj_ptr, const int32_t *adj, bs_bsr **out,
+                  bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "bs_bsr_create: out is NULL");
+  *out = NULL;
+  if (n < 0) return bs_error_set(err, BS_EINPUT, "bs_bsr_create: negative size n = %d", (int)n);
+  if (n > 0 && !adj_ptr)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_create: adj_ptr is NULL for n = %d", (int)n);
+  /* Validate the graph and bound the number of blocks (degree + diagonal). */
+  int64_t bound = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    if (adj_ptr[i] < 0 || adj_ptr[i + 1] < adj_ptr[i])
+      return bs_error_set(err, BS_EINPUT,
+                          "bs_bsr_create: adj_ptr not nondecreasing at vertex %d (%d, %d)",
+                          (int)i, (int)adj_ptr[i], (int)adj_ptr[i + 1]);
+    bound += (int64_t)(adj_ptr[i + 1] - adj_ptr[i]) + 1;
+  }
+  if (n > 0 && adj_ptr[n] > adj_ptr[0] && !adj)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_create: adj is NULL with %d neighbours",
+                        (int)(adj_ptr[n] - adj_ptr[0]));
+  for (int32_t i = 0; i < n; ++i)
+    for (int32_t k = adj_ptr[i]; k < adj_ptr[i + 1]; ++k)
+      if (adj[k] < 0 || adj[k] >= n)
+        return bs_error_set(err, BS_EINPUT,
+                            "bs_bsr_create: neighbour %d of vertex %d (adj[%d]) out of range [0, %d)",
+                            (int)adj[k], (int)i, (int)k, (int)n);
+  if (bound > INT32_MAX)
+    return bs_error_set(err, BS_EINPUT,
+                        "bs_bsr_create: %lld blocks exceed the int32 row_ptr range",
+                        (long long)bound);
+
+  bs_bsr *A = bs_calloc(1, sizeof *A, "bs_bsr", err);
+  if (!A) return BS_ENOMEM;
+  A->n = n;
+  A->row_ptr = bs_calloc((size_t)n + 1, sizeof *A->row_ptr, "bs_bsr row_ptr", err);
+  A->diag = bs_calloc(n > 0 ? (size_t)n : 1, sizeof *A->diag, "bs_bsr diag", err);
+  int32_t *tmp = bs_calloc(bound > 0 ? (size_t)bound : 1, sizeof *tmp, "bs_bsr columns", err);
+  if (!A->row_ptr || !A->diag || !tmp) {
+    free(tmp);
+    bs_bsr_destroy(&A);
+    return BS_ENOMEM;
+  }
+  /* Each row: neighbours plus i, sorted, duplicates merged, compacted in place
+   * (the write position never passes the read position). */
+  int64_t w = 0, r = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    int64_t m = (int64_t)(adj_ptr[i + 1] - adj_ptr[i]);
+    int32_t *row = tmp + r;
+    if (m > 0) memcpy(row, adj + adj_ptr[i], (size_t)m * sizeof *row);
+    row[m] = i;
+    sort_i32(row, m + 1);
+    A->row_ptr[i] = (int32_t)w;
+    for (int64_t k = 0; k <= m; ++k) {
+      if (k > 0 && row[k] == row[k - 1]) continue;
+      if (row[k] == i) A->diag[i] = (int32_t)w;
+      tmp[w++] = row[k];
+    }
+    r += m + 1;
+  }
+  A->row_ptr[n] = (int32_t)w;
+  A->nnzb = w;
+  int32_t *shrunk = realloc(tmp, (w > 0 ? (size_t)w : 1) * sizeof *tmp);
+  A->col = shrunk ? shrunk : tmp; /* if shrinking fails, keep the larger block */
+  A->val = bs_calloc(w > 0 ? 9 * (size_t)w : 1, sizeof *A->val, "bs_bsr values", err);
+  if (!A->val) {
+    bs_bsr_destroy(&A);
+    return BS_ENOMEM;
+  }
+  *out = A;
+  return BS_OK;
+}
+
+int32_t bs_bsr_slot(const bs_bsr *A, int32_t i, int32_t j) {
+  if (!A || i < 0 || i >= A->n || j < 0 || j >= A->n) return -1;
+  int32_t lo = A->row_ptr[i], hi = A->row_ptr[i + 1] - 1;
+  while (lo <= hi) {
+    int32_t mid = lo + (hi - lo) / 2;
+    if (A->col[mid] == j) return mid;
+    if (A->col[mid] < j)
+      lo = mid + 1;
+    else
+      hi = mid - 1;
+  }
+  return -1;
+}
+
+void bs_bsr_zero(bs_bsr *A) {
+  if (!A) return;
+  const int32_t n = A->n;
+  double *v = A->val;
+  const int32_t *rp = A->row_ptr;
+  /* Row by row, so that the pages of a row end up near the thread that uses
+   * them in the product (first touch). */
+#pragma omp parallel for schedule(static)
+  for (int32_t i = 0; i < n; ++i)
+    memset(v + 9 * (int64_t)rp[i], 0, 9 * (size_t)(rp[i + 1] - rp[i]) * sizeof *v);
+}
+
+void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+  const int32_t n = A->n;
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const double *val = A->val;
+  if (!mask) {
+#pragma omp parallel for schedule(static)
+    for (int32_t i = 0; i < n; ++i) {
+      double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+        const double *a = val + 9 * (int64_t)s;
+        const double *xj = x + 3 * (int64_t)col[s];
+        const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+        y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
+        y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
+        y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
+      }
+      y[3 * (int64_t)i] = y0;
+      y[3 * (int64_t)i + 1] = y1;
+      y[3 * (int64_t)i + 2] = y2;
+    }
+    return;
+  }
+  /* Masked: written without data-dependent branches (selects instead), because
+   * a mispredicted branch on a scattered mask flushes the loads in flight and
+   * halves the bandwidth; constrained rows are computed and then dropped.
+   * Selects (not multiplications by 0/1) keep the contract exact: the blocks of
+   * constrained columns never enter the sum, even if they hold NaN. */
+#pragma omp parallel for schedule(static)
+  for (int32_t i = 0; i < n; ++i) {
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+      const int32_t j = col[s];
+      const double *a = val + 9 * (int64_t)s;
+      const double *xj = x + 3 * (int64_t)j;
+      const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+      const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
+      const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
+      const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
+      const int f = mask[j] != 0;
+      y0 = f ? y0 + t0 : y0;
+      y1 = f ? y1 + t1 : y1;
+      y2 = f ? y2 + t2 : y2;
+    }
+    const int f = mask[i] != 0;
+    y[3 * (int64_t)i] = f ? y0 : 0.0;
+    y[3 * (int64_t)i + 1] = f ? y1 : 0.0;
+    y[3 * (int64_t)i + 2] = f ? y2 : 0.0;
+  }
+}
+
+int bs_bsr_check(const bs_bsr *A, double tol, bs_error *err) {
+  if (!A) return bs_error_set(err, BS_EINPUT, "bs_bsr_check: matrix is NULL");
+  const int32_t n = A->n;
+  if (n < 0) return bs_error_set(err, BS_EINPUT, "bs_bsr_check: negative size n = %d", (int)n);
+  if (!A->row_ptr || !A->col || !A->diag || !A->val)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_check: an array of the matrix is NULL");
+  if (A->row_ptr[0] != 0)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_check: row_ptr[0] = %d, expected 0",
+                        (int)A->row_ptr[0]);
+  if ((int64_t)A->row_ptr[n] != A->nnzb)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_check: row_ptr[n] = %d but nnzb = %lld",
+                        (int)A->row_ptr[n], (long long)A->nnzb);
+  /* Structure: rows monotone, columns in range and strictly increasing, diag. */
+  for (int32_t i = 0; i < n; ++i) {
+    if (A->row_ptr[i + 1] < A->row_ptr[i])
+      return bs_error_set(err, BS_EINPUT, "bs_bsr_check: row_ptr decreases at block row %d",
+                          (int)i);
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s) {
+      const int32_t j = A->col[s];
+      if (j < 0 || j >= n)
+        return bs_error_set(err, BS_EINPUT,
+                            "bs_bsr_check: block (%d,%d) at slot %d: column out of range [0, %d)",
+                            (int)i, (int)j, (int)s, (int)n);
+      if (s > A->row_ptr[i] && A->col[s - 1] >= j)
+        return bs_error_set(err, BS_EINPUT,
+                            "bs_bsr_check: block (%d,%d) at slot %d: columns not strictly "
+                            "increasing (previous column %d)",
+                            (int)i, (int)j, (int)s, (int)A->col[s - 1]);
+    }
+    const int32_t d = A->diag[i];
+    if (d < A->row_ptr[i] || d >= A->row_ptr[i + 1] || A->col[d] != i)
+      return bs_error_set(err, BS_EINPUT,
+                          "bs_bsr_check: block (%d,%d): diagonal block missing or diag[%d] = %d "
+                          "wrong",
+                          (int)i, (int)i, (int)i, (int)d);
+  }
+  /* Values finite; the largest magnitude sets the symmetry scale. */
+  double amax = 0.0;
+  for (int32_t i = 0; i < n; ++i)
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s)
+      for (int e = 0; e < 9; ++e) {
+        const double v = A->val[9 * (int64_t)s + e];
+        if (!isfinite(v))
+          return bs_error_set(err, BS_ENUMERIC,
+                              "bs_bsr_check: block (%d,%d) entry (%d,%d) is not finite (%g)",
+                              (int)i, (int)A->col[s], e / 3, e % 3, v);
+        if (fabs(v) > amax) amax = fabs(v);
+      }
+  /* Pattern and values symmetric: A_ij == A_ji^T within tol * max|A|. */
+  const double bound = tol * amax;
+  for (int32_t i = 0; i < n; ++i)
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s) {
+      const int32_t j = A->col[s];
+      const int32_t t = bs_bsr_slot(A, j, i);
+      if (t < 0)
+        return bs_error_set(err, BS_EINPUT,
+                            "bs_bsr_check: block (%d,%d) is stored but block (%d,%d) is not "
+                            "(pattern not symmetric)",
+                            (int)i, (int)j, (int)j, (int)i);
+      if (j < i) continue; /* values: each pair once, the diagonal against itself */
+      const double *a = A->val + 9 * (int64_t)s, *b = A->val + 9 * (int64_t)t;
+      for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q) {
+          const double diff = fabs(a[3 * p + q] - b[3 * q + p]);
+          if (diff > bound)
+            return bs_error_set(err, BS_EINPUT,
+                                "bs_bsr_check: block (%d,%d) entry (%d,%d) = %.17g differs from "
+                                "block (%d,%d) entry (%d,%d) = %.17g by %g > tol %g * max|A| %g",
+                                (int)i, (int)j, p, q, a[3 * p + q], (int)j, (int)i, q, p,
+                                b[3 * q + p], diff, tol, amax);
+        }
+    }
+  return BS_OK;
+}

@@ -1,0 +1,680 @@
+/* linsolve.c — CG, block-Jacobi PCG, MINRES and CHOLMOD on 3x3 block CSR
+ * matrices, restricted to the free dofs of a mask (see bs_linsolve.h).
+ *
+ * Masking: every work vector is kept zero on the constrained dofs (the masked
+ * right-hand side is zero there and bs_bsr_mul with the mask writes zeros
+ * there), so plain dot products over all 3n entries are the masked ones. */
+#include "bs_linsolve.h"
+
+#include <cholmod.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct bs_linsolve {
+  bs_lin_kind kind;
+  int32_t n;    /* block size of the pattern                            */
+  int64_t nnzb; /* stored blocks of the pattern (a cheap identity check) */
+  int64_t N;    /* 3n                                                   */
+  /* Krylov vectors (3n each); which ones exist depends on kind. */
+  double *r, *p, *q, *z;      /* CG / PCG (z: PCG only); q also for residuals */
+  double *y, *v, *w, *w1, *w2, *r2; /* MINRES (with r, q)                     */
+  double *minv;               /* PCG: 9n, inverse diagonal blocks         */
+  /* CHOLMOD: scalar lower-triangular CSC of the free dofs. */
+  cholmod_common cm;
+  int cm_started;
+  int have_symbolic;
+  uint8_t *cmask;   /* n: the mask the symbolic analysis was built for   */
+  int32_t *fmap;    /* n: free vertex number, or -1                      */
+  int32_t *fvert;   /* nfree: vertex of each free vertex number          */
+  int32_t nfree;
+  cholmod_sparse *C;
+  cholmod_factor *L;
+  cholmod_dense *B, *X, *Y, *E;
+};
+
+/* ---- names ------------------------------------------------------------ */
+
+static const char *const kind_names[] = {"cg", "pcg", "cholmod", "minres"};
+
+const char *bs_lin_kind_name(bs_lin_kind k) {
+  if ((int)k < 0 || (int)k > (int)BS_LIN_MINRES) return "unknown";
+  return kind_names[k];
+}
+
+int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err) {
+  if (!name || !out)
+    return bs_error_set(err, BS_EINPUT, "bs_lin_kind_parse: NULL argument");
+  for (int k = 0; k <= (int)BS_LIN_MINRES; ++k)
+    if (strcmp(name, kind_names[k]) == 0) {
+      *out = (bs_lin_kind)k;
+      return BS_OK;
+    }
+  return bs_error_set(err, BS_EINPUT,
+                      "unknown linear solver \"%s\" (expected cg, pcg, cholmod or minres)", name);
+}
+
+/* ---- vector kernels (OpenMP, static schedules) ------------------------- */
+
+static double vdot(int64_t N, const double *a, const double *b) {
+  double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+  for (int64_t k = 0; k < N; ++k) s += a[k] * b[k];
+  return s;
+}
+
+static void vcopy(int64_t N, const double *a, double *b) {
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < N; ++k) b[k] = a[k];
+}
+
+static void vzero(int64_t N, double *a) {
+#pragma omp parallel for schedule(static)
+  for (int64_t k = 0; k < N; ++k) a[k] = 0.0;
+}
+
+/* r = b on the free dofs, 0 on the constrained ones; returns ||r||^2 and the
+ * number of non-finite free entries of b in *bad. */
+static double load_rhs(int32_t n, const uint8_t *mask, const double *b, double *r, int64_t *bad) {
+  double s = 0.0;
+  int64_t nb = 0;
+#pragma omp parallel for schedule(static) reduction(+ : s, nb)
+  for (int32_t i = 0; i < n; ++i) {
+    const int free_i = !mask || mask[i];
+    for (int a = 0; a < 3; ++a) {
+      const double bi = free_i ? b[3 * (int64_t)i + a] : 0.0;
+      if (!isfinite(bi)) {
+        ++nb;
+        r[3 * (int64_t)i + a] = 0.0;
+      } else {
+        r[3 * (int64_t)i + a] = bi;
+        s += bi * bi;
+      }
+    }
+  }
+  *bad = nb;
+  return s;
+}
+
+static int rhs_error(int32_t n, const uint8_t *mask, const double *b, bs_error *err) {
+  for (int64_t k = 0; k < 3 * (int64_t)n; ++k)
+    if ((!mask || mask[k / 3]) && !isfinite(b[k]))
+      return bs_error_set(err, BS_ENUMERIC,
+                          "linear solve: right-hand side entry %lld (vertex %lld, component %d) "
+                          "is not finite (%g)",
+                          (long long)k, (long long)(k / 3), (int)(k % 3), b[k]);
+  return bs_error_set(err, BS_EINTERNAL, "linear solve: non-finite right-hand side not found");
+}
+
+/* Names the first non-finite entry of A among the free-free blocks, or
+ * reports a numerical breakdown when A is finite. */
+static int matrix_error(const bs_bsr *A, const uint8_t *mask, const char *what, bs_error *err) {
+  for (int32_t i = 0; i < A->n; ++i) {
+    if (mask && !mask[i]) continue;
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s) {
+      if (mask && !mask[A->col[s]]) continue;
+      for (int e = 0; e < 9; ++e)
+        if (!isfinite(A->val[9 * (int64_t)s + e]))
+          return bs_error_set(err, BS_ENUMERIC,
+                              "%s: matrix block (%d,%d) entry (%d,%d) is not finite (%g)", what,
+                              (int)i, (int)A->col[s], e / 3, e % 3, A->val[9 * (int64_t)s + e]);
+    }
+  }
+  return bs_error_set(err, BS_ENUMERIC,
+                      "%s: numerical breakdown (a non-finite inner product with finite A and b: "
+                      "overflow)",
+                      what);
+}
+
+/* ---- block Jacobi ------------------------------------------------------- */
+
+/* Inverse of the symmetric part S of a 3x3 block D if S is positive definite
+ * (Cholesky pivots above 1e-14 * max diagonal); else the inverse of the
+ * diagonal if all of it is positive; else the identity. Returns which (0, 1, 2). */
+static int block_inverse(const double *D, double *Mi) {
+  double S[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) S[3 * a + b] = 0.5 * (D[3 * a + b] + D[3 * b + a]);
+  const double dmax = fmax(fabs(S[0]), fmax(fabs(S[4]), fabs(S[8])));
+  const double floor_ = 1e-14 * dmax;
+  /* Cholesky S = L L^T. */
+  int spd = dmax > 0.0 && isfinite(dmax);
+  double l00 = 0, l10 = 0, l20 = 0, l11 = 0, l21 = 0, l22 = 0;
+  if (spd) {
+    double d0 = S[0];
+    spd = d0 > floor_;
+    if (spd) {
+      l00 = sqrt(d0);
+      l10 = S[3] / l00;
+      l20 = S[6] / l00;
+      double d1 = S[4] - l10 * l10;
+      spd = d1 > floor_;
+      if (spd) {
+        l11 = sqrt(d1);
+        l21 = (S[7] - l20 * l10) / l11;
+        double d2 = S[8] - l20 * l20 - l21 * l21;
+        spd = d2 > floor_;
+        if (spd) l22 = sqrt(d2);
+      }
+    }
+  }
+  if (spd) {
+    /* S^-1 = L^-T L^-1 with L^-1 lower triangular. */
+    const double i00 = 1.0 / l00, i11 = 1.0 / l11, i22 = 1.0 / l22;
+    const double i10 = -l10 * i00 * i11;
+    const double i21 = -l21 * i11 * i22;
+    const double i20 = -(l20 * i00 + l21 * i10) * i22;
+    /* Mi = Li^T Li, Li = [[i00,0,0],[i10,i11,0],[i20,i21,i22]]. */
+    Mi[0] = i00 * i00 + i10 * i10 + i20 * i20;
+    Mi[1] = i10 * i11 + i20 * i21;
+    Mi[2] = i20 * i22;
+    Mi[4] = i11 * i11 + i21 * i21;
+    Mi[5] = i21 * i22;
+    Mi[8] = i22 * i22;
+    Mi[3] = Mi[1];
+    Mi[6] = Mi[2];
+    Mi[7] = Mi[5];
+    return 0;
+  }
+  memset(Mi, 0, 9 * sizeof *Mi);
+  if (S[0] > 0 && S[4] > 0 && S[8] > 0 && isfinite(dmax)) {
+    Mi[0] = 1.0 / S[0];
+    Mi[4] = 1.0 / S[4];
+    Mi[8] = 1.0 / S[8];
+    return 1;
+  }
+  Mi[0] = Mi[4] = Mi[8] = 1.0;
+  return 2;
+}
+
+static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *minv) {
+  const int32_t n = A->n;
+#pragma omp parallel for schedule(static)
+  for (int32_t i = 0; i < n; ++i) {
+    double *Mi = minv + 9 * (int64_t)i;
+    if (mask && !mask[i])
+      memset(Mi, 0, 9 * sizeof *Mi);
+    else
+      (void)block_inverse(A->val + 9 * (int64_t)A->diag[i], Mi);
+  }
+}
+
+/* z = M^-1 r; returns r . z. */
+static double apply_block_jacobi(int32_t n, const double *minv, const double *r, double *z) {
+  double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+  for (int32_t i = 0; i < n; ++i) {
+    const double *M = minv + 9 * (int64_t)i;
+    const double *ri = r + 3 * (int64_t)i;
+    double *zi = z + 3 * (int64_t)i;
+    const double z0 = M[0] * ri[0] + M[1] * ri[1] + M[2] * ri[2];
+    const double z1 = M[3] * ri[0] + M[4] * ri[1] + M[5] * ri[2];
+    const double z2 = M[6] * ri[0] + M[7] * ri[1] + M[8] * ri[2];
+    zi[0] = z0;
+    zi[1] = z1;
+    zi[2] = z2;
+    s += ri[0] * z0 + ri[1] * z1 + ri[2] * z2;
+  }
+  return s;
+}
+
+/* ---- CG / PCG ----------------------------------------------------------- */
+
+/* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally with the block
+ * Jacobi preconditioner. Stops on ||r|| <= rel_tol ||b||, max_iter, or
+ * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
+ * iteration, is returned with indefinite = 1). */
+static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
+                  double rel_tol, int max_iter, int precond, double *x, bs_lin_stats *st,
+                  bs_error *err) {
+  const int32_t n = ls->n;
+  const int64_t N = ls->N;
+  double *r = ls->r, *p = ls->p, *q = ls->q, *z = precond ? ls->z : ls->r;
+  int64_t bad = 0;
+  double rr = load_rhs(n, mask, b, r, &bad);
+  if (bad) return rhs_error(n, mask, b, err);
+  vzero(N, x);
+  const double bnorm = sqrt(rr);
+  if (bnorm == 0.0) {
+    st->converged = 1;
+    return BS_OK;
+  }
+  double rz = rr;
+  if (precond) {
+    build_block_jacobi(A, mask, ls->minv);
+    rz = apply_block_jacobi(n, ls->minv, r, z);
+  }
+  vcopy(N, z, p);
+  const double target = rel_tol * bnorm;
+  for (int k = 0; k < max_iter; ++k) {
+    bs_bsr_mul(A, mask, p, q);
+    const double pq = vdot(N, p, q);
+    if (!isfinite(pq)) return matrix_error(A, mask, precond ? "pcg" : "cg", err);
+    if (pq <= 0.0) {
+      st->indefinite = 1;
+      if (k == 0) {
+        /* No iterate yet: return the right-hand side (r still holds masked b). */
+        vcopy(N, r, x);
+        bs_bsr_mul(A, mask, x, q);
+        double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+        for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
+        rr = s;
+      }
+      break;
+    }
+    const double alpha = rz / pq;
+    double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+    for (int64_t m = 0; m < N; ++m) {
+      x[m] += alpha * p[m];
+      r[m] -= alpha * q[m];
+      s += r[m] * r[m];
+    }
+    rr = s;
+    st->iterations = k + 1;
+    if (!isfinite(rr)) return matrix_error(A, mask, precond ? "pcg" : "cg", err);
+    if (sqrt(rr) <= target) {
+      st->converged = 1;
+      break;
+    }
+    const double rz_new = precond ? apply_block_jacobi(n, ls->minv, r, z) : rr;
+    const double beta = rz_new / rz;
+    rz = rz_new;
+#pragma omp parallel for schedule(static)
+    for (int64_t m = 0; m < N; ++m) p[m] = z[m] + beta * p[m];
+  }
+  st->rel_residual = sqrt(rr) / bnorm;
+  return BS_OK;
+}
+
+/* ---- MINRES --------------------------------------------------------------- */
+
+/* MINRES of Paige and Saunders (1975) for symmetric A, following the
+ * reference implementation's recurrences: Lanczos vectors v_k, a QR
+ * factorization of the tridiagonal by Givens rotations (cs, sn), and the
+ * update x += phi w. phibar is the residual norm in exact arithmetic; when it
+ * meets the target the true residual is computed and, if rounding left it above
+ * the target, MINRES restarts on it (at most 4 times, counted in max_iter). */
+static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
+                      double rel_tol, int max_iter, double *x, bs_lin_stats *st, bs_error *err) {
+  const int32_t n = ls->n;
+  const int64_t N = ls->N;
+  double *r1 = ls->r, *r2 = ls->r2, *y = ls->y, *v = ls->v, *w = ls->w, *w1 = ls->w1,
+         *w2 = ls->w2;
+  int64_t bad = 0;
+  const double bb = load_rhs(n, mask, b, r1, &bad);
+  if (bad) return rhs_error(n, mask, b, err);
+  vzero(N, x);
+  const double bnorm = sqrt(bb);
+  if (bnorm == 0.0) {
+    st->converged = 1;
+    return BS_OK;
+  }
+  const double target = rel_tol * bnorm;
+  double rnorm = bnorm, prev_rnorm = INFINITY;
+  int its = 0;
+  for (int restart = 0;; ++restart) {
+    /* r1 holds the true residual b - A x, masked; rnorm its norm. */
+    if (rnorm <= target) {
+      st->converged = 1;
+      break;
+    }
+    if (its >= max_iter || restart > 4 || !(rnorm < prev_rnorm)) break;
+    prev_rnorm = rnorm;
+    const double beta1 = rnorm;
+    vcopy(N, r1, r2); /* r2: the current Lanczos vector times beta */
+    vzero(N, w);
+    vzero(N, w2);
+    double oldb = 0.0, beta = beta1, dbar = 0.0, epsln = 0.0, phibar = beta1, cs = -1.0,
+           sn = 0.0;
+    int first = 1;
+    while (its < max_iter) {
+      ++its;
+      const double sc = 1.0 / beta;
+#pragma omp parallel for schedule(static)
+      for (int64_t m = 0; m < N; ++m) v[m] = sc * r2[m];
+      bs_bsr_mul(A, mask, v, y);
+      if (!first) {
+        const double f = beta / oldb;
+#pragma omp parallel for schedule(static)
+        for (int64_t m = 0; m < N; ++m) y[m] -= f * r1[m];
+      }
+      first = 0;
+      const double alfa = vdot(N, v, y);
+      if (!isfinite(alfa)) return matrix_error(A, mask, "minres", err);
+      const double f2 = alfa / beta;
+      double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+      for (int64_t m = 0; m < N; ++m) {
+        y[m] -= f2 * r2[m];
+        s += y[m] * y[m];
+      }
+      /* r1 <- r2, r2 <- y; the old r1 becomes the next y buffer. */
+      double *t = r1;
+      r1 = r2;
+      r2 = y;
+      y = t;
+      oldb = beta;
+      beta = sqrt(s);
+      if (!isfinite(beta)) return matrix_error(A, mask, "minres", err);
+      /* Apply the previous rotation, then compute and apply the next one. */
+      const double oldeps = epsln;
+      const double delta = cs * dbar + sn * alfa;
+      const double gbar = sn * dbar - cs * alfa;
+      epsln = sn * beta;
+      dbar = -cs * beta;
+      double gamma = hypot(gbar, beta);
+      if (gamma < DBL_MIN) gamma = DBL_MIN;
+      cs = gbar / gamma;
+      sn = beta / gamma;
+      const double phi = cs * phibar;
+      phibar = sn * phibar;
+      /* w1 <- w2, w2 <- w, w <- (v - oldeps w1 - delta w2) / gamma; x += phi w. */
+      t = w1;
+      w1 = w2;
+      w2 = w;
+      w = t;
+      const double ig = 1.0 / gamma;
+#pragma omp parallel for schedule(static)
+      for (int64_t m = 0; m < N; ++m) {
+        w[m] = (v[m] - oldeps * w1[m] - delta * w2[m]) * ig;
+        x[m] += phi * w[m];
+      }
+      if (phibar <= target || beta == 0.0) break;
+    }
+    /* True residual into r1. */
+    bs_bsr_mul(A, mask, x, y);
+    double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+    for (int32_t i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const int64_t m = 3 * (int64_t)i + a;
+        const double ri = (!mask || mask[i]) ? b[m] - y[m] : 0.0;
+        r1[m] = ri;
+        s += ri * ri;
+      }
+    rnorm = sqrt(s);
+    if (!isfinite(rnorm)) return matrix_error(A, mask, "minres", err);
+  }
+  st->iterations = its;
+  st->rel_residual = rnorm / bnorm;
+  return BS_OK;
+}
+
+/* ---- CHOLMOD ------------------------------------------------------------ */
+
+static int cholmod_status_error(bs_linsolve *ls, const char *what, bs_error *err) {
+  const int s = ls->cm.status;
+  if (s == CHOLMOD_OUT_OF_MEMORY)
+    return bs_error_set(err, BS_ENOMEM, "cholmod: %s: out of memory", what);
+  return bs_error_set(err, BS_EINTERNAL, "cholmod: %s failed (CHOLMOD status %d)", what, s);
+}
+
+static void chol_free_symbolic(bs_linsolve *ls) {
+  if (!ls->cm_started) return;
+  cholmod_free_factor(&ls->L, &ls->cm);
+  cholmod_free_sparse(&ls->C, &ls->cm);
+  cholmod_free_dense(&ls->B, &ls->cm);
+  cholmod_free_dense(&ls->X, &ls->cm);
+  cholmod_free_dense(&ls->Y, &ls->cm);
+  cholmod_free_dense(&ls->E, &ls->cm);
+  ls->have_symbolic = 0;
+}
+
+/* Scalar lower-triangular CSC pattern of A on the free dofs. Column J = 3 f(j)
+ * + b holds rows I = 3 f(i) + a >= J; by symmetry A(I,J) = A(J,I) = entry (b,a)
+ * of block (j,i), so column J is read from block row j, columns i >= j. Free
+ * vertices keep their order, so the rows come out sorted. Then the symbolic
+ * analysis (fill-reducing ordering, supernodes). */
+static int chol_setup(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, bs_error *err) {
+  chol_free_symbolic(ls);
+  const int32_t n = A->n;
+  int32_t nf = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    const int free_i = !mask || mask[i];
+    ls->cmask[i] = (uint8_t)free_i;
+    ls->fmap[i] = free_i ? nf : -1;
+    if (free_i) ls->fvert[nf++] = i;
+  }
+  ls->nfree = nf;
+  int64_t nnz = 0;
+  for (int32_t f = 0; f < nf; ++f) {
+    const int32_t j = ls->fvert[f];
+    for (int32_t s = A->diag[j]; s < A->row_ptr[j + 1]; ++s)
+      if (ls->fmap[A->col[s]] >= 0) nnz += A->col[s] == j ? 6 : 9;
+  }
+  if (nnz > INT32_MAX - 1 || 3 * (int64_t)nf > INT32_MAX)
+    return bs_error_set(err, BS_EINPUT,
+                        "cholmod: %lld scalar nonzeros exceed the int32 CHOLMOD interface",
+                        (long long)nnz);
+  const size_t Nf = 3 * (size_t)nf;
+  ls->C = cholmod_allocate_sparse(Nf, Nf, (size_t)(nnz > 0 ? nnz : 1), 1, 1, -1, CHOLMOD_REAL,
+                                  &ls->cm);
+  ls->B = cholmod_allocate_dense(Nf, 1, Nf, CHOLMOD_REAL, &ls->cm);
+  if (!ls->C || !ls->B) return cholmod_status_error(ls, "allocation", err);
+  int *Cp = ls->C->p, *Ci = ls->C->i;
+  int k = 0;
+  for (int32_t f = 0; f < nf; ++f) {
+    const int32_t j = ls->fvert[f];
+    for (int bcol = 0; bcol < 3; ++bcol) {
+      Cp[3 * f + bcol] = k;
+      for (int32_t s = A->diag[j]; s < A->row_ptr[j + 1]; ++s) {
+        const int32_t fi = ls->fmap[A->col[s]];
+        if (fi < 0) continue;
+        for (int a = (A->col[s] == j ? bcol : 0); a < 3; ++a) Ci[k++] = 3 * fi + a;
+      }
+    }
+  }
+  Cp[Nf] = k;
+  ls->L = cholmod_analyze(ls->C, &ls->cm);
+  if (!ls->L) return cholmod_status_error(ls, "symbolic analysis", err);
+  ls->have_symbolic = 1;
+  return BS_OK;
+}
+
+/* Copies the values of A into the CSC (same traversal as chol_setup);
+ * returns the number of non-finite entries met. */
+static int64_t chol_copy_values(bs_linsolve *ls, const bs_bsr *A) {
+  const int *Cp = ls->C->p;
+  double *Cx = ls->C->x;
+  int64_t bad = 0;
+  const int32_t nf = ls->nfree;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (int32_t f = 0; f < nf; ++f) {
+    const int32_t j = ls->fvert[f];
+    for (int bcol = 0; bcol < 3; ++bcol) {
+      int k = Cp[3 * f + bcol];
+      for (int32_t s = A->diag[j]; s < A->row_ptr[j + 1]; ++s) {
+        if (ls->fmap[A->col[s]] < 0) continue;
+        const double *blk = A->val + 9 * (int64_t)s;
+        for (int a = (A->col[s] == j ? bcol : 0); a < 3; ++a) {
+          const double vv = blk[3 * bcol + a];
+          if (!isfinite(vv)) ++bad;
+          Cx[k++] = vv;
+        }
+      }
+    }
+  }
+  return bad;
+}
+
+static int run_cholmod(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
+                       double *x, bs_lin_stats *st, bs_error *err) {
+  const int32_t n = ls->n;
+  const int64_t N = ls->N;
+  int64_t bad = 0;
+  const double bb = load_rhs(n, mask, b, ls->r, &bad);
+  if (bad) return rhs_error(n, mask, b, err);
+  /* The symbolic analysis is tied to the mask: redo it if the mask changed. */
+  int same = ls->have_symbolic;
+  for (int32_t i = 0; same && i < n; ++i)
+    if (ls->cmask[i] != (uint8_t)(!mask || mask[i])) same = 0;
+  if (!same) {
+    int rc = chol_setup(ls, A, mask, err);
+    if (rc) return rc;
+  }
+  if (chol_copy_values(ls, A)) return matrix_error(A, mask, "cholmod", err);
+  const double bnorm = sqrt(bb);
+  if (bnorm == 0.0) {
+    vzero(N, x);
+    st->converged = 1;
+    return BS_OK;
+  }
+  if (ls->nfree == 0) { /* unreachable: b != 0 needs a free dof */
+    vzero(N, x);
+    st->converged = 1;
+    return BS_OK;
+  }
+  ls->cm.status = CHOLMOD_OK;
+  const int ok = cholmod_factorize(ls->C, ls->L, &ls->cm);
+  if (ls->cm.status == CHOLMOD_NOT_POSDEF || (ok && ls->L->minor < ls->L->n)) {
+    st->not_pd = 1;
+    return BS_OK; /* x untouched: the caller falls back to CG */
+  }
+  if (!ok || ls->cm.status < CHOLMOD_OK) return cholmod_status_error(ls, "factorization", err);
+  double *Bx = ls->B->x;
+  for (int32_t f = 0; f < ls->nfree; ++f)
+    for (int a = 0; a < 3; ++a) Bx[3 * f + a] = ls->r[3 * (int64_t)ls->fvert[f] + a];
+  if (!cholmod_solve2(CHOLMOD_A, ls->L, ls->B, NULL, &ls->X, NULL, &ls->Y, &ls->E, &ls->cm))
+    return cholmod_status_error(ls, "solve", err);
+  const double *Xx = ls->X->x;
+  vzero(N, x);
+  for (int32_t f = 0; f < ls->nfree; ++f)
+    for (int a = 0; a < 3; ++a) x[3 * (int64_t)ls->fvert[f] + a] = Xx[3 * f + a];
+  /* Residual of the direct solve (one product). */
+  bs_bsr_mul(A, mask, x, ls->q);
+  double s = 0.0;
+  const double *r = ls->r, *q = ls->q;
+#pragma omp parallel for schedule(static) reduction(+ : s)
+  for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
+  st->rel_residual = sqrt(s) / bnorm;
+  if (!isfinite(st->rel_residual))
+    return bs_error_set(err, BS_ENUMERIC, "cholmod: non-finite solution (A nearly singular?)");
+  st->converged = 1;
+  return BS_OK;
+}
+
+/* ---- create / destroy / solve ------------------------------------------ */
+
+void bs_linsolve_destroy(bs_linsolve **lsp) {
+  if (!lsp || !*lsp) return;
+  bs_linsolve *ls = *lsp;
+  if (ls->cm_started) {
+    chol_free_symbolic(ls);
+    cholmod_finish(&ls->cm);
+  }
+  free(ls->r);
+  free(ls->p);
+  free(ls->q);
+  free(ls->z);
+  free(ls->y);
+  free(ls->v);
+  free(ls->w);
+  free(ls->w1);
+  free(ls->w2);
+  free(ls->r2);
+  free(ls->minv);
+  free(ls->cmask);
+  free(ls->fmap);
+  free(ls->fvert);
+  free(ls);
+  *lsp = NULL;
+}
+
+int bs_linsolve_create(const bs_bsr *pattern, bs_lin_kind kind, bs_linsolve **out,
+                       bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: out is NULL");
+  *out = NULL;
+  if (!pattern) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: pattern is NULL");
+  if ((int)kind < 0 || (int)kind > (int)BS_LIN_MINRES)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: unknown solver kind %d", (int)kind);
+  bs_linsolve *ls = bs_calloc(1, sizeof *ls, "bs_linsolve", err);
+  if (!ls) return BS_ENOMEM;
+  ls->kind = kind;
+  ls->n = pattern->n;
+  ls->nnzb = pattern->nnzb;
+  ls->N = 3 * (int64_t)pattern->n;
+  const size_t N = ls->N > 0 ? (size_t)ls->N : 1, n = pattern->n > 0 ? (size_t)pattern->n : 1;
+  int ok = 1;
+#define BS_ALLOC(ptr, count, what)                              \
+  do {                                                          \
+    (ptr) = bs_calloc((count), sizeof *(ptr), (what), err);     \
+    ok = ok && (ptr) != NULL;                                   \
+  } while (0)
+  BS_ALLOC(ls->r, N, "linsolve residual");
+  BS_ALLOC(ls->q, N, "linsolve product");
+  switch (kind) {
+  case BS_LIN_PCG:
+    BS_ALLOC(ls->z, N, "pcg preconditioned residual");
+    BS_ALLOC(ls->minv, 9 * n, "pcg block Jacobi");
+    /* fall through */
+  case BS_LIN_CG:
+    BS_ALLOC(ls->p, N, "cg direction");
+    break;
+  case BS_LIN_MINRES:
+    BS_ALLOC(ls->y, N, "minres vector");
+    BS_ALLOC(ls->v, N, "minres vector");
+    BS_ALLOC(ls->w, N, "minres vector");
+    BS_ALLOC(ls->w1, N, "minres vector");
+    BS_ALLOC(ls->w2, N, "minres vector");
+    BS_ALLOC(ls->r2, N, "minres vector");
+    break;
+  case BS_LIN_CHOLMOD:
+    BS_ALLOC(ls->cmask, n, "cholmod mask");
+    BS_ALLOC(ls->fmap, n, "cholmod free map");
+    BS_ALLOC(ls->fvert, n, "cholmod free vertices");
+    if (ok) {
+      cholmod_start(&ls->cm);
+      ls->cm_started = 1;
+      ls->cm.print = 0;            /* a library never prints */
+      ls->cm.error_handler = NULL;
+      ls->cm.supernodal = CHOLMOD_SUPERNODAL;
+      ls->cm.quick_return_if_not_posdef = 1;
+    }
+    break;
+  }
+#undef BS_ALLOC
+  if (!ok) {
+    bs_linsolve_destroy(&ls);
+    return BS_ENOMEM;
+  }
+  *out = ls;
+  return BS_OK;
+}
+
+int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
+                      double rel_tol, int max_iter, double *x, bs_lin_stats *st, bs_error *err) {
+  bs_lin_stats local;
+  if (!st) st = &local;
+  memset(st, 0, sizeof *st);
+  const double t0 = bs_seconds();
+  if (!ls || !A || !b || !x)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_solve: NULL argument");
+  if (A->n != ls->n || A->nnzb != ls->nnzb)
+    return bs_error_set(err, BS_EINPUT,
+                        "bs_linsolve_solve: matrix (n = %d, %lld blocks) does not match the "
+                        "workspace pattern (n = %d, %lld blocks)",
+                        (int)A->n, (long long)A->nnzb, (int)ls->n, (long long)ls->nnzb);
+  if (!(rel_tol >= 0.0))
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_solve: rel_tol = %g must be >= 0", rel_tol);
+  if (max_iter <= 0) max_iter = ls->N > INT32_MAX ? INT32_MAX : (int)(ls->N > 0 ? ls->N : 1);
+  int rc = BS_OK;
+  switch (ls->kind) {
+  case BS_LIN_CG:
+    rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 0, x, st, err);
+    break;
+  case BS_LIN_PCG:
+    rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 1, x, st, err);
+    break;
+  case BS_LIN_MINRES:
+    rc = run_minres(ls, A, mask, b, rel_tol, max_iter, x, st, err);
+    break;
+  case BS_LIN_CHOLMOD:
+    rc = run_cholmod(ls, A, mask, b, x, st, err);
+    break;
+  }
+  st->seconds = bs_seconds() - t0;
+  return rc;
+}

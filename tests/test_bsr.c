@@ -1,0 +1,278 @@
+/* test_bsr.c — 3x3 block CSR: pattern from a graph, product against a dense
+ * product (plain and masked), thread-count independence, the checker, and
+ * error paths of create. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_bsr.h"
+
+static uint64_t rng_state = 88172645463325252ull;
+static double urand(void) { /* xorshift64, uniform in [-1, 1) */
+  rng_state ^= rng_state << 13;
+  rng_state ^= rng_state >> 7;
+  rng_state ^= rng_state << 17;
+  return (double)(rng_state >> 11) / 9007199254740992.0 * 2.0 - 1.0;
+}
+
+/* A symmetric random graph on n vertices, about deg neighbours each, with
+ * duplicate entries on purpose. */
+static void random_graph(int32_t n, int deg, int32_t **ptr, int32_t **adj) {
+  int32_t *ei = malloc(sizeof(int32_t) * (size_t)n * deg * 3);
+  int32_t *ej = malloc(sizeof(int32_t) * (size_t)n * deg * 3);
+  int m = 0;
+  for (int32_t i = 0; i < n; ++i)
+    for (int k = 0; k < deg; ++k) {
+      int32_t j = (int32_t)((urand() + 1.0) * 0.5 * n) % n;
+      if (j == i) continue;
+      ei[m] = i, ej[m] = j, ++m;
+      ei[m] = j, ej[m] = i, ++m;
+      if (k == 0) { /* a duplicate */
+        ei[m] = i, ej[m] = j, ++m;
+      }
+    }
+  *ptr = calloc((size_t)n + 1, sizeof(int32_t));
+  *adj = malloc(sizeof(int32_t) * (size_t)(m > 0 ? m : 1));
+  for (int e = 0; e < m; ++e) (*ptr)[ei[e] + 1]++;
+  for (int32_t i = 0; i < n; ++i) (*ptr)[i + 1] += (*ptr)[i];
+  int32_t *fill = calloc((size_t)n, sizeof(int32_t));
+  for (int e = 0; e < m; ++e) (*adj)[(*ptr)[ei[e]] + fill[ei[e]]++] = ej[e];
+  free(fill);
+  free(ei);
+  free(ej);
+}
+
+static void fill_random(bs_bsr *A) {
+  for (int64_t k = 0; k < 9 * A->nnzb; ++k) A->val[k] = urand();
+}
+
+/* Symmetrize values: A_ji = A_ij^T. */
+static void symmetrize(bs_bsr *A) {
+  for (int32_t i = 0; i < A->n; ++i)
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s) {
+      int32_t j = A->col[s];
+      if (j < i) continue;
+      int32_t t = bs_bsr_slot(A, j, i);
+      cr_assert(t >= 0);
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) A->val[9 * t + 3 * b + a] = A->val[9 * s + 3 * a + b];
+    }
+}
+
+static double *dense_of(const bs_bsr *A) {
+  int64_t N = 3 * (int64_t)A->n;
+  double *D = calloc((size_t)(N * N), sizeof *D);
+  for (int32_t i = 0; i < A->n; ++i)
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          D[(3 * i + a) * N + 3 * A->col[s] + b] = A->val[9 * s + 3 * a + b];
+  return D;
+}
+
+Test(bsr, pattern_from_graph) {
+  /* 0: {2, 1, 2}, 1: {0}, 2: {0, 0}, 3: {} (isolated), 4: {4, 1} (self loop). */
+  const int32_t ptr[] = {0, 3, 4, 6, 6, 8};
+  const int32_t adj[] = {2, 1, 2, 0, 0, 0, 4, 1};
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(5, ptr, adj, &A, &err), 0, "%s", err.msg);
+  const int32_t rp[] = {0, 3, 5, 7, 8, 10};
+  const int32_t col[] = {0, 1, 2, 0, 1, 0, 2, 3, 1, 4};
+  const int32_t diag[] = {0, 4, 6, 7, 9};
+  cr_assert_eq(A->n, 5);
+  cr_assert_eq(A->nnzb, 10);
+  for (int i = 0; i <= 5; ++i) cr_assert_eq(A->row_ptr[i], rp[i], "row_ptr[%d]", i);
+  for (int s = 0; s < 10; ++s) cr_assert_eq(A->col[s], col[s], "col[%d]", s);
+  for (int i = 0; i < 5; ++i) cr_assert_eq(A->diag[i], diag[i], "diag[%d]", i);
+  for (int64_t k = 0; k < 9 * A->nnzb; ++k) cr_assert_eq(A->val[k], 0.0);
+  cr_assert_eq(bs_bsr_slot(A, 0, 2), 2);
+  cr_assert_eq(bs_bsr_slot(A, 4, 1), 8);
+  cr_assert_eq(bs_bsr_slot(A, 3, 3), 7);
+  cr_assert_eq(bs_bsr_slot(A, 3, 0), -1);
+  cr_assert_eq(bs_bsr_slot(A, 1, 4), -1);
+  cr_assert_eq(bs_bsr_slot(A, 5, 0), -1);
+  cr_assert_eq(bs_bsr_slot(A, 0, -1), -1);
+  /* (4,1) stored but (1,4) not: the checker names the pair. */
+  cr_assert_eq(bs_bsr_check(A, 0.0, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "(4,1)") && strstr(err.msg, "(1,4)"), "%s", err.msg);
+  fill_random(A);
+  bs_bsr_zero(A);
+  for (int64_t k = 0; k < 9 * A->nnzb; ++k) cr_assert_eq(A->val[k], 0.0);
+  bs_bsr_destroy(&A);
+  cr_assert_null(A);
+  bs_bsr_destroy(&A); /* NULL is fine */
+  bs_bsr_destroy(NULL);
+}
+
+Test(bsr, empty_matrix) {
+  const int32_t ptr[] = {0};
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(0, ptr, NULL, &A, &err), 0, "%s", err.msg);
+  cr_assert_eq(A->nnzb, 0);
+  cr_assert_eq(bs_bsr_check(A, 0.0, &err), 0, "%s", err.msg);
+  bs_bsr_destroy(&A);
+}
+
+Test(bsr, create_errors) {
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  const int32_t ptr[] = {0, 1, 2, 3};
+  const int32_t bad[] = {1, 7, 0};
+  cr_assert_eq(bs_bsr_create(3, ptr, bad, &A, &err), BS_EINPUT);
+  cr_assert_null(A);
+  cr_assert(strstr(err.msg, "neighbour 7 of vertex 1"), "%s", err.msg);
+  const int32_t ptr2[] = {0, 2, 1, 3};
+  const int32_t ok[] = {1, 2, 0};
+  cr_assert_eq(bs_bsr_create(3, ptr2, ok, &A, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "vertex 1"), "%s", err.msg);
+  cr_assert_eq(bs_bsr_create(-1, ptr, ok, &A, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "-1"), "%s", err.msg);
+}
+
+Test(bsr, product_matches_dense) {
+  int32_t *ptr, *adj;
+  const int32_t n = 60;
+  random_graph(n, 4, &ptr, &adj);
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  /* Sorted, diagonal present, pattern symmetric (values need not be). */
+  for (int32_t i = 0; i < n; ++i) {
+    cr_assert_eq(A->col[A->diag[i]], i);
+    for (int32_t s = A->row_ptr[i] + 1; s < A->row_ptr[i + 1]; ++s)
+      cr_assert_lt(A->col[s - 1], A->col[s]);
+    for (int32_t k = ptr[i]; k < ptr[i + 1]; ++k) cr_assert_geq(bs_bsr_slot(A, i, adj[k]), 0);
+  }
+  fill_random(A);
+  const int64_t N = 3 * n;
+  double *D = dense_of(A), *x = malloc(N * sizeof *x), *y = malloc(N * sizeof *y);
+  for (int64_t k = 0; k < N; ++k) x[k] = urand();
+  bs_bsr_mul(A, NULL, x, y);
+  for (int64_t r = 0; r < N; ++r) {
+    double s = 0;
+    for (int64_t c = 0; c < N; ++c) s += D[r * N + c] * x[c];
+    cr_assert_float_eq(y[r], s, 1e-12, "row %lld: %g vs %g", (long long)r, y[r], s);
+  }
+  /* Masked: y_i = sum over free j of A_ij x_j for free i, 0 for constrained i. */
+  uint8_t *mask = malloc((size_t)n);
+  for (int32_t i = 0; i < n; ++i) mask[i] = (uint8_t)(i % 3 != 1);
+  for (int64_t k = 0; k < N; ++k) y[k] = NAN;
+  bs_bsr_mul(A, mask, x, y);
+  for (int64_t r = 0; r < N; ++r) {
+    double s = 0;
+    if (mask[r / 3])
+      for (int64_t c = 0; c < N; ++c)
+        if (mask[c / 3]) s += D[r * N + c] * x[c];
+    if (!mask[r / 3])
+      cr_assert_eq(y[r], 0.0, "constrained row %lld", (long long)r);
+    else
+      cr_assert_float_eq(y[r], s, 1e-12, "masked row %lld: %g vs %g", (long long)r, y[r], s);
+  }
+  /* Constrained entries of x do not matter. */
+  double *y2 = malloc(N * sizeof *y2);
+  for (int64_t k = 0; k < N; ++k)
+    if (!mask[k / 3]) x[k] = 1e30;
+  bs_bsr_mul(A, mask, x, y2);
+  cr_assert_eq(memcmp(y, y2, N * sizeof *y), 0);
+  free(y2);
+  free(mask);
+  free(D);
+  free(x);
+  free(y);
+  free(ptr);
+  free(adj);
+  bs_bsr_destroy(&A);
+}
+
+Test(bsr, product_independent_of_threads) {
+  int32_t *ptr, *adj;
+  const int32_t n = 5000;
+  random_graph(n, 6, &ptr, &adj);
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  fill_random(A);
+  const int64_t N = 3 * n;
+  double *x = malloc(N * sizeof *x), *y1 = malloc(N * sizeof *y1), *y2 = malloc(N * sizeof *y2);
+  for (int64_t k = 0; k < N; ++k) x[k] = urand();
+  int nt = omp_get_max_threads();
+  omp_set_num_threads(1);
+  bs_bsr_mul(A, NULL, x, y1);
+  omp_set_num_threads(3);
+  bs_bsr_mul(A, NULL, x, y2);
+  omp_set_num_threads(nt);
+  cr_assert_eq(memcmp(y1, y2, N * sizeof *y1), 0, "product depends on the thread count");
+  free(x);
+  free(y1);
+  free(y2);
+  free(ptr);
+  free(adj);
+  bs_bsr_destroy(&A);
+}
+
+Test(bsr, check_catches_asymmetry_and_names_block) {
+  int32_t *ptr, *adj;
+  const int32_t n = 40;
+  random_graph(n, 3, &ptr, &adj);
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  fill_random(A);
+  symmetrize(A);
+  cr_assert_eq(bs_bsr_check(A, 0.0, &err), 0, "%s", err.msg);
+  /* Pick an off-diagonal block (i,j), i < j, and break A_ji = A_ij^T there. */
+  int32_t i = -1, j = -1, s = -1;
+  for (int32_t r = 0; r < n && s < 0; ++r)
+    for (int32_t t = A->row_ptr[r]; t < A->row_ptr[r + 1]; ++t)
+      if (A->col[t] > r) {
+        i = r, j = A->col[t], s = t;
+        break;
+      }
+  cr_assert_geq(s, 0);
+  const int32_t t = bs_bsr_slot(A, j, i);
+  A->val[9 * t + 5] += 1e-6; /* entry (1,2) of block (j,i): mirrors (2,1) of (i,j) */
+  cr_assert_eq(bs_bsr_check(A, 1e-9, &err), BS_EINPUT);
+  char want[64];
+  snprintf(want, sizeof want, "block (%d,%d) entry (2,1)", (int)i, (int)j);
+  cr_assert(strstr(err.msg, want), "message \"%s\" lacks \"%s\"", err.msg, want);
+  snprintf(want, sizeof want, "block (%d,%d) entry (1,2)", (int)j, (int)i);
+  cr_assert(strstr(err.msg, want), "message \"%s\" lacks \"%s\"", err.msg, want);
+  /* Within a looser relative tolerance it passes. */
+  cr_assert_eq(bs_bsr_check(A, 1e-5, &err), 0, "%s", err.msg);
+  /* An asymmetric diagonal block is caught too. */
+  A->val[9 * t + 5] -= 1e-6;
+  A->val[9 * A->diag[7] + 1] += 0.5;
+  cr_assert_eq(bs_bsr_check(A, 1e-9, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "block (7,7) entry (0,1)"), "%s", err.msg);
+  A->val[9 * A->diag[7] + 1] -= 0.5;
+  cr_assert_eq(bs_bsr_check(A, 1e-12, &err), 0, "%s", err.msg);
+  /* Non-finite value. */
+  A->val[9 * s + 4] = NAN;
+  cr_assert_eq(bs_bsr_check(A, 1e-9, &err), BS_ENUMERIC);
+  snprintf(want, sizeof want, "block (%d,%d) entry (1,1)", (int)i, (int)j);
+  cr_assert(strstr(err.msg, want), "message \"%s\" lacks \"%s\"", err.msg, want);
+  A->val[9 * s + 4] = A->val[9 * t + 4];
+  /* Broken structure: unsorted columns, wrong diagonal slot. */
+  int32_t r0 = A->row_ptr[i];
+  int32_t c0 = A->col[r0];
+  A->col[r0] = A->col[r0 + 1];
+  A->col[r0 + 1] = c0;
+  cr_assert_eq(bs_bsr_check(A, 1e-9, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "not strictly increasing"), "%s", err.msg);
+  A->col[r0 + 1] = A->col[r0];
+  A->col[r0] = c0;
+  int32_t d = A->diag[3];
+  A->diag[3] = d == A->row_ptr[3] ? d + 1 : d - 1;
+  cr_assert_eq(bs_bsr_check(A, 1e-9, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "block (3,3)"), "%s", err.msg);
+  A->diag[3] = d;
+  cr_assert_eq(bs_bsr_check(A, 1e-12, &err), 0, "%s", err.msg);
+  free(ptr);
+  free(adj);
+  bs_bsr_destroy(&A);
+}
