@@ -1,0 +1,48 @@
+/* bs_svd.h — small dense decompositions for the constitutive models: the
+ * signed ("inversion-aware") SVD of a 3x3 matrix and the eigen-decomposition
+ * of a symmetric 3x3 matrix.
+ *
+ * Conventions
+ *  - Matrices are row-major double[9]: A[3*r + c]. Units: whatever the input
+ *    carries (F is dimensionless).
+ *  - Nothing allocates, prints or fails: these are total functions. A
+ *    non-finite F gives NaN outputs at once; bs_sym3_eig on a non-finite A
+ *    gives non-finite outputs after a bounded number of sweeps.
+ *
+ * Accuracy: both routines are cyclic Jacobi methods run to machine precision.
+ * bs_svd3 reconstructs F to a few ulps of ||F|| and returns U, V orthogonal to
+ * a few ulps, for every F: rank 0..3, repeated, zero or tiny singular values,
+ * inverted, and any scale from 1e-300 to 1e300.
+ */
+#ifndef BS_SVD_H
+#define BS_SVD_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* F = U diag(sigma) V^T with U, V rotations (orthogonal, det +1) and
+ *   sigma[0] >= sigma[1] >= |sigma[2]|,  sign(sigma[2]) = sign(det F)
+ * (the inversion convention of Irving, Teran and Fedkiw 2004: a reflection is
+ * carried by the smallest singular value, never by U or V).
+ *
+ * Method (one-sided Jacobi, Hestenes 1958): the columns of B = F V are
+ * orthogonalized by plane rotations of V, each computed from the Gram entries
+ * |b_p|^2, |b_q|^2, b_p.b_q of the current columns; this is Jacobi on F^T F
+ * without forming it, so small singular values keep their relative accuracy.
+ * Sweeps stop when every pair satisfies |b_p.b_q| <= eps |b_p||b_q|. Columns
+ * are then sorted by length, V made a rotation, U = [b0/|b0|, Gram-Schmidt
+ * of b1 (or any unit vector orthogonal to u0 when b1 vanishes), u0 x u1], and
+ * sigma2 = u2 . b2 carries the sign of det F. F is scaled by a power of two
+ * first (exact), so no step under- or overflows. F = 0 gives U = V = I. */
+void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]);
+
+/* A = Q diag(lambda) Q^T for symmetric A (only the upper triangle is read),
+ * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
+ * eigenvalues carry an absolute error of a few ulps of max |lambda|. */
+void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

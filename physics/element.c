@@ -1,0 +1,86 @@
+/* element.c — the P1 tet kernel (see bs_element.h). */
+#include "bs_element.h"
+
+#include <math.h>
+
+void bs_tet_rest(const double X[12], double Dm_inv[9], double *volume) {
+  double D[9];
+  for (int m = 0; m < 3; m++)
+    for (int k = 0; k < 3; k++) D[3 * m + k] = X[3 * (k + 1) + m] - X[m];
+  /* cofactors (transposed: the adjugate) */
+  const double c00 = D[4] * D[8] - D[5] * D[7], c01 = D[5] * D[6] - D[3] * D[8], c02 = D[3] * D[7] - D[4] * D[6];
+  const double det = D[0] * c00 + D[1] * c01 + D[2] * c02;
+  *volume = det / 6.0;
+  if (det == 0.0 || !isfinite(det)) {
+    for (int i = 0; i < 9; i++) Dm_inv[i] = 0.0;
+    return;
+  }
+  const double id = 1.0 / det;
+  Dm_inv[0] = c00 * id;
+  Dm_inv[3] = c01 * id;
+  Dm_inv[6] = c02 * id;
+  Dm_inv[1] = (D[2] * D[7] - D[1] * D[8]) * id;
+  Dm_inv[4] = (D[0] * D[8] - D[2] * D[6]) * id;
+  Dm_inv[7] = (D[1] * D[6] - D[0] * D[7]) * id;
+  Dm_inv[2] = (D[1] * D[5] - D[2] * D[4]) * id;
+  Dm_inv[5] = (D[2] * D[3] - D[0] * D[5]) * id;
+  Dm_inv[8] = (D[0] * D[4] - D[1] * D[3]) * id;
+}
+
+void bs_tet_F(const double x[12], const double Dm_inv[9], double F[9]) {
+  for (int m = 0; m < 3; m++) {
+    const double d1 = x[3 + m] - x[m], d2 = x[6 + m] - x[m], d3 = x[9 + m] - x[m];
+    for (int j = 0; j < 3; j++) F[3 * m + j] = d1 * Dm_inv[j] + d2 * Dm_inv[3 + j] + d3 * Dm_inv[6 + j];
+  }
+}
+
+/* w[a][j] = dF_mj / dx_{a,m}. */
+static void shape_weights(const double Dm_inv[9], double w[4][3]) {
+  for (int j = 0; j < 3; j++) {
+    w[1][j] = Dm_inv[j];
+    w[2][j] = Dm_inv[3 + j];
+    w[3][j] = Dm_inv[6 + j];
+    w[0][j] = -(w[1][j] + w[2][j] + w[3][j]);
+  }
+}
+
+double bs_tet_energy(const bs_material *m, const double x[12], const double Dm_inv[9], double vol) {
+  double F[9];
+  bs_tet_F(x, Dm_inv, F);
+  return vol * bs_material_psi(m, F);
+}
+
+double bs_tet_energy_grad(const bs_material *m, const double x[12], const double Dm_inv[9], double vol,
+                          double g[12]) {
+  double F[9], P[9], w[4][3];
+  bs_tet_F(x, Dm_inv, F);
+  const double psi = bs_material_psi_P(m, F, P);
+  shape_weights(Dm_inv, w);
+  for (int a = 0; a < 4; a++)
+    for (int c = 0; c < 3; c++)
+      g[3 * a + c] = vol * (P[3 * c] * w[a][0] + P[3 * c + 1] * w[a][1] + P[3 * c + 2] * w[a][2]);
+  return vol * psi;
+}
+
+void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
+                    double H[144]) {
+  double F[9], K[81], w[4][3];
+  bs_tet_F(x, Dm_inv, F);
+  bs_material_dPdF(m, F, project_psd, K);
+  shape_weights(Dm_inv, w);
+  /* H[(a,c),(b,e)] = vol sum_{j,l} w[a][j] K[(c,j),(e,l)] w[b][l], by 3x3
+   * blocks K_ce of K; only c <= e (and a <= b when c = e), then mirrored. */
+  for (int c = 0; c < 3; c++)
+    for (int e = c; e < 3; e++) {
+      double T[4][3];
+      for (int a = 0; a < 4; a++)
+        for (int l = 0; l < 3; l++)
+          T[a][l] = vol * (w[a][0] * K[9 * (3 * c) + 3 * e + l] + w[a][1] * K[9 * (3 * c + 1) + 3 * e + l] +
+                           w[a][2] * K[9 * (3 * c + 2) + 3 * e + l]);
+      for (int a = 0; a < 4; a++)
+        for (int b = (c == e ? a : 0); b < 4; b++) {
+          const double v = T[a][0] * w[b][0] + T[a][1] * w[b][1] + T[a][2] * w[b][2];
+          H[12 * (3 * a + c) + 3 * b + e] = H[12 * (3 * b + e) + 3 * a + c] = v;
+        }
+    }
+}

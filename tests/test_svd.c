@@ -1,0 +1,282 @@
+/* The signed 3x3 SVD and the symmetric 3x3 eigen-decomposition: reconstruction
+ * and orthogonality to 1e-12 relative, rotations (det +1), ordering and the
+ * inversion sign convention, over random, rank-deficient, repeated, inverted,
+ * nearly flat and extreme-scale matrices. */
+#include <criterion/criterion.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "bs_svd.h"
+
+/* ---- deterministic random numbers and small matrix helpers ---- */
+
+static uint64_t rng = 0x9E3779B97F4A7C15ull;
+static double urand(void) { /* splitmix64 -> [0, 1) */
+  uint64_t z = (rng += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return (double)(z >> 11) * 0x1.0p-53;
+}
+static double nrand(void) {
+  double u = urand(), v = urand();
+  return sqrt(-2.0 * log(u + 1e-300)) * cos(6.283185307179586 * v);
+}
+static void rand_rot(double Q[9]) {
+  double q[4], n = 0;
+  for (int i = 0; i < 4; i++) {
+    q[i] = nrand();
+    n += q[i] * q[i];
+  }
+  n = sqrt(n);
+  double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+  Q[0] = 1 - 2 * (y * y + z * z), Q[1] = 2 * (x * y - z * w), Q[2] = 2 * (x * z + y * w);
+  Q[3] = 2 * (x * y + z * w), Q[4] = 1 - 2 * (x * x + z * z), Q[5] = 2 * (y * z - x * w);
+  Q[6] = 2 * (x * z - y * w), Q[7] = 2 * (y * z + x * w), Q[8] = 1 - 2 * (x * x + y * y);
+}
+static double det3(const double A[9]) {
+  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+         A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+/* F = Q diag(s) R^T */
+static void compose(const double Q[9], const double s[3], const double R[9], double F[9]) {
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double v = 0;
+      for (int k = 0; k < 3; k++) v += Q[3 * i + k] * s[k] * R[3 * j + k];
+      F[3 * i + j] = v;
+    }
+}
+static double maxabs(const double A[9]) {
+  double m = 0;
+  for (int i = 0; i < 9; i++) m = fmax(m, fabs(A[i]));
+  return m;
+}
+/* Frobenius norm, scaled so that it neither over- nor underflows. */
+static double fro(const double A[9]) {
+  double m = maxabs(A), v = 0;
+  if (m == 0) return 0;
+  for (int i = 0; i < 9; i++) v += (A[i] / m) * (A[i] / m);
+  return m * sqrt(v);
+}
+/* max |A^T A - I| */
+static double orth_err(const double A[9]) {
+  double e = 0;
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double v = -(i == j);
+      for (int k = 0; k < 3; k++) v += A[3 * k + i] * A[3 * k + j];
+      e = fmax(e, fabs(v));
+    }
+  return e;
+}
+
+/* Worst figures over a test, reported in the log. */
+static double worst_rec, worst_orth;
+
+/* Every property of bs_svd3 at F; returns sigma. */
+static void check_svd(const double F[9], double sigma[3], const char *what) {
+  double U[9], V[9], s[3], R[9];
+  bs_svd3(F, U, s, V);
+  for (int i = 0; i < 9; i++) cr_assert(isfinite(U[i]) && isfinite(V[i]), "%s: non-finite U or V", what);
+  cr_assert(isfinite(s[0]) && isfinite(s[1]) && isfinite(s[2]), "%s: non-finite sigma", what);
+  compose(U, s, V, R);
+  double nF = fro(F), d[9];
+  for (int i = 0; i < 9; i++) d[i] = R[i] - F[i];
+  double rec = nF > 0 ? fro(d) / nF : fro(d);
+  double ou = orth_err(U), ov = orth_err(V);
+  worst_rec = fmax(worst_rec, rec);
+  worst_orth = fmax(worst_orth, fmax(ou, ov));
+  cr_assert(rec <= 1e-12, "%s: reconstruction error %g (relative)", what, rec);
+  cr_assert(ou <= 1e-12 && ov <= 1e-12, "%s: orthogonality error U %g V %g", what, ou, ov);
+  cr_assert(fabs(det3(U) - 1) <= 1e-12 && fabs(det3(V) - 1) <= 1e-12, "%s: det U = %.17g, det V = %.17g", what,
+            det3(U), det3(V));
+  cr_assert(s[0] >= s[1] && s[1] >= fabs(s[2]), "%s: order violated: %.17g %.17g %.17g", what, s[0], s[1], s[2]);
+  cr_assert(s[1] >= 0, "%s: sigma1 = %g < 0", what, s[1]);
+  double Fs[9], mF = maxabs(F);
+  for (int i = 0; i < 9; i++) Fs[i] = mF > 0 ? F[i] / mF : 0;
+  double dF = det3(Fs); /* sign of det F without overflow */
+  if (fabs(dF) > 1e-9)
+    cr_assert((dF > 0) == (s[2] > 0), "%s: sign of sigma2 (%g) differs from det F (%g)", what, s[2], dF);
+  if (sigma) memcpy(sigma, s, sizeof s);
+}
+
+/* F = Q diag(s) R^T for random rotations; the computed sigma must be s. */
+static void check_known(const double s_in[3], const char *what) {
+  for (int t = 0; t < 200; t++) {
+    double Q[9], R[9], F[9], s[3];
+    rand_rot(Q);
+    rand_rot(R);
+    compose(Q, s_in, R, F);
+    check_svd(F, s, what);
+    double sc = fabs(s_in[0]);
+    for (int k = 0; k < 3; k++)
+      cr_assert(fabs(s[k] - s_in[k]) <= 1e-14 * sc, "%s: sigma%d = %.17g, expected %.17g", what, k, s[k], s_in[k]);
+  }
+}
+
+Test(svd, random) {
+  worst_rec = worst_orth = 0;
+  for (int t = 0; t < 20000; t++) {
+    double F[9];
+    for (int i = 0; i < 9; i++) F[i] = nrand();
+    check_svd(F, NULL, "random");
+  }
+  cr_log_info("random: worst reconstruction %.2e, orthogonality %.2e", worst_rec, worst_orth);
+}
+
+Test(svd, inverted) {
+  int n_inv = 0;
+  for (int t = 0; t < 5000; t++) {
+    double F[9], s[3];
+    for (int i = 0; i < 9; i++) F[i] = nrand();
+    if (det3(F) > 0)
+      for (int j = 0; j < 3; j++) F[j] = -F[j]; /* reflect a row */
+    check_svd(F, s, "inverted");
+    cr_assert(s[2] < 0, "inverted F must give sigma2 < 0, got %g", s[2]);
+    n_inv++;
+  }
+  cr_assert_eq(n_inv, 5000);
+  check_known((double[]){2.0, 1.0, -0.5}, "inverted known");
+  check_known((double[]){1.0, 1.0, -1.0}, "inverted repeated (1,1,-1)");
+  check_known((double[]){2.0, 1.0, -1.0}, "inverted repeated (2,1,-1)");
+  /* pure reflections */
+  double M[9] = {-1, 0, 0, 0, -1, 0, 0, 0, -1}, s[3];
+  check_svd(M, s, "-I");
+  cr_assert(s[0] == 1 && s[1] == 1 && s[2] == -1, "-I: sigma %g %g %g", s[0], s[1], s[2]);
+}
+
+Test(svd, rank_deficient) {
+  for (int t = 0; t < 2000; t++) {
+    double a[3], b[3], c[3], d[3], F[9], s[3];
+    for (int i = 0; i < 3; i++) a[i] = nrand(), b[i] = nrand(), c[i] = nrand(), d[i] = nrand();
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) F[3 * i + j] = a[i] * b[j];
+    check_svd(F, s, "rank 1");
+    cr_assert(s[1] <= 1e-14 * s[0] && fabs(s[2]) <= 1e-14 * s[0], "rank 1: sigma %g %g %g", s[0], s[1], s[2]);
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) F[3 * i + j] = a[i] * b[j] + c[i] * d[j];
+    check_svd(F, s, "rank 2");
+    cr_assert(fabs(s[2]) <= 1e-14 * s[0], "rank 2: sigma %g %g %g", s[0], s[1], s[2]);
+  }
+  /* rank 0 */
+  double Z[9] = {0}, U[9], V[9], s[3];
+  bs_svd3(Z, U, s, V);
+  cr_assert(s[0] == 0 && s[1] == 0 && s[2] == 0, "zero matrix: sigma %g %g %g", s[0], s[1], s[2]);
+  check_svd(Z, NULL, "zero");
+  /* single nonzero entries, a permutation, a rank-1 diagonal */
+  for (int k = 0; k < 9; k++) {
+    double E[9] = {0};
+    E[k] = -3.5;
+    check_svd(E, s, "single entry");
+    cr_assert(s[0] == 3.5 && s[1] == 0 && s[2] == 0, "single entry %d: sigma %g %g %g", k, s[0], s[1], s[2]);
+  }
+  double P[9] = {0, 1, 0, 0, 0, 1, 1, 0, 0}; /* cyclic permutation, det +1 */
+  check_svd(P, s, "permutation");
+  cr_assert(fabs(s[0] - 1) < 1e-15 && fabs(s[1] - 1) < 1e-15 && fabs(s[2] - 1) < 1e-15);
+  double P2[9] = {0, 1, 0, 1, 0, 0, 0, 0, 1}; /* transposition, det -1 */
+  check_svd(P2, s, "transposition");
+  cr_assert(fabs(s[2] + 1) < 1e-15, "transposition: sigma2 = %g", s[2]);
+}
+
+Test(svd, repeated) {
+  check_known((double[]){2, 2, 1}, "diag(2,2,1)");
+  check_known((double[]){1, 1, 1}, "rotation");
+  check_known((double[]){2, 1, 1}, "diag(2,1,1)");
+  check_known((double[]){3, 3, 3}, "3 I");
+  check_known((double[]){1, 1, 0}, "diag(1,1,0)");
+  check_known((double[]){1, 0, 0}, "diag(1,0,0)");
+  check_known((double[]){1, 1 - 1e-12, 1 - 2e-12}, "nearly repeated");
+  double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, U[9], V[9], s[3];
+  bs_svd3(I, U, s, V);
+  for (int i = 0; i < 9; i++) cr_assert(U[i] == I[i] && V[i] == I[i], "identity: U, V must be I exactly");
+  cr_assert(s[0] == 1 && s[1] == 1 && s[2] == 1, "identity: sigma must be 1 exactly");
+}
+
+Test(svd, near_identity) {
+  for (int t = 0; t < 2000; t++) {
+    double F[9], s[3];
+    for (int i = 0; i < 9; i++) F[i] = (i % 4 == 0) + 1e-9 * nrand();
+    check_svd(F, s, "near identity");
+    for (int k = 0; k < 3; k++) cr_assert(fabs(s[k] - 1) < 1e-8, "near identity: sigma%d = %g", k, s[k]);
+  }
+}
+
+Test(svd, nearly_flat) {
+  check_known((double[]){1.5, 0.7, 1e-8}, "flat +1e-8");
+  check_known((double[]){1.5, 0.7, -1e-8}, "flat -1e-8");
+  check_known((double[]){1.0, 1e-8, 1e-9}, "needle");
+  check_known((double[]){1.0, 1.0, 1e-8}, "flat repeated");
+  check_known((double[]){1.0, 1e-8, -1e-8}, "needle repeated inverted");
+  /* relative accuracy of the smallest singular value (one-sided Jacobi) */
+  for (int t = 0; t < 200; t++) {
+    double Q[9], R[9], F[9], s[3], s_in[3] = {2.0, 0.5, 1e-10};
+    rand_rot(Q);
+    rand_rot(R);
+    compose(Q, s_in, R, F);
+    check_svd(F, s, "tiny sigma");
+    cr_assert(fabs(s[2] - 1e-10) <= 1e-5 * 1e-10, "tiny sigma: %.17g", s[2]);
+  }
+}
+
+Test(svd, extreme_scales) {
+  const double scales[] = {1e-300, 1e-200, 1e-20, 1e20, 1e200, 1e300};
+  for (int k = 0; k < 6; k++)
+    for (int t = 0; t < 500; t++) {
+      double F[9], s[3], dF;
+      for (int i = 0; i < 9; i++) F[i] = nrand();
+      dF = det3(F);
+      for (int i = 0; i < 9; i++) F[i] *= scales[k];
+      check_svd(F, s, "scaled");
+      cr_assert((s[2] > 0) == (dF > 0), "scaled %g: sign of sigma2", scales[k]);
+    }
+}
+
+Test(svd, non_finite) {
+  const double bad[3] = {NAN, INFINITY, -INFINITY};
+  for (int k = 0; k < 3; k++)
+    for (int pos = 0; pos < 9; pos++) {
+      double F[9] = {1, 2, 0.5, 0, 3, 0, 0.25, 0, 1}, U[9], V[9], s[3];
+      F[pos] = bad[k];
+      bs_svd3(F, U, s, V);
+      cr_assert(isnan(s[0]) && isnan(s[1]) && isnan(s[2]) && isnan(U[0]) && isnan(V[8]),
+                "a non-finite entry at %d must give NaN outputs", pos);
+    }
+}
+
+/* A = Q diag(lambda) Q^T, Q a rotation, lambda sorted. */
+static void check_eig(const double A[9], const char *what) {
+  double lam[3], Q[9], R[9], d[9];
+  bs_sym3_eig(A, lam, Q);
+  compose(Q, lam, Q, R);
+  for (int i = 0; i < 9; i++) d[i] = R[i] - A[i];
+  double nA = fro(A);
+  cr_assert(fro(d) <= 1e-13 * (nA > 0 ? nA : 1), "%s: eig reconstruction %g", what, fro(d) / nA);
+  cr_assert(orth_err(Q) <= 1e-13 && fabs(det3(Q) - 1) <= 1e-13, "%s: Q not a rotation", what);
+  cr_assert(lam[0] >= lam[1] && lam[1] >= lam[2], "%s: eigenvalues not sorted", what);
+}
+
+Test(svd, sym3_eig) {
+  for (int t = 0; t < 5000; t++) {
+    double A[9];
+    for (int i = 0; i < 3; i++)
+      for (int j = i; j < 3; j++) A[3 * i + j] = A[3 * j + i] = nrand();
+    check_eig(A, "random symmetric");
+  }
+  const double spectra[][3] = {{2, 2, 1}, {1, 1, 1}, {3, -1, -1}, {0, 0, 0}, {1, 0, -1}, {1e-12, 0, -1e-12}};
+  for (int k = 0; k < 6; k++)
+    for (int t = 0; t < 200; t++) {
+      double Q[9], A[9], lam[3], Qo[9];
+      rand_rot(Q);
+      compose(Q, spectra[k], Q, A);
+      for (int i = 0; i < 3; i++) /* exactly symmetric */
+        for (int j = i + 1; j < 3; j++) A[3 * j + i] = A[3 * i + j];
+      check_eig(A, "known spectrum");
+      bs_sym3_eig(A, lam, Qo);
+      for (int i = 0; i < 3; i++)
+        cr_assert(fabs(lam[i] - spectra[k][i]) <= 1e-14 * (1 + fabs(spectra[k][0])), "eigenvalue %d: %.17g vs %g",
+                  i, lam[i], spectra[k][i]);
+    }
+}
