@@ -28,6 +28,152 @@ void bs_shim_free(void *p);
 int bs_shim_read_surface(const char *path, double **points, int64_t *n_points, int32_t **tris,
                          int64_t *n_tris, bs_error *err);
 
+
+/* ==========================================================================
+ * Geometry (shim_geometry.cpp; helper "shim"): exact predicates, an AABB tree
+ * over surface triangles with closest-point and box queries, signed distance
+ * to a closed surface, surface self-intersection.
+ *
+ * Kernel: CGAL::Exact_predicates_inexact_constructions_kernel. Every YES/NO
+ * or SIGN answer (orientation, point in tetrahedron, inside/outside, whether
+ * two triangles intersect) is exact for the double inputs as given: no
+ * tolerance, no round-off. Constructed numbers (closest points, distances,
+ * barycentric weights) are computed in double precision, and so is the
+ * feature (face, edge, vertex) of a closest point, which follows them.
+ *
+ * Data: points are 3 doubles each (x[3*i + k]); triangles are 3 int32_t
+ * 0-based point indices each; lengths are in the units of the points
+ * (metres in bigstep). Coordinates must be finite.
+ *
+ * Ownership: the tree copies the points and triangles it is given; arrays
+ * returned by bs_shim_self_intersections are freed with bs_shim_free.
+ *
+ * Threads: the tree's query functions (closest, within, signed distance) are
+ * read-only and may run concurrently on one tree; bs_shim_tree_update must
+ * not run concurrently with anything else on that tree.
+ * ========================================================================== */
+
+/* Orientation of the tetrahedron (a, b, c, d): the exact sign of
+ *     det[b - a, c - a, d - a] = ((b - a) x (c - a)) . (d - a),
+ * i.e. +1 when d lies on the side of the plane (a, b, c) into which the
+ * normal (b - a) x (c - a) points (a, b, c counterclockwise seen from d; a
+ * tet of positive volume in bs_mesh's convention), 0 when the four points
+ * are coplanar, -1 otherwise. This is CGAL::orientation(a, b, c, d); it is
+ * the OPPOSITE sign of Shewchuk's orient3d. Returns BS_EINPUT (< -1) when an
+ * argument is NULL or a coordinate is not finite. */
+int bs_shim_orient3d(const double a[3], const double b[3], const double c[3], const double d[3]);
+
+/* Exact position of p with respect to the closed tetrahedron (a, b, c, d),
+ * of either orientation: 1 strictly inside, 0 on its boundary (a face, an
+ * edge or a vertex), -1 outside. A flat tetrahedron (four coplanar points)
+ * has no interior: 0 when p lies in the convex hull of the four points, -1
+ * otherwise. Returns BS_EINPUT (< -1) for a NULL argument or a non-finite
+ * coordinate. */
+int bs_shim_point_in_tet(const double p[3], const double a[3], const double b[3], const double c[3],
+                         const double d[3]);
+
+/* Bounding-volume hierarchy (CGAL::AABB_tree) over the triangles of a
+ * surface; each primitive holds its triangle index. */
+typedef struct bs_shim_tree bs_shim_tree;
+
+/* Builds the tree over n_tris >= 1 triangles of n_points points (both
+ * copied). Errors: BS_EINPUT for NULL arrays, counts out of range, or a
+ * triangle whose index is outside [0, n_points) (the message names the
+ * triangle); BS_ENUMERIC for a non-finite coordinate (names the point).
+ * Degenerate (zero-area) triangles are allowed. */
+int bs_shim_tree_create(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
+                        bs_shim_tree **out, bs_error *err);
+
+/* Destroys the tree (NULL or *t == NULL is fine) and sets *t = NULL. */
+void bs_shim_tree_destroy(bs_shim_tree **t);
+
+/* New positions for the same points (3 * n_points doubles, the connectivity
+ * is kept), then a rebuild of the hierarchy. It reuses the tree's storage
+ * (no allocation) and does not build CGAL's k-d tree of reference points,
+ * which the queries below do not need: O(n log n) time. On error
+ * (BS_EINPUT: NULL; BS_ENUMERIC: a non-finite coordinate, named) the tree
+ * keeps its previous positions. */
+int bs_shim_tree_update(bs_shim_tree *t, const double *points, bs_error *err);
+
+/* Features of a triangle (v0, v1, v2) reported by the closest-point queries:
+ * 0 its interior; 1 edge v0v1, 2 edge v1v2, 3 edge v2v0 (the closest point
+ * is in the edge's relative interior); 4, 5, 6 vertex v0, v1, v2. These are
+ * the triangle's own edges and vertices, creased on the surface or not. */
+enum {
+  BS_SHIM_FACE = 0,
+  BS_SHIM_EDGE01 = 1,
+  BS_SHIM_EDGE12 = 2,
+  BS_SHIM_EDGE20 = 3,
+  BS_SHIM_VERTEX0 = 4,
+  BS_SHIM_VERTEX1 = 5,
+  BS_SHIM_VERTEX2 = 6
+};
+
+/* Closest point of the surface to q: out_point (3), its triangle, the
+ * barycentric weights of out_point in that triangle (bary[k] for vertex k,
+ * summing to 1, exactly 0 for the vertices off the feature) and the feature
+ * (above). When several triangles are equally close, one of them is
+ * returned. Every output may be NULL when not wanted. The search visits the
+ * nearer child box first and prunes boxes farther than the best so far.
+ * Returns BS_OK, or BS_EINPUT for a NULL t or q or a non-finite q. */
+int bs_shim_tree_closest(const bs_shim_tree *t, const double q[3], double out_point[3], int32_t *out_tri,
+                         double bary[3], int *feature);
+
+/* The same, starting the search from triangle `hint` (e.g. the triangle the
+ * point was closest to at the previous iteration), which tightens the search
+ * radius from the start (as CGAL's closest_point(query, hint) does). The result is
+ * the same as without a hint, up to ties. hint < 0 means no hint; a hint >=
+ * the number of triangles is BS_EINPUT. Neither search builds or uses
+ * CGAL's k-d tree of reference points. */
+int bs_shim_tree_closest_hint(const bs_shim_tree *t, const double q[3], int32_t hint, double out_point[3],
+                              int32_t *out_tri, double bary[3], int *feature);
+
+/* Triangles whose axis-aligned bounding boxes intersect the closed box
+ * [lo, hi] (touching counts), in no particular order. Up to cap indices are
+ * written to out (out may be NULL when cap is 0); *count receives the TOTAL
+ * number found, which may exceed cap: then only the first cap were written
+ * and the caller should retry with a buffer of *count entries. A box with
+ * lo > hi on some axis is empty (count 0). No allocation. Returns BS_OK, or
+ * BS_EINPUT for NULL t, lo, hi or count, a NULL out with cap > 0, a
+ * negative cap, or a NaN bound. */
+int bs_shim_tree_within(const bs_shim_tree *t, const double lo[3], const double hi[3], int32_t *out, int64_t cap,
+                        int64_t *count);
+
+/* Signed distance from each of the n points q (3 n doubles) to the surface
+ * of the tree, which must be closed (watertight; its triangles' orientation
+ * does not matter): out[i] = -d inside, +d outside, 0 on the surface, with d
+ * the Euclidean distance to the closest point (as bs_shim_tree_closest).
+ * Inside/outside is decided exactly by ray parity, as CGAL's
+ * Side_of_triangle_mesh does: a ray from the point crosses the surface an
+ * odd number of times iff the point is inside; a ray that meets an edge or a
+ * vertex, or lies in a triangle's plane, is discarded and another
+ * direction drawn (deterministic sequence). For a surface that is not closed
+ * the sign is meaningless. Errors: BS_EINPUT (NULL arguments, n < 0, a
+ * non-finite point, named); BS_ENUMERIC when no conclusive ray is found for
+ * a point (names it). */
+int bs_shim_signed_distance(const bs_shim_tree *t, const double *q, int64_t n, double *out, bs_error *err);
+
+/* Pairs of triangles of the surface that intersect, found with CGAL's
+ * box_intersection_d and decided by exact predicates (CGAL::do_intersect on
+ * triangles and segments). Triangles are closed sets (touching counts), with
+ * this rule for triangles that share vertices (by index), as in CGAL's
+ * Polygon_mesh_processing::self_intersections:
+ *   - sharing one vertex: adjacency; they intersect only if, in one of
+ *     them, the edge opposite the shared vertex meets the other triangle
+ *     (then they overlap beyond that vertex);
+ *   - sharing an edge: adjacency; they intersect only if they are coplanar
+ *     and lie on the same side of the edge (a fold that overlaps);
+ *   - sharing three vertices (a duplicated triangle): they intersect.
+ * A degenerate triangle (collinear vertices, exact test, including repeated
+ * indices) is reported once as the pair (i, i) and not tested against
+ * others. *pairs receives 2 * *n_pairs indices (i < j within a pair, pairs
+ * sorted), allocated by the shim (free with bs_shim_free; NULL when there
+ * are none). Errors: BS_EINPUT for NULL arrays with positive counts,
+ * negative counts, or an index outside [0, n_points) (names the triangle);
+ * BS_ENUMERIC for a non-finite coordinate (names the point); BS_ENOMEM. */
+int bs_shim_self_intersections(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
+                               int32_t **pairs, int64_t *n_pairs, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,200 @@
+/* penalty.c — object penalty collisions, Phi = k (-phi)^3 inside (paper
+ * section 5.2; see bs_penalty.h for the sign and the derivatives). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_penalty.h"
+
+enum { CHUNK = 1024 }; /* vertices per energy partial sum */
+
+typedef struct penalty_data {
+  const bs_levelset *ls;
+  double k;
+  int32_t n;        /* vertices in the set                          */
+  int32_t *verts;   /* the set; NULL: all, vertex i is entry i      */
+  int32_t n_chunks; /* ceil(n / CHUNK)                              */
+  double *partial;  /* n_chunks energy partial sums                 */
+} penalty_data;
+
+static void penalty_free(void *p) {
+  penalty_data *d = p;
+  if (!d) return;
+  free(d->verts);
+  free(d->partial);
+  free(d);
+}
+
+static double step_time(const bs_term *t) { return t->step ? t->step->time : 0.0; }
+static int32_t vertex_of(const penalty_data *d, int32_t i) { return d->verts ? d->verts[i] : i; }
+
+/* Energy of all vertices, gradient added into g when non-NULL. */
+static double penalty_eval(const bs_term *t, const double *x, double *g) {
+  penalty_data *d = t->data;
+  bs_levelset_frame f;
+  bs_levelset_frame_at(d->ls, step_time(t), &f);
+  const double k = d->k;
+#pragma omp parallel for schedule(static)
+  for (int32_t c = 0; c < d->n_chunks; c++) {
+    int64_t end = ((int64_t)c + 1) * CHUNK < d->n ? ((int64_t)c + 1) * CHUNK : d->n;
+    double E = 0;
+    for (int32_t i = c * (int32_t)CHUNK; i < end; i++) {
+      int32_t v = vertex_of(d, i);
+      double grad[3];
+      double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, g ? grad : NULL, NULL);
+      if (!(phi < 0)) continue;
+      E -= k * phi * phi * phi;
+      if (g)
+        for (int a = 0; a < 3; a++) g[3 * (size_t)v + a] -= 3 * k * phi * phi * grad[a];
+    }
+    d->partial[c] = E;
+  }
+  double E = 0;
+  for (int32_t c = 0; c < d->n_chunks; c++) E += d->partial[c];
+  return E;
+}
+
+static double penalty_value(const bs_term *t, const double *x) { return penalty_eval(t, x, NULL); }
+static double penalty_gradient(const bs_term *t, const double *x, double *g) { return penalty_eval(t, x, g); }
+
+static void penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  const penalty_data *d = t->data;
+  bs_levelset_frame f;
+  bs_levelset_frame_at(d->ls, step_time(t), &f);
+  const double k = d->k;
+#pragma omp parallel for schedule(static)
+  for (int32_t i = 0; i < d->n; i++) {
+    int32_t v = vertex_of(d, i);
+    double grad[3], hess[9];
+    double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, grad, hess);
+    if (!(phi < 0)) continue;
+    double *blk = H->val + 9 * (size_t)H->diag[v];
+    for (int a = 0; a < 3; a++)
+      for (int b = 0; b < 3; b++)
+        blk[3 * a + b] += -6 * k * phi * grad[a] * grad[b] - 3 * k * phi * phi * hess[3 * a + b];
+  }
+}
+
+static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free};
+
+int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, const bs_levelset *ls, double k,
+                                  int32_t n_vertices, const int32_t *vertices, bs_term **out, bs_error *err) {
+  if (!fem || !ls || !out) return bs_error_set(err, BS_EINPUT, "penalty term: fem, level set and out must be non-NULL");
+  if (!isfinite(k) || !(k > 0))
+    return bs_error_set(err, BS_EINPUT, "penalty stiffness k = %g: must be finite and > 0 (J/m^3)", k);
+  if (vertices && (n_vertices < 0 || n_vertices > fem->n_vertices))
+    return bs_error_set(err, BS_EINPUT, "penalty term: %d vertices given for a mesh of %d", (int)n_vertices,
+                        (int)fem->n_vertices);
+  penalty_data *d = bs_calloc(1, sizeof *d, "the penalty term", err);
+  if (!d) return BS_ENOMEM;
+  d->ls = ls;
+  d->k = k;
+  d->n = vertices ? n_vertices : fem->n_vertices;
+  int st = 0;
+  if (vertices) {
+    uint8_t *seen = bs_calloc((size_t)fem->n_vertices + 1, 1, "the penalty vertex set", err);
+    d->verts = bs_calloc((size_t)d->n + 1, sizeof(int32_t), "the penalty vertex set", err);
+    if (!seen || !d->verts) st = BS_ENOMEM;
+    for (int32_t i = 0; !st && i < d->n; i++) {
+      int32_t v = vertices[i];
+      if (v < 0 || v >= fem->n_vertices)
+        st = bs_error_set(err, BS_EINPUT, "penalty vertices[%d] = %d: out of range [0, %d)", (int)i, (int)v,
+                          (int)fem->n_vertices);
+      else if (seen[v])
+        st = bs_error_set(err, BS_EINPUT, "penalty vertices[%d] = %d: repeated", (int)i, (int)v);
+      else
+        seen[v] = 1, d->verts[i] = v;
+    }
+    free(seen);
+  }
+  if (!st) {
+    d->n_chunks = (d->n + CHUNK - 1) / CHUNK;
+    d->partial = bs_calloc((size_t)d->n_chunks + 1, sizeof(double), "the penalty partial sums", err);
+    if (!d->partial) st = BS_ENOMEM;
+  }
+  bs_term *t = NULL;
+  if (!st) {
+    t = calloc(1, sizeof *t);
+    if (!t) st = bs_error_set(err, BS_ENOMEM, "out of memory creating the penalty term");
+  }
+  if (st) {
+    penalty_free(d);
+    return st;
+  }
+  t->name = "penalty";
+  t->ops = &penalty_ops;
+  t->fem = fem;
+  t->step = step;
+  t->data = d;
+  *out = t;
+  return 0;
+}
+
+int bs_term_penalty_create(const bs_fem *fem, const bs_step_data *step, const bs_levelset *ls, double k,
+                           bs_term **out, bs_error *err) {
+  return bs_term_penalty_create_subset(fem, step, ls, k, 0, NULL, out, err);
+}
+
+int bs_term_is_penalty(const bs_term *t) { return t && t->ops == &penalty_ops; }
+
+const bs_levelset *bs_term_penalty_levelset(const bs_term *t) {
+  return bs_term_is_penalty(t) ? ((const penalty_data *)t->data)->ls : NULL;
+}
+
+double bs_term_penalty_stiffness(const bs_term *t) {
+  return bs_term_is_penalty(t) ? ((const penalty_data *)t->data)->k : 0.0;
+}
+
+double bs_penalty_point_force(const bs_levelset *ls, double k, double time, const double x[3], double f[3]) {
+  double grad[3];
+  double phi = bs_levelset_eval(ls, time, x, grad, NULL);
+  double s = phi < 0 ? 3 * k * phi * phi : 0.0;
+  for (int a = 0; a < 3; a++) f[a] = s * grad[a];
+  return phi;
+}
+
+static int need_penalty(const bs_term *t, const char *what, bs_error *err) {
+  if (!bs_term_is_penalty(t))
+    return bs_error_set(err, BS_EINPUT, "%s: term \"%s\" is not a penalty term", what, t && t->name ? t->name : "NULL");
+  return 0;
+}
+
+int bs_term_penalty_forces(const bs_term *t, const double *x, double *f, bs_error *err) {
+  int st = need_penalty(t, "penalty forces", err);
+  if (st) return st;
+  const penalty_data *d = t->data;
+  bs_levelset_frame fr;
+  bs_levelset_frame_at(d->ls, step_time(t), &fr);
+  memset(f, 0, 3 * (size_t)t->fem->n_vertices * sizeof(double));
+  const double k = d->k;
+#pragma omp parallel for schedule(static)
+  for (int32_t i = 0; i < d->n; i++) {
+    int32_t v = vertex_of(d, i);
+    double grad[3];
+    double phi = bs_levelset_eval_frame(d->ls, &fr, x + 3 * (size_t)v, grad, NULL);
+    if (phi < 0)
+      for (int a = 0; a < 3; a++) f[3 * (size_t)v + a] = 3 * k * phi * phi * grad[a];
+  }
+  return 0;
+}
+
+int bs_term_penalty_stats(const bs_term *t, const double *x, int32_t *count, double *max_depth, bs_error *err) {
+  int st = need_penalty(t, "penalty stats", err);
+  if (st) return st;
+  const penalty_data *d = t->data;
+  bs_levelset_frame fr;
+  bs_levelset_frame_at(d->ls, step_time(t), &fr);
+  int32_t c = 0;
+  double depth = 0;
+#pragma omp parallel for schedule(static) reduction(+ : c) reduction(max : depth)
+  for (int32_t i = 0; i < d->n; i++) {
+    double phi = bs_levelset_eval_frame(d->ls, &fr, x + 3 * (size_t)vertex_of(d, i), NULL, NULL);
+    if (phi < 0) {
+      c++;
+      if (-phi > depth) depth = -phi;
+    }
+  }
+  if (count) *count = c;
+  if (max_depth) *max_depth = depth;
+  return 0;
+}
