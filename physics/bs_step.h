@@ -52,8 +52,15 @@ typedef void (*bs_script_fn)(double t, double *x, void *ctx);
 typedef struct bs_step_hooks {
   void (*project)(double *x, void *ctx);                             /* P(x) in place     */
   void (*register_active)(const double *x, const double *g, void *ctx);
-  /* after the solve: may change v only (friction), never positions */
-  int (*post_solve)(const double *x_n, const double *x, double *v, double dt, void *ctx, bs_error *err);
+  /* g <- J_P(x)^T g at a feasible x for the active pairs (bs_objective's project_gradient) */
+  void (*project_gradient)(const double *x, double *g, void *ctx);
+  /* H <- Hessian of E'(P(x)) from H' = Hessian of E' and g' = grad E' at a feasible x
+     (section 3.2, "Derivatives"); called after the terms' Hessians are assembled */
+  void (*project_hessian)(const double *x, const double *g, bs_bsr *H, void *ctx);
+  /* After the solve, with g = grad E'(x^{n+1}) (unprojected, all terms): may change v
+     (friction); may change x only for the `postprocess` collision baseline. */
+  int (*post_solve)(const double *x_n, double *x, const double *g, double *v, double dt, void *ctx,
+                    bs_error *err);
   void *ctx;
 } bs_step_hooks;
 

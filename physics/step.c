@@ -18,6 +18,7 @@ struct bs_integrator {
   int static_mode;        /* 1 while solving statics                 */
   bs_minimizer *min;
   double *x_n, *x_hat, *g1, *g2, *grad;
+  double *gh;             /* 3n: grad E' for the Hessian projection   */
   int has_expensive;
 };
 
@@ -52,6 +53,7 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->g1);
   free(I->g2);
   free(I->grad);
+  free(I->gh);
   free(I);
   *pI = NULL;
 }
@@ -73,7 +75,8 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   I->g1 = malloc(sizeof(double) * (n3 ? n3 : 1));
   I->g2 = malloc(sizeof(double) * (n3 ? n3 : 1));
   I->grad = malloc(sizeof(double) * (n3 ? n3 : 1));
-  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad) {
+  I->gh = malloc(sizeof(double) * (n3 ? n3 : 1));
+  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh) {
     bs_integrator_destroy(&I);
     return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%zu vertices)", nv);
   }
@@ -141,7 +144,20 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   bs_bsr_zero(H);
   for (int i = 0; i < I->n_terms; i++)
     if (term_active(I, I->terms[i])) I->terms[i]->ops->hessian(I->terms[i], x, H);
+  if (I->hooks.project_hessian) {
+    double E;
+    memset(I->gh, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
+    for (int i = 0; i < I->n_terms; i++)
+      if (term_active(I, I->terms[i])) E = I->terms[i]->ops->gradient(I->terms[i], x, I->gh);
+    (void)E;
+    I->hooks.project_hessian(x, I->gh, H, I->hooks.ctx);
+  }
   return 0;
+}
+
+static void hook_project_gradient(const double *x, double *g, void *ctx) {
+  bs_integrator *I = ctx;
+  I->hooks.project_gradient(x, g, I->hooks.ctx);
 }
 
 static void hook_project(double *x, void *ctx) {
@@ -163,6 +179,7 @@ static void make_objective(bs_integrator *I, bs_objective *o) {
   o->hessian = obj_hessian;
   o->project = I->hooks.project ? hook_project : NULL;
   o->register_active = I->hooks.register_active ? hook_register : NULL;
+  o->project_gradient = I->hooks.project_gradient ? hook_project_gradient : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->ctx = I;
 }
@@ -247,7 +264,13 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   }
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
-  if (I->hooks.post_solve && (rc = I->hooks.post_solve(I->x_n, x, v, dt, I->hooks.ctx, err))) return rc;
+  if (I->hooks.post_solve) {
+    double E;
+    memset(I->gh, 0, sizeof(double) * n3);
+    for (int i = 0; i < I->n_terms; i++) E = I->terms[i]->ops->gradient(I->terms[i], x, I->gh);
+    (void)E;
+    if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
+  }
   st->seconds = bs_seconds() - t0;
   return 0;
 }
