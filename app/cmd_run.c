@@ -72,6 +72,41 @@ static int write_frame(const bs_sim *s, const char *dir, int frame, char **names
   return 0;
 }
 
+/* Per-frame energies: kinetic ½ Σ m |v|², elastic Φ_e, gravity −Σ m gᵀx. */
+static void frame_energies(const bs_sim *s, double *kin, double *ela, double *grav) {
+  const bs_fem *fem = s->fem;
+  const double *g = s->scene->gravity;
+  double k = 0, gp = 0;
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    const double *vv = s->v + 3 * v, *xx = s->x + 3 * v;
+    k += 0.5 * fem->mass[v] * (vv[0] * vv[0] + vv[1] * vv[1] + vv[2] * vv[2]);
+    gp -= fem->mass[v] * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
+  }
+  *kin = k;
+  *grav = gp;
+  *ela = bs_fem_elastic_energy(fem, s->x);
+}
+
+static void write_frame_row(FILE *f, const bs_sim *s, int frame, long it, long cg, long failed, double secs) {
+  if (!f) return;
+  double kin, ela, grav, mn;
+  frame_energies(s, &kin, &ela, &grav);
+  int32_t inv = bs_fem_count_inverted(s->fem, s->x, &mn);
+  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f\n", frame, s->time, kin, ela, grav,
+          kin + ela + grav, inv, mn, it, cg, failed, secs);
+  fflush(f);
+}
+
+/* state.bin: "BSST1\0\0\0", int32 n_vertices, int32 0, then per frame: time, x (3n), v (3n). */
+static void write_state(FILE *f, const bs_sim *s) {
+  if (!f) return;
+  size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  fwrite(&s->time, sizeof(double), 1, f);
+  fwrite(s->x, sizeof(double), n3, f);
+  fwrite(s->v, sizeof(double), n3, f);
+  fflush(f);
+}
+
 int bs_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL;
   const char **sets = calloc((size_t)argc * 2 + 8, sizeof(char *));
@@ -91,7 +126,10 @@ int bs_cmd_run(int argc, char **argv) {
     if (!strncmp(a, "--", 2)) {
       char flag[64];
       const char *val = NULL, *eq = strchr(a, '=');
-      if (eq && strncmp(a, "--set", 5) != 0) {
+      if (!strncmp(a, "--set=", 6)) {
+        snprintf(flag, sizeof flag, "--set");
+        val = a + 6;
+      } else if (eq && strncmp(a, "--set", 5) != 0) {
         snprintf(flag, sizeof flag, "%.*s", (int)(eq - a), a);
         val = eq + 1;
       } else {
@@ -159,7 +197,7 @@ int bs_cmd_run(int argc, char **argv) {
            scene_path, s->mesh->n_vertices, s->mesh->n_tets, dofs, s->mesh->n_vertices - n_free, method,
            bs_lin_kind_name(sc->solver.min.linear), sc->frames, sc->fps, sc->steps_per_frame, sc->dt,
            sc->solver.min.tol);
-  FILE *csv = NULL;
+  FILE *csv = NULL, *fcsv = NULL, *state = NULL;
   char **names = NULL;
   double *times = NULL;
   int n_out = 0;
@@ -183,11 +221,36 @@ int bs_cmd_run(int argc, char **argv) {
                    "fallback_neg_grad,clamps,cholmod_fallbacks,alpha_min,alpha_max,grad_norm,E,reason,inverted,"
                    "t_eval,t_assembly,t_linear,t_line_search,seconds\n");
     }
+    {
+      char p[1200];
+      snprintf(p, sizeof p, "%s/frames.csv", dir);
+      fcsv = fopen(p, "w");
+      if (!fcsv) {
+        fprintf(stderr, "bigstep run: cannot write '%s'\n", p);
+        rc = BS_EXIT_FAIL;
+        goto out_files;
+      }
+      fprintf(fcsv, "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds\n");
+      if (sc->states) {
+        snprintf(p, sizeof p, "%s/state.bin", dir);
+        state = fopen(p, "wb");
+        if (!state) {
+          fprintf(stderr, "bigstep run: cannot write '%s'\n", p);
+          rc = BS_EXIT_FAIL;
+          goto out_files;
+        }
+        int32_t hdr[2] = {s->mesh->n_vertices, 0};
+        fwrite("BSST1\0\0\0", 1, 8, state);
+        fwrite(hdr, sizeof(int32_t), 2, state);
+      }
+    }
     names = calloc((size_t)sc->frames + 2, sizeof(char *));
     times = calloc((size_t)sc->frames + 2, sizeof(double));
   }
   run_totals T = {0};
   double t_wall = bs_seconds();
+  write_frame_row(fcsv, s, 0, 0, 0, 0, 0.0);
+  write_state(state, s);
   if (dir && sc->vtu_every > 0 && write_frame(s, dir, 0, names, times, &n_out, &err)) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     rc = BS_EXIT_FAIL;
@@ -208,6 +271,8 @@ int bs_cmd_run(int argc, char **argv) {
              st.failed ? "FAILED" : "converged", st.min.iterations, st.min.cg_iterations, st.min.grad_norm, st.min.E,
              inv, st.seconds);
     if (st.failed) fprintf(stderr, "bigstep run: static solve failed: %s\n", st.min.reason_text);
+    write_frame_row(fcsv, s, 1, st.min.iterations, st.min.cg_iterations, st.failed, st.seconds);
+    write_state(state, s);
     if (dir && sc->vtu_every > 0 && write_frame(s, dir, 1, names, times, &n_out, &err)) {
       fprintf(stderr, "bigstep run: %s\n", err.msg);
       rc = BS_EXIT_FAIL;
@@ -241,6 +306,8 @@ int bs_cmd_run(int argc, char **argv) {
         }
       }
       s->time = f / sc->fps;
+      write_frame_row(fcsv, s, f, it, cg, fails, secs);
+      write_state(state, s);
       if (!quiet) {
         int32_t inv = bs_fem_count_inverted(s->fem, s->x, NULL);
         printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d  %.3f s%s\n", f, sc->frames, it, cg, gmax,
@@ -259,14 +326,27 @@ int bs_cmd_run(int argc, char **argv) {
     double frames = sc->mode == BS_MODE_STATIC ? 1 : (sc->frames ? sc->frames : 1);
     double mn;
     int32_t inv = bs_fem_count_inverted(s->fem, s->x, &mn);
-    printf("\n%-13s %6s %10s %9s %11s %8s %9s %9s\n", "method", "steps", "s/frame", "dofs", "solves/step", "failed",
-           "|gradE|", "inverted");
-    printf("%-13s %6d %10.4f %9ld %11.2f %8ld %9.2e %9d\n", method, sc->steps_per_frame, wall / frames, dofs,
-           T.steps ? (double)T.iterations / T.steps : 0.0, T.failed, T.max_grad, inv);
-    printf("solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG exits, "
-           "%ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD fallbacks; peak memory %.1f MiB\n",
-           T.cg, T.iterations ? (double)T.cg / T.iterations : 0.0, T.ls, T.indefinite, T.fb_dx, T.fb_grad, T.clamps,
-           T.chol_fb, bs_peak_rss() / 1048576.0);
+    char summary[2048];
+    int len = snprintf(summary, sizeof summary, "%-13s %6s %10s %9s %11s %8s %9s %9s\n", "method", "steps", "s/frame",
+                       "dofs", "solves/step", "failed", "|gradE|", "inverted");
+    len += snprintf(summary + len, sizeof summary - (size_t)len, "%-13s %6d %10.4f %9ld %11.2f %8ld %9.2e %9d\n",
+                    method, sc->steps_per_frame, wall / frames, dofs, T.steps ? (double)T.iterations / T.steps : 0.0,
+                    T.failed, T.max_grad, inv);
+    snprintf(summary + len, sizeof summary - (size_t)len,
+             "solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG "
+             "exits, %ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD fallbacks; peak memory %.1f MiB\n",
+             T.cg, T.iterations ? (double)T.cg / T.iterations : 0.0, T.ls, T.indefinite, T.fb_dx, T.fb_grad, T.clamps,
+             T.chol_fb, bs_peak_rss() / 1048576.0);
+    printf("\n%s", summary);
+    if (dir) {
+      char p[1200];
+      snprintf(p, sizeof p, "%s/summary.txt", dir);
+      FILE *sf = fopen(p, "w");
+      if (sf) {
+        fputs(summary, sf);
+        fclose(sf);
+      }
+    }
     if (T.failed) {
       fprintf(stderr, "bigstep run: %ld of %ld steps did not converge\n", T.failed, T.steps);
       rc = BS_EXIT_FAIL;
@@ -282,6 +362,8 @@ out_files:
     }
   }
   if (csv) fclose(csv);
+  if (fcsv) fclose(fcsv);
+  if (state) fclose(state);
   for (int i = 0; i < n_out; i++) free(names[i]);
   free(names);
   free(times);

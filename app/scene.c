@@ -401,10 +401,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   s->stats_csv = 1;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
   if (out) {
-    static const char *const ok[] = {"dir", "vtu_every", "stats", NULL};
+    static const char *const ok[] = {"dir", "vtu_every", "stats", "states", NULL};
     if ((st = check_keys(c, out, "output", ok)) || (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
         (st = get_int(c, out, "output", "vtu_every", 0, 0, 1000000, &s->vtu_every)) ||
-        (st = get_bool(c, out, "output", "stats", &s->stats_csv)))
+        (st = get_bool(c, out, "output", "stats", &s->stats_csv)) ||
+        (st = get_bool(c, out, "output", "states", &s->states)))
       return st;
   }
   return 0;

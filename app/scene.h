@@ -75,6 +75,7 @@ typedef struct bs_scene {
   char out_dir[1024];      /* "" : no output                                   */
   int vtu_every;           /* frames between VTU files (0: none)               */
   int stats_csv;
+  int states;              /* write state.bin (x, v every frame)                */
 } bs_scene;
 
 /* Loads and validates a scene, applying the n_sets overrides "key.path=value"
