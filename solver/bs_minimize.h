@@ -1,0 +1,246 @@
+/* bs_minimize.h — the stabilized Newton minimizer of Gast & Schroeder (paper,
+ * sections 3.1–3.3) and the plain Newton root-finder it is compared against
+ * (section 2).
+ *
+ * The minimizer knows no physics: it sees an objective E through callbacks
+ * (value, gradient, Hessian into a 3x3 block CSR matrix, optional projection
+ * hooks) and a vector x of 3n doubles (3 per vertex, dof 3i+a is component a
+ * of vertex i).
+ *
+ * Units: x has whatever unit the objective gives it (metres in bigstep); E and
+ * its derivatives are in the objective's units (J, N, N/m). opts.tol is on the
+ * masked 2-norm of grad E (N); opts.clamp is on the 2-norm of the step (units
+ * of x); opts.sigma has units of grad E^-1/2 (the paper's sigma, usually 1).
+ *
+ * Each iteration of bs_minimize (paper 3.1, steps 1–9):
+ *   1. register_active(x, g') with g' = grad E'(x), the gradient the objective
+ *      returned at the feasible iterate x (constrained problems only).
+ *   2. g = grad E(x): g' with fixed dofs zeroed, then project_gradient(x, g)
+ *      when given (section 3.2: E = E'∘P, so grad E = J_P^T grad E' at a
+ *      feasible x). Hessian H at x (objective's hessian callback).
+ *   3. stop when ||g|| < tol (at least one iteration when opts.naive_guess).
+ *   4. solve H dx = -g from a zero guess to relative tolerance
+ *      min(1/2, sigma sqrt(max(||g||, tol))) with opts.linear. CG/PCG exit on
+ *      indefiniteness with their last iterate (the rhs on the first step);
+ *      CHOLMOD reporting "not positive definite" falls back to CG for that
+ *      iteration (counted in cholmod_fallbacks).
+ *   5. downhill: keep dx if dx.g < -kappa ||dx|| ||g||, else -dx if that
+ *      passes (fallback_neg_dx), else -g (fallback_neg_grad).
+ *   6. clamp ||dx|| to opts.clamp (clamps).
+ *   7. strong Wolfe line search (Nocedal & Wright, Algorithms 3.5 and 3.6) on
+ *      phi(a) = E(P(x + a dx)), phi'(a) = grad E(P(x + a dx)).dx, where grad E
+ *      is the gradient as in step 2 (masked, project_gradient with the active
+ *      set registered in step 1). a = 1 is tried first; a grows beyond 1 when
+ *      the curvature condition fails with a negative slope. A non-evaluable or
+ *      non-finite point counts as phi = +Inf (the step shrinks). When
+ *      value_lower_bound is given and exceeds phi(0), value() and gradient()
+ *      are not called at that point (section 3.3). If no Wolfe point is found
+ *      within opts.max_ls trial points, the lowest trial point with
+ *      phi < phi(0) is taken (ls_failures); if there is none the solve stops
+ *      with BS_MIN_LINE_SEARCH. An accepted step never increases E (except,
+ *      by at most the rounding level of E, with opts.accept_noise; off by
+ *      default).
+ *   8–9. x <- P(x + a dx), which is the point the line search evaluated.
+ * The initial guess is projected too. Fixed dofs (mask 0) never move: they are
+ * restored after every projection, and directions are zero there.
+ *
+ * Line-search constants: c1 = 1e-4 (sufficient decrease) and c2 = 0.9
+ * (curvature) by default, Nocedal & Wright's choice for Newton-type methods.
+ * Extrapolation (a > 1): the minimizer of the cubic through the last two trial
+ * points, kept within [a_i + (a_i - a_{i-1})/2, a_i + 10 (a_i - a_{i-1})]
+ * (a_i + 4 (a_i - a_{i-1}) when the cubic has no minimizer), up to a = 1e10.
+ * Zoom: the cubic through the bracket ends when both slopes are known, else
+ * the quadratic through phi(lo), phi'(lo), phi(hi) when phi(hi) is finite,
+ * kept at least 10% of the bracket away from its ends, else bisection. Trial
+ * points of the first phase call gradient() (the slope is needed when they
+ * satisfy sufficient decrease, which is the usual case); trial points of the
+ * zoom call value() first and gradient() only when sufficient decrease holds.
+ *
+ * Constrained problems (section 3.2): the objective's `gradient` and `hessian`
+ * describe E' (the unconstrained objective); `project` is P (active or
+ * violated pairs projected), `register_active` labels the active set from
+ * grad E' at a feasible x, and `project_gradient` turns grad E' into grad E
+ * for the labeled pairs. The `hessian` callback should return the Hessian of
+ * E (projected rows/columns of active pairs, plus the curvature term of P)
+ * for fast convergence; any symmetric matrix still gives a descent method
+ * through step 5.
+ *
+ * The baseline bs_newton (section 2): x <- x - H^-1 g with MINRES to relative
+ * tolerance opts.newton_rel_tol (default 1e-10), no line search, no clamp.
+ * The hooks, when given, are applied as in bs_minimize (projection of the
+ * initial guess and of every iterate, registration, projected gradient); pass
+ * them NULL for the pure root-finder. It stops when ||g|| < tol (converged),
+ * after max_iter iterations (BS_MIN_MAX_ITER), or when an iterate, E or the
+ * gradient becomes non-finite (BS_MIN_NONFINITE; x keeps the last finite
+ * iterate). With k_steps > 0 it takes exactly k_steps iterations (the "k
+ * Newton steps and stop" variant) and reports BS_MIN_CONVERGED if ||g|| < tol
+ * after them, else BS_MIN_STEPS_DONE with grad_norm: not reaching tol is
+ * by design there and is not a max-iteration failure.
+ *
+ * Ownership: bs_minimizer_create copies opts and sizes every work buffer (a
+ * Hessian with the pattern's sparsity, vectors, the linear-solver workspaces:
+ * CG, MINRES and opts.linear) once for (n, pattern); bs_minimize and
+ * bs_newton allocate nothing (CHOLMOD's numeric factorization aside). The
+ * pattern is read during create only. The caller owns the minimizer
+ * (bs_minimizer_destroy accepts NULL and nulls the pointer). The objective and
+ * its ctx are borrowed for the duration of one call. One solve at a time per
+ * minimizer. stats.reason_text points into the minimizer (valid until its
+ * next solve or its destruction).
+ *
+ * Status: bs_minimize and bs_newton return 0 when they ran, converged or not
+ * (stats.reason says how it ended, stats.reason_text in words, naming the
+ * iteration and, for non-finite values, the vertex). Negative codes: BS_EINPUT
+ * (bad options naming the field, objective of the wrong size, a missing
+ * required callback), BS_ENUMERIC (the initial x holds NaN/Inf on a free dof:
+ * the message names the vertex), BS_ENOMEM, or a linear solver's error.
+ *
+ * Timing (seconds, stats): t_eval = value, gradient, lower-bound and hook
+ * calls (project, register_active, project_gradient) wherever they happen;
+ * t_assembly = hessian calls; t_linear = linear solves; t_line_search = wall
+ * time of the line searches including the evaluations they make (also counted
+ * in t_eval); t_total = the whole call.
+ *
+ * Threads: vector kernels use OpenMP with static schedules; the callbacks are
+ * called from the calling thread.
+ */
+#ifndef BS_MINIMIZE_H
+#define BS_MINIMIZE_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+#include "bs_bsr.h"
+#include "bs_linsolve.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One accepted iteration of bs_minimize, handed to bs_objective.trace. The
+ * pointers are valid during the callback only. */
+typedef struct bs_min_iter {
+  int iteration;         /* 0-based index of the iteration that produced this step    */
+  int direction;         /* 0 Newton dx, 1 -dx (fallback), 2 -grad E (fallback)      */
+  int clamped;           /* 1: ||dx|| was clamped to opts.clamp                      */
+  int lin_iterations;    /* Krylov iterations of the Newton solve                     */
+  int lin_indefinite;    /* 1: CG/PCG stopped on negative curvature                   */
+  int cholmod_fallback;  /* 1: CHOLMOD found H not positive definite, CG was used     */
+  int wolfe;             /* 1: the step satisfies the strong Wolfe conditions;        */
+                         /* 0: the line search hit its cap (best decreasing point);  */
+                         /* 2: a rounding-level step of opts.accept_noise            */
+  int ls_evaluations;    /* trial points of this line search                          */
+  double grad_norm;      /* ||grad E(x)|| before the step                             */
+  double lin_rel_tol;    /* relative tolerance asked of the linear solver            */
+  double alpha;          /* step length taken                                         */
+  double phi0, dphi0;    /* E(x) and grad E(x).d                                      */
+  double phi, dphi;      /* E(y) and grad E(y).d at the accepted point y             */
+  const double *x;       /* 3n: the iterate before the step                          */
+  const double *d;       /* 3n: the search direction (after downhill check, clamp)   */
+  const double *y;       /* 3n: the accepted point P(x + alpha d)                    */
+} bs_min_iter;
+
+typedef struct bs_objective {
+  int32_t n;           /* blocks (vertices); vectors have 3n doubles                   */
+  const uint8_t *mask; /* n: 1 free, 0 fixed (NULL: all free). Fixed dofs never move.  */
+  /* E(x). Return 0, or nonzero if x is not evaluable (the line search treats it as +Inf). */
+  int (*value)(const double *x, double *E, void *ctx);
+  /* E(x) and g = dE/dx (all 3n entries; the minimizer masks). Nonzero: not evaluable. */
+  int (*gradient)(const double *x, double *E, double *g, void *ctx);
+  /* Hessian at x assembled into H (the objective zeroes it first). Pattern fixed.
+     Nonzero: not evaluable (the solve stops with BS_MIN_NONFINITE). */
+  int (*hessian)(const double *x, bs_bsr *H, void *ctx);
+  /* Optional (NULL): P(x) in place (section 3.2 projection onto the feasible set). */
+  void (*project)(double *x, void *ctx);
+  /* Optional (NULL): register the active set at feasible x with gradient g of E' (step 1). */
+  void (*register_active)(const double *x, const double *g, void *ctx);
+  /* Optional (NULL): an E estimate that is a lower bound of value(x), used by the line
+     search to skip expensive terms (section 3.3 self-collision shortcut): if
+     lower_bound > E(x_i), value() need not be called. Nonzero: not evaluable. */
+  int (*value_lower_bound)(const double *x, double *E_lb, void *ctx);
+  /* Optional (NULL), added: g <- J_P(x)^T g in place at a feasible x, i.e. grad E from
+     grad E' for the pairs labeled active by the last register_active (for a level-set
+     constraint with normal n at an active vertex: g_v <- g_v - (g_v.n) n). */
+  void (*project_gradient)(const double *x, double *g, void *ctx);
+  /* Optional (NULL), added: called after every accepted step of bs_minimize. */
+  void (*trace)(const bs_min_iter *it, void *ctx);
+  void *ctx;
+} bs_objective;
+
+typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default() */
+  double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
+  int max_iter;        /* Newton iterations cap, default 500 (>= 0)                        */
+  double sigma;        /* CG tolerance scale, default 1 (> 0)                              */
+  double kappa;        /* downhill check, default 1e-2 (in [0, 1))                          */
+  double clamp;        /* length clamp ell, default 1e3 (> 0)                               */
+  double c1, c2;       /* Wolfe constants, default 1e-4 and 0.9 (0 < c1 < c2 < 1)           */
+  int max_ls;          /* line-search trial points cap per iteration, default 40 (>= 1)     */
+  int naive_guess;     /* 1: take at least one iteration even if ||g|| < tol                */
+  bs_lin_kind linear;  /* cg (default), pcg, cholmod (minres accepted too)                 */
+  int cg_max_iter;     /* Krylov iterations cap per solve; 0 (default): 2 x free dofs + 100 */
+  double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
+  int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
+                       /* step predicts, |g.d|, is below the rounding level of E            */
+                       /* (64 eps |E|), accept alpha = 1 if E(y) <= E(x) + 64 eps |E| and   */
+                       /* |phi'(1)| <= c2 |phi'(0)| (an approximate Wolfe point), so that   */
+                       /* tol can go below what E resolves; counted in noise_steps         */
+} bs_minimize_opts;
+
+/* Fills the defaults listed above. */
+void bs_minimize_opts_default(bs_minimize_opts *opts);
+
+typedef enum {
+  BS_MIN_CONVERGED = 0, /* ||grad E|| < tol                                                 */
+  BS_MIN_MAX_ITER,      /* max_iter iterations without convergence                           */
+  BS_MIN_STALLED,       /* an accepted step left every free dof unchanged (no progress)     */
+  BS_MIN_LINE_SEARCH,   /* no trial point decreased E within max_ls (x unchanged)          */
+  BS_MIN_NONFINITE,     /* E, grad E or H not finite / not evaluable at an iterate         */
+  BS_MIN_STEPS_DONE     /* bs_newton with k_steps > 0 took its k steps, ||g|| >= tol        */
+} bs_min_reason;
+
+/* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done". */
+const char *bs_min_reason_name(bs_min_reason r);
+
+/* iterations: accepted steps (Newton steps for bs_newton); cg_iterations: Krylov
+ * iterations summed over the solves (MINRES for bs_newton); ls_evaluations: line-search
+ * trial points (each one value() and/or gradient() call, or only the lower bound). */
+typedef struct bs_minimize_stats {
+  int iterations, cg_iterations, indefinite_exits, fallback_neg_dx, fallback_neg_grad,
+      clamps, ls_evaluations, cholmod_fallbacks;
+  int ls_failures;                           /* added: steps taken without a Wolfe point  */
+  int noise_steps;                           /* added: steps taken by opts.accept_noise   */
+  double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
+  double grad_norm, E;                       /* final                                      */
+  double t_eval, t_assembly, t_linear, t_line_search, t_total; /* seconds per phase        */
+  bs_min_reason reason;
+  const char *reason_text;
+} bs_minimize_stats;
+
+typedef struct bs_minimizer bs_minimizer; /* work buffers sized once for (n, pattern) */
+
+/* opts NULL: defaults. BS_EINPUT names the offending option or pattern field. */
+int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_minimizer **out,
+                        bs_error *err);
+void bs_minimizer_destroy(bs_minimizer **m);
+
+/* Replaces the options (validated as in create; on error the old ones stay). Creates
+ * the workspace of a linear solver kind not used before (allocation happens here, never
+ * inside bs_minimize). */
+int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_error *err);
+/* The options in force. */
+const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m);
+
+/* Minimizes from x (in/out). Returns 0 when it ran (converged or not: see stats.reason),
+   negative on errors. st may be NULL. */
+int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st,
+                bs_error *err);
+
+/* The baseline of section 2: x <- x - H^-1 g with MINRES to a tight tolerance, no line
+   search; stops at ||g|| < tol (converged), after max_iter (failure recorded), or after
+   exactly k_steps iterations when k_steps > 0 (the "k Newton steps and stop" variant). */
+int bs_newton(bs_minimizer *m, const bs_objective *obj, int k_steps, double *x,
+              bs_minimize_stats *st, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

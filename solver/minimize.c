@@ -1,0 +1,460 @@
+/* minimize.c — the stabilized Newton minimizer of the paper (section 3.1):
+ * Newton-CG with early exit on indefiniteness, adaptive CG tolerance, downhill
+ * check, length clamp, strong Wolfe line search (linesearch.c), and the
+ * gradient-projection hooks of section 3.2. See bs_minimize.h. */
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "minimize_impl.h"
+
+/* ---- small shared helpers ------------------------------------------------ */
+
+#define BS_PAR_MIN 16384 /* below this many doubles, vector kernels run serially */
+
+double bs__dot(int64_t N, const double *a, const double *b) {
+  double s = 0;
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > BS_PAR_MIN)
+  for (int64_t i = 0; i < N; ++i) s += a[i] * b[i];
+  return s;
+}
+
+void bs__mask_copy(int32_t n, const uint8_t *mask, const double *src, double *dst) {
+#pragma omp parallel for schedule(static) if (3 * (int64_t)n > BS_PAR_MIN)
+  for (int32_t v = 0; v < n; ++v) {
+    const int f = !mask || mask[v];
+    for (int k = 0; k < 3; ++k) dst[3 * (int64_t)v + k] = f ? src[3 * (int64_t)v + k] : 0.0;
+  }
+}
+
+void bs__restore_fixed(int32_t n, const uint8_t *mask, const double *src, double *dst) {
+  if (!mask) return;
+  for (int32_t v = 0; v < n; ++v)
+    if (!mask[v])
+      for (int k = 0; k < 3; ++k) dst[3 * (int64_t)v + k] = src[3 * (int64_t)v + k];
+}
+
+int64_t bs__first_nonfinite(int32_t n, const uint8_t *mask, const double *v) {
+  for (int32_t i = 0; i < n; ++i) {
+    if (mask && !mask[i]) continue;
+    for (int k = 0; k < 3; ++k)
+      if (!isfinite(v[3 * (int64_t)i + k])) return 3 * (int64_t)i + k;
+  }
+  return -1;
+}
+
+void bs__set_reason(bs_minimizer *m, bs_minimize_stats *st, bs_min_reason r, const char *fmt, ...) {
+  char body[BS_MIN_TEXT - 16];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(body, sizeof body, fmt, ap);
+  va_end(ap);
+  snprintf(m->text, sizeof m->text, "%s: %s", bs_min_reason_name(r), body);
+  st->reason = r;
+  st->reason_text = m->text;
+}
+
+void bs__project(const bs_objective *obj, double *x, const double *fixed_src, bs_minimize_stats *st) {
+  if (!obj->project) return;
+  double t = bs_seconds();
+  obj->project(x, obj->ctx);
+  bs__restore_fixed(obj->n, obj->mask, fixed_src, x);
+  st->t_eval += bs_seconds() - t;
+}
+
+int bs__gradient(bs_minimizer *m, const bs_objective *obj, const double *x, double *E, double *g_raw,
+                 int64_t *bad, bs_minimize_stats *st) {
+  double t = bs_seconds();
+  *bad = -1;
+  int rc = obj->gradient(x, E, g_raw, obj->ctx);
+  st->t_eval += bs_seconds() - t;
+  if (rc != 0 || !isfinite(*E)) return 1;
+  *bad = bs__first_nonfinite(m->n, obj->mask, g_raw);
+  return *bad >= 0;
+}
+
+double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const double *x,
+                                const double *g_raw, double *g, bs_minimize_stats *st, int do_register) {
+  if ((do_register && obj->register_active) || obj->project_gradient) {
+    double t = bs_seconds();
+    if (do_register && obj->register_active) obj->register_active(x, g_raw, obj->ctx);
+    bs__mask_copy(m->n, obj->mask, g_raw, g);
+    if (obj->project_gradient) {
+      obj->project_gradient(x, g, obj->ctx);
+      bs__mask_copy(m->n, obj->mask, g, g); /* the hook must not revive fixed dofs */
+    }
+    st->t_eval += bs_seconds() - t;
+  } else {
+    bs__mask_copy(m->n, obj->mask, g_raw, g);
+  }
+  return sqrt(bs__dot(m->n3, g, g));
+}
+
+double bs__noise_level(double E) { return 64 * DBL_EPSILON * fabs(E); }
+
+const char *bs_min_reason_name(bs_min_reason r) {
+  switch (r) {
+  case BS_MIN_CONVERGED: return "converged";
+  case BS_MIN_MAX_ITER: return "max_iter";
+  case BS_MIN_STALLED: return "stalled";
+  case BS_MIN_LINE_SEARCH: return "line_search";
+  case BS_MIN_NONFINITE: return "nonfinite";
+  case BS_MIN_STEPS_DONE: return "steps_done";
+  }
+  return "unknown";
+}
+
+/* ---- options, create, destroy --------------------------------------------- */
+
+void bs_minimize_opts_default(bs_minimize_opts *o) {
+  memset(o, 0, sizeof *o);
+  o->tol = 1e-3;
+  o->max_iter = 500;
+  o->sigma = 1.0;
+  o->kappa = 1e-2;
+  o->clamp = 1e3;
+  o->c1 = 1e-4;
+  o->c2 = 0.9;
+  o->max_ls = 40;
+  o->naive_guess = 0;
+  o->linear = BS_LIN_CG;
+  o->cg_max_iter = 0;
+  o->newton_rel_tol = 1e-10;
+  o->accept_noise = 0;
+}
+
+int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
+  if (!o) return bs_error_set(err, BS_EINPUT, "minimizer options: NULL");
+  if (!(o->tol >= 0) || !isfinite(o->tol))
+    return bs_error_set(err, BS_EINPUT, "minimizer option tol must be finite and >= 0, got %g", o->tol);
+  if (o->max_iter < 0)
+    return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
+  if (!(o->sigma > 0) || !isfinite(o->sigma))
+    return bs_error_set(err, BS_EINPUT, "minimizer option sigma must be finite and > 0, got %g", o->sigma);
+  if (!(o->kappa >= 0 && o->kappa < 1))
+    return bs_error_set(err, BS_EINPUT, "minimizer option kappa must be in [0, 1), got %g", o->kappa);
+  if (!(o->clamp > 0))
+    return bs_error_set(err, BS_EINPUT, "minimizer option clamp must be > 0, got %g", o->clamp);
+  if (!(o->c1 > 0 && o->c1 < 1))
+    return bs_error_set(err, BS_EINPUT, "minimizer option c1 must be in (0, 1), got %g", o->c1);
+  if (!(o->c2 > o->c1 && o->c2 < 1))
+    return bs_error_set(err, BS_EINPUT, "minimizer option c2 must be in (c1, 1) = (%g, 1), got %g", o->c1,
+                        o->c2);
+  if (o->max_ls < 1)
+    return bs_error_set(err, BS_EINPUT, "minimizer option max_ls must be >= 1, got %d", o->max_ls);
+  if ((unsigned)o->linear > (unsigned)BS_LIN_MINRES)
+    return bs_error_set(err, BS_EINPUT, "minimizer option linear: unknown solver kind %d", (int)o->linear);
+  if (o->cg_max_iter < 0)
+    return bs_error_set(err, BS_EINPUT, "minimizer option cg_max_iter must be >= 0, got %d", o->cg_max_iter);
+  if (!(o->newton_rel_tol > 0) || !isfinite(o->newton_rel_tol))
+    return bs_error_set(err, BS_EINPUT, "minimizer option newton_rel_tol must be finite and > 0, got %g",
+                        o->newton_rel_tol);
+  return 0;
+}
+
+void bs_minimizer_destroy(bs_minimizer **pm) {
+  if (!pm || !*pm) return;
+  bs_minimizer *m = *pm;
+  for (int k = 0; k < 4; ++k) bs_linsolve_destroy(&m->lin[k]);
+  bs_bsr_destroy(&m->H);
+  free(m->g_raw);
+  free(m->g);
+  free(m->d);
+  free(m->r);
+  free(m->y);
+  free(m->gy_raw);
+  free(m->gy);
+  free(m);
+  *pm = NULL;
+}
+
+static int ensure_solver(bs_minimizer *m, bs_lin_kind k, bs_error *err) {
+  if (m->lin[k]) return 0;
+  int rc = bs_linsolve_create(m->H, k, &m->lin[k], err);
+  if (rc) bs_error_prefix(err, "minimizer: creating the %s workspace", bs_lin_kind_name(k));
+  return rc;
+}
+
+int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_minimizer **out,
+                        bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "bs_minimizer_create: out is NULL");
+  *out = NULL;
+  if (!pattern) return bs_error_set(err, BS_EINPUT, "bs_minimizer_create: pattern is NULL");
+  if (pattern->n < 0)
+    return bs_error_set(err, BS_EINPUT, "bs_minimizer_create: pattern n = %d is negative", (int)pattern->n);
+  bs_minimize_opts o;
+  if (opts) o = *opts;
+  else bs_minimize_opts_default(&o);
+  int rc = bs__opts_check(&o, err);
+  if (rc) return rc;
+
+  bs_minimizer *m = bs_calloc(1, sizeof *m, "the minimizer", err);
+  if (!m) return BS_ENOMEM;
+  m->n = pattern->n;
+  m->n3 = 3 * (int64_t)pattern->n;
+  m->opts = o;
+  /* Hessian storage: the same pattern (a graph with self loops gives back the
+   * same sorted rows, hence the same slots). */
+  if ((rc = bs_bsr_create(pattern->n, pattern->row_ptr, pattern->col, &m->H, err))) {
+    bs_error_prefix(err, "minimizer: copying the Hessian pattern");
+    bs_minimizer_destroy(&m);
+    return rc;
+  }
+  if (m->H->nnzb != pattern->nnzb) {
+    bs_minimizer_destroy(&m);
+    return bs_error_set(err, BS_EINPUT,
+                        "bs_minimizer_create: pattern is malformed (nnzb %lld, but its rows hold %lld distinct blocks)",
+                        (long long)pattern->nnzb, (long long)m->H->nnzb);
+  }
+  size_t N = m->n3 > 0 ? (size_t)m->n3 : 1;
+  double **vecs[] = {&m->g_raw, &m->g, &m->d, &m->r, &m->y, &m->gy_raw, &m->gy};
+  for (size_t k = 0; k < sizeof vecs / sizeof vecs[0]; ++k) {
+    *vecs[k] = bs_calloc(N, sizeof(double), "minimizer work vectors", err);
+    if (!*vecs[k]) {
+      bs_minimizer_destroy(&m);
+      return BS_ENOMEM;
+    }
+  }
+  if ((rc = ensure_solver(m, BS_LIN_CG, err)) || (rc = ensure_solver(m, BS_LIN_MINRES, err)) ||
+      (rc = ensure_solver(m, o.linear, err))) {
+    bs_minimizer_destroy(&m);
+    return rc;
+  }
+  *out = m;
+  return 0;
+}
+
+int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_error *err) {
+  if (!m) return bs_error_set(err, BS_EINPUT, "bs_minimizer_set_opts: minimizer is NULL");
+  int rc = bs__opts_check(opts, err);
+  if (rc) return rc;
+  if ((rc = ensure_solver(m, opts->linear, err))) return rc;
+  m->opts = *opts;
+  return 0;
+}
+
+const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m) { return m ? &m->opts : NULL; }
+
+int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *x, bs_error *err) {
+  if (!m) return bs_error_set(err, BS_EINPUT, "minimizer is NULL");
+  if (!obj) return bs_error_set(err, BS_EINPUT, "objective is NULL");
+  if (!x && m->n > 0) return bs_error_set(err, BS_EINPUT, "x is NULL");
+  if (obj->n != m->n)
+    return bs_error_set(err, BS_EINPUT, "objective has n = %d vertices but the minimizer was sized for n = %d",
+                        (int)obj->n, (int)m->n);
+  if (!obj->value) return bs_error_set(err, BS_EINPUT, "objective callback 'value' is NULL");
+  if (!obj->gradient) return bs_error_set(err, BS_EINPUT, "objective callback 'gradient' is NULL");
+  if (!obj->hessian) return bs_error_set(err, BS_EINPUT, "objective callback 'hessian' is NULL");
+  int64_t bad = bs__first_nonfinite(m->n, obj->mask, x);
+  if (bad >= 0)
+    return bs_error_set(err, BS_ENUMERIC, "initial x is not finite at vertex %lld component %d (%g)",
+                        (long long)(bad / 3), (int)(bad % 3), x[bad]);
+  return 0;
+}
+
+/* ---- the minimizer --------------------------------------------------------- */
+
+/* Step 4: H d = -g on the free dofs. Returns 0, 1 when the solve produced a
+ * non-finite value (reason set), or a negative error. */
+static int newton_direction(bs_minimizer *m, const bs_objective *obj, double gnorm, int it, bs_minimize_stats *st,
+                            bs_min_iter *rec, bs_error *err) {
+  const bs_minimize_opts *o = &m->opts;
+  int64_t free_dofs = 0;
+  for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;
+  /* Default cap: CG ends in at most (free dofs) steps in exact arithmetic; allow
+   * for rounding. */
+  int64_t auto_it = 2 * free_dofs + 100;
+  int max_it = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
+  double rel = fmin(0.5, o->sigma * sqrt(fmax(gnorm, o->tol)));
+  rec->lin_rel_tol = rel;
+  for (int64_t i = 0; i < m->n3; ++i) m->r[i] = -m->g[i];
+  bs_lin_kind kind = o->linear;
+  bs_lin_stats ls;
+  memset(&ls, 0, sizeof ls);
+  double t = bs_seconds();
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd) {
+    st->cholmod_fallbacks++;
+    rec->cholmod_fallback = 1;
+    kind = BS_LIN_CG;
+    rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  }
+  st->t_linear += bs_seconds() - t;
+  if (rc == BS_ENUMERIC) {
+    bs__set_reason(m, st, BS_MIN_NONFINITE, "Newton system not finite at iteration %d (%s)", it, e2.msg);
+    return 1;
+  }
+  if (rc) {
+    if (err) *err = e2;
+    bs_error_prefix(err, "minimizer iteration %d: %s solve", it, bs_lin_kind_name(kind));
+    return rc;
+  }
+  st->cg_iterations += ls.iterations;
+  st->indefinite_exits += ls.indefinite;
+  rec->lin_iterations = ls.iterations;
+  rec->lin_indefinite = ls.indefinite;
+  return 0;
+}
+
+int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st_out, bs_error *err) {
+  double t_start = bs_seconds();
+  bs_minimize_stats local, *st = st_out ? st_out : &local;
+  memset(st, 0, sizeof *st);
+  int rc = bs__obj_check(m, obj, x, err);
+  if (rc) return rc;
+  const bs_minimize_opts *o = &m->opts;
+  const int32_t n = m->n;
+  const int64_t N = m->n3;
+  if (N == 0) { /* nothing to move: report E */
+    double E0 = 0;
+    double t = bs_seconds();
+    int vrc = obj->value(x, &E0, obj->ctx);
+    st->t_eval += bs_seconds() - t;
+    st->E = E0;
+    if (vrc || !isfinite(E0)) bs__set_reason(m, st, BS_MIN_NONFINITE, "objective not evaluable (E = %g)", E0);
+    else bs__set_reason(m, st, BS_MIN_CONVERGED, "no unknowns");
+    st->t_total = bs_seconds() - t_start;
+    return 0;
+  }
+
+  /* The initial guess is projected (fixed dofs kept: m->y holds the input). */
+  if (obj->project) {
+    memcpy(m->y, x, sizeof(double) * (size_t)N);
+    bs__project(obj, x, m->y, st);
+  }
+  double E = NAN;
+  int64_t bad;
+  if (bs__gradient(m, obj, x, &E, m->g_raw, &bad, st)) {
+    st->E = E;
+    st->grad_norm = NAN;
+    if (bad >= 0)
+      bs__set_reason(m, st, BS_MIN_NONFINITE, "gradient not finite at the initial point: vertex %lld component %d (%g)",
+                     (long long)(bad / 3), (int)(bad % 3), m->g_raw[bad]);
+    else bs__set_reason(m, st, BS_MIN_NONFINITE, "objective not evaluable at the initial point (E = %g)", E);
+    st->t_total = bs_seconds() - t_start;
+    return 0;
+  }
+
+  int it = 0;
+  for (;; ++it) {
+    /* Steps 1-3. */
+    double gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 1);
+    st->E = E;
+    st->grad_norm = gnorm;
+    if (gnorm == 0 || (gnorm < o->tol && !(it == 0 && o->naive_guess))) {
+      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, o->tol, it);
+      break;
+    }
+    if (it >= o->max_iter) {
+      bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, o->tol, it);
+      break;
+    }
+    bs_min_iter rec;
+    memset(&rec, 0, sizeof rec);
+    rec.iteration = it;
+    rec.grad_norm = gnorm;
+
+    /* Step 2: Hessian. */
+    double t = bs_seconds();
+    int hrc = obj->hessian(x, m->H, obj->ctx);
+    st->t_assembly += bs_seconds() - t;
+    if (hrc) {
+      bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);
+      break;
+    }
+    /* Step 4: Newton direction. */
+    rc = newton_direction(m, obj, gnorm, it, st, &rec, err);
+    if (rc < 0) return rc;
+    if (rc > 0) break;
+
+    /* Step 5: downhill check. */
+    double dn = sqrt(bs__dot(N, m->d, m->d)), dg = bs__dot(N, m->d, m->g);
+    if (isfinite(dn) && isfinite(dg) && dn > 0 && dg < -o->kappa * dn * gnorm) {
+      rec.direction = 0;
+    } else if (isfinite(dn) && isfinite(dg) && dn > 0 && -dg < -o->kappa * dn * gnorm) {
+      for (int64_t i = 0; i < N; ++i) m->d[i] = -m->d[i];
+      rec.direction = 1;
+      st->fallback_neg_dx++;
+    } else {
+      for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
+      dn = gnorm;
+      rec.direction = 2;
+      st->fallback_neg_grad++;
+    }
+    /* Step 6: length clamp. */
+    if (dn > o->clamp) {
+      double s = o->clamp / dn;
+      for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
+      rec.clamped = 1;
+      st->clamps++;
+    }
+    double dphi0 = bs__dot(N, m->d, m->g);
+
+    /* Steps 7-9: line search along the projected curve. */
+    bs__ls_result ls;
+    t = bs_seconds();
+    bs__line_search(m, obj, x, E, dphi0, st, &ls);
+    st->t_line_search += bs_seconds() - t;
+    st->ls_evaluations += ls.evals;
+    if (ls.status < 0) {
+      /* Paper 3.3: below some |grad E| the decrease a step can make, about
+       * |g.d|/2, is lost in the rounding of E itself. Say so when it is. */
+      const double noise = bs__noise_level(E);
+      if (-dphi0 <= noise)
+        bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
+                       "no decrease of E in %d trial points at iteration %d: the predicted decrease |g.d| = %.3e "
+                       "is at the rounding level of E = %.9e (|grad E| = %.3e; tol %.3e is below what E resolves; "
+                       "see opts.accept_noise)",
+                       ls.evals, it, -dphi0, E, gnorm, o->tol);
+      else
+        bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
+                       "no decrease of E along the search direction in %d trial points at iteration %d "
+                       "(|grad E| = %.3e, E = %.9e, g.d = %.3e)",
+                       ls.evals, it, gnorm, E, dphi0);
+      break;
+    }
+    if (ls.status == 0) st->ls_failures++;
+    if (ls.status == 2) st->noise_steps++;
+    int moved = 0;
+    for (int32_t v = 0; v < n && !moved; ++v)
+      if (!obj->mask || obj->mask[v])
+        for (int k = 0; k < 3; ++k)
+          if (m->y[3 * (int64_t)v + k] != x[3 * (int64_t)v + k]) moved = 1;
+
+    rec.wolfe = ls.status == 1 ? 1 : ls.status == 2 ? 2 : 0;
+    rec.ls_evaluations = ls.evals;
+    rec.alpha = ls.alpha;
+    rec.phi0 = E;
+    rec.dphi0 = dphi0;
+    rec.phi = ls.phi;
+    rec.dphi = ls.dphi;
+    rec.x = x;
+    rec.d = m->d;
+    rec.y = m->y;
+    if (obj->trace) obj->trace(&rec, obj->ctx);
+
+    /* Accept: x <- P(x + alpha d), with its gradient. */
+    memcpy(x, m->y, sizeof(double) * (size_t)N);
+    memcpy(m->g_raw, m->gy_raw, sizeof(double) * (size_t)N);
+    E = ls.phi;
+    st->iterations++;
+    st->alpha_last = ls.alpha;
+    if (st->iterations == 1 || ls.alpha < st->alpha_min) st->alpha_min = ls.alpha;
+    if (st->iterations == 1 || ls.alpha > st->alpha_max) st->alpha_max = ls.alpha;
+    if (!moved) {
+      gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 0);
+      st->E = E;
+      st->grad_norm = gnorm;
+      bs__set_reason(m, st, BS_MIN_STALLED,
+                     "the step at iteration %d left x unchanged (alpha = %.3e, |grad E| = %.3e)", it, ls.alpha, gnorm);
+      break;
+    }
+  }
+  st->t_total = bs_seconds() - t_start;
+  return 0;
+}

@@ -1,0 +1,73 @@
+/* minimize_impl.h — internals shared by minimize.c, linesearch.c and newton.c
+ * (not a public header: include bs_minimize.h). */
+#ifndef BS_MINIMIZE_IMPL_H
+#define BS_MINIMIZE_IMPL_H
+
+#include "bs_minimize.h"
+
+#define BS_MIN_TEXT 512
+
+struct bs_minimizer {
+  int32_t n;                  /* blocks                                              */
+  int64_t n3;                 /* 3n                                                  */
+  bs_minimize_opts opts;
+  bs_bsr *H;                  /* Hessian storage with the pattern of create          */
+  bs_linsolve *lin[4];        /* workspaces by bs_lin_kind (CG and MINRES always)    */
+  /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
+   * direction, right-hand side, trial point, raw and projected gradient there. */
+  double *g_raw, *g, *d, *r, *y, *gy_raw, *gy;
+  char text[BS_MIN_TEXT];     /* stats.reason_text points here                      */
+};
+
+/* Vector kernels over N = 3n doubles (OpenMP, static schedule). */
+double bs__dot(int64_t N, const double *a, const double *b);
+/* Copies src to dst, zeroing the dofs of fixed vertices. */
+void bs__mask_copy(int32_t n, const uint8_t *mask, const double *src, double *dst);
+/* dst_v = src_v for every fixed vertex v (no-op when mask is NULL). */
+void bs__restore_fixed(int32_t n, const uint8_t *mask, const double *src, double *dst);
+/* Index of the first non-finite entry on a free vertex, -1 if none. */
+int64_t bs__first_nonfinite(int32_t n, const uint8_t *mask, const double *v);
+
+/* Validates options; BS_EINPUT names the field. */
+int bs__opts_check(const bs_minimize_opts *o, bs_error *err);
+/* Common argument checks of bs_minimize / bs_newton. */
+int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *x, bs_error *err);
+/* Sets reason and a formatted reason text (stored in m->text). */
+void bs__set_reason(bs_minimizer *m, bs_minimize_stats *st, bs_min_reason r, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* Projects x in place with the objective's hook (if any), keeping fixed dofs at
+ * their values in `fixed_src` (which may alias nothing in x). Timed into t_eval. */
+void bs__project(const bs_objective *obj, double *x, const double *fixed_src, bs_minimize_stats *st);
+
+/* Gradient of E' at x into m->g_raw (E into *E). Returns 0 if evaluable and
+ * finite; otherwise 1 and *bad is the first non-finite dof (-1 for E or a
+ * failed call). Timed into t_eval. */
+int bs__gradient(bs_minimizer *m, const bs_objective *obj, const double *x, double *E, double *g_raw,
+                 int64_t *bad, bs_minimize_stats *st);
+
+/* Step 1-2 of an iteration: register_active(x, g_raw), then g = mask(g_raw) and
+ * project_gradient(x, g). Returns ||g||. */
+double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const double *x,
+                                const double *g_raw, double *g, bs_minimize_stats *st, int do_register);
+
+/* Line search result. */
+typedef struct bs__ls_result {
+  int status;     /* 1 strong Wolfe point, 0 best decreasing point (cap), 2 noise step, -1 no decrease */
+  int evals;      /* trial points                                                        */
+  double alpha, phi, dphi;
+} bs__ls_result;
+
+/* Rounding level of E below which changes of E are not resolved. */
+double bs__noise_level(double E);
+
+/* Strong Wolfe line search along m->d from x (phi0 = E(x), dphi0 = g.d < 0).
+ * On status >= 0: m->y = P(x + alpha d), m->gy_raw its raw gradient, m->gy the
+ * masked projected gradient, phi and dphi their values. */
+void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0,
+                     double dphi0, bs_minimize_stats *st, bs__ls_result *res);
+
+#endif

@@ -1,0 +1,1353 @@
+/* test_minimize.c — the stabilized Newton minimizer (paper 3.1–3.3) and the
+ * Newton baseline (section 2) on small analytic objectives with a bs_bsr
+ * Hessian: a quadratic, Rosenbrock (embedded and n-dimensional), a double well
+ * started on negative curvature, an underestimated step (alpha > 1), the length
+ * clamp, strong Wolfe checks recomputed independently, a log barrier (non-
+ * evaluable points), the sphere constraint through the projection hooks, fixed
+ * dofs, the lower-bound shortcut, non-finite objectives, CHOLMOD and PCG, and
+ * the Newton baseline converging quadratically or failing. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_minimize.h"
+
+/* ---- patterns ----------------------------------------------------------- */
+
+/* Chain graph: vertex i is adjacent to i-1 and i+1 (n = 1: a single block). */
+static bs_bsr *pattern_chain(int32_t n) {
+  int32_t *ptr = calloc((size_t)n + 1, sizeof *ptr), *adj = malloc(sizeof *adj * (2 * (size_t)n + 1));
+  int m = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    if (i > 0) adj[m++] = i - 1;
+    if (i < n - 1) adj[m++] = i + 1;
+    ptr[i + 1] = m;
+  }
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  free(ptr);
+  free(adj);
+  return A;
+}
+
+/* H(i, j) += v for scalar dofs i, j (setup-speed slot lookup; tests only). */
+static void hadd(bs_bsr *H, int64_t i, int64_t j, double v) {
+  int32_t s = bs_bsr_slot(H, (int32_t)(i / 3), (int32_t)(j / 3));
+  cr_assert(s >= 0, "test pattern misses block (%lld, %lld)", (long long)(i / 3), (long long)(j / 3));
+  H->val[9 * (int64_t)s + 3 * (i % 3) + (j % 3)] += v;
+}
+
+/* ---- test objectives ------------------------------------------------------ */
+
+typedef struct fx fx;
+/* E (always), g (if non-NULL, 3n entries) and H (if non-NULL, added) at x.
+ * Returns nonzero when x is not evaluable. */
+typedef int (*fx_eval)(fx *f, const double *x, double *E, double *g, bs_bsr *H);
+
+struct fx {
+  int32_t n;
+  fx_eval eval;
+  double hess_scale;   /* the Hessian callback returns hess_scale * H            */
+  const double *A, *b; /* quadratic: dense 3n x 3n A and b                      */
+  double eps;          /* weak quadratic curvature (clamp test)                 */
+  double k, t[3], R;   /* sphere: stiffness, target, radius                     */
+  int active, activations, releases;
+  int nan_mode;        /* 1: E = NaN; 2: gradient NaN at vertex 1 component 2    */
+  int noise_on;        /* rounding-noise test: bias switched on                  */
+  /* counters */
+  int n_value, n_grad, n_hess;
+  /* trace checks */
+  double c1, c2;
+  int n_rec, bad_wolfe, bad_point, bad_decrease, rec_indef_descent;
+  bs_min_iter first;
+  int has_first;
+  /* Newton iterates (first dof) */
+  double u[128];
+  int n_u;
+  /* lower-bound test */
+  double E_cur;
+  int lb_calls, lb_skips, lb_violations;
+};
+
+static void fx_init(fx *f, int32_t n, fx_eval ev) {
+  memset(f, 0, sizeof *f);
+  f->n = n;
+  f->eval = ev;
+  f->hess_scale = 1.0;
+  f->c1 = 1e-4;
+  f->c2 = 0.9;
+}
+
+static int cb_value(const double *x, double *E, void *ctx) {
+  fx *f = ctx;
+  f->n_value++;
+  return f->eval(f, x, E, NULL, NULL);
+}
+
+static int cb_gradient(const double *x, double *E, double *g, void *ctx) {
+  fx *f = ctx;
+  f->n_grad++;
+  if (f->n_u < 128) f->u[f->n_u++] = x[0];
+  memset(g, 0, sizeof(double) * 3 * (size_t)f->n);
+  return f->eval(f, x, E, g, NULL);
+}
+
+static int cb_hessian(const double *x, bs_bsr *H, void *ctx) {
+  fx *f = ctx;
+  f->n_hess++;
+  bs_bsr_zero(H);
+  double E;
+  int rc = f->eval(f, x, &E, NULL, H);
+  for (int64_t i = 0; i < 9 * H->nnzb; ++i) H->val[i] *= f->hess_scale;
+  return rc;
+}
+
+static double dot(int64_t N, const double *a, const double *b) {
+  double s = 0;
+  for (int64_t i = 0; i < N; ++i) s += a[i] * b[i];
+  return s;
+}
+
+/* Recomputes phi and phi' at both ends of every accepted step with the test's
+ * own function (unconstrained objectives) and checks the strong Wolfe
+ * conditions and y = x + alpha d. */
+static void cb_trace_wolfe(const bs_min_iter *it, void *ctx) {
+  fx *f = ctx;
+  const int64_t N = 3 * (int64_t)f->n;
+  double *g = malloc(sizeof(double) * (size_t)N);
+  double E0, E1;
+  memset(g, 0, sizeof(double) * (size_t)N);
+  f->eval(f, it->x, &E0, g, NULL);
+  double d0 = dot(N, g, it->d);
+  memset(g, 0, sizeof(double) * (size_t)N);
+  f->eval(f, it->y, &E1, g, NULL);
+  double d1 = dot(N, g, it->d);
+  free(g);
+  const double tiny = 1e-12 * (fabs(E0) + 1e-300);
+  if (!(E1 <= E0 + f->c1 * it->alpha * d0 + tiny) || !(fabs(d1) <= f->c2 * fabs(d0) * (1 + 1e-12))) f->bad_wolfe++;
+  if (!(d0 < 0)) f->bad_wolfe++;
+  if (fabs(E0 - it->phi0) > tiny || fabs(E1 - it->phi) > tiny) f->bad_wolfe++;
+  if (!it->wolfe) f->bad_wolfe++;
+  if (!(E1 <= E0)) f->bad_decrease++;
+  for (int64_t i = 0; i < N; ++i)
+    if (fabs(it->y[i] - (it->x[i] + it->alpha * it->d[i])) > 1e-12 * (1 + fabs(it->y[i]))) f->bad_point++;
+  if (it->lin_indefinite && it->direction == 0 && d0 < 0) f->rec_indef_descent++;
+  if (!f->has_first) {
+    f->first = *it;
+    f->first.x = f->first.d = f->first.y = NULL;
+    f->has_first = 1;
+  }
+  f->n_rec++;
+}
+
+static bs_objective make_obj(fx *f, const uint8_t *mask) {
+  bs_objective o;
+  memset(&o, 0, sizeof o);
+  o.n = f->n;
+  o.mask = mask;
+  o.value = cb_value;
+  o.gradient = cb_gradient;
+  o.hessian = cb_hessian;
+  o.trace = cb_trace_wolfe;
+  o.ctx = f;
+  return o;
+}
+
+/* Quadratic: E = 1/2 x^T A x - b^T x. */
+static int ev_quad(fx *f, const double *x, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t i = 0; i < N; ++i) {
+    double ax = 0;
+    for (int64_t j = 0; j < N; ++j) ax += f->A[i * N + j] * x[j];
+    e += 0.5 * x[i] * ax - f->b[i] * x[i];
+    if (g) g[i] = ax - f->b[i];
+    if (H)
+      for (int64_t j = 0; j < N; ++j)
+        if (f->A[i * N + j] != 0) hadd(H, i, j, f->A[i * N + j]);
+  }
+  *E = e;
+  return 0;
+}
+
+/* A = L (x) S + I on a chain of n vertices: SPD, block tridiagonal. */
+static double *quad_matrix(int32_t n) {
+  const int64_t N = 3 * (int64_t)n;
+  const double S[9] = {2, 0.5, 0, 0.5, 1.5, 0.3, 0, 0.3, 1};
+  double *A = calloc((size_t)(N * N), sizeof *A);
+  for (int32_t v = 0; v < n; ++v) {
+    int deg = (v > 0) + (v < n - 1);
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c) {
+        A[(3 * v + a) * N + 3 * v + c] += deg * S[3 * a + c] + (a == c);
+        if (v > 0) A[(3 * v + a) * N + 3 * (v - 1) + c] -= S[3 * a + c];
+        if (v < n - 1) A[(3 * v + a) * N + 3 * (v + 1) + c] -= S[3 * a + c];
+      }
+  }
+  return A;
+}
+
+/* Rosenbrock in one block: (1-x)^2 + 100 (y - x^2)^2 + z^2 / 2. */
+static int ev_rosen2(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  double x = u[0], y = u[1], z = u[2], w = y - x * x;
+  *E = (1 - x) * (1 - x) + 100 * w * w + 0.5 * z * z;
+  if (g) {
+    g[0] = -2 * (1 - x) - 400 * x * w;
+    g[1] = 200 * w;
+    g[2] = z;
+  }
+  if (H) {
+    hadd(H, 0, 0, 2 - 400 * w + 800 * x * x);
+    hadd(H, 0, 1, -400 * x);
+    hadd(H, 1, 0, -400 * x);
+    hadd(H, 1, 1, 200);
+    hadd(H, 2, 2, 1);
+  }
+  return 0;
+}
+
+/* n-dimensional Rosenbrock over all 3n dofs: sum 100 (u_{k+1} - u_k^2)^2 + (1 - u_k)^2. */
+static int ev_rosenN(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k + 1 < N; ++k) {
+    double w = u[k + 1] - u[k] * u[k];
+    e += 100 * w * w + (1 - u[k]) * (1 - u[k]);
+    if (g) {
+      g[k] += -400 * u[k] * w - 2 * (1 - u[k]);
+      g[k + 1] += 200 * w;
+    }
+    if (H) {
+      hadd(H, k, k, 2 - 400 * w + 800 * u[k] * u[k]);
+      hadd(H, k, k + 1, -400 * u[k]);
+      hadd(H, k + 1, k, -400 * u[k]);
+      hadd(H, k + 1, k + 1, 200);
+    }
+  }
+  *E = e;
+  return 0;
+}
+
+/* Double well per dof: u^4 - u^2 (minima at +-1/sqrt 2, negative curvature at 0). */
+static int ev_well(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    e += u[k] * u[k] * u[k] * u[k] - u[k] * u[k];
+    if (g) g[k] = 4 * u[k] * u[k] * u[k] - 2 * u[k];
+    if (H) hadd(H, k, k, 12 * u[k] * u[k] - 2);
+  }
+  *E = e;
+  return 0;
+}
+
+/* Weak quadratic per dof: eps u^2 / 2 - u (minimum at 1/eps, Newton step huge). */
+static int ev_weak(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    e += 0.5 * f->eps * u[k] * u[k] - u[k];
+    if (g) g[k] = f->eps * u[k] - 1;
+    if (H) hadd(H, k, k, f->eps);
+  }
+  *E = e;
+  return 0;
+}
+
+/* Log barrier per dof: u - log u (minimum at 1; not evaluable for u <= 0). */
+static int ev_barrier(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    if (!(u[k] > 0)) return 1;
+    e += u[k] - log(u[k]);
+    if (g) g[k] = 1 - 1 / u[k];
+    if (H) hadd(H, k, k, 1 / (u[k] * u[k]));
+  }
+  *E = e;
+  return 0;
+}
+
+/* Arctan gradient per dof: E = u atan u - log(1 + u^2)/2, g = atan u, H = 1/(1+u^2). */
+static int ev_atan(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    e += u[k] * atan(u[k]) - 0.5 * log1p(u[k] * u[k]);
+    if (g) g[k] = atan(u[k]);
+    if (H) hadd(H, k, k, 1 / (1 + u[k] * u[k]));
+  }
+  *E = e;
+  return 0;
+}
+
+/* Exponential per dof: exp(u) - 2u (root of the gradient at log 2). */
+static int ev_exp(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    e += exp(u[k]) - 2 * u[k];
+    if (g) g[k] = exp(u[k]) - 2;
+    if (H) hadd(H, k, k, exp(u[k]));
+  }
+  *E = e;
+  return 0;
+}
+
+/* NaN objectives. */
+static int ev_nan(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  ev_quad(f, u, E, g, H);
+  if (f->nan_mode == 1) *E = NAN;
+  if (f->nan_mode == 2 && g) g[3 * 1 + 2] = NAN;
+  return 0;
+}
+
+/* ---- basic behaviour -------------------------------------------------------- */
+
+Test(minimize, defaults_and_reason_names) {
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  cr_assert_eq(o.max_iter, 500);
+  cr_assert_float_eq(o.kappa, 1e-2, 0);
+  cr_assert_float_eq(o.clamp, 1e3, 0);
+  cr_assert_float_eq(o.c1, 1e-4, 0);
+  cr_assert_float_eq(o.c2, 0.9, 0);
+  cr_assert_float_eq(o.sigma, 1.0, 0);
+  cr_assert_eq(o.linear, BS_LIN_CG);
+  cr_assert_str_eq(bs_min_reason_name(BS_MIN_CONVERGED), "converged");
+  cr_assert_str_eq(bs_min_reason_name(BS_MIN_LINE_SEARCH), "line_search");
+  cr_assert_str_eq(bs_min_reason_name(BS_MIN_STEPS_DONE), "steps_done");
+}
+
+Test(minimize, quadratic_one_iteration) {
+  const int32_t n = 4;
+  const int64_t N = 3 * n;
+  bs_bsr *P = pattern_chain(n);
+  double *A = quad_matrix(n), b[12], x[12] = {0};
+  for (int64_t i = 0; i < N; ++i) b[i] = sin(1.0 + i);
+  fx f;
+  fx_init(&f, n, ev_quad);
+  f.A = A;
+  f.b = b;
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-9;
+  o.sigma = 1e-12; /* CG to ~1e-12 relative: one exact Newton step */
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_eq(st.iterations, 1, "took %d iterations", st.iterations);
+  cr_assert_float_eq(st.alpha_last, 1.0, 0, "alpha %g", st.alpha_last);
+  cr_assert_eq(st.ls_evaluations, 1);
+  cr_assert_eq(f.n_hess, 1);
+  double r = 0;
+  for (int64_t i = 0; i < N; ++i) {
+    double ax = 0;
+    for (int64_t j = 0; j < N; ++j) ax += A[i * N + j] * x[j];
+    r = fmax(r, fabs(ax - b[i]));
+  }
+  cr_assert_lt(r, 1e-9, "residual %g", r);
+  cr_assert_lt(st.grad_norm, 1e-9);
+  cr_assert_eq(f.bad_wolfe, 0);
+  cr_assert_eq(f.n_rec, 1);
+  cr_assert_not_null(st.reason_text);
+  cr_assert(strstr(st.reason_text, "converged") != NULL, "%s", st.reason_text);
+  cr_assert(st.t_total >= st.t_linear && st.t_linear >= 0 && st.t_eval >= 0 && st.t_assembly >= 0);
+  bs_minimizer_destroy(&m);
+  bs_minimizer_destroy(&m); /* NULL-safe */
+  cr_assert_null(m);
+  bs_bsr_destroy(&P);
+  free(A);
+}
+
+Test(minimize, rosenbrock_embedded) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_rosen2);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-8;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {-1.2, 1.0, 0.5};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_float_eq(x[0], 1.0, 1e-7, "x = %.12g", x[0]);
+  cr_assert_float_eq(x[1], 1.0, 1e-7, "y = %.12g", x[1]);
+  cr_assert_float_eq(x[2], 0.0, 1e-7);
+  cr_assert_lt(st.iterations, 100, "%d iterations", st.iterations);
+  cr_assert_eq(f.bad_wolfe, 0, "%d accepted steps violate strong Wolfe", f.bad_wolfe);
+  cr_assert_eq(f.bad_point, 0);
+  cr_assert_eq(f.n_rec, st.iterations);
+  cr_assert_eq(st.ls_failures, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, rosenbrock_n_dimensional) {
+  const int32_t n = 4; /* 12-dimensional Rosenbrock spread over 4 blocks */
+  bs_bsr *P = pattern_chain(n);
+  fx f;
+  fx_init(&f, n, ev_rosenN);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-8;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[12];
+  for (int k = 0; k < 12; ++k) x[k] = k % 2 ? 1.0 : -1.2;
+  double E0;
+  ev_rosenN(&f, x, &E0, NULL, NULL);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_lt(st.grad_norm, 1e-8);
+  cr_assert_lt(st.E, E0);
+  /* A local minimizer: the Hessian there is positive definite on every dof's
+   * 1-D restriction (diagonal entries positive). */
+  bs_bsr *H = pattern_chain(n);
+  double E;
+  ev_rosenN(&f, x, &E, NULL, H);
+  for (int k = 0; k < 12; ++k) {
+    int32_t s = H->diag[k / 3];
+    cr_assert_gt(H->val[9 * s + 4 * (k % 3)], 0);
+  }
+  cr_assert_eq(f.bad_wolfe, 0);
+  cr_assert_eq(f.bad_point, 0);
+  bs_bsr_destroy(&H);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, negative_curvature_start) {
+  const int32_t n = 2;
+  bs_bsr *P = pattern_chain(n);
+  fx f;
+  fx_init(&f, n, ev_well);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[6];
+  for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.1 * k);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(x[k], 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
+  cr_assert_gt(st.indefinite_exits, 0);
+  /* CG's indefinite exit on the first iteration returned the right-hand side
+   * -grad E: a descent direction, kept by the downhill check. */
+  cr_assert(f.has_first);
+  cr_assert_eq(f.first.lin_indefinite, 1);
+  cr_assert_eq(f.first.direction, 0);
+  cr_assert_lt(f.first.dphi0, 0);
+  cr_assert_gt(f.rec_indef_descent, 0);
+  cr_assert_eq(st.fallback_neg_dx, 0, "CG never needs -dx (paper 3.1)");
+  cr_assert_gt(st.alpha_max, 1.0, "the rhs direction is short: alpha grows");
+  cr_assert_eq(f.bad_wolfe, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, alpha_above_one_when_the_step_undershoots) {
+  /* The Hessian callback overestimates curvature 20x: every Newton step is
+   * 1/20 of the right one, so |phi'(1)| = 0.95 |phi'(0)| fails the curvature
+   * condition (c2 = 0.9) with a negative slope and the line search must grow
+   * alpha. */
+  const int32_t n = 3;
+  const int64_t N = 3 * n;
+  bs_bsr *P = pattern_chain(n);
+  double *A = quad_matrix(n), b[9], x[9] = {0};
+  for (int64_t i = 0; i < N; ++i) b[i] = cos(2.0 * i);
+  fx f;
+  fx_init(&f, n, ev_quad);
+  f.A = A;
+  f.b = b;
+  f.hess_scale = 20;
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-6;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.alpha_max, 10.0, "alpha_max = %g", st.alpha_max);
+  cr_assert_eq(f.bad_wolfe, 0);
+  cr_assert_eq(f.bad_point, 0);
+  cr_assert_eq(st.ls_failures, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+  free(A);
+}
+
+Test(minimize, length_clamp) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_weak);
+  f.eps = 1e-6; /* Newton step 1e6 per dof from 0, clamped to 1e3 */
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-6;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.clamps, 0);
+  cr_assert_gt(st.alpha_max, 1.0, "alpha beyond 1 undoes the clamp");
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(x[k], 1e6, 1.0, "x = %.9g", x[k]);
+  cr_assert_eq(f.bad_wolfe, 0);
+  /* A smaller clamp: more clamped steps, same answer. */
+  bs_minimize_opts o2 = o;
+  o2.clamp = 10;
+  cr_assert_eq(bs_minimizer_set_opts(m, &o2, &err), 0, "%s", err.msg);
+  double y[3] = {0, 0, 0};
+  cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.clamps, 0);
+  cr_assert_gt(st.alpha_max, 100.0, "alpha_max = %g", st.alpha_max);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(y[k], 1e6, 1.0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+static void cap_trace(const bs_min_iter *it, void *ctx) {
+  fx *f = ctx;
+  if (!(it->phi < it->phi0)) f->bad_decrease++;
+  if (!it->wolfe) f->bad_wolfe++; /* here: counts steps taken without a Wolfe point */
+  f->n_rec++;
+}
+
+Test(minimize, line_search_cap_takes_the_best_decrease) {
+  /* One trial point per line search: along a clamped direction alpha = 1
+   * decreases E but fails the curvature condition (|phi'(1)| = 0.94 |phi'(0)|),
+   * and, as the lowest decreasing point, is taken anyway. */
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_weak);
+  f.eps = 1e-4;
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-8;
+  o.max_ls = 1;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.trace = cap_trace;
+  double x[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.ls_failures, 0);
+  cr_assert_eq(f.bad_wolfe, st.ls_failures);
+  cr_assert_eq(f.bad_decrease, 0, "a capped line search never increases E");
+  cr_assert_float_eq(st.alpha_max, 1.0, 0, "alpha_max = %.17g", st.alpha_max);
+  cr_assert_eq(st.ls_evaluations, st.iterations);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(x[k], 1e4, 1e-6);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, non_evaluable_points_shrink_the_step) {
+  bs_bsr *P = pattern_chain(2);
+  fx f;
+  fx_init(&f, 2, ev_barrier);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[6] = {10, 10, 10, 10, 10, 10};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(x[k], 1.0, 1e-9);
+  cr_assert_lt(st.alpha_min, 1.0, "the first Newton step (to u = -80) had to shrink");
+  cr_assert_eq(f.bad_wolfe, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* ---- fixed dofs ------------------------------------------------------------- */
+
+static void project_shift_fixed(double *x, void *ctx) {
+  (void)ctx;
+  /* A hostile projection that moves vertex 1 (fixed) and nothing else. */
+  for (int k = 0; k < 3; ++k) x[3 + k] += 1.0;
+}
+
+Test(minimize, fixed_dofs_never_move) {
+  const int32_t n = 4;
+  const int64_t N = 3 * n;
+  bs_bsr *P = pattern_chain(n);
+  double *A = quad_matrix(n), b[12], x[12];
+  for (int64_t i = 0; i < N; ++i) {
+    b[i] = sin(3.0 * i);
+    x[i] = 0.1 * i;
+  }
+  uint8_t mask[4] = {1, 0, 1, 0};
+  double x0[12];
+  memcpy(x0, x, sizeof x);
+  fx f;
+  fx_init(&f, n, ev_quad);
+  f.A = A;
+  f.b = b;
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, mask);
+  obj.trace = NULL;
+  obj.project = project_shift_fixed;
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int v = 0; v < n; ++v)
+    if (!mask[v])
+      for (int k = 0; k < 3; ++k) cr_assert_eq(x[3 * v + k], x0[3 * v + k], "fixed vertex %d moved", v);
+  /* Free rows satisfy A_ff x_f + A_fc x_c = b_f. */
+  for (int64_t i = 0; i < N; ++i) {
+    if (!mask[i / 3]) continue;
+    double ax = 0;
+    for (int64_t j = 0; j < N; ++j) ax += A[i * N + j] * x[j];
+    cr_assert_float_eq(ax, b[i], 1e-9, "free row %lld", (long long)i);
+  }
+  /* The baseline obeys the mask too. */
+  memcpy(x, x0, sizeof x);
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int v = 0; v < n; ++v)
+    if (!mask[v])
+      for (int k = 0; k < 3; ++k) cr_assert_eq(x[3 * v + k], x0[3 * v + k]);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+  free(A);
+}
+
+/* ---- constraints: stay outside a sphere (paper 3.2) ------------------------- */
+
+/* E' = k/2 |x - t|^2; feasible set |x| >= R; phi = |x| - R, grad phi = x/|x|. */
+static int ev_sphere(fx *f, const double *x, double *E, double *g, bs_bsr *H) {
+  double e = 0, gp[3];
+  for (int k = 0; k < 3; ++k) {
+    double dk = x[k] - f->t[k];
+    e += 0.5 * f->k * dk * dk;
+    gp[k] = f->k * dk;
+    if (g) g[k] = gp[k];
+  }
+  *E = e;
+  if (H) {
+    if (f->active) {
+      /* Hessian of E'(P(x)) at |x| = R in the tangent plane: k (I - nn^T) minus
+       * (g'.n)/R (I - nn^T) (curvature of P); k nn^T keeps it nonsingular (the
+       * normal direction is projected out of every right-hand side). */
+      double r = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), nv[3], gn = 0;
+      for (int k = 0; k < 3; ++k) nv[k] = x[k] / r;
+      for (int k = 0; k < 3; ++k) gn += gp[k] * nv[k];
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c) {
+          double T = (a == c) - nv[a] * nv[c];
+          hadd(H, a, c, (f->k - gn / f->R) * T + f->k * nv[a] * nv[c]);
+        }
+    } else {
+      for (int a = 0; a < 3; ++a) hadd(H, a, a, f->k);
+    }
+  }
+  return 0;
+}
+
+static void sphere_project(double *x, void *ctx) {
+  fx *f = ctx;
+  double r = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  if ((f->active || r < f->R) && r > 0)
+    for (int k = 0; k < 3; ++k) x[k] *= f->R / r;
+}
+
+static void sphere_register(const double *x, const double *g, void *ctx) {
+  fx *f = ctx;
+  double r = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  cr_assert_geq(r, f->R * (1 - 1e-12), "register_active called at an infeasible point (|x| = %.17g)", r);
+  int touching = fabs(r - f->R) <= 1e-12 * f->R;
+  double gn = (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]) / r;
+  int was = f->active;
+  f->active = touching && gn >= 0; /* paper: touching and grad E'.grad phi >= 0 */
+  f->activations += !was && f->active;
+  f->releases += was && !f->active;
+}
+
+static void sphere_project_gradient(const double *x, double *g, void *ctx) {
+  fx *f = ctx;
+  if (!f->active) return;
+  double r = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+  double gn = (g[0] * x[0] + g[1] * x[1] + g[2] * x[2]) / r;
+  for (int k = 0; k < 3; ++k) g[k] -= gn * x[k] / r;
+}
+
+static void sphere_trace(const bs_min_iter *it, void *ctx) {
+  fx *f = ctx;
+  if (!(it->phi <= it->phi0)) f->bad_decrease++;
+  double r = sqrt(it->y[0] * it->y[0] + it->y[1] * it->y[1] + it->y[2] * it->y[2]);
+  if (r < f->R * (1 - 1e-12)) f->bad_point++; /* iterates stay feasible */
+  f->n_rec++;
+}
+
+static void run_sphere(fx *f, double *x, bs_minimize_stats *st) {
+  bs_bsr *P = pattern_chain(1);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-9;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(f, NULL);
+  obj.project = sphere_project;
+  obj.register_active = sphere_register;
+  obj.project_gradient = sphere_project_gradient;
+  obj.trace = sphere_trace;
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, sphere_constraint_active_at_solution) {
+  fx f;
+  fx_init(&f, 1, ev_sphere);
+  f.k = 2.0;
+  f.R = 1.0;
+  f.t[0] = 0.3, f.t[1] = 0.2, f.t[2] = -0.1; /* inside: the solution is on the sphere */
+  double x[3] = {0.5, 2.0, 0.3};
+  bs_minimize_stats st;
+  run_sphere(&f, x, &st);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  double tn = sqrt(f.t[0] * f.t[0] + f.t[1] * f.t[1] + f.t[2] * f.t[2]);
+  for (int k = 0; k < 3; ++k)
+    cr_assert_float_eq(x[k], f.R * f.t[k] / tn, 1e-8, "x[%d] = %.12g, expected %.12g", k, x[k], f.R * f.t[k] / tn);
+  cr_assert_float_eq(sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), f.R, 1e-12);
+  cr_assert_eq(f.active, 1, "the constraint is active at the solution");
+  cr_assert_eq(f.bad_decrease, 0);
+  cr_assert_eq(f.bad_point, 0);
+  cr_assert_lt(st.iterations, 30, "%d iterations", st.iterations);
+}
+
+Test(minimize, sphere_constraint_released) {
+  /* Start touching with the pull partly inward: active first, then the point
+   * slides round the sphere until grad E' points inward and the constraint
+   * separates; the solution is the (outside) target. */
+  fx f;
+  fx_init(&f, 1, ev_sphere);
+  f.k = 1.0;
+  f.R = 1.0;
+  f.t[0] = 2.0, f.t[1] = 0.5, f.t[2] = 0.0;
+  double x[3] = {0.0, 1.0, 0.0};
+  bs_minimize_stats st;
+  run_sphere(&f, x, &st);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(x[k], f.t[k], 1e-8, "x[%d] = %.12g", k, x[k]);
+  cr_assert_geq(f.activations, 1, "the constraint was active at the start");
+  cr_assert_geq(f.releases, 1, "and was released");
+  cr_assert_eq(f.active, 0);
+  cr_assert_eq(f.bad_decrease, 0);
+  cr_assert_eq(f.bad_point, 0);
+}
+
+Test(minimize, initial_guess_is_projected) {
+  fx f;
+  fx_init(&f, 1, ev_sphere);
+  f.k = 1.0;
+  f.R = 1.0;
+  f.t[0] = 0.0, f.t[1] = 0.0, f.t[2] = 3.0; /* outside, straight above */
+  double x[3] = {0.0, 0.0, 0.2};           /* infeasible start */
+  bs_bsr *P = pattern_chain(1);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-9;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.project = sphere_project;
+  obj.register_active = sphere_register; /* asserts feasibility when called */
+  obj.project_gradient = sphere_project_gradient;
+  obj.trace = sphere_trace;
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_float_eq(x[2], 3.0, 1e-8);
+  cr_assert_eq(f.bad_point, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* ---- the lower-bound shortcut (paper 3.3) ---------------------------------- */
+
+/* E = sum (u-1)^2/2 + s(u), s = 0.1 sum u^4 >= 0 (the "expensive" term);
+ * the lower bound is the quadratic part. */
+static double lb_quad(const double *u) {
+  double q = 0;
+  for (int k = 0; k < 3; ++k) q += 0.5 * (u[k] - 1) * (u[k] - 1);
+  return q;
+}
+
+static int ev_lb(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  double e = lb_quad(u);
+  for (int k = 0; k < 3; ++k) {
+    e += 0.1 * pow(u[k], 4);
+    if (g) g[k] = (u[k] - 1) + 0.4 * pow(u[k], 3);
+    if (H) hadd(H, k, k, 1 + 1.2 * u[k] * u[k]);
+  }
+  *E = e;
+  return 0;
+}
+
+static int lb_value(const double *x, double *E, void *ctx) {
+  fx *f = ctx;
+  if (lb_quad(x) > f->E_cur * (1 + 1e-14)) f->lb_violations++;
+  return cb_value(x, E, ctx);
+}
+
+static int lb_gradient(const double *x, double *E, double *g, void *ctx) {
+  fx *f = ctx;
+  if (lb_quad(x) > f->E_cur * (1 + 1e-14)) f->lb_violations++;
+  return cb_gradient(x, E, g, ctx);
+}
+
+static int lb_bound(const double *x, double *E, void *ctx) {
+  fx *f = ctx;
+  f->lb_calls++;
+  *E = lb_quad(x);
+  if (*E > f->E_cur) f->lb_skips++;
+  return 0;
+}
+
+static void lb_trace(const bs_min_iter *it, void *ctx) {
+  fx *f = ctx;
+  f->E_cur = it->phi; /* E(x_{i+1}): the reference of the next line search */
+  f->n_rec++;
+}
+
+Test(minimize, lower_bound_skips_expensive_terms) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_lb);
+  f.hess_scale = 1e-3; /* 1000x too long Newton steps: the first trial overshoots far */
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-7;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.value = lb_value;
+  obj.gradient = lb_gradient;
+  obj.value_lower_bound = lb_bound;
+  obj.trace = lb_trace;
+  double x[3] = {3.0, -2.0, 2.5};
+  ev_lb(&f, x, &f.E_cur, NULL, NULL);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(f.lb_skips, 0, "the bound exceeded E(x_i) at some trial point");
+  cr_assert_eq(f.lb_violations, 0, "value()/gradient() called where the bound already exceeded E(x_i)");
+  cr_assert_eq(f.lb_calls, st.ls_evaluations);
+  double g[3];
+  double E;
+  ev_lb(&f, x, &E, g, NULL);
+  cr_assert_lt(sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), 1e-7);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* ---- non-finite objectives and errors -------------------------------------- */
+
+Test(minimize, nan_objective_is_reported) {
+  const int32_t n = 2;
+  bs_bsr *P = pattern_chain(n);
+  double *A = quad_matrix(n), b[6] = {1, 2, 3, 4, 5, 6}, x[6] = {0};
+  fx f;
+  fx_init(&f, n, ev_nan);
+  f.A = A;
+  f.b = b;
+  f.nan_mode = 1;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, NULL, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_NONFINITE);
+  cr_assert(strstr(st.reason_text, "initial point") != NULL, "%s", st.reason_text);
+  cr_assert_eq(st.iterations, 0);
+  f.nan_mode = 2;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_NONFINITE);
+  cr_assert(strstr(st.reason_text, "vertex 1 component 2") != NULL, "%s", st.reason_text);
+  /* The baseline reports it the same way. */
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_NONFINITE);
+  cr_assert(strstr(st.reason_text, "vertex 1 component 2") != NULL, "%s", st.reason_text);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+  free(A);
+}
+
+static int hess_fails(const double *x, bs_bsr *H, void *ctx) {
+  (void)x, (void)H, (void)ctx;
+  return 7;
+}
+
+Test(minimize, errors_name_the_culprit) {
+  bs_bsr *P = pattern_chain(2);
+  bs_error err = {0};
+  bs_minimizer *m = NULL;
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.c2 = 1e-5; /* below c1 */
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert_null(m);
+  cr_assert(strstr(err.msg, "c2") != NULL, "%s", err.msg);
+  bs_minimize_opts_default(&o);
+  o.kappa = 1.5;
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "kappa") != NULL, "%s", err.msg);
+  bs_minimize_opts_default(&o);
+  o.max_ls = 0;
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "max_ls") != NULL, "%s", err.msg);
+  cr_assert_eq(bs_minimizer_create(NULL, NULL, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "pattern") != NULL, "%s", err.msg);
+
+  cr_assert_eq(bs_minimizer_create(P, NULL, &m, &err), 0, "%s", err.msg);
+  /* set_opts rejects bad options and keeps the old ones. */
+  bs_minimize_opts_default(&o);
+  o.clamp = -1;
+  cr_assert_eq(bs_minimizer_set_opts(m, &o, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "clamp") != NULL, "%s", err.msg);
+  cr_assert_float_eq(bs_minimizer_opts(m)->clamp, 1e3, 0);
+
+  fx f;
+  fx_init(&f, 3, ev_well); /* wrong size: 3 vertices for a 2-vertex minimizer */
+  bs_objective obj = make_obj(&f, NULL);
+  double x[9] = {0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "n = 3") != NULL, "%s", err.msg);
+  f.n = 2;
+  obj = make_obj(&f, NULL);
+  obj.hessian = NULL;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "hessian") != NULL, "%s", err.msg);
+  obj = make_obj(&f, NULL);
+  x[4] = INFINITY;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), BS_ENUMERIC);
+  cr_assert(strstr(err.msg, "vertex 1 component 1") != NULL, "%s", err.msg);
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), BS_ENUMERIC);
+  x[4] = 0.3;
+  cr_assert_eq(bs_newton(m, &obj, -1, x, &st, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "k_steps") != NULL, "%s", err.msg);
+  /* A Hessian callback that fails stops the solve with a reason. */
+  for (int k = 0; k < 6; ++k) x[k] = 0.3;
+  obj.hessian = hess_fails;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_NONFINITE);
+  cr_assert(strstr(st.reason_text, "Hessian") != NULL, "%s", st.reason_text);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+static int ev_const(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  (void)f, (void)u, (void)g, (void)H;
+  *E = 42.0;
+  return 0;
+}
+
+Test(minimize, empty_problem) {
+  int32_t ptr[1] = {0};
+  bs_bsr *P = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(0, ptr, NULL, &P, &err), 0, "%s", err.msg);
+  bs_minimizer *m = NULL;
+  cr_assert_eq(bs_minimizer_create(P, NULL, &m, &err), 0, "%s", err.msg);
+  fx f;
+  fx_init(&f, 0, ev_const);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[1] = {0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_eq(st.iterations, 0);
+  cr_assert_float_eq(st.E, 42.0, 0);
+  cr_assert_eq(bs_newton(m, &obj, 3, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* A stalled objective: E rises in every direction the solver can take
+ * (a non-smooth kink). The line search must report it, not loop. */
+static int ev_kink(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  /* E = |u0| with the gradient of a smooth function pointing the wrong way. */
+  *E = fabs(u[0]) + fabs(u[1]) + fabs(u[2]);
+  if (g) g[0] = g[1] = g[2] = 1.0;
+  if (H)
+    for (int k = 0; k < 3; ++k) hadd(H, k, k, 1.0);
+  return 0;
+}
+
+Test(minimize, line_search_failure_is_reported) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_kink);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.max_ls = 15;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.trace = NULL;
+  double x[3] = {0, 0, 0}, x0[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_LINE_SEARCH, "%s", st.reason_text);
+  cr_assert_eq(st.ls_evaluations, 15);
+  cr_assert_eq(memcmp(x, x0, sizeof x), 0, "x unchanged when E cannot decrease");
+  cr_assert_eq(st.iterations, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, max_iter_and_naive_guess) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_rosen2);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-12;
+  o.max_iter = 3;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {-1.2, 1.0, 0.0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_MAX_ITER, "%s", st.reason_text);
+  cr_assert_eq(st.iterations, 3);
+  /* Already converged: no iteration, unless the guess is naive. */
+  fx_init(&f, 1, ev_rosen2);
+  obj = make_obj(&f, NULL);
+  o.tol = 1e-3;
+  o.max_iter = 500;
+  cr_assert_eq(bs_minimizer_set_opts(m, &o, &err), 0, "%s", err.msg);
+  double y[3] = {1.0 + 1e-6, 1.0 + 2e-6, 0.0};
+  cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED);
+  cr_assert_eq(st.iterations, 0);
+  o.naive_guess = 1;
+  cr_assert_eq(bs_minimizer_set_opts(m, &o, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED);
+  cr_assert_eq(st.iterations, 1);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* Rounding noise of E emulated deterministically: exp(u) - 2u per dof, and
+ * from the first gradient evaluation with |g| < 1e-7 on, every evaluation of
+ * E is 16 eps |E| higher (the last iterate's E was a "lucky low" rounding, as
+ * happens with sums of many terms). The gradient is exact throughout. */
+static int noisy_value(const double *x, double *E, void *ctx) {
+  fx *f = ctx;
+  ev_exp(f, x, E, NULL, NULL);
+  if (f->noise_on) *E += 16 * 2.220446049250313e-16 * fabs(*E);
+  return 0;
+}
+
+static int noisy_gradient(const double *x, double *E, double *g, void *ctx) {
+  fx *f = ctx;
+  noisy_value(x, E, ctx);
+  ev_exp(f, x, &(double){0}, g, NULL);
+  if (sqrt(dot(3, g, g)) < 1e-7) f->noise_on = 1; /* switch the bias on for later evaluations */
+  return 0;
+}
+
+Test(minimize, tolerance_below_the_rounding_of_E) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_exp);
+  f.hess_scale = 2; /* half Newton steps: |g| passes every scale on its way down */
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-12;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.value = noisy_value;
+  obj.gradient = noisy_gradient;
+  obj.trace = NULL;
+  double x[3] = {1.0, 1.2, 0.9};
+  bs_minimize_stats st;
+  /* The paper's rule: stop, and say why. */
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(f.noise_on, 1, "the noise was switched on");
+  cr_assert_eq(st.reason, BS_MIN_LINE_SEARCH, "%s", st.reason_text);
+  cr_assert(strstr(st.reason_text, "rounding level") != NULL, "%s", st.reason_text);
+  cr_assert_gt(st.grad_norm, o.tol);
+  /* accept_noise: the rounding-level step is taken and tol is reached. */
+  o.accept_noise = 1;
+  cr_assert_eq(bs_minimizer_set_opts(m, &o, &err), 0, "%s", err.msg);
+  f.noise_on = 0;
+  double y[3] = {1.0, 1.2, 0.9};
+  cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.noise_steps, 0);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(y[k], log(2.0), 1e-12);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* ---- other linear solvers ---------------------------------------------------- */
+
+static void run_well(bs_lin_kind kind, bs_minimize_stats *st, double *x) {
+  bs_bsr *P = pattern_chain(2);
+  fx f;
+  fx_init(&f, 2, ev_well);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  o.linear = kind;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  for (int k = 0; k < 6; ++k) x[k] = (k % 2 ? -0.02 : 0.01) * (1 + 0.1 * k);
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  cr_assert_eq(f.bad_wolfe, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, cholmod_falls_back_to_cg_when_indefinite) {
+  bs_minimize_stats st;
+  double x[6];
+  run_well(BS_LIN_CHOLMOD, &st, x);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.cholmod_fallbacks, 0);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(fabs(x[k]), 1 / sqrt(2.0), 1e-8);
+}
+
+Test(minimize, pcg_converges) {
+  bs_minimize_stats st;
+  double x[6];
+  run_well(BS_LIN_PCG, &st, x);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_gt(st.indefinite_exits, 0);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(fabs(x[k]), 1 / sqrt(2.0), 1e-8);
+}
+
+/* ---- the Newton baseline ------------------------------------------------------ */
+
+Test(newton, converges_quadratically_on_a_mild_problem) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_exp);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-13;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_lt(st.iterations, 10);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(x[k], log(2.0), 1e-13);
+  /* e_{k+1} ~ (f''/2f') e_k^2 = e_k^2 / 2 for the root of exp(u) - 2. */
+  int pairs = 0;
+  for (int i = 0; i + 1 < f.n_u; ++i) {
+    double e0 = fabs(f.u[i] - log(2.0)), e1 = fabs(f.u[i + 1] - log(2.0));
+    if (e0 < 0.2 && e1 > 1e-12) {
+      double q = e1 / (e0 * e0);
+      cr_assert(q > 0.2 && q < 1.0, "e_{k+1}/e_k^2 = %g at step %d (e = %g -> %g)", q, i, e0, e1);
+      pairs++;
+    }
+  }
+  cr_assert_geq(pairs, 2, "only %d steps in the quadratic regime", pairs);
+  cr_assert_float_eq(st.alpha_last, 1.0, 0);
+  /* k Newton steps and stop. */
+  fx_init(&f, 1, ev_exp);
+  double y[3] = {0, 0, 0};
+  cr_assert_eq(bs_newton(m, &obj, 2, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.iterations, 2);
+  cr_assert_eq(st.reason, BS_MIN_STEPS_DONE, "%s", st.reason_text);
+  cr_assert_gt(st.grad_norm, o.tol);
+  double z[3] = {0, 0, 0};
+  cr_assert_eq(bs_newton(m, &obj, 8, z, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.iterations, 8);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(newton, fails_where_the_minimizer_succeeds) {
+  /* grad E = atan(u): Newton from |u0| > 1.39 diverges; the minimizer converges. */
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_atan);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  o.max_iter = 100;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {3.0, -2.0, 5.0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_assert(st.reason == BS_MIN_MAX_ITER || st.reason == BS_MIN_NONFINITE, "%s", st.reason_text);
+  cr_assert(!(st.grad_norm < o.tol), "Newton ended away from the root: %s", st.reason_text);
+  for (int k = 0; k < 3; ++k) cr_assert(isfinite(x[k]), "x keeps the last finite iterate");
+
+  fx_init(&f, 1, ev_atan);
+  double y[3] = {3.0, -2.0, 5.0};
+  cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int k = 0; k < 3; ++k) cr_assert_float_eq(y[k], 0.0, 1e-10);
+  cr_assert_eq(f.bad_wolfe, 0);
+
+  /* Rosenbrock-type: the minimizer converges from (-1.2, 1); record what the
+   * baseline does from the same start (it must not report convergence to a
+   * non-stationary point). */
+  fx_init(&f, 1, ev_rosen2);
+  double r[3] = {-1.2, 1.0, 0.0};
+  cr_assert_eq(bs_newton(m, &obj, 0, r, &st, &err), 0, "%s", err.msg);
+  if (st.reason == BS_MIN_CONVERGED) cr_assert_lt(st.grad_norm, o.tol);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* ---- the fixtures' derivatives (so that the tests above test the solver) ---- */
+
+static void fd_check(fx *f, const double *x0, const char *name) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double *g = calloc((size_t)N, sizeof *g), *gp = calloc((size_t)N, sizeof *gp), *gm = calloc((size_t)N, sizeof *gm);
+  double *x = malloc(sizeof(double) * (size_t)N);
+  bs_bsr *H = pattern_chain(f->n);
+  double E;
+  f->eval(f, x0, &E, g, H);
+  double err_g[3], err_h[3], hs[3] = {1e-2, 1e-3, 1e-4};
+  for (int s = 0; s < 3; ++s) {
+    double h = hs[s], eg = 0, eh = 0;
+    for (int64_t i = 0; i < N; ++i) {
+      memcpy(x, x0, sizeof(double) * (size_t)N);
+      x[i] += h;
+      double Ep, Em;
+      memset(gp, 0, sizeof(double) * (size_t)N);
+      f->eval(f, x, &Ep, gp, NULL);
+      x[i] -= 2 * h;
+      memset(gm, 0, sizeof(double) * (size_t)N);
+      f->eval(f, x, &Em, gm, NULL);
+      eg = fmax(eg, fabs((Ep - Em) / (2 * h) - g[i]));
+      for (int64_t j = 0; j < N; ++j) {
+        int32_t sl = bs_bsr_slot(H, (int32_t)(j / 3), (int32_t)(i / 3));
+        double hji = sl >= 0 ? H->val[9 * (int64_t)sl + 3 * (j % 3) + (i % 3)] : 0;
+        eh = fmax(eh, fabs((gp[j] - gm[j]) / (2 * h) - hji));
+      }
+    }
+    err_g[s] = eg;
+    err_h[s] = eh;
+  }
+  for (int s = 0; s + 1 < 3; ++s) {
+    cr_assert(err_g[s + 1] < 0.02 * err_g[s] || err_g[s + 1] < 1e-9, "%s gradient: FD error %g -> %g is not O(h^2)",
+              name, err_g[s], err_g[s + 1]);
+    cr_assert(err_h[s + 1] < 0.02 * err_h[s] || err_h[s + 1] < 1e-7, "%s Hessian: FD error %g -> %g is not O(h^2)",
+              name, err_h[s], err_h[s + 1]);
+  }
+  cr_assert_lt(err_g[2], 1e-5, "%s gradient", name);
+  cr_assert_lt(err_h[2], 1e-4, "%s Hessian", name);
+  bs_bsr_destroy(&H);
+  free(g), free(gp), free(gm), free(x);
+}
+
+Test(fixtures, derivatives_match_finite_differences) {
+  fx f;
+  double x[12];
+  for (int k = 0; k < 12; ++k) x[k] = 0.3 + 0.37 * sin(1.7 * k);
+  fx_init(&f, 4, ev_rosenN);
+  fd_check(&f, x, "rosenbrock");
+  fx_init(&f, 1, ev_rosen2);
+  fd_check(&f, x, "rosenbrock2");
+  fx_init(&f, 2, ev_well);
+  fd_check(&f, x, "double well");
+  fx_init(&f, 2, ev_atan);
+  fd_check(&f, x, "atan");
+  fx_init(&f, 2, ev_exp);
+  fd_check(&f, x, "exp");
+  double xp[6];
+  for (int k = 0; k < 6; ++k) xp[k] = 0.5 + 0.3 * sin(1.3 * k); /* inside the barrier's domain */
+  fx_init(&f, 2, ev_barrier);
+  fd_check(&f, xp, "barrier");
+  fx_init(&f, 1, ev_lb);
+  fd_check(&f, x, "lower-bound objective");
+  /* The sphere's projected Hessian: the tangential part must match the
+   * derivative of the projected gradient along the sphere. */
+  fx_init(&f, 1, ev_sphere);
+  f.k = 2.0;
+  f.R = 1.0;
+  f.t[0] = 0.3, f.t[1] = 0.2, f.t[2] = -0.1;
+  double p[3] = {0.6, 0.0, 0.8}, gp[3], gm[3], e;
+  f.active = 1;
+  bs_bsr *H = pattern_chain(1);
+  ev_sphere(&f, p, &e, NULL, H);
+  double tng[3] = {0.8, 0.0, -0.6}; /* unit tangent at p */
+  double errs[2];
+  for (int s = 0; s < 2; ++s) {
+    double h = s ? 1e-4 : 1e-3, q[3];
+    for (int k = 0; k < 3; ++k) q[k] = p[k] + h * tng[k];
+    sphere_project(q, &f);
+    ev_sphere(&f, q, &e, gp, NULL);
+    sphere_project_gradient(q, gp, &f);
+    for (int k = 0; k < 3; ++k) q[k] = p[k] - h * tng[k];
+    sphere_project(q, &f);
+    ev_sphere(&f, q, &e, gm, NULL);
+    sphere_project_gradient(q, gm, &f);
+    /* tangential component of d(grad E)/ds vs t^T H t */
+    double fd = 0, ht = 0;
+    for (int k = 0; k < 3; ++k) fd += tng[k] * (gp[k] - gm[k]) / (2 * h);
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c) ht += tng[a] * H->val[3 * a + c] * tng[c];
+    errs[s] = fabs(fd - ht);
+  }
+  cr_assert(errs[1] < 1e-6 || errs[1] < 0.02 * errs[0], "sphere tangential Hessian: %g -> %g", errs[0], errs[1]);
+  bs_bsr_destroy(&H);
+}
