@@ -181,7 +181,7 @@ void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], 
 
 double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
   double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_tets > 2048)
   for (int32_t t = 0; t < fem->n_tets; t++) {
     double xt[12];
     bs_fem_gather(fem, x, t, xt);
@@ -195,7 +195,7 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
   const int32_t *tets = fem->mesh->tets;
   for (int c = 0; c < fem->n_colors; c++) {
     int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) reduction(+ : E) if (hi - lo > 512)
     for (int32_t k = lo; k < hi; k++) {
       int32_t t = fem->color_tets[k];
       double xt[12], ge[12];
@@ -216,7 +216,7 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
 void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H) {
   for (int c = 0; c < fem->n_colors; c++) {
     int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (hi - lo > 512)
     for (int32_t k = lo; k < hi; k++) {
       int32_t t = fem->color_tets[k];
       double xt[12], He[144];
@@ -231,7 +231,7 @@ void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd,
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF) {
   int32_t n = 0;
   double mn = INFINITY;
-#pragma omp parallel for schedule(static) reduction(+ : n) reduction(min : mn)
+#pragma omp parallel for schedule(static) reduction(+ : n) reduction(min : mn) if (fem->n_tets > 2048)
   for (int32_t t = 0; t < fem->n_tets; t++) {
     double xt[12], F[9];
     bs_fem_gather(fem, x, t, xt);

@@ -40,6 +40,10 @@ void bs_integrator_opts_default(bs_integrator_opts *o) {
   o->method = BS_METHOD_OPTIMIZATION;
   o->newton_k = 1;
   bs_minimize_opts_default(&o->min);
+  /* Accept a Newton step whose decrease of E is below E's rounding level when
+     the gradient says it is a good step (the paper, section 3.3, notes that E
+     is noisy; without this, tolerances below the noise floor stall). */
+  o->min.accept_noise = 1;
 }
 
 void bs_integrator_destroy(bs_integrator **pI) {
@@ -207,7 +211,8 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   if (I->opts.method == BS_METHOD_OPTIMIZATION) rc = bs_minimize(I->min, &obj, x, &st->min, err);
   else rc = bs_newton(I->min, &obj, I->opts.method == BS_METHOD_NEWTON_K ? I->opts.newton_k : 0, x, &st->min, err);
   if (rc) return rc;
-  st->failed = st->min.reason != BS_MIN_CONVERGED;
+  /* "k Newton steps and stop" ends by design without convergence: not a failure. */
+  st->failed = st->min.reason != BS_MIN_CONVERGED && st->min.reason != BS_MIN_STEPS_DONE;
   return 0;
 }
 

@@ -32,7 +32,7 @@ void bs_term_destroy(bs_term **pt) {
 
 /* Adds c * m_v to the diagonal blocks of H. */
 static void add_mass_diagonal(const bs_fem *fem, double c, bs_bsr *H) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++) {
     double *blk = H->val + 9 * (size_t)H->diag[v];
     double d = c * fem->mass[v];
@@ -45,7 +45,7 @@ static void add_mass_diagonal(const bs_fem *fem, double c, bs_bsr *H) {
 /* c/2 Σ m_v |x_v − y_v|², gradient c m_v (x_v − y_v). */
 static double mass_quadratic(const bs_fem *fem, double c, const double *x, const double *y, double *g) {
   double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++) {
     double cm = c * fem->mass[v];
     for (int k = 0; k < 3; k++) {
@@ -85,7 +85,7 @@ static double gravity_value(const bs_term *t, const double *x) {
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
   double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E)
+#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++)
     E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
   return E;
@@ -94,7 +94,7 @@ static double gravity_gradient(const bs_term *t, const double *x, double *grad) 
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++)
     for (int k = 0; k < 3; k++) grad[3 * v + k] -= fem->mass[v] * g[k];
   return gravity_value(t, x);
@@ -152,7 +152,7 @@ static int damping_begin(bs_term *t, bs_error *err) {
   bs_bsr_zero(dd->D);
   for (int c = 0; c < fem->n_colors; c++) {
     int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (hi - lo > 512)
     for (int32_t k = lo; k < hi; k++) {
       int32_t e = fem->color_tets[k];
       int32_t mi = fem->tet_material[e];

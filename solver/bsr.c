@@ -130,7 +130,7 @@ void bs_bsr_zero(bs_bsr *A) {
   const int32_t *rp = A->row_ptr;
   /* Row by row, so that the pages of a row end up near the thread that uses
    * them in the product (first touch). */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 4096)
   for (int32_t i = 0; i < n; ++i)
     memset(v + 9 * (int64_t)rp[i], 0, 9 * (size_t)(rp[i + 1] - rp[i]) * sizeof *v);
 }
@@ -140,7 +140,7 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
   const int32_t *rp = A->row_ptr, *col = A->col;
   const double *val = A->val;
   if (!mask) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 4096)
     for (int32_t i = 0; i < n; ++i) {
       double y0 = 0.0, y1 = 0.0, y2 = 0.0;
       for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
@@ -162,7 +162,7 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
    * halves the bandwidth; constrained rows are computed and then dropped.
    * Selects (not multiplications by 0/1) keep the contract exact: the blocks of
    * constrained columns never enter the sum, even if they hold NaN. */
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 4096)
   for (int32_t i = 0; i < n; ++i) {
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
     for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {

@@ -59,18 +59,18 @@ int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err) {
 
 static double vdot(int64_t N, const double *a, const double *b) {
   double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
   for (int64_t k = 0; k < N; ++k) s += a[k] * b[k];
   return s;
 }
 
 static void vcopy(int64_t N, const double *a, double *b) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
   for (int64_t k = 0; k < N; ++k) b[k] = a[k];
 }
 
 static void vzero(int64_t N, double *a) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
   for (int64_t k = 0; k < N; ++k) a[k] = 0.0;
 }
 
@@ -79,7 +79,7 @@ static void vzero(int64_t N, double *a) {
 static double load_rhs(int32_t n, const uint8_t *mask, const double *b, double *r, int64_t *bad) {
   double s = 0.0;
   int64_t nb = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s, nb)
+#pragma omp parallel for schedule(static) reduction(+ : s, nb) if (n > 4096)
   for (int32_t i = 0; i < n; ++i) {
     const int free_i = !mask || mask[i];
     for (int a = 0; a < 3; ++a) {
@@ -190,7 +190,7 @@ static int block_inverse(const double *D, double *Mi) {
 
 static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *minv) {
   const int32_t n = A->n;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 4096)
   for (int32_t i = 0; i < n; ++i) {
     double *Mi = minv + 9 * (int64_t)i;
     if (mask && !mask[i])
@@ -203,7 +203,7 @@ static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *min
 /* z = M^-1 r; returns r . z. */
 static double apply_block_jacobi(int32_t n, const double *minv, const double *r, double *z) {
   double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (n > 4096)
   for (int32_t i = 0; i < n; ++i) {
     const double *M = minv + 9 * (int64_t)i;
     const double *ri = r + 3 * (int64_t)i;
@@ -258,7 +258,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
         vcopy(N, r, x);
         bs_bsr_mul(A, mask, x, q);
         double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
         for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
         rr = s;
       }
@@ -266,7 +266,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     }
     const double alpha = rz / pq;
     double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
     for (int64_t m = 0; m < N; ++m) {
       x[m] += alpha * p[m];
       r[m] -= alpha * q[m];
@@ -282,7 +282,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     const double rz_new = precond ? apply_block_jacobi(n, ls->minv, r, z) : rr;
     const double beta = rz_new / rz;
     rz = rz_new;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
     for (int64_t m = 0; m < N; ++m) p[m] = z[m] + beta * p[m];
   }
   st->rel_residual = sqrt(rr) / bnorm;
@@ -333,12 +333,12 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
     while (its < max_iter) {
       ++its;
       const double sc = 1.0 / beta;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
       for (int64_t m = 0; m < N; ++m) v[m] = sc * r2[m];
       bs_bsr_mul(A, mask, v, y);
       if (!first) {
         const double f = beta / oldb;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
         for (int64_t m = 0; m < N; ++m) y[m] -= f * r1[m];
       }
       first = 0;
@@ -346,7 +346,7 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
       if (!isfinite(alfa)) return matrix_error(A, mask, "minres", err);
       const double f2 = alfa / beta;
       double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
       for (int64_t m = 0; m < N; ++m) {
         y[m] -= f2 * r2[m];
         s += y[m] * y[m];
@@ -377,7 +377,7 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
       w2 = w;
       w = t;
       const double ig = 1.0 / gamma;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (N > 16384)
       for (int64_t m = 0; m < N; ++m) {
         w[m] = (v[m] - oldeps * w1[m] - delta * w2[m]) * ig;
         x[m] += phi * w[m];
@@ -387,7 +387,7 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
     /* True residual into r1. */
     bs_bsr_mul(A, mask, x, y);
     double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (n > 4096)
     for (int32_t i = 0; i < n; ++i)
       for (int a = 0; a < 3; ++a) {
         const int64_t m = 3 * (int64_t)i + a;
@@ -481,7 +481,7 @@ static int64_t chol_copy_values(bs_linsolve *ls, const bs_bsr *A) {
   double *Cx = ls->C->x;
   int64_t bad = 0;
   const int32_t nf = ls->nfree;
-#pragma omp parallel for schedule(static) reduction(+ : bad)
+#pragma omp parallel for schedule(static) reduction(+ : bad) if (nf > 4096)
   for (int32_t f = 0; f < nf; ++f) {
     const int32_t j = ls->fvert[f];
     for (int bcol = 0; bcol < 3; ++bcol) {
@@ -547,7 +547,7 @@ static int run_cholmod(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, co
   bs_bsr_mul(A, mask, x, ls->q);
   double s = 0.0;
   const double *r = ls->r, *q = ls->q;
-#pragma omp parallel for schedule(static) reduction(+ : s)
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
   for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
   st->rel_residual = sqrt(s) / bnorm;
   if (!isfinite(st->rel_residual))
