@@ -195,7 +195,8 @@ int bs_cmd_run(int argc, char **argv) {
     printf("bigstep run %s: %d vertices, %d tets, %ld dofs (%d scripted vertices), method %s, linear %s, "
            "%d frames at %g fps, %d steps/frame (dt %.6g s), tolerance %g\n",
            scene_path, s->mesh->n_vertices, s->mesh->n_tets, dofs, s->mesh->n_vertices - n_free, method,
-           bs_lin_kind_name(sc->solver.min.linear), sc->frames, sc->fps, sc->steps_per_frame, sc->dt,
+           sc->solver.method == BS_METHOD_OPTIMIZATION ? bs_lin_kind_name(sc->solver.min.linear) : "minres",
+           sc->frames, sc->fps, sc->steps_per_frame, sc->dt,
            sc->solver.min.tol);
   FILE *csv = NULL, *fcsv = NULL, *state = NULL;
   char **names = NULL;

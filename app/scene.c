@@ -349,7 +349,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
-                                     "newton_k", "mode", "load_steps", "project_hessian", NULL};
+                                     "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma", NULL};
     if ((st = check_keys(c, so, "solver", sk))) return st;
     char buf[64];
     bs_error e2;
@@ -362,6 +362,8 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       return fail(c, "solver.linear", "must be \"cg\", \"pcg\" or \"cholmod\", got \"%s\"", buf);
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
     if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
+    if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
+    if (!(s->solver.min.sigma > 0)) return fail(c, "solver.cg_sigma", "must be > 0, got %g", s->solver.min.sigma);
     if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
         (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||
         (st = get_int(c, so, "solver", "newton_k", 0, 1, 1000000, &s->solver.newton_k)) ||
