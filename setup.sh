@@ -31,7 +31,7 @@ cmake --build "$BUILD_DIR" -j "$JOBS"
 
 case "$mode" in
   build) ;;
-  run)  "$BUILD_DIR/app/bigstep" mesh info data/geo/cube.geo ;;
+  run)  "$BUILD_DIR/app/bigstep" run data/scenes/cube_stretch.json ;;
   test) ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
   *) echo "usage: bash setup.sh run|test|build" >&2; exit 2 ;;
 esac
