@@ -1,0 +1,125 @@
+/* bench/kernels.c — per-tet kernels and memory-bound kernels on a structured
+ * box (default 64^3 cells: 65^3 vertices, 824k dofs, 1.57M tets), printed as
+ * a table with 1 and N threads and ratios to the 1-thread run, plus STREAM
+ * triad as the bandwidth baseline measured in the same run.
+ *
+ *   bench_kernels [CELLS] [REPEATS]
+ *
+ * Medians of REPEATS (default 5) timings. Never run by the test suite. */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_fem.h"
+#include "bs_terms.h"
+
+static int cmp_d(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+static double median(double *t, int n) {
+  qsort(t, (size_t)n, sizeof(double), cmp_d);
+  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+
+static double stream_triad(size_t n, int reps) {
+  double *a = malloc(n * sizeof(double)), *b = malloc(n * sizeof(double)), *c = malloc(n * sizeof(double));
+#pragma omp parallel for schedule(static)
+  for (size_t i = 0; i < n; i++) {
+    a[i] = 0;
+    b[i] = 1;
+    c[i] = 2;
+  }
+  double t[64];
+  for (int r = 0; r < reps; r++) {
+    double t0 = bs_seconds();
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) a[i] = b[i] + 3.0 * c[i];
+    t[r] = bs_seconds() - t0;
+  }
+  double s = median(t, reps);
+  free(a);
+  free(b);
+  free(c);
+  return 3.0 * n * sizeof(double) / s / 1e9;
+}
+
+int main(int argc, char **argv) {
+  int cells = argc > 1 ? atoi(argv[1]) : 64;
+  int reps = argc > 2 ? atoi(argv[2]) : 5;
+  if (cells < 1 || reps < 1 || reps > 64) {
+    fprintf(stderr, "usage: bench_kernels [CELLS] [REPEATS<=64]\n");
+    return 2;
+  }
+  bs_error err;
+  bs_mesh *mesh = NULL;
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  if (bs_mesh_create_box(lo, hi, cells, cells, cells, &mesh, &err)) {
+    fprintf(stderr, "%s\n", err.msg);
+    return 1;
+  }
+  bs_material mat;
+  bs_material_init(BS_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, &mat, &err);
+  bs_fem *fem = NULL;
+  if (bs_fem_create(mesh, 1, &mat, NULL, &fem, &err)) {
+    fprintf(stderr, "%s\n", err.msg);
+    return 1;
+  }
+  bs_bsr *H = NULL;
+  bs_fem_matrix(fem, &H, &err);
+  size_t n3 = 3 * (size_t)mesh->n_vertices;
+  double *x = malloc(n3 * sizeof(double)), *g = malloc(n3 * sizeof(double)), *y = malloc(n3 * sizeof(double));
+  uint64_t s = 88172645463325252ull;
+  for (size_t i = 0; i < n3; i++) {
+    s ^= s << 13;
+    s ^= s >> 7;
+    s ^= s << 17;
+    x[i] = mesh->x[i] + 0.2 / cells * ((double)(s >> 11) / 9007199254740992.0 - 0.5);
+  }
+  int maxt = omp_get_max_threads();
+  printf("box %d^3 cells: %d vertices (%zu dofs), %d tets, %lld blocks, %d colours; medians of %d\n", cells,
+         mesh->n_vertices, n3, mesh->n_tets, (long long)H->nnzb, fem->n_colors, reps);
+  printf("%-34s %8s %12s %12s %8s\n", "kernel", "threads", "ms", "ns/tet|GB/s", "ratio");
+  int threads[2] = {1, maxt};
+  double base[8] = {0};
+  for (int ti = 0; ti < (maxt > 1 ? 2 : 1); ti++) {
+    omp_set_num_threads(threads[ti]);
+    double t[64];
+    int k = 0;
+#define TIME(label, body, per_tet, bytes)                                                                  \
+  do {                                                                                                     \
+    for (int r = 0; r < reps; r++) {                                                                       \
+      double t0 = bs_seconds();                                                                            \
+      body;                                                                                                \
+      t[r] = bs_seconds() - t0;                                                                            \
+    }                                                                                                      \
+    double m = median(t, reps);                                                                            \
+    if (ti == 0) base[k] = m;                                                                              \
+    double metric = per_tet ? 1e9 * m / mesh->n_tets : (bytes) / m / 1e9;                                  \
+    printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, threads[ti], 1e3 * m, metric, base[k] / m);           \
+    k++;                                                                                                   \
+  } while (0)
+    TIME("energy", bs_fem_elastic_energy(fem, x), 1, 0);
+    TIME("energy + gradient", (memset(g, 0, n3 * sizeof(double)), bs_fem_elastic_gradient(fem, x, g)), 1, 0);
+    TIME("Hessian assembly", (bs_bsr_zero(H), bs_fem_elastic_hessian(fem, x, 0, 1.0, H)), 1, 0);
+    TIME("projected Hessian assembly", (bs_bsr_zero(H), bs_fem_elastic_hessian(fem, x, 1, 1.0, H)), 1, 0);
+    TIME("energy+gradient+Hessian",
+         (memset(g, 0, n3 * sizeof(double)), bs_fem_elastic_gradient(fem, x, g), bs_bsr_zero(H),
+          bs_fem_elastic_hessian(fem, x, 0, 1.0, H)),
+         1, 0);
+    double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
+    TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
+    double triad = stream_triad(n3 * 8, reps);
+    printf("%-34s %8d %12s %12.1f\n", "STREAM triad (GB/s)", threads[ti], "", triad);
+  }
+  free(x);
+  free(g);
+  free(y);
+  bs_bsr_destroy(&H);
+  bs_fem_destroy(&fem);
+  bs_mesh_destroy(&mesh);
+  return 0;
+}
