@@ -91,9 +91,11 @@ static void write_frame_row(FILE *f, const bs_sim *s, int frame, long it, long c
   if (!f) return;
   double kin, ela, grav, mn;
   frame_energies(s, &kin, &ela, &grav);
-  int32_t inv = bs_fem_count_inverted(s->fem, s->x, &mn);
-  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f\n", frame, s->time, kin, ela, grav,
-          kin + ela + grav, inv, mn, it, cg, failed, secs);
+  int32_t inv = bs_fem_count_inverted(s->fem, s->x, &mn), pen;
+  double depth;
+  bs_sim_penetration(s, &pen, &depth);
+  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e\n", frame, s->time, kin, ela, grav,
+          kin + ela + grav, inv, mn, it, cg, failed, secs, pen, depth);
   fflush(f);
 }
 
@@ -231,7 +233,8 @@ int bs_cmd_run(int argc, char **argv) {
         rc = BS_EXIT_FAIL;
         goto out_files;
       }
-      fprintf(fcsv, "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds\n");
+      fprintf(fcsv, "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds,"
+                    "penetrating,max_depth\n");
       if (sc->states) {
         snprintf(p, sizeof p, "%s/state.bin", dir);
         state = fopen(p, "wb");
@@ -310,9 +313,12 @@ int bs_cmd_run(int argc, char **argv) {
       write_frame_row(fcsv, s, f, it, cg, fails, secs);
       write_state(state, s);
       if (!quiet) {
-        int32_t inv = bs_fem_count_inverted(s->fem, s->x, NULL);
-        printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d  %.3f s%s\n", f, sc->frames, it, cg, gmax,
-               inv, secs, fails ? "  FAILED STEPS" : "");
+        int32_t inv = bs_fem_count_inverted(s->fem, s->x, NULL), pen;
+        double depth;
+        bs_sim_penetration(s, &pen, &depth);
+        printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d", f, sc->frames, it, cg, gmax, inv);
+        if (s->obstacles) printf("  inside obstacles %d (depth %.2e m)", pen, depth);
+        printf("  %.3f s%s\n", secs, fails ? "  FAILED STEPS" : "");
         fflush(stdout);
       }
       if (dir && sc->vtu_every > 0 && f % sc->vtu_every == 0 && write_frame(s, dir, f, names, times, &n_out, &err)) {
@@ -333,6 +339,13 @@ int bs_cmd_run(int argc, char **argv) {
     len += snprintf(summary + len, sizeof summary - (size_t)len, "%-13s %6d %10.4f %9ld %11.2f %8ld %9.2e %9d\n",
                     method, sc->steps_per_frame, wall / frames, dofs, T.steps ? (double)T.iterations / T.steps : 0.0,
                     T.failed, T.max_grad, inv);
+    if (s->obstacles) {
+      int32_t pen;
+      double depth;
+      bs_sim_penetration(s, &pen, &depth);
+      len += snprintf(summary + len, sizeof summary - (size_t)len,
+                      "at the last frame: %d vertices inside obstacles, max depth %.3e m\n", pen, depth);
+    }
     snprintf(summary + len, sizeof summary - (size_t)len,
              "solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG "
              "exits, %ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD fallbacks; peak memory %.1f MiB\n",

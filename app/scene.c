@@ -305,15 +305,96 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   return 0;
 }
 
+static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
+  static const char *const keys[] = {"shape", "normal", "offset", "center", "radius", "half_extents", "axis",
+                                     "half_height", "major", "minor", "inside_out", "file", "grid_h", "collision",
+                                     "stiffness", "friction", "velocity", "angular_velocity", "keyframes", NULL};
+  int st;
+  char w[512];
+  if ((st = check_keys(c, o, where, keys))) return st;
+  if ((st = get_str(c, o, where, "shape", 1, b->shape, sizeof b->shape))) return st;
+  static const char *const shapes[] = {"plane", "sphere", "box", "cylinder", "torus", "grid", NULL};
+  int known = 0;
+  for (int i = 0; shapes[i]; i++) known |= !strcmp(b->shape, shapes[i]);
+  if (!known) {
+    join(w, sizeof w, where, "shape");
+    return fail(c, w, "must be plane, sphere, box, cylinder, torus or grid, got \"%s\"", b->shape);
+  }
+  b->normal[1] = 1;
+  b->axis[1] = 1;
+  b->radius = 0.5;
+  b->half_extents[0] = b->half_extents[1] = b->half_extents[2] = 0.5;
+  b->half_height = 0.5;
+  b->major = 1;
+  b->minor = 0.25;
+  snprintf(b->collision, sizeof b->collision, "constraint");
+  b->stiffness = 1e6;
+  if ((st = get_vec3(c, o, where, "normal", 0, b->normal)) || (st = get_num(c, o, where, "offset", 0, &b->offset)) ||
+      (st = get_vec3(c, o, where, "center", 0, b->center)) || (st = get_num(c, o, where, "radius", 0, &b->radius)) ||
+      (st = get_vec3(c, o, where, "half_extents", 0, b->half_extents)) ||
+      (st = get_vec3(c, o, where, "axis", 0, b->axis)) ||
+      (st = get_num(c, o, where, "half_height", 0, &b->half_height)) ||
+      (st = get_num(c, o, where, "major", 0, &b->major)) || (st = get_num(c, o, where, "minor", 0, &b->minor)) ||
+      (st = get_bool(c, o, where, "inside_out", &b->inside_out)) ||
+      (st = get_str(c, o, where, "file", 0, b->grid_file, sizeof b->grid_file)) ||
+      (st = get_num(c, o, where, "grid_h", 0, &b->grid_h)) ||
+      (st = get_str(c, o, where, "collision", 0, b->collision, sizeof b->collision)) ||
+      (st = get_num(c, o, where, "stiffness", 0, &b->stiffness)) ||
+      (st = get_num(c, o, where, "friction", 0, &b->friction)) ||
+      (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
+      (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
+    return st;
+  if (!strcmp(b->shape, "grid") && !b->grid_file[0]) {
+    join(w, sizeof w, where, "file");
+    return fail(c, w, "missing: shape \"grid\" needs the grid level-set file");
+  }
+  if (strcmp(b->collision, "constraint") && strcmp(b->collision, "penalty") && strcmp(b->collision, "postprocess")) {
+    join(w, sizeof w, where, "collision");
+    return fail(c, w, "must be constraint, penalty or postprocess, got \"%s\"", b->collision);
+  }
+  if (!(b->stiffness > 0)) {
+    join(w, sizeof w, where, "stiffness");
+    return fail(c, w, "must be > 0, got %g", b->stiffness);
+  }
+  if (!(b->friction >= 0)) {
+    join(w, sizeof w, where, "friction");
+    return fail(c, w, "must be >= 0, got %g", b->friction);
+  }
+  if (b->grid_h < 0) {
+    join(w, sizeof w, where, "grid_h");
+    return fail(c, w, "must be > 0, got %g", b->grid_h);
+  }
+  const cJSON *keysj = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
+  if (keysj) {
+    join(w, sizeof w, where, "keyframes");
+    if (!cJSON_IsArray(keysj) || cJSON_GetArraySize(keysj) < 1) return fail(c, w, "must be a non-empty array");
+    b->n_keys = cJSON_GetArraySize(keysj);
+    b->key_t = calloc((size_t)b->n_keys, sizeof(double));
+    b->key_translate = calloc(3 * (size_t)b->n_keys, sizeof(double));
+    b->key_rotate = calloc(3 * (size_t)b->n_keys, sizeof(double));
+    if (!b->key_t || !b->key_translate || !b->key_rotate) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+    for (int i = 0; i < b->n_keys; i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%d", w, i);
+      const cJSON *k = cJSON_GetArrayItem(keysj, i);
+      static const char *const kk[] = {"t", "translate", "rotate", NULL};
+      if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &b->key_t[i])) ||
+          (st = get_vec3(c, k, wi, "translate", 0, b->key_translate + 3 * i)) ||
+          (st = get_vec3(c, k, wi, "rotate", 0, b->key_rotate + 3 * i)))
+        return st;
+      if (i > 0 && !(b->key_t[i] > b->key_t[i - 1])) return fail(c, wi, "keyframe times must increase");
+    }
+  }
+  return 0;
+}
+
 static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   static const char *const keys[] = {"time", "solver", "gravity", "drag", "bodies", "output", "obstacles",
                                      "self_collision", "description", NULL};
   int st;
   if ((st = check_keys(c, root, "", keys))) return st;
-  if (cJSON_HasObjectItem(root, "obstacles") || cJSON_HasObjectItem(root, "self_collision")) {
-    const char *k = cJSON_HasObjectItem(root, "obstacles") ? "obstacles" : "self_collision";
-    return fail(c, k, "collisions are not part of this build of bigstep (they land with the collision module)");
-  }
+  if (cJSON_HasObjectItem(root, "self_collision"))
+    return fail(c, "self_collision", "self-collisions are not part of this build of bigstep yet");
   const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
   if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
 
@@ -399,6 +480,19 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = parse_body(c, cJSON_GetArrayItem(bodies, i), w, &s->bodies[i]))) return st;
   }
 
+  const cJSON *obs = cJSON_GetObjectItemCaseSensitive(root, "obstacles");
+  if (obs) {
+    if (!cJSON_IsArray(obs)) return fail(c, "obstacles", "must be an array");
+    s->n_obstacles = cJSON_GetArraySize(obs);
+    s->obstacles = calloc((size_t)(s->n_obstacles ? s->n_obstacles : 1), sizeof(bs_scene_obstacle));
+    if (!s->obstacles) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+    for (int i = 0; i < s->n_obstacles; i++) {
+      char w[64];
+      snprintf(w, sizeof w, "obstacles.%d", i);
+      if ((st = parse_obstacle(c, cJSON_GetArrayItem(obs, i), w, &s->obstacles[i]))) return st;
+    }
+  }
+
   s->vtu_every = 1;
   s->stats_csv = 1;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
@@ -480,6 +574,12 @@ void bs_scene_destroy(bs_scene **ps) {
     free(b->scripts);
   }
   free(s->bodies);
+  for (int i = 0; i < s->n_obstacles; i++) {
+    free(s->obstacles[i].key_t);
+    free(s->obstacles[i].key_translate);
+    free(s->obstacles[i].key_rotate);
+  }
+  free(s->obstacles);
   free(s);
   *ps = NULL;
 }
@@ -527,6 +627,30 @@ int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scen
   }
   cJSON_Delete(root);
   if (st) {
+    bs_scene_destroy(&s);
+    return st;
+  }
+  /* resolve grid files relative to the scene file's folder when not found as given */
+  for (int i = 0; i < s->n_obstacles; i++) {
+    bs_scene_obstacle *o = &s->obstacles[i];
+    if (!o->grid_file[0]) continue;
+    FILE *gf = fopen(o->grid_file, "rb");
+    if (gf) {
+      fclose(gf);
+      continue;
+    }
+    const char *slash = strrchr(path, '/');
+    if (slash && o->grid_file[0] != '/') {
+      char alt[2048];
+      snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - path), path, o->grid_file);
+      gf = fopen(alt, "rb");
+      if (gf) {
+        fclose(gf);
+        snprintf(o->grid_file, sizeof o->grid_file, "%s", alt);
+        continue;
+      }
+    }
+    st = bs_error_set(err, BS_EIO, "%s: obstacles.%d.file: cannot open grid level-set file '%s'", path, i, o->grid_file);
     bs_scene_destroy(&s);
     return st;
   }

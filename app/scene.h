@@ -57,6 +57,22 @@ typedef struct bs_scene_body {
   bs_scene_script *scripts;
 } bs_scene_body;
 
+/* An obstacle: a level set (analytic shape, optionally sampled onto a grid or
+ * loaded from a grid file), how it collides, and its motion. */
+typedef struct bs_scene_obstacle {
+  char shape[32];          /* plane, sphere, box, cylinder, torus, grid        */
+  double normal[3], offset;            /* plane                                */
+  double center[3], radius, half_extents[3], axis[3], half_height, major, minor;
+  int inside_out;
+  char grid_file[1024];    /* shape "grid": a grid level-set file             */
+  double grid_h;           /* > 0: sample the analytic shape onto a grid       */
+  char collision[32];      /* constraint, penalty, postprocess                */
+  double stiffness, friction;
+  double velocity[3], angular_velocity[3];
+  int n_keys;
+  double *key_t, *key_translate, *key_rotate; /* rotate in degrees (axis-angle) */
+} bs_scene_obstacle;
+
 typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
 
 typedef struct bs_scene {
@@ -72,6 +88,8 @@ typedef struct bs_scene {
   double drag;
   int n_bodies;
   bs_scene_body *bodies;
+  int n_obstacles;
+  bs_scene_obstacle *obstacles;
   char out_dir[1024];      /* "" : no output                                   */
   int vtu_every;           /* frames between VTU files (0: none)               */
   int stats_csv;

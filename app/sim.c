@@ -4,13 +4,16 @@
 #include <string.h>
 
 #include "app.h"
+#include "bs_penalty.h"
 #include "sim.h"
 
 void bs_sim_destroy(bs_sim **ps) {
   if (!ps || !*ps) return;
   bs_sim *s = *ps;
   bs_integrator_destroy(&s->integrator);
-  for (int i = 0; i < s->n_terms; i++) bs_term_destroy(&s->terms[i]);
+  for (int i = 0; i < s->n_terms; i++)
+    if (!bs_term_is_penalty(s->terms[i])) bs_term_destroy(&s->terms[i]);
+  bs_obstacles_destroy(&s->obstacles);
   bs_fem_destroy(&s->fem);
   for (int i = 0; i < s->n_scripts; i++) free(s->scripts[i].vertices);
   free(s->scripts);
@@ -77,6 +80,78 @@ static void script_positions(double t, double *x, void *ctx) {
       for (int k = 0; k < 3; k++) x[3 * v + k] = s->x0[3 * v + k] + off[k];
     }
   }
+}
+
+void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth) {
+  *count = 0;
+  *max_depth = 0;
+  if (s->obstacles) bs_obstacles_penetration(s->obstacles, s->time, s->x, count, max_depth);
+}
+
+/* The scene's obstacles: level sets, their motion, the collision way. */
+static int make_obstacles(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  int st = bs_obstacles_create(s->fem, &s->step, s->mask, &s->obstacles, err);
+  if (st) return st;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (int32_t v = 0; v < s->mesh->n_vertices; v++)
+    for (int k = 0; k < 3; k++) {
+      lo[k] = fmin(lo[k], s->x0[3 * v + k]);
+      hi[k] = fmax(hi[k], s->x0[3 * v + k]);
+    }
+  double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  for (int i = 0; i < sc->n_obstacles; i++) {
+    const bs_scene_obstacle *o = &sc->obstacles[i];
+    bs_levelset *ls = NULL;
+    if (!strcmp(o->shape, "plane")) st = bs_levelset_create_halfspace(o->normal, o->offset, &ls, err);
+    else if (!strcmp(o->shape, "sphere")) st = bs_levelset_create_sphere(o->center, o->radius, &ls, err);
+    else if (!strcmp(o->shape, "box")) st = bs_levelset_create_box(o->center, o->half_extents, &ls, err);
+    else if (!strcmp(o->shape, "cylinder"))
+      st = bs_levelset_create_cylinder(o->center, o->axis, o->radius, o->half_height, &ls, err);
+    else if (!strcmp(o->shape, "torus")) st = bs_levelset_create_torus(o->center, o->axis, o->major, o->minor, &ls, err);
+    else st = bs_levelset_grid_load(o->grid_file, &ls, err);
+    if (!st && o->inside_out) bs_levelset_set_complement(ls, 1);
+    if (!st && (o->velocity[0] || o->velocity[1] || o->velocity[2] || o->angular_velocity[0] ||
+                o->angular_velocity[1] || o->angular_velocity[2]))
+      st = bs_levelset_set_velocity(ls, o->velocity, o->angular_velocity, err);
+    if (!st && o->n_keys > 0) {
+      double *rot = malloc(sizeof(double) * 3 * (size_t)o->n_keys);
+      if (!rot) st = bs_error_set(err, BS_ENOMEM, "out of memory");
+      for (int k = 0; !st && k < 3 * o->n_keys; k++) rot[k] = o->key_rotate[k] * M_PI / 180.0;
+      if (!st) st = bs_levelset_set_keyframes(ls, o->n_keys, o->key_t, o->key_translate, rot, err);
+      free(rot);
+    }
+    if (!st && o->grid_h > 0 && strcmp(o->shape, "grid")) {
+      /* sample the analytic shape onto a grid around the bodies (one diagonal of margin) */
+      double glo[3], ghi[3];
+      for (int k = 0; k < 3; k++) {
+        glo[k] = lo[k] - diag;
+        ghi[k] = hi[k] + diag;
+      }
+      bs_levelset *g = NULL;
+      st = bs_levelset_grid_sample(ls, 0.0, glo, ghi, o->grid_h, &g, err);
+      bs_levelset_destroy(&ls);
+      ls = g;
+    }
+    if (st) {
+      bs_levelset_destroy(&ls);
+      bs_error_prefix(err, "%s: obstacles.%d", sc->path, i);
+      return st;
+    }
+    bs_collide_mode mode;
+    if ((st = bs_collide_mode_parse(o->collision, &mode, err)) ||
+        (st = bs_obstacles_add(s->obstacles, ls, mode, o->stiffness, o->friction, err))) {
+      bs_error_prefix(err, "%s: obstacles.%d", sc->path, i);
+      return st;
+    }
+  }
+  bs_term *const *pt = NULL;
+  int np = bs_obstacles_terms(s->obstacles, &pt);
+  if (s->n_terms + np > (int)(sizeof s->terms / sizeof s->terms[0]))
+    return bs_error_set(err, BS_EINPUT, "%s: too many penalty obstacles (%d)", sc->path, np);
+  for (int i = 0; i < np; i++) s->terms[s->n_terms++] = pt[i];
+  return 0;
 }
 
 /* Appends mesh b into the arrays of the merged mesh. */
@@ -274,9 +349,15 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
     if (sc->drag > 0 && sc->mode == BS_MODE_DYNAMIC &&
         (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err)))
       goto done;
+    if (sc->n_obstacles > 0 && (st = make_obstacles(s, err))) goto done;
     if ((st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
                                    s->n_scripts ? script_positions : NULL, s, &sc->solver, &s->integrator, err)))
       goto done;
+    if (s->obstacles) {
+      bs_step_hooks hooks;
+      bs_obstacles_hooks(s->obstacles, &hooks);
+      bs_integrator_set_hooks(s->integrator, &hooks);
+    }
   }
   st = 0;
 done:

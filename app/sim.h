@@ -10,6 +10,7 @@
 
 #include "bs_fem.h"
 #include "bs_mesh.h"
+#include "bs_obstacles.h"
 #include "bs_step.h"
 #include "bs_terms.h"
 #include "scene.h"
@@ -33,7 +34,8 @@ typedef struct bs_sim {
   int32_t *tet_material;
   bs_fem *fem;
   int n_terms;
-  bs_term *terms[8];
+  bs_term *terms[64];      /* the scene's terms (penalty terms are the obstacles') */
+  bs_obstacles *obstacles; /* NULL when the scene has none                  */
   bs_step_data step;    /* filled by the integrator each step */
   bs_integrator *integrator;
   double time;
@@ -41,5 +43,8 @@ typedef struct bs_sim {
 
 int bs_sim_create(const bs_scene *scene, bs_sim **out, bs_error *err);
 void bs_sim_destroy(bs_sim **s);
+
+/* Vertices inside obstacles at the current state, and the largest depth (m). */
+void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
 
 #endif
