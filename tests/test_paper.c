@@ -107,3 +107,18 @@ Test(paper, point_cube_recovers, .timeout = 600) {
   recover("point_cube", "1e7", 2, 1);
   recover("point_cube", "1e5", 20, 20);
 }
+
+/* beam_sag: the static solve and the dynamic form converge in every step. */
+Test(paper, beam_sag_static_and_dynamic_converge, .timeout = 600) {
+  char *out = NULL;
+  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR "/data/scenes/beam_sag.json --quiet --set output.dir=", &out);
+  cr_expect_eq(rc, 0, "%s", out);
+  cr_expect_eq(failed_steps(out, "optimization"), 0, "%s", out);
+  free(out);
+  rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR
+                   "/data/scenes/beam_sag.json --quiet --frames 6 --set solver.mode=dynamic --set output.dir=",
+                   &out);
+  cr_expect_eq(rc, 0, "%s", out);
+  cr_expect_eq(failed_steps(out, "optimization"), 0, "%s", out);
+  free(out);
+}
