@@ -13,6 +13,7 @@ static const char *main_help =
     "\n"
     "commands:\n"
     "  run SCENE                          simulate a scene (JSON) and report per frame\n"
+    "  study SCENE --vary KEY=v1,v2,...   measure speed against accuracy over settings\n"
     "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
@@ -34,6 +35,7 @@ int main(int argc, char **argv) {
   }
   if (!strcmp(cmd, "mesh")) return bs_cmd_mesh(argc - 1, argv + 1);
   if (!strcmp(cmd, "run")) return bs_cmd_run(argc - 1, argv + 1);
+  if (!strcmp(cmd, "study")) return bs_cmd_study(argc - 1, argv + 1);
   fprintf(stderr, "bigstep: unknown command '%s' (see 'bigstep --help')\n", cmd);
   return BS_EXIT_USAGE;
 }
