@@ -1,0 +1,171 @@
+/* bs_selfcollide.h — penalty self-collisions (paper section 5.3) as an energy
+ * term (bs_terms.h), and self-contact friction applied after the solve.
+ *
+ * Detection at a configuration x (every evaluation of the term):
+ *  - a surface vertex p (a vertex of a boundary triangle) collides when it
+ *    lies in a closed tet that does not have p as a vertex (exact test,
+ *    bs_shim_point_in_tet >= 0). Tets are found through a bounding-volume
+ *    hierarchy over tet boxes: its topology is built at creation and rebuilt
+ *    at each begin_step (at xⁿ), its boxes are refit at every evaluation;
+ *  - the primitive of a colliding p is the feature (triangle interior, edge
+ *    or vertex) of the closest boundary triangle that does not have p as a
+ *    vertex. The search starts from the distance to the triangle p collided
+ *    with last (hint) or, for a new collision, to the triangle closest in the
+ *    rest shape to p's rest-shape image (barycentric in the tet it is in),
+ *    and gathers every triangle within that distance from the AABB tree of
+ *    the boundary at x (bs_shim_tree_within); the radius doubles when no
+ *    admissible triangle is within it. The result is the exact minimum over
+ *    admissible triangles (ties: the smallest triangle index), whatever the
+ *    start: the hint only makes the search faster.
+ *
+ * Energy per colliding vertex: Phi = k d sqrt(d + eps), eps = 1e-15 m^2,
+ * d = squared distance from p to its primitive, differentiated exactly with
+ * respect to p and the 1, 2 or 3 primitive vertices in the primitive's region:
+ *   vertex a:       d = |u|^2,                          u = p - a;
+ *   edge (a, b):    d = |u|^2 - (u.e)^2/(e.e),           e = b - a;
+ *   face (a, b, c): d = (u.n)^2/(n.n),                  n = (b - a) x (c - a).
+ * With psi(d) = d sqrt(d + eps): grad Phi = k psi'(d) grad d,
+ * Hess Phi = k (psi''(d) grad d grad d^T + psi'(d) Hess d). Phi ~ k depth^3.
+ *
+ * Choice within a Newton solve: the colliding set and the primitives are
+ * re-detected at every evaluation (value, gradient, Hessian), as in the
+ * paper, so E, grad E and H describe one function. That function is
+ * continuous wherever the colliding set changes at d = 0 (a vertex crossing
+ * the surface it is closest to), because the primitive is the exact closest
+ * admissible one (a minimum of continuous distances). It can jump when a
+ * vertex enters a tet at a positive distance from the admissible surface
+ * (e.g. a tet of its own body through an inversion, or a thin part); this is
+ * inherent to the paper's point-in-tet detection. The term is "expensive"
+ * (section 3.3): the line search may skip it when the other terms already
+ * exceed E(x_i).
+ *
+ * Hessian blocks: a colliding vertex couples with its primitive's vertices,
+ * which need not share a tet with it, so block (p, q) may be missing from the
+ * fem's pattern (which the minimizer's matrix copies). bs_term hessian adds
+ * every block that exists (diagonal blocks always) and counts the missing
+ * ones (stats.missing_blocks); bs_term_self_missing_blocks returns them at x,
+ * and bs_self_coupling_pairs lists the vertex pairs a collision within a
+ * distance margin may couple, so that a pattern can be built with them.
+ *
+ * Friction (section 5.3): for each colliding p with primitive vertices n_i
+ * and closest-point barycentric weights w_i (w_0 = -1 for p), force f =
+ * -dPhi/dp on p with normal n = f/|f|, Q = I - n n^T, relative velocity
+ * vbar = sum w_i v_i, mbar^-1 = sum w_i^2 m_i^-1: the impulse j = -mbar Q vbar
+ * (which minimizes the kinetic energy over tangential impulses) is clipped to
+ * length mu |f| dt (the force's impulse over the step; the paper writes mu
+ * |f|) and applied as v_i += w_i m_i^-1 j'. Contacts are processed one after
+ * the other in vertex order; each one lowers (never raises) the kinetic
+ * energy and conserves linear momentum. Positions are never touched.
+ *
+ * Units: k in J/m^3 (N/m^2), d in m^2, energy in J, margin and depths in m,
+ * mu dimensionless, dt in s, v in m/s.
+ *
+ * Threads: detection and the closest-primitive searches run in OpenMP over
+ * surface vertices (independent results); sums and scatters are sequential
+ * in vertex order, so results do not depend on the thread count. One term is
+ * evaluated by one thread at a time.
+ *
+ * Ownership: the term (free with bs_term_destroy) keeps pointers to the fem
+ * (and its mesh) and the step data, which must outlive it. It owns its
+ * hierarchies and buffers, all sized at creation: evaluation allocates
+ * nothing.
+ *
+ * Status: 0; BS_EINPUT for bad arguments (named: k, margin, mu, dt, a term
+ * that is not a self-collision term, a mesh with no boundary); BS_ENUMERIC for
+ * a non-finite coordinate (names the vertex); BS_ENOMEM.
+ */
+#ifndef BS_SELFCOLLIDE_H
+#define BS_SELFCOLLIDE_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+#include "bs_fem.h"
+#include "bs_terms.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_SELF_EPS 1e-15 /* eps in Phi = k d sqrt(d + eps), m^2 */
+
+/* The self-collision term over all boundary vertices of fem->mesh; k finite
+ * > 0. step may be NULL (then begin_step does not rebuild the hierarchy). */
+int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err);
+
+/* 1 if t was made by bs_term_self_create, else 0. */
+int bs_term_is_self(const bs_term *t);
+
+typedef struct bs_self_stats {
+  int32_t colliding;      /* colliding vertices at the last evaluation          */
+  double max_depth;       /* largest distance to the primitive then (m)         */
+  int64_t missing_blocks; /* coupling blocks the last Hessian could not store   */
+  int64_t evaluations;    /* evaluations since creation or the last reset       */
+  int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step)          */
+  double t_rebuild;       /* seconds: hierarchy topology rebuilds               */
+  double t_refit;         /* seconds: box refits                                */
+  double t_detect;        /* seconds: point-in-tet detection                    */
+  double t_closest;       /* seconds: tree update and closest primitives        */
+} bs_self_stats;
+
+/* Statistics (cumulative since creation or reset, plus the last evaluation). */
+int bs_term_self_stats(const bs_term *t, bs_self_stats *out, bs_error *err);
+void bs_term_self_reset_stats(bs_term *t);
+
+/* Detects at x: the number of colliding vertices and the largest distance to
+ * their primitives (either output may be NULL). Updates the last-evaluation
+ * fields of the stats. */
+int bs_term_self_detect(bs_term *t, const double *x, int32_t *count, double *max_depth, bs_error *err);
+
+/* The Hessian blocks (i, j), i != j, that the self-collision Hessian at x has
+ * and the fem's pattern lacks: pairs[2 s], pairs[2 s + 1] and the row-major
+ * block blocks[9 s .. 9 s + 8] for entry s. Both (i, j) and (j, i) are
+ * listed; a pair coupled by several collisions appears once per collision
+ * (sum them). Writes at most cap entries (pairs, blocks may be NULL when cap
+ * is 0); *count receives the total, which may exceed cap. */
+int bs_term_self_missing_blocks(bs_term *t, const double *x, int64_t cap, int32_t *pairs, double *blocks,
+                                int64_t *count, bs_error *err);
+
+/* Friction after the solve (see the top of this file) at x = xⁿ⁺¹: v (3 per
+ * vertex) is updated in place. mask (n_vertices bytes, 1 free, 0 fixed; NULL:
+ * all free): fixed vertices act as infinitely heavy (their v is unchanged).
+ * mu >= 0 and dt > 0 finite. n_contacts (may be NULL) receives the number of
+ * contacts that received an impulse. */
+int bs_self_friction(bs_term *t, const double *x, double mu, double dt, const uint8_t *mask, double *v,
+                     int32_t *n_contacts, bs_error *err);
+
+/* Vertex pairs (i < j), sorted and unique, that self-collision at x (NULL:
+ * rest positions) within distance margin >= 0 may couple and that the fem's
+ * pattern lacks: i a boundary vertex, j a vertex of a boundary triangle
+ * within margin of x_i that does not have i as a vertex. *pairs (2 per pair)
+ * is malloc'ed (free with free(); NULL when there are none). */
+int bs_self_coupling_pairs(const bs_fem *fem, const double *x, double margin, int32_t **pairs, int64_t *n_pairs,
+                           bs_error *err);
+
+/* ---- kernels (exposed for tests and reuse) --------------------------- */
+
+/* Features of a closest point on a triangle (a, b, c). */
+enum { BS_SELF_FACE = 0, BS_SELF_EDGE = 1, BS_SELF_VERTEX = 2 };
+
+/* Closest point of the closed triangle (a, b, c) to p: returns its squared
+ * distance, its barycentric weights w (exactly 0 off the feature), the
+ * feature kind and the feature's vertices as local indices 0..2 (loc[0..nv),
+ * nv = 3, 2, 1 for face, edge, vertex), the weights of those in wf. A
+ * degenerate (collinear) triangle is treated through its edges. */
+double bs_self_closest_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
+                                double w[3], int *feature, int *nv, int loc[3], double wf[3]);
+
+/* Squared distance d from p to a primitive in its region's formula (above):
+ * y = (p, then the nv = 1, 2 or 3 primitive vertices), 3 (nv + 1) doubles.
+ * Gradient g (3 (nv + 1)) and Hessian H ((3 (nv + 1))^2, row-major) are
+ * OVERWRITTEN when non-NULL. */
+double bs_self_sqdist(int nv, const double *y, double *g, double *H);
+
+/* Phi = k d sqrt(d + eps) for the same y, with gradient and Hessian
+ * (overwritten when non-NULL). */
+double bs_self_pair_energy(int nv, const double *y, double k, double *g, double *H);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
