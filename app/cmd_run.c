@@ -9,6 +9,7 @@
 
 #include "app.h"
 #include "scene.h"
+#include "bs_shim.h"
 #include "sim.h"
 
 static const char *run_help =
@@ -87,6 +88,18 @@ static void frame_energies(const bs_sim *s, double *kin, double *ela, double *gr
   *ela = bs_fem_elastic_energy(fem, s->x);
 }
 
+/* Pairs of boundary triangles that intersect at the current state (exact,
+ * CGAL); -1 if the test could not run. */
+static int64_t surface_self_intersections(const bs_sim *s) {
+  int32_t *pairs = NULL;
+  int64_t n = 0;
+  bs_error err;
+  if (bs_shim_self_intersections(s->x, s->mesh->n_vertices, s->mesh->faces, s->mesh->n_faces, &pairs, &n, &err))
+    return -1;
+  bs_shim_free(pairs);
+  return n;
+}
+
 static void write_frame_row(FILE *f, const bs_sim *s, int frame, long it, long cg, long failed, double secs) {
   if (!f) return;
   double kin, ela, grav, mn;
@@ -94,8 +107,9 @@ static void write_frame_row(FILE *f, const bs_sim *s, int frame, long it, long c
   int32_t inv = bs_fem_count_inverted(s->fem, s->x, &mn), pen;
   double depth;
   bs_sim_penetration(s, &pen, &depth);
-  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e\n", frame, s->time, kin, ela, grav,
-          kin + ela + grav, inv, mn, it, cg, failed, secs, pen, depth);
+  int64_t si = surface_self_intersections(s);
+  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", frame, s->time, kin, ela,
+          grav, kin + ela + grav, inv, mn, it, cg, failed, secs, pen, depth, (long long)si);
   fflush(f);
 }
 
@@ -234,7 +248,7 @@ int bs_cmd_run(int argc, char **argv) {
         goto out_files;
       }
       fprintf(fcsv, "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds,"
-                    "penetrating,max_depth\n");
+                    "penetrating,max_depth,self_intersections\n");
       if (sc->states) {
         snprintf(p, sizeof p, "%s/state.bin", dir);
         state = fopen(p, "wb");
@@ -339,12 +353,17 @@ int bs_cmd_run(int argc, char **argv) {
     len += snprintf(summary + len, sizeof summary - (size_t)len, "%-13s %6d %10.4f %9ld %11.2f %8ld %9.2e %9d\n",
                     method, sc->steps_per_frame, wall / frames, dofs, T.steps ? (double)T.iterations / T.steps : 0.0,
                     T.failed, T.max_grad, inv);
-    if (s->obstacles) {
+    {
       int32_t pen;
       double depth;
       bs_sim_penetration(s, &pen, &depth);
       len += snprintf(summary + len, sizeof summary - (size_t)len,
-                      "at the last frame: %d vertices inside obstacles, max depth %.3e m\n", pen, depth);
+                      "at the last frame: %d inverted tets, %lld intersecting surface triangle pairs", inv,
+                      (long long)surface_self_intersections(s));
+      if (s->obstacles)
+        len += snprintf(summary + len, sizeof summary - (size_t)len, ", %d vertices inside obstacles (max depth %.3e m)",
+                        pen, depth);
+      len += snprintf(summary + len, sizeof summary - (size_t)len, "\n");
     }
     snprintf(summary + len, sizeof summary - (size_t)len,
              "solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG "

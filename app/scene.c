@@ -393,8 +393,19 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
                                      "self_collision", "description", NULL};
   int st;
   if ((st = check_keys(c, root, "", keys))) return st;
-  if (cJSON_HasObjectItem(root, "self_collision"))
-    return fail(c, "self_collision", "self-collisions are not part of this build of bigstep yet");
+  const cJSON *sc = cJSON_GetObjectItemCaseSensitive(root, "self_collision");
+  if (sc) {
+    static const char *const sk[] = {"stiffness", "friction", NULL};
+    if ((st = check_keys(c, sc, "self_collision", sk))) return st;
+    s->self_collision = 1;
+    s->self_stiffness = 1e5;
+    s->self_friction = 0;
+    if ((st = get_num(c, sc, "self_collision", "stiffness", 0, &s->self_stiffness)) ||
+        (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
+      return st;
+    if (!(s->self_stiffness > 0)) return fail(c, "self_collision.stiffness", "must be > 0, got %g", s->self_stiffness);
+    if (!(s->self_friction >= 0)) return fail(c, "self_collision.friction", "must be >= 0, got %g", s->self_friction);
+  }
   const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
   if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
 

@@ -90,6 +90,8 @@ typedef struct bs_scene {
   bs_scene_body *bodies;
   int n_obstacles;
   bs_scene_obstacle *obstacles;
+  int self_collision;      /* penalty self-collisions (section 5.3)             */
+  double self_stiffness, self_friction;
   char out_dir[1024];      /* "" : no output                                   */
   int vtu_every;           /* frames between VTU files (0: none)               */
   int stats_csv;

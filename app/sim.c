@@ -5,6 +5,7 @@
 
 #include "app.h"
 #include "bs_penalty.h"
+#include "bs_selfcollide.h"
 #include "sim.h"
 
 void bs_sim_destroy(bs_sim **ps) {
@@ -80,6 +81,44 @@ static void script_positions(double t, double *x, void *ctx) {
       for (int k = 0; k < 3; k++) x[3 * v + k] = s->x0[3 * v + k] + off[k];
     }
   }
+}
+
+/* With self-collision, the hooks go through the sim so that post_solve can
+ * apply the obstacles' friction and then self-contact friction. */
+static void sim_project(double *x, void *ctx) {
+  bs_sim *s = ctx;
+  s->obstacle_hooks.project(x, s->obstacle_hooks.ctx);
+}
+static void sim_register_active(const double *x, const double *g, void *ctx) {
+  bs_sim *s = ctx;
+  s->obstacle_hooks.register_active(x, g, s->obstacle_hooks.ctx);
+}
+static void sim_project_gradient(const double *x, double *g, void *ctx) {
+  bs_sim *s = ctx;
+  s->obstacle_hooks.project_gradient(x, g, s->obstacle_hooks.ctx);
+}
+static void sim_project_hessian(const double *x, const double *g, bs_bsr *H, void *ctx) {
+  bs_sim *s = ctx;
+  s->obstacle_hooks.project_hessian(x, g, H, s->obstacle_hooks.ctx);
+}
+static int sim_post_solve(const double *x_n, double *x, const double *g, double *v, double dt, void *ctx,
+                          bs_error *err) {
+  bs_sim *s = ctx;
+  int st = 0;
+  if (s->obstacle_hooks.post_solve && (st = s->obstacle_hooks.post_solve(x_n, x, g, v, dt, s->obstacle_hooks.ctx, err)))
+    return st;
+  if (s->scene->self_friction > 0) {
+    int32_t n = 0;
+    st = bs_self_friction(s->self, x, s->scene->self_friction, dt, s->mask, v, &n, err);
+  }
+  return st;
+}
+
+void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth) {
+  *count = 0;
+  *max_depth = 0;
+  bs_error err;
+  if (s->self) bs_term_self_detect(s->self, s->x, count, max_depth, &err);
 }
 
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth) {
@@ -350,14 +389,26 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
         (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err)))
       goto done;
     if (sc->n_obstacles > 0 && (st = make_obstacles(s, err))) goto done;
+    if (sc->self_collision) {
+      if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err))) goto done;
+      s->terms[s->n_terms++] = s->self;
+    }
     if ((st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
                                    s->n_scripts ? script_positions : NULL, s, &sc->solver, &s->integrator, err)))
       goto done;
-    if (s->obstacles) {
-      bs_step_hooks hooks;
-      bs_obstacles_hooks(s->obstacles, &hooks);
-      bs_integrator_set_hooks(s->integrator, &hooks);
+    bs_step_hooks hooks;
+    memset(&hooks, 0, sizeof hooks);
+    if (s->obstacles) bs_obstacles_hooks(s->obstacles, &s->obstacle_hooks);
+    hooks = s->obstacle_hooks;
+    if (s->self) { /* friction of both kinds after the solve */
+      hooks.post_solve = sim_post_solve;
+      hooks.ctx = s;
+      if (s->obstacle_hooks.project) hooks.project = sim_project;
+      if (s->obstacle_hooks.register_active) hooks.register_active = sim_register_active;
+      if (s->obstacle_hooks.project_gradient) hooks.project_gradient = sim_project_gradient;
+      if (s->obstacle_hooks.project_hessian) hooks.project_hessian = sim_project_hessian;
     }
+    bs_integrator_set_hooks(s->integrator, &hooks);
   }
   st = 0;
 done:

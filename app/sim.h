@@ -36,6 +36,8 @@ typedef struct bs_sim {
   int n_terms;
   bs_term *terms[64];      /* the scene's terms (penalty terms are the obstacles') */
   bs_obstacles *obstacles; /* NULL when the scene has none                  */
+  bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
+  bs_step_hooks obstacle_hooks;
   bs_step_data step;    /* filled by the integrator each step */
   bs_integrator *integrator;
   double time;
@@ -46,5 +48,8 @@ void bs_sim_destroy(bs_sim **s);
 
 /* Vertices inside obstacles at the current state, and the largest depth (m). */
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
+
+/* Self-colliding vertices at the current state and the largest depth (m). */
+void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth);
 
 #endif
