@@ -266,6 +266,8 @@ int bs_cmd_run(int argc, char **argv) {
     times = calloc((size_t)sc->frames + 2, sizeof(double));
   }
   run_totals T = {0};
+  int first_fail_frame = 0, first_fail_step = 0;
+  char first_fail_reason[512] = "";
   double t_wall = bs_seconds();
   write_frame_row(fcsv, s, 0, 0, 0, 0, 0.0);
   write_state(state, s);
@@ -288,7 +290,7 @@ int bs_cmd_run(int argc, char **argv) {
       printf("static: %s after %d iterations (%d CG), |grad E| %.3e, E %.6e, %d inverted tets, %.3f s\n",
              st.failed ? "FAILED" : "converged", st.min.iterations, st.min.cg_iterations, st.min.grad_norm, st.min.E,
              inv, st.seconds);
-    if (st.failed) fprintf(stderr, "bigstep run: static solve failed: %s\n", st.min.reason_text);
+    if (st.failed) snprintf(first_fail_reason, sizeof first_fail_reason, "%s", st.min.reason_text ? st.min.reason_text : "?");
     write_frame_row(fcsv, s, 1, st.min.iterations, st.min.cg_iterations, st.failed, st.seconds);
     write_state(state, s);
     if (dir && sc->vtu_every > 0 && write_frame(s, dir, 1, names, times, &n_out, &err)) {
@@ -307,6 +309,11 @@ int bs_cmd_run(int argc, char **argv) {
           goto out_files;
         }
         s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
+        if (st.failed && !T.failed) {
+          first_fail_frame = f;
+          first_fail_step = k;
+          snprintf(first_fail_reason, sizeof first_fail_reason, "%s", st.min.reason_text ? st.min.reason_text : "?");
+        }
         add_stats(&T, &st);
         it += st.min.iterations;
         cg += st.min.cg_iterations;
@@ -381,7 +388,8 @@ int bs_cmd_run(int argc, char **argv) {
       }
     }
     if (T.failed) {
-      fprintf(stderr, "bigstep run: %ld of %ld steps did not converge\n", T.failed, T.steps);
+      fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
+              T.steps, first_fail_frame, first_fail_step, first_fail_reason);
       rc = BS_EXIT_FAIL;
     }
   }
