@@ -35,5 +35,7 @@ int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err);
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);
 int bs_cmd_study(int argc, char **argv);
+int bs_cmd_check(int argc, char **argv);
+int bs_cmd_levelset(int argc, char **argv);
 
 #endif

@@ -9,14 +9,19 @@
  *  - surface self-intersections: the boundary triangles of that rest mesh,
  *    placed at the current positions, tested pairwise with exact predicates
  *    (bs_shim_self_intersections; degenerate triangles count as a pair);
- *  - vertices inside obstacles (with --scene): this build has no obstacles in
- *    its scenes, so --scene is refused with a message saying so.
+ *  - vertices inside obstacles (with --scene): the scene is built as
+ *    `bigstep run` builds it; the file's points must be its mesh's vertices
+ *    (same count, and rest = x - displacement equal to the scene's rest shape
+ *    up to 1e-9 of its size), then bs_sim_penetration counts the free
+ *    vertices inside some obstacle at the frame's time (the PVD's timestep,
+ *    else frame N / fps) and the largest depth -phi.
  * A folder is read as its frame_NNNNN.vtu files in frame order, or, when it
  * holds none, as the files its frames.pvd lists. Exit status: 0 clean, 1 when
  * anything was found or a file could not be read (the message names it),
  * 2 on a usage error. */
 #include <dirent.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,6 +30,8 @@
 #include "app.h"
 #include "bs_shim.h"
 #include "bs_vtu_read.h"
+#include "scene.h"
+#include "sim.h"
 
 static const char *check_help =
     "usage: bigstep check OUTPUT_DIR|FILE.vtu|FILE.pvd [--scene SCENE] [--quiet]\n"
@@ -184,6 +191,8 @@ typedef struct audit {
   int32_t n_tets;
   int32_t inverted;
   int64_t self_pairs;
+  int32_t penetrating; /* with a scene */
+  double max_depth;
 } audit;
 
 /* The rest mesh of the previous frame, reused while the connectivity and the
@@ -240,7 +249,38 @@ static int cache_mesh(const bs_vtu *v, double *rest, const char *path, mesh_cach
   return BS_OK;
 }
 
-static int audit_frame(const char *path, mesh_cache *c, double **xc_buf, size_t *xc_cap, audit *a, bs_error *err) {
+/* Vertices inside the scene's obstacles at time t for the file's positions. */
+static int audit_obstacles(const bs_vtu *v, const double *rest, const char *path, double t, bs_sim *s, audit *a,
+                           bs_error *err) {
+  const bs_mesh *m = s->mesh;
+  if (v->n_points != m->n_vertices)
+    return bs_error_set(err, BS_EINPUT, "'%s' has %d points but the scene's mesh has %d vertices: not a state of this scene",
+                        path, v->n_points, m->n_vertices);
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (int32_t i = 0; i < m->n_vertices; i++)
+    for (int k = 0; k < 3; k++) {
+      double r = m->x[3 * (size_t)i + k];
+      if (r < lo[k]) lo[k] = r;
+      if (r > hi[k]) hi[k] = r;
+    }
+  double size = 0;
+  for (int k = 0; k < 3; k++) size = hi[k] - lo[k] > size ? hi[k] - lo[k] : size;
+  for (int32_t i = 0; i < m->n_vertices; i++)
+    for (int k = 0; k < 3; k++)
+      if (fabs(rest[3 * (size_t)i + k] - m->x[3 * (size_t)i + k]) > 1e-9 * size)
+        return bs_error_set(err, BS_EINPUT,
+                            "'%s': point %d rests at (%g, %g, %g) but the scene's vertex %d rests at (%g, %g, %g): "
+                            "not a state of this scene",
+                            path, i, rest[3 * (size_t)i], rest[3 * (size_t)i + 1], rest[3 * (size_t)i + 2], i,
+                            m->x[3 * (size_t)i], m->x[3 * (size_t)i + 1], m->x[3 * (size_t)i + 2]);
+  memcpy(s->x, v->x, 3 * (size_t)m->n_vertices * sizeof(double));
+  s->time = t;
+  bs_sim_penetration(s, &a->penetrating, &a->max_depth);
+  return BS_OK;
+}
+
+static int audit_frame(const char *path, double t, bs_sim *sim, mesh_cache *c, double **xc_buf, size_t *xc_cap,
+                       audit *a, bs_error *err) {
   bs_vtu *v = NULL;
   int rc = bs_vtu_read(path, &v, err);
   if (rc) return rc;
@@ -253,7 +293,7 @@ static int audit_frame(const char *path, mesh_cache *c, double **xc_buf, size_t 
     bs_vtu_destroy(&v);
     return bs_error_set(err, BS_ENOMEM, "'%s': out of memory", path);
   }
-  if ((rc = bs_vtu_rest(v, path, rest, err))) {
+  if ((rc = bs_vtu_rest(v, path, rest, err)) || (sim && (rc = audit_obstacles(v, rest, path, t, sim, a, err)))) {
     free(rest);
     bs_vtu_destroy(&v);
     return rc;
@@ -328,10 +368,6 @@ int bs_cmd_check(int argc, char **argv) {
     }
   }
   if (!target) return bs_app_usage_error("check", "missing OUTPUT_DIR or FILE.vtu");
-  if (scene) {
-    fprintf(stderr, "bigstep check: --scene given but this build has no obstacle support (scene '%s')\n", scene);
-    return BS_EXIT_FAIL;
-  }
 
   bs_error err;
   bs_error_clear(&err);
@@ -341,23 +377,38 @@ int bs_cmd_check(int argc, char **argv) {
     list_free(&L);
     return BS_EXIT_FAIL;
   }
+  bs_scene *sc = NULL;
+  bs_sim *sim = NULL;
+  if (scene && (bs_scene_load(scene, 0, NULL, &sc, &err) || bs_sim_create(sc, &sim, &err))) {
+    fprintf(stderr, "bigstep check: %s\n", err.msg);
+    bs_scene_destroy(&sc);
+    list_free(&L);
+    return BS_EXIT_FAIL;
+  }
+  char obst[160];
+  if (!sim) snprintf(obst, sizeof obst, "obstacles not checked (no --scene)");
+  else if (!sim->obstacles) snprintf(obst, sizeof obst, "the scene has no obstacles");
+  else snprintf(obst, sizeof obst, "%d obstacle%s of the scene", bs_obstacles_count(sim->obstacles),
+                bs_obstacles_count(sim->obstacles) == 1 ? "" : "s");
 
   if (!quiet) {
-    printf("bigstep check %s: %d frame%s (%s); obstacles not checked (no --scene)\n", target, L.n,
-           L.n == 1 ? "" : "s", L.origin);
+    printf("bigstep check %s: %d frame%s (%s); %s\n", target, L.n, L.n == 1 ? "" : "s", L.origin, obst);
     printf("%7s %12s %10s %10s %12s %12s %10s  %s\n", "frame", "time", "tets", "inverted", "self_pairs",
            "penetrating", "max_depth", "file");
   }
   mesh_cache cache = {0};
   double *xc = NULL;
   size_t xc_cap = 0;
-  long long tot_inv = 0, tot_pairs = 0;
+  long long tot_inv = 0, tot_pairs = 0, tot_pen = 0;
+  double max_depth = 0;
   int bad_frames = 0, unreadable = 0;
   for (int i = 0; i < L.n; i++) {
     const frame_src *f = &L.f[i];
     audit a = {0};
     bs_error_clear(&err);
-    if (audit_frame(f->path, &cache, &xc, &xc_cap, &a, &err)) {
+    /* the frame's time: the PVD's, else frame N of `bigstep run` at N / fps */
+    double t = f->has_time ? f->time : (sc && sc->mode == BS_MODE_DYNAMIC ? f->number / sc->fps : 0.0);
+    if (audit_frame(f->path, t, sim, &cache, &xc, &xc_cap, &a, &err)) {
       fflush(stdout);
       fprintf(stderr, "bigstep check: %s\n", err.msg);
       fflush(stderr);
@@ -371,24 +422,38 @@ int bs_cmd_check(int argc, char **argv) {
     }
     tot_inv += a.inverted;
     tot_pairs += a.self_pairs;
-    bad_frames += a.inverted > 0 || a.self_pairs > 0;
+    tot_pen += a.penetrating;
+    if (a.max_depth > max_depth) max_depth = a.max_depth;
+    bad_frames += a.inverted > 0 || a.self_pairs > 0 || a.penetrating > 0;
     if (!quiet) {
       char tbuf[32];
       if (f->has_time) snprintf(tbuf, sizeof tbuf, "%.6g", f->time);
       else snprintf(tbuf, sizeof tbuf, "-");
+      char pbuf[32] = "-", dbuf[32] = "-";
+      if (sim) {
+        snprintf(pbuf, sizeof pbuf, "%d", a.penetrating);
+        snprintf(dbuf, sizeof dbuf, "%.3g", a.max_depth);
+      }
       const char *base = strrchr(f->path, '/');
       printf("%7d %12s %10d %10d %12lld %12s %10s  %s\n", f->number, tbuf, a.n_tets, a.inverted,
-             (long long)a.self_pairs, "-", "-", base ? base + 1 : f->path);
+             (long long)a.self_pairs, pbuf, dbuf, base ? base + 1 : f->path);
     }
   }
   cache_free(&cache);
   free(xc);
-  int found = tot_inv > 0 || tot_pairs > 0;
-  printf("total: %d frames, inverted %lld, self-intersecting pairs %lld, penetrating -, max depth -, unreadable %d: ",
-         L.n, tot_inv, tot_pairs, unreadable);
+  int found = tot_inv > 0 || tot_pairs > 0 || tot_pen > 0;
+  char pbuf[32] = "-", dbuf[32] = "-";
+  if (sim) {
+    snprintf(pbuf, sizeof pbuf, "%lld", tot_pen);
+    snprintf(dbuf, sizeof dbuf, "%.3g m", max_depth);
+  }
+  printf("total: %d frames, inverted %lld, self-intersecting pairs %lld, penetrating %s, max depth %s, unreadable %d: ",
+         L.n, tot_inv, tot_pairs, pbuf, dbuf, unreadable);
   if (found) printf("problems in %d frame%s\n", bad_frames, bad_frames == 1 ? "" : "s");
   else if (unreadable) printf("%d file%s could not be audited\n", unreadable, unreadable == 1 ? "" : "s");
   else printf("clean\n");
   list_free(&L);
+  bs_sim_destroy(&sim);
+  bs_scene_destroy(&sc);
   return found || unreadable ? BS_EXIT_FAIL : 0;
 }

@@ -14,7 +14,9 @@ static const char *main_help =
     "commands:\n"
     "  run SCENE                          simulate a scene (JSON) and report per frame\n"
     "  study SCENE --vary KEY=v1,v2,...   measure speed against accuracy over settings\n"
+    "  check DIR|FILE.vtu|FILE.pvd        audit saved states (inverted tets, self-intersections, obstacles)\n"
     "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
+    "  levelset SURFACE OUT               a grid level set (signed distance) from a closed surface\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
     "  bigstep --version        the version\n";
@@ -36,6 +38,8 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "mesh")) return bs_cmd_mesh(argc - 1, argv + 1);
   if (!strcmp(cmd, "run")) return bs_cmd_run(argc - 1, argv + 1);
   if (!strcmp(cmd, "study")) return bs_cmd_study(argc - 1, argv + 1);
+  if (!strcmp(cmd, "check")) return bs_cmd_check(argc - 1, argv + 1);
+  if (!strcmp(cmd, "levelset")) return bs_cmd_levelset(argc - 1, argv + 1);
   fprintf(stderr, "bigstep: unknown command '%s' (see 'bigstep --help')\n", cmd);
   return BS_EXIT_USAGE;
 }
