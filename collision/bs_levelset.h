@@ -7,7 +7,7 @@
  *
  * Evaluation returns phi and, on request, grad phi (3) and the Hessian (9,
  * row-major), both EXACT derivatives of the function evaluated (analytic
- * formulas; for grids, the derivatives of the trilinear interpolant). On the
+ * formulas; for grids, the derivatives of the interpolant). On the
  * non-smooth sets (medial axes, box edges and faces' bisector planes, the
  * sphere centre, the torus axis and core circle) phi is still exact and the
  * derivatives are those of one of the adjoining smooth pieces; where a
@@ -23,7 +23,8 @@
  *   cylinder    capped, radius r and half-height hh along its axis, exact SDF;
  *   torus       major radius R (core circle, around the axis), minor radius
  *               r < R (tube), phi = |(rho - R, z)| - r, rho = |(y_x, y_y)|;
- *   grid        trilinear interpolation of sampled values (see below);
+ *   grid        cubic B-spline (default) or trilinear interpolation of
+ *               sampled values (see below);
  * and the COMPLEMENT of any of them (phi -> -phi: a bowl, a hole, a room).
  *
  * Placement and motion. A shape has a rest placement: a centre c0 and a
@@ -43,9 +44,22 @@
  *
  * Grid level sets: nodes origin + h (i, j, k), 0 <= i < nx (and so on),
  * nx, ny, nz >= 2, values stored x fastest: values[i + nx (j + ny k)].
- * Inside the grid box phi is the trilinear interpolant; its gradient and
- * Hessian are the interpolant's exact derivatives (the Hessian has a zero
- * diagonal and nonzero mixed terms inside a cell). Outside the box phi is
+ * Inside the grid box phi is an interpolant of the node values, chosen with
+ * bs_levelset_grid_set_interp:
+ *   BS_GRID_CUBIC (the default for every grid, created or loaded): the
+ *     uniform cubic B-spline whose coefficients are prefiltered at creation
+ *     (separable tridiagonal solves) so that it INTERPOLATES the nodes. It is
+ *     C2 everywhere inside the box: gradient and Hessian are continuous
+ *     across cell faces, so penalty forces have no kinks (paper 5.2). At the
+ *     grid boundary the stencil's ghost coefficient is linearly extrapolated
+ *     (natural end condition: trilinear functions are reproduced exactly).
+ *     Error O(h^4) for smooth phi in the interior, O(h^2) near the boundary
+ *     and near kinks of phi (medial axes), where it may overshoot slightly.
+ *   BS_GRID_LINEAR: the trilinear interpolant (the Hessian has a zero
+ *     diagonal and nonzero mixed terms inside a cell; the gradient jumps
+ *     across cell faces).
+ * Gradient and Hessian are the interpolant's exact derivatives (on a cell
+ * face in linear mode, those of the cell above). Outside the box phi is
  * extrapolated as phi(q) + |p - q| with q the point of the box nearest to p:
  * continuous, growing at unit rate away from the box. The extrapolation is
  * meaningful only when the grid encloses the obstacle with some margin (phi
@@ -56,7 +70,8 @@
  *     4 x int32  nx, ny, nz, 0 (reserved)
  *     4 x double origin[3], h
  *     nx ny nz doubles, x fastest.
- * Only the grid is stored (not the motion or the complement flag).
+ * Only the grid is stored (not the motion, the complement flag or the
+ * interpolation mode: a loaded grid is cubic).
  *
  * Projection (paper 5.1): P(x) = x - phi(x) grad phi(x). For an analytic
  * SDF, away from the medial axis, grad phi(x) is the unit direction from the
@@ -97,6 +112,9 @@ typedef enum {
 
 typedef enum { BS_LS_STATIC = 0, BS_LS_VELOCITY, BS_LS_KEYFRAMES } bs_ls_motion;
 
+/* Grid interpolation (see the header comment). */
+typedef enum { BS_GRID_CUBIC = 0, BS_GRID_LINEAR = 1 } bs_grid_interp;
+
 /* The level set. Fields are read-only for users: create with the
  * constructors below and change only through the setters. */
 typedef struct bs_levelset {
@@ -112,7 +130,10 @@ typedef struct bs_levelset {
   double *key_t, *key_d, *key_q; /* rotations as unit quaternions (4: w x y z) */
   int32_t n[3];         /* grid: nodes per axis                               */
   double origin[3], h;  /* grid: first node, spacing                          */
-  double *values;       /* grid: n[0] n[1] n[2] values, x fastest             */
+  double *values;       /* grid: n[0] n[1] n[2] = N values, x fastest; the one
+                           allocation holds 2 N doubles: then the coefficients */
+  double *coef;         /* grid: N cubic B-spline coefficients (values + N)   */
+  int grid_interp;      /* grid: a bs_grid_interp (BS_GRID_CUBIC by default)  */
 } bs_levelset;
 
 /* The placement of a level set at one time (computed once, reused for many
@@ -206,6 +227,15 @@ double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double 
 /* The grid's values (layout above) and geometry, or NULL for analytic
  * shapes. Any output pointer may be NULL. */
 const double *bs_levelset_grid_values(const bs_levelset *ls, int32_t n[3], double origin[3], double *h);
+
+/* Selects the grid interpolant (both are ready from creation: switching is
+ * free). BS_EINPUT for an analytic level set (naming its kind) or an unknown
+ * mode (naming its value). */
+int bs_levelset_grid_set_interp(bs_levelset *ls, bs_grid_interp mode, bs_error *err);
+/* The grid's interpolation mode (meaningless for analytic shapes). */
+bs_grid_interp bs_levelset_grid_get_interp(const bs_levelset *ls);
+/* "cubic", "linear" (or "unknown"). */
+const char *bs_grid_interp_name(bs_grid_interp mode);
 
 /* Writes a grid level set to path (format above). An analytic level set is
  * BS_EINPUT; a file that cannot be written is BS_EIO naming it. */

@@ -1,21 +1,48 @@
-/* grid_levelset.c — level sets sampled on a regular grid: trilinear
- * interpolation with its exact derivatives, extrapolation outside the grid,
- * sampling of analytic level sets, and the BSLS1 file format (see
- * bs_levelset.h).
+/* grid_levelset.c — level sets sampled on a regular grid: cubic B-spline
+ * (default) or trilinear interpolation with exact derivatives, extrapolation
+ * outside the grid, sampling of analytic level sets, and the BSLS1 file
+ * format (see bs_levelset.h).
  *
- * In a cell with corner values c_abc (a, b, c in {0, 1}) and local
+ * Trilinear. In a cell with corner values c_abc (a, b, c in {0, 1}) and local
  * coordinates f in [0, 1]^3, with weights w_0(f) = 1 - f, w_1(f) = f and
  * their derivatives w'_0 = -1, w'_1 = 1:
  *   phi      = sum c_abc w_a(fx) w_b(fy) w_c(fz),
  *   dphi/dx  = sum c_abc w'_a w_b w_c / h            (and y, z alike),
  *   d2phi/dxdy = sum c_abc w'_a w'_b w_c / h^2       (and xz, yz alike),
- * and d2phi/dx2 = 0 (each weight is linear in its own variable).
- * Outside the box, p is clamped to its nearest box point q and
+ * and d2phi/dx2 = 0 (each weight is linear in its own variable). The
+ * gradient jumps across cell faces.
+ *
+ * Cubic B-spline (C2). phi(u) = sum_ijk C_ijk B(u_x - i) B(u_y - j) B(u_z - k),
+ * u = (p - origin) / h, B the uniform cubic B-spline (support [-2, 2]). In
+ * the cell [c, c + 1] with f = u - c the four nonzero basis functions, on
+ * nodes c - 1 .. c + 2, are
+ *   b0 = (1 - f)^3 / 6,          b1 = (3 f^3 - 6 f^2 + 4) / 6,
+ *   b2 = (-3 f^3 + 3 f^2 + 3 f + 1) / 6,          b3 = f^3 / 6,
+ * and the gradient and Hessian use their exact first and second derivatives
+ * (divided by h and h^2). The coefficients C are not the samples: they are
+ * PREFILTERED once at creation so that the spline interpolates every node,
+ *   (C_{i-1} + 4 C_i + C_{i+1}) / 6 = v_i,
+ * solved by separable tridiagonal (Thomas) sweeps along x, then y, then z.
+ * Boundary: the stencil of a cell next to the grid boundary reaches one node
+ * past it; that ghost coefficient is the LINEAR EXTRAPOLATION of the two
+ * nearest, C_{-1} = 2 C_0 - C_1 (and C_n = 2 C_{n-1} - C_{n-2}), i.e. the
+ * ghost's basis function is folded onto its two neighbours. Then the node
+ * equation at the boundary reads C_0 = v_0 and phi'' = 0 there (the natural
+ * spline): linear functions along each axis, hence every trilinear function,
+ * are reproduced exactly, which plain index clamping (C_{-1} = C_0) would not.
+ * For a smooth phi the interpolation error is O(h^4) in the interior and
+ * O(h^2) within a few cells of the grid boundary (the natural end condition).
+ *
+ * Outside the box (either mode), p is clamped to its nearest box point q and
  *   phi(p) = phi(q) + |p - q|;
  * on a clamped axis k, q_k does not depend on p_k, so the interpolant's
- * derivative along k drops out, and the distance adds r/|r| to the gradient
- * and (P - u u^T)/|r| to the Hessian (r = p - q, u = r/|r|, P the diagonal
- * projector on the clamped axes).
+ * derivatives along k drop out (gradient entry and Hessian row/column), and
+ * the distance adds r/|r| to the gradient and (P - u u^T)/|r| to the Hessian
+ * (r = p - q, u = r/|r|, P the diagonal projector on the clamped axes).
+ *
+ * Storage: ls->values holds 2 N doubles in one allocation (freed with
+ * ls->values by bs_levelset_destroy): the N samples, then the N B-spline
+ * coefficients (ls->coef = ls->values + N).
  */
 #include <errno.h>
 #include <math.h>
@@ -28,30 +55,35 @@
 #define HEADER_BYTES 56
 static const char MAGIC[8] = {'B', 'S', 'L', 'S', '1', 0, 0, 0};
 
-double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double g[3], double H[9]) {
-  const int32_t *n = ls->n;
-  const double h = ls->h;
-  if (isnan(p[0]) || isnan(p[1]) || isnan(p[2])) { /* no cell to look up: NaN out */
-    if (g) g[0] = g[1] = g[2] = NAN;
-    if (H)
-      for (int k = 0; k < 9; k++) H[k] = NAN;
-    return NAN;
-  }
+/* Position of p in the grid, per axis: the clamped parameter's cell c (0 <=
+ * c <= n - 2), f in [0, 1], whether the axis is clamped and the offset
+ * r = p - q (m). */
+typedef struct {
+  int32_t c[3];
   double f[3], r[3];
-  int32_t i0[3];
   int clamped[3];
+} grid_locus;
+
+static void locate(const bs_levelset *ls, const double p[3], grid_locus *L) {
   for (int k = 0; k < 3; k++) {
-    double u = (p[k] - ls->origin[k]) / h, umax = (double)(n[k] - 1);
+    double u = (p[k] - ls->origin[k]) / ls->h, umax = (double)(ls->n[k] - 1);
     double q = u < 0 ? 0 : (u > umax ? umax : u);
-    clamped[k] = (q != u);
-    r[k] = (u - q) * h;
+    L->clamped[k] = (q != u);
+    L->r[k] = (u - q) * ls->h;
     int32_t c = (int32_t)floor(q);
-    if (c > n[k] - 2) c = n[k] - 2;
-    i0[k] = c;
-    f[k] = q - c;
+    if (c > ls->n[k] - 2) c = ls->n[k] - 2;
+    L->c[k] = c;
+    L->f[k] = q - c;
   }
+}
+
+/* Trilinear interpolant at the locus: value, gradient d/du (not yet / h) and
+ * the mixed second derivatives d2/du2 (row-major, diagonal zero). */
+static double interp_linear(const bs_levelset *ls, const grid_locus *L, double gu[3], double Hu[9]) {
+  const int32_t *n = ls->n;
+  const double *f = L->f;
   const size_t sx = 1, sy = (size_t)n[0], sz = (size_t)n[0] * (size_t)n[1];
-  const double *c0 = ls->values + i0[0] * sx + i0[1] * sy + i0[2] * sz;
+  const double *c0 = ls->values + L->c[0] * sx + L->c[1] * sy + L->c[2] * sz;
   double val = 0, gx = 0, gy = 0, gz = 0, hxy = 0, hxz = 0, hyz = 0;
   for (int c = 0; c < 2; c++) {
     double wz = c ? f[2] : 1 - f[2], dz = c ? 1.0 : -1.0;
@@ -70,18 +102,125 @@ double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double 
       }
     }
   }
-  double dist = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-  if (g) {
-    g[0] = clamped[0] ? 0 : gx / h;
-    g[1] = clamped[1] ? 0 : gy / h;
-    g[2] = clamped[2] ? 0 : gz / h;
+  gu[0] = gx, gu[1] = gy, gu[2] = gz;
+  Hu[0] = Hu[4] = Hu[8] = 0;
+  Hu[1] = Hu[3] = hxy;
+  Hu[2] = Hu[6] = hxz;
+  Hu[5] = Hu[7] = hyz;
+  return val;
+}
+
+/* The cubic B-spline weights of one axis (value, first and second
+ * derivatives in f) on the stencil nodes c - 1 .. c + 2, with a ghost node
+ * (index -1 or n) folded onto its two neighbours: C_{-1} = 2 C_0 - C_1 gives
+ * w_0 += 2 w_{-1}, w_1 -= w_{-1}. Slots lo .. hi are the in-grid ones. */
+typedef struct {
+  double w[4], d[4], dd[4];
+  int lo, hi;
+} axis_weights;
+
+static void fold(double a[4], int ghost, int near, int next) {
+  a[near] += 2 * a[ghost];
+  a[next] -= a[ghost];
+  a[ghost] = 0;
+}
+
+static void bspline_weights(double f, int32_t c, int32_t n, axis_weights *A) {
+  double g = 1 - f, f2 = f * f;
+  A->w[0] = g * g * g / 6;
+  A->w[1] = (3 * f2 * f - 6 * f2 + 4) / 6;
+  A->w[2] = (-3 * f2 * f + 3 * f2 + 3 * f + 1) / 6;
+  A->w[3] = f2 * f / 6;
+  A->d[0] = -0.5 * g * g;
+  A->d[1] = 1.5 * f2 - 2 * f;
+  A->d[2] = -1.5 * f2 + f + 0.5;
+  A->d[3] = 0.5 * f2;
+  A->dd[0] = g;
+  A->dd[1] = 3 * f - 2;
+  A->dd[2] = 1 - 3 * f;
+  A->dd[3] = f;
+  A->lo = 0, A->hi = 3;
+  if (c == 0) { /* node -1 is a ghost */
+    fold(A->w, 0, 1, 2), fold(A->d, 0, 1, 2), fold(A->dd, 0, 1, 2);
+    A->lo = 1;
   }
+  if (c + 2 >= n) { /* node n is a ghost */
+    fold(A->w, 3, 2, 1), fold(A->d, 3, 2, 1), fold(A->dd, 3, 2, 1);
+    A->hi = 2;
+  }
+}
+
+/* Cubic B-spline at the locus: value, gradient d/du and Hessian d2/du2. The
+ * 4 x 4 x 4 sum is contracted axis by axis: x first (three sums per row),
+ * then y (six), then z (ten outputs). */
+static double interp_cubic(const bs_levelset *ls, const grid_locus *L, double gu[3], double Hu[9]) {
+  const int32_t *n = ls->n;
+  axis_weights X, Y, Z;
+  bspline_weights(L->f[0], L->c[0], n[0], &X);
+  bspline_weights(L->f[1], L->c[1], n[1], &Y);
+  bspline_weights(L->f[2], L->c[2], n[2], &Z);
+  const size_t sy = (size_t)n[0], sz = (size_t)n[0] * (size_t)n[1];
+  double val = 0, gx = 0, gy = 0, gz = 0, hxx = 0, hyy = 0, hzz = 0, hxy = 0, hxz = 0, hyz = 0;
+  for (int c = Z.lo; c <= Z.hi; c++) {
+    size_t kz = (size_t)(L->c[2] - 1 + c) * sz;
+    /* y-contractions of the x-contractions: T_ab = sum_j (x-sum a) (y-weight b) */
+    double t00 = 0, t10 = 0, t01 = 0, t20 = 0, t11 = 0, t02 = 0;
+    for (int b = Y.lo; b <= Y.hi; b++) {
+      const double *row = ls->coef + kz + (size_t)(L->c[1] - 1 + b) * sy + L->c[0]; /* node c: slot 1 */
+      double r0 = 0, r1 = 0, r2 = 0;
+      for (int a = X.lo; a <= X.hi; a++) {
+        double v = row[a - 1];
+        r0 += v * X.w[a];
+        r1 += v * X.d[a];
+        r2 += v * X.dd[a];
+      }
+      t00 += r0 * Y.w[b];
+      t10 += r1 * Y.w[b];
+      t01 += r0 * Y.d[b];
+      t20 += r2 * Y.w[b];
+      t11 += r1 * Y.d[b];
+      t02 += r0 * Y.dd[b];
+    }
+    double wz = Z.w[c], dz = Z.d[c], ddz = Z.dd[c];
+    val += t00 * wz;
+    gx += t10 * wz;
+    gy += t01 * wz;
+    gz += t00 * dz;
+    hxx += t20 * wz;
+    hyy += t02 * wz;
+    hzz += t00 * ddz;
+    hxy += t11 * wz;
+    hxz += t10 * dz;
+    hyz += t01 * dz;
+  }
+  gu[0] = gx, gu[1] = gy, gu[2] = gz;
+  Hu[0] = hxx, Hu[4] = hyy, Hu[8] = hzz;
+  Hu[1] = Hu[3] = hxy;
+  Hu[2] = Hu[6] = hxz;
+  Hu[5] = Hu[7] = hyz;
+  return val;
+}
+
+double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double g[3], double H[9]) {
+  if (isnan(p[0]) || isnan(p[1]) || isnan(p[2])) { /* no cell to look up: NaN out */
+    if (g) g[0] = g[1] = g[2] = NAN;
+    if (H)
+      for (int k = 0; k < 9; k++) H[k] = NAN;
+    return NAN;
+  }
+  grid_locus L;
+  locate(ls, p, &L);
+  double gu[3], Hu[9];
+  double val = ls->grid_interp == BS_GRID_LINEAR ? interp_linear(ls, &L, gu, Hu) : interp_cubic(ls, &L, gu, Hu);
+  const double h = ls->h, *r = L.r;
+  const int *clamped = L.clamped;
+  double dist = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+  if (g)
+    for (int k = 0; k < 3; k++) g[k] = clamped[k] ? 0 : gu[k] / h;
   if (H) {
     double h2 = h * h;
-    memset(H, 0, 9 * sizeof(double));
-    H[1] = H[3] = (clamped[0] || clamped[1]) ? 0 : hxy / h2;
-    H[2] = H[6] = (clamped[0] || clamped[2]) ? 0 : hxz / h2;
-    H[5] = H[7] = (clamped[1] || clamped[2]) ? 0 : hyz / h2;
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) H[3 * i + j] = (clamped[i] || clamped[j]) ? 0 : Hu[3 * i + j] / h2;
   }
   if (dist > 0) {
     double u[3] = {r[0] / dist, r[1] / dist, r[2] / dist};
@@ -94,8 +233,74 @@ double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double 
   return val + dist;
 }
 
+/* ---- prefilter: the B-spline coefficients that interpolate the samples ---- */
+
+/* Solves, along every grid line of axis a, the tridiagonal system
+ *   C_0 = v_0,  C_{i-1} + 4 C_i + C_{i+1} = 6 v_i (0 < i < m - 1),  C_{m-1} = v_{m-1}
+ * in place (Thomas algorithm; strictly diagonally dominant, so stable without
+ * pivoting). The data are viewed as [outer][m][inner] with inner = the stride
+ * of axis a, so each sweep step runs over a contiguous block. im holds the
+ * m inverse pivots (workspace, m doubles). */
+static void prefilter_axis(double *C, const int32_t n[3], int a, double *im) {
+  const size_t m = (size_t)n[a];
+  size_t inner = 1, outer = 1;
+  for (int k = 0; k < a; k++) inner *= (size_t)n[k];
+  for (int k = a + 1; k < 3; k++) outer *= (size_t)n[k];
+  if (m < 3) return; /* only boundary rows: C = v */
+  /* pivots: m_1 = 4, m_i = 4 - 1 / m_{i-1}; the super-diagonal over the
+   * pivot (cp_i) equals 1 / m_i on the interior rows, and the last row has
+   * a zero sub-diagonal */
+  im[0] = 1;
+  double piv = 4;
+  for (size_t i = 1; i + 1 < m; i++) {
+    im[i] = 1 / piv;
+    piv = 4 - im[i];
+  }
+  for (size_t o = 0; o < outer; o++) {
+    double *base = C + o * m * inner;
+    for (size_t i = 1; i + 1 < m; i++) { /* forward: d_i = (6 v_i - d_{i-1}) / m_i */
+      double *cur = base + i * inner, *prev = cur - inner;
+      for (size_t s = 0; s < inner; s++) cur[s] = (6 * cur[s] - prev[s]) * im[i];
+    }
+    for (size_t i = m - 2; i >= 1; i--) { /* back: C_i = d_i - C_{i+1} / m_i */
+      double *cur = base + i * inner, *next = cur + inner;
+      for (size_t s = 0; s < inner; s++) cur[s] -= next[s] * im[i];
+    }
+  }
+}
+
+/* Fills ls->coef from ls->values. */
+static int grid_prefilter(bs_levelset *ls, bs_error *err) {
+  int32_t mmax = ls->n[0];
+  if (ls->n[1] > mmax) mmax = ls->n[1];
+  if (ls->n[2] > mmax) mmax = ls->n[2];
+  double *im = bs_calloc((size_t)mmax, sizeof(double), "grid prefilter pivots", err);
+  if (!im) return BS_ENOMEM;
+  memcpy(ls->coef, ls->values, (size_t)ls->n[0] * (size_t)ls->n[1] * (size_t)ls->n[2] * sizeof(double));
+  for (int a = 0; a < 3; a++) prefilter_axis(ls->coef, ls->n, a, im);
+  free(im);
+  return 0;
+}
+
+int bs_levelset_grid_set_interp(bs_levelset *ls, bs_grid_interp mode, bs_error *err) {
+  if (!ls || ls->kind != BS_LS_GRID)
+    return bs_error_set(err, BS_EINPUT, "grid interpolation: the level set is %s, not a grid",
+                        ls ? bs_levelset_kind_name(ls->kind) : "NULL");
+  if (mode != BS_GRID_CUBIC && mode != BS_GRID_LINEAR)
+    return bs_error_set(err, BS_EINPUT, "grid interpolation mode = %d: must be BS_GRID_CUBIC or BS_GRID_LINEAR",
+                        (int)mode);
+  ls->grid_interp = mode;
+  return 0;
+}
+
+bs_grid_interp bs_levelset_grid_get_interp(const bs_levelset *ls) { return (bs_grid_interp)ls->grid_interp; }
+
+const char *bs_grid_interp_name(bs_grid_interp mode) {
+  return mode == BS_GRID_CUBIC ? "cubic" : mode == BS_GRID_LINEAR ? "linear" : "unknown";
+}
+
 /* Validates the geometry and allocates a grid level set with room for its
- * values (not filled). */
+ * values and its B-spline coefficients (neither filled); cubic by default. */
 static int grid_new(const double origin[3], double h, const int32_t n[3], bs_levelset **out, bs_error *err) {
   for (int k = 0; k < 3; k++)
     if (!isfinite(origin[k]))
@@ -111,11 +316,13 @@ static int grid_new(const double origin[3], double h, const int32_t n[3], bs_lev
                         (int)n[2]);
   bs_levelset *ls = bs_calloc(1, sizeof *ls, "a grid level set", err);
   if (!ls) return BS_ENOMEM;
-  ls->values = bs_calloc((size_t)total, sizeof(double), "grid level set values", err);
+  ls->values = bs_calloc(2 * (size_t)total, sizeof(double), "grid level set values", err);
   if (!ls->values) {
     free(ls);
     return BS_ENOMEM;
   }
+  ls->coef = ls->values + (size_t)total;
+  ls->grid_interp = BS_GRID_CUBIC;
   ls->kind = BS_LS_GRID;
   ls->motion = BS_LS_STATIC;
   ls->Q0[0] = ls->Q0[4] = ls->Q0[8] = 1;
@@ -149,7 +356,7 @@ int bs_levelset_grid_from_values(const double origin[3], double h, const int32_t
   int st = grid_new(origin, h, n, &ls, err);
   if (st) return st;
   memcpy(ls->values, values, grid_count(ls) * sizeof(double));
-  if ((st = check_values(ls, "", err))) {
+  if ((st = check_values(ls, "", err)) || (st = grid_prefilter(ls, err))) {
     bs_levelset_destroy(&ls);
     return st;
   }
@@ -186,7 +393,7 @@ int bs_levelset_grid_sample(const bs_levelset *src, double t, const double lo[3]
         double x[3] = {lo[0] + h * i, lo[1] + h * j, lo[2] + h * k};
         v[i + (size_t)n[0] * (j + (size_t)n[1] * k)] = bs_levelset_eval_frame(src, &f, x, NULL, NULL);
       }
-  if ((st = check_values(ls, "sampled ", err))) {
+  if ((st = check_values(ls, "sampled ", err)) || (st = grid_prefilter(ls, err))) {
     bs_levelset_destroy(&ls);
     return st;
   }
@@ -295,7 +502,8 @@ int bs_levelset_grid_load(const char *path, bs_levelset **out, bs_error *err) {
     st = bs_error_set(err, BS_EINPUT, "level set file '%s': trailing bytes after %zu values", path, total);
     goto done;
   }
-  if ((st = check_values(ls, "", err))) bs_error_prefix(err, "level set file '%s'", path);
+  if ((st = check_values(ls, "", err)) || (st = grid_prefilter(ls, err)))
+    bs_error_prefix(err, "level set file '%s'", path);
 done:
   fclose(fp);
   if (st) bs_levelset_destroy(&ls);

@@ -253,13 +253,22 @@ Test(levelset, grid_derivatives) {
   bs_error err;
   double lo[3] = {-1.1, -1.3, -0.8}, hi[3] = {1.3, 0.9, 1.4};
   cr_assert_eq(bs_levelset_grid_sample(torus, 0, lo, hi, 0.08, &grid, &err), 0, "%s", err.msg);
-  for (int variant = 0; variant < 3; variant++) {
-    bs_levelset_set_complement(grid, variant == 1);
-    if (variant == 2) set_test_velocity(grid);
-    /* points inside cells (FD exact to round-off: trilinear along each axis)
-     * and outside the grid box (the extrapolation: O(h^2)) */
-    check_derivatives(variant == 0 ? "grid" : variant == 1 ? "complement of grid" : "moving grid", grid, 0.6, 1.9,
-                      0.015, 0);
+  for (int variant = 0; variant < 6; variant++) {
+    bs_grid_interp mode = variant < 3 ? BS_GRID_CUBIC : BS_GRID_LINEAR;
+    cr_assert_eq(bs_levelset_grid_set_interp(grid, mode, &err), 0, "%s", err.msg);
+    bs_levelset_set_complement(grid, variant % 3 == 1);
+    if (variant % 3 == 2) set_test_velocity(grid);
+    if (variant % 3 == 0) { /* back at rest */
+      const double zero[3] = {0, 0, 0};
+      cr_assert_eq(bs_levelset_set_velocity(grid, zero, zero, &err), 0, "%s", err.msg);
+    }
+    /* points inside cells (trilinear: FD exact to round-off, linear along
+     * each axis; cubic: O(h^2)) and outside the grid box (the extrapolation:
+     * O(h^2)) */
+    char name[64];
+    snprintf(name, sizeof name, "%s %s grid", variant % 3 == 0 ? "static" : variant % 3 == 1 ? "complement of" : "moving",
+             bs_grid_interp_name(mode));
+    check_derivatives(name, grid, 0.6, 1.9, 0.015, 0);
   }
   bs_levelset_destroy(&grid);
   bs_levelset_destroy(&torus);
@@ -515,10 +524,31 @@ static bs_levelset *grid_of(double (*fn)(const double *, double *, double *), co
   return ls;
 }
 
+static void check_trilinear_reproduced(const bs_levelset *ls, const double origin[3], double h, const int32_t n[3],
+                                       const char *name);
+
+/* Both modes: the cubic B-spline's natural end condition (ghost coefficients
+ * linearly extrapolated) reproduces linear functions along each axis, hence
+ * trilinear ones, exactly, up to the boundary; n = 2 and 3 exercise a stencil
+ * folded at both ends. */
 Test(levelset, grid_reproduces_trilinear_functions) {
   const double origin[3] = {-0.4, 0.1, -0.3}, h = 0.125;
-  const int32_t n[3] = {7, 5, 6};
-  bs_levelset *ls = grid_of(trilinear, origin, h, n);
+  const int32_t sizes[2][3] = {{7, 5, 6}, {2, 3, 4}};
+  for (int v = 0; v < 4; v++) {
+    const int32_t *n = sizes[v / 2];
+    bs_grid_interp mode = (v & 1) ? BS_GRID_LINEAR : BS_GRID_CUBIC;
+    bs_levelset *ls = grid_of(trilinear, origin, h, n);
+    cr_assert_eq(bs_levelset_grid_get_interp(ls), BS_GRID_CUBIC, "cubic is the default");
+    bs_error err;
+    cr_assert_eq(bs_levelset_grid_set_interp(ls, mode, &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_levelset_grid_get_interp(ls), mode);
+    check_trilinear_reproduced(ls, origin, h, n, bs_grid_interp_name(mode));
+    bs_levelset_destroy(&ls);
+  }
+}
+
+static void check_trilinear_reproduced(const bs_levelset *ls, const double origin[3], double h, const int32_t n[3],
+                                       const char *name) {
   cr_assert_eq(bs_levelset_kind(ls), BS_LS_GRID);
   cr_assert(!bs_levelset_is_analytic(ls));
   for (int i = 0; i < 2000; i++) {
@@ -527,19 +557,19 @@ Test(levelset, grid_reproduces_trilinear_functions) {
     if (i < 8) /* the corners of the grid box */
       for (int k = 0; k < 3; k++) x[k] = origin[k] + ((i >> k) & 1) * h * (n[k] - 1);
     double phi = bs_levelset_eval(ls, 0, x, g, H), fe = trilinear(x, ge, He);
-    cr_assert(fabs(phi - fe) < 1e-13, "value %.17g vs %.17g", phi, fe);
+    cr_assert(fabs(phi - fe) < 1e-13, "%s: value %.17g vs %.17g", name, phi, fe);
     if (i >= 8) { /* derivatives are those of the same function inside the cells */
-      cr_assert(maxdiff(3, g, ge) < 1e-12, "grad differs by %g", maxdiff(3, g, ge));
-      cr_assert(maxdiff(9, H, He) < 1e-11, "Hessian differs by %g", maxdiff(9, H, He));
-      cr_assert(H[0] == 0 && H[4] == 0 && H[8] == 0);
+      cr_assert(maxdiff(3, g, ge) < 1e-12, "%s: grad differs by %g", name, maxdiff(3, g, ge));
+      cr_assert(maxdiff(9, H, He) < 1e-11, "%s: Hessian differs by %g", name, maxdiff(9, H, He));
+      cr_assert(fabs(H[0]) < 1e-11 && fabs(H[4]) < 1e-11 && fabs(H[8]) < 1e-11, "%s", name);
     }
   }
-  bs_levelset_destroy(&ls);
 }
 
-/* Random node values: inside a cell the returned derivatives match central
- * differences of the returned phi to round-off (the interpolant is linear
- * along each axis, so central differences are exact there). */
+/* Random node values, trilinear mode: inside a cell the returned derivatives
+ * match central differences of the returned phi to round-off (the
+ * interpolant is linear along each axis, so central differences are exact
+ * there). */
 Test(levelset, grid_derivatives_inside_cells) {
   const double origin[3] = {0.2, -0.1, 0.05}, h = 0.1;
   const int32_t n[3] = {6, 5, 7};
@@ -548,6 +578,7 @@ Test(levelset, grid_derivatives_inside_cells) {
   bs_levelset *ls = NULL;
   bs_error err;
   cr_assert_eq(bs_levelset_grid_from_values(origin, h, n, vals, &ls, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_set_interp(ls, BS_GRID_LINEAR, &err), 0, "%s", err.msg);
   int found = 0;
   double m = 0, mH = 0;
   for (int i = 0; found < 500 && i < 100000; i++) {
@@ -594,24 +625,34 @@ Test(levelset, grid_extrapolation) {
   bs_levelset_destroy(&ls);
 }
 
-/* The trilinear interpolant of a sphere's SDF is within C h^2 of the exact one
- * (away from the centre), and the error falls as h^2. */
+static void check_sampled_sphere(bs_grid_interp mode);
+
+/* The trilinear and the cubic interpolants of a sphere's SDF are within C h^2
+ * of the exact one (away from the centre), and the error falls as h^2 (or
+ * faster). */
 Test(levelset, grid_sampled_sphere_accuracy) {
+  for (int mode = BS_GRID_CUBIC; mode <= BS_GRID_LINEAR; mode++)
+    check_sampled_sphere((bs_grid_interp)mode);
+}
+
+static void check_sampled_sphere(bs_grid_interp mode) {
   const double c[3] = {0.05, -0.02, 0.03}, r = 0.5;
   bs_levelset *sphere = NULL;
   bs_error err;
   cr_assert_eq(bs_levelset_create_sphere(c, r, &sphere, &err), 0, "%s", err.msg);
-  double lo[3] = {-0.8, -0.8, -0.8}, hi[3] = {0.8, 0.8, 0.8}, errs[3];
+  double lo[3] = {-0.8, -0.8, -0.8}, hi[3] = {0.8, 0.8, 0.8}, errs[3], gerrs[3];
   const double hs[3] = {0.1, 0.05, 0.025};
+  const char *name = bs_grid_interp_name(mode);
   for (int s = 0; s < 3; s++) {
     bs_levelset *grid = NULL;
     cr_assert_eq(bs_levelset_grid_sample(sphere, 0, lo, hi, hs[s], &grid, &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_levelset_grid_set_interp(grid, mode, &err), 0, "%s", err.msg);
     int32_t n[3];
     double o[3], h;
     cr_assert_not_null(bs_levelset_grid_values(grid, n, o, &h));
     cr_assert(h == hs[s] && o[0] == lo[0]);
     cr_assert(o[0] + h * (n[0] - 1) >= hi[0] - 1e-12 && o[0] + h * (n[0] - 2) < hi[0]);
-    double m = 0;
+    double m = 0, mg = 0;
     for (int i = 0; i < 3000; i++) {
       double x[3], d2 = 0;
       for (int k = 0; k < 3; k++) {
@@ -619,15 +660,31 @@ Test(levelset, grid_sampled_sphere_accuracy) {
         d2 += (x[k] - c[k]) * (x[k] - c[k]);
       }
       if (sqrt(d2) < 0.2) continue;
-      m = fmax(m, fabs(bs_levelset_eval(grid, 0, x, NULL, NULL) - bs_levelset_eval(sphere, 0, x, NULL, NULL)));
+      double g[3], ge[3];
+      m = fmax(m, fabs(bs_levelset_eval(grid, 0, x, g, NULL) - bs_levelset_eval(sphere, 0, x, ge, NULL)));
+      mg = fmax(mg, maxdiff(3, g, ge));
     }
     errs[s] = m;
+    gerrs[s] = mg;
     /* |Hess phi| <= 1/|x - c| = 5: trilinear error <= h^2/8 * 3 * 5 */
-    cr_assert(m <= 2 * hs[s] * hs[s], "h = %g: max error %g > 2 h^2", hs[s], m);
+    cr_assert(m <= 2 * hs[s] * hs[s], "%s: h = %g: max error %g > 2 h^2", name, hs[s], m);
     bs_levelset_destroy(&grid);
   }
-  cr_assert(errs[0] / errs[1] > 2.5 && errs[1] / errs[2] > 2.5, "errors %g %g %g do not fall as h^2", errs[0],
-            errs[1], errs[2]);
+  cr_assert(errs[0] / errs[1] > 2.5 && errs[1] / errs[2] > 2.5, "%s: errors %g %g %g do not fall as h^2", name,
+            errs[0], errs[1], errs[2]);
+  for (int s = 0; s < 3; s++) {
+    double h = hs[s];
+    if (mode == BS_GRID_CUBIC) { /* interior O(h^4) for phi, O(h^3) for grad */
+      cr_assert(errs[s] <= 0.25 * h * h, "cubic: h = %g: max error %g > h^2 / 4", h, errs[s]);
+      cr_assert(gerrs[s] <= 2 * h * h, "cubic: h = %g: max gradient error %g > 2 h^2", h, gerrs[s]);
+    } else {
+      cr_assert(gerrs[s] <= 3 * h, "linear: h = %g: max gradient error %g > 3 h", h, gerrs[s]);
+    }
+  }
+  if (mode == BS_GRID_CUBIC)
+    cr_assert(errs[0] / errs[1] > 8 && errs[1] / errs[2] > 8 && gerrs[0] / gerrs[1] > 4 && gerrs[1] / gerrs[2] > 4,
+              "cubic: errors %g %g %g, gradient errors %g %g %g fall too slowly", errs[0], errs[1], errs[2], gerrs[0],
+              gerrs[1], gerrs[2]);
   bs_levelset_destroy(&sphere);
 }
 
@@ -666,6 +723,195 @@ Test(levelset, grid_save_load_round_trip) {
   bs_levelset_destroy(&grid);
   bs_levelset_destroy(&back);
   bs_levelset_destroy(&torus);
+}
+
+/* ---- cubic B-spline grids ------------------------------------------------------ */
+
+/* A grid of random values on the origin 0 with h a power of two (so that node
+ * coordinates and x / h are exact). */
+static bs_levelset *random_grid(const int32_t n[3], double h, double *vals) {
+  const double origin[3] = {0, 0, 0};
+  size_t total = (size_t)n[0] * n[1] * n[2];
+  for (size_t i = 0; i < total; i++) vals[i] = urange(-1, 1);
+  bs_levelset *ls = NULL;
+  bs_error err;
+  cr_assert_eq(bs_levelset_grid_from_values(origin, h, n, vals, &ls, &err), 0, "%s", err.msg);
+  return ls;
+}
+
+/* The prefiltered spline interpolates every node, boundary nodes and
+ * corners included, for axes of 2, 3 and more nodes. */
+Test(levelset, grid_cubic_interpolates_nodes) {
+  const int32_t sizes[3][3] = {{6, 5, 7}, {2, 3, 9}, {12, 2, 4}};
+  const double h = 0.125;
+  for (int s = 0; s < 3; s++) {
+    const int32_t *n = sizes[s];
+    double *vals = malloc(sizeof(double) * (size_t)n[0] * n[1] * n[2]);
+    bs_levelset *ls = random_grid(n, h, vals);
+    cr_assert_eq(bs_levelset_grid_get_interp(ls), BS_GRID_CUBIC);
+    double m = 0, moff = 0;
+    for (int32_t k = 0; k < n[2]; k++)
+      for (int32_t j = 0; j < n[1]; j++)
+        for (int32_t i = 0; i < n[0]; i++) {
+          double x[3] = {h * i, h * j, h * k}, v = vals[i + n[0] * (j + n[1] * k)];
+          m = fmax(m, fabs(bs_levelset_eval(ls, 0, x, NULL, NULL) - v));
+          /* mid-cell the B-spline is not the trilinear average of random data */
+          if (i + 1 < n[0] && j + 1 < n[1] && k + 1 < n[2]) {
+            double y[3] = {x[0] + h / 2, x[1] + h / 2, x[2] + h / 2};
+            double c = bs_levelset_eval(ls, 0, y, NULL, NULL);
+            bs_error err;
+            cr_assert_eq(bs_levelset_grid_set_interp(ls, BS_GRID_LINEAR, &err), 0);
+            moff = fmax(moff, fabs(c - bs_levelset_eval(ls, 0, y, NULL, NULL)));
+            cr_assert_eq(bs_levelset_grid_set_interp(ls, BS_GRID_CUBIC, &err), 0);
+          }
+        }
+    cr_assert(m < 1e-14, "grid %d x %d x %d: spline misses a node by %g", n[0], n[1], n[2], m);
+    cr_assert(moff > 1e-3, "grid %d x %d x %d: cubic equals trilinear mid-cell (%g)", n[0], n[1], n[2], moff);
+    /* the samples themselves are returned unchanged */
+    cr_assert(memcmp(bs_levelset_grid_values(ls, NULL, NULL, NULL), vals, sizeof(double) * n[0] * n[1] * n[2]) == 0);
+    free(vals);
+    bs_levelset_destroy(&ls);
+  }
+}
+
+/* grad vs central differences of phi and Hessian vs central differences of
+ * grad for the cubic mode, at random points of the whole box (cells next to
+ * the boundary included) and at points ON cell faces: errors summed over the
+ * points fall as h^2 (ratio 4 per halving), except the Hessian's ON a face.
+ * There the third derivative jumps (the spline is C2, not C3), so the
+ * central difference of grad errs by e/4 times that jump: O(e), ratio 2,
+ * which is the expected behaviour of a continuous Hessian with a kink (a
+ * jump in the Hessian itself would give an O(1) error that does not fall). */
+Test(levelset, grid_cubic_derivatives_across_faces) {
+  const int32_t n[3] = {7, 6, 8};
+  const double h = 0.125, margin = 0.02, steps[3] = {h / 8, h / 16, h / 32};
+  double vals[7 * 6 * 8];
+  bs_levelset *ls = random_grid(n, h, vals);
+  for (int on_face = 0; on_face < 2; on_face++) {
+    double Eg[3] = {0}, EH[3] = {0};
+    for (int p = 0; p < 300; p++) {
+      double x[3];
+      for (int k = 0; k < 3; k++) x[k] = urange(margin, h * (n[k] - 1) - margin);
+      if (on_face) { /* one or two coordinates on an interior node plane */
+        int k = p % 3;
+        x[k] = h * (1 + (int)(urand() * (n[k] - 2)));
+        if (p % 2) x[(k + 1) % 3] = h * (1 + (int)(urand() * (n[(k + 1) % 3] - 2)));
+      }
+      double g[3], H[9];
+      bs_levelset_eval(ls, 0, x, g, H);
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < i; j++) cr_assert(H[3 * i + j] == H[3 * j + i], "Hessian asymmetric");
+      for (int s = 0; s < 3; s++) {
+        double eg, eH;
+        fd_errors(ls, 0, x, steps[s], &eg, &eH);
+        Eg[s] += eg;
+        EH[s] += eH;
+      }
+    }
+    for (int s = 0; s < 2; s++) {
+      double rg = Eg[s] / Eg[s + 1], rH = EH[s] / EH[s + 1];
+      cr_assert(rg > 3.5 && rg < 4.5, "%s: gradient FD error ratio %g (%g -> %g), expected 4",
+                on_face ? "on faces" : "random", rg, Eg[s], Eg[s + 1]);
+      double lo = on_face ? 1.7 : 3.5, hi = on_face ? 2.3 : 4.5;
+      cr_assert(rH > lo && rH < hi, "%s: Hessian FD error ratio %g (%g -> %g), expected %g",
+                on_face ? "on faces" : "random", rH, EH[s], EH[s + 1], on_face ? 2.0 : 4.0);
+    }
+    /* and small in absolute terms: for node data of unit size the third and
+     * fourth derivatives scale as 1/h^3 and 1/h^4, so e^2 / h^3 and e^2 / h^4 */
+    double e2 = steps[2] * steps[2], eH = on_face ? steps[2] * h : e2;
+    cr_assert(Eg[2] / 300 < 20 * e2 / (h * h * h) && EH[2] / 300 < 20 * eH / (h * h * h * h),
+              "mean FD errors %g, %g", Eg[2] / 300, EH[2] / 300);
+  }
+  bs_levelset_destroy(&ls);
+}
+
+/* Left and right limits on a cell face: the cubic B-spline's value, gradient
+ * and Hessian agree (C2) to round-off, on every interior face (those next to
+ * the boundary, where the stencil is folded, included); the trilinear
+ * gradient does not. */
+Test(levelset, grid_cubic_gradient_continuous_across_faces) {
+  const int32_t n[3] = {6, 5, 7};
+  const double h = 0.125, d = 1e-14; /* x = i h -+ d lies in cells i - 1 and i */
+  double vals[6 * 5 * 7];
+  bs_levelset *ls = random_grid(n, h, vals);
+  bs_error err;
+  double worst_g = 0, worst_H = 0, worst_lin = 1e9;
+  for (int k = 0; k < 3; k++)
+    for (int32_t i = 1; i + 1 < n[k]; i++)
+      for (int p = 0; p < 10; p++) {
+        double a[3], b[3];
+        for (int q = 0; q < 3; q++) a[q] = b[q] = urange(0.01, h * (n[q] - 1) - 0.01);
+        a[k] = h * i - d, b[k] = h * i + d;
+        double ga[3], gb[3], Ha[9], Hb[9];
+        cr_assert_eq(bs_levelset_grid_set_interp(ls, BS_GRID_CUBIC, &err), 0);
+        double fa = bs_levelset_eval(ls, 0, a, ga, Ha), fb = bs_levelset_eval(ls, 0, b, gb, Hb);
+        double ng = sqrt(ga[0] * ga[0] + ga[1] * ga[1] + ga[2] * ga[2]), nH = 0;
+        for (int q = 0; q < 9; q++) nH = fmax(nH, fabs(Ha[q]));
+        cr_assert(fabs(fa - fb) <= 4 * d * ng + 1e-15, "value jumps by %g across face %d of axis %d", fabs(fa - fb), i,
+                  k);
+        worst_g = fmax(worst_g, maxdiff(3, ga, gb) / ng);
+        worst_H = fmax(worst_H, maxdiff(9, Ha, Hb) / nH);
+        cr_assert_eq(bs_levelset_grid_set_interp(ls, BS_GRID_LINEAR, &err), 0);
+        bs_levelset_eval(ls, 0, a, ga, NULL);
+        bs_levelset_eval(ls, 0, b, gb, NULL);
+        ng = sqrt(ga[0] * ga[0] + ga[1] * ga[1] + ga[2] * ga[2]);
+        worst_lin = fmin(worst_lin, fabs(ga[k] - gb[k]) / ng);
+      }
+  cr_assert(worst_g < 1e-10, "cubic gradient jumps across a face by %g (relative)", worst_g);
+  cr_assert(worst_H < 1e-8, "cubic Hessian jumps across a face by %g (relative)", worst_H);
+  /* random data: the trilinear normal derivative jumps on every face */
+  cr_assert(worst_lin > 1e-6, "trilinear gradient continuous across a face? smallest jump %g", worst_lin);
+  bs_levelset_destroy(&ls);
+}
+
+/* The interpolation mode is not stored: a loaded grid is cubic and evaluates
+ * (value, gradient, Hessian) exactly as the saved one, in both modes. */
+Test(levelset, grid_cubic_save_load_round_trip) {
+  bs_levelset *torus = make_shape(4), *grid = NULL, *back = NULL;
+  bs_error err;
+  double lo[3] = {-1, -1.2, -0.7}, hi[3] = {1.2, 0.8, 1.3};
+  cr_assert_eq(bs_levelset_grid_sample(torus, 0, lo, hi, 0.1, &grid, &err), 0, "%s", err.msg);
+  char path[256];
+  temp_path(path, sizeof path, "cubic");
+  cr_assert_eq(bs_levelset_grid_set_interp(grid, BS_GRID_LINEAR, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_save(grid, path, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_load(path, &back, &err), 0, "%s", err.msg);
+  remove(path);
+  cr_assert_eq(bs_levelset_grid_get_interp(back), BS_GRID_CUBIC, "a loaded grid is cubic");
+  for (int mode = BS_GRID_CUBIC; mode <= BS_GRID_LINEAR; mode++) {
+    cr_assert_eq(bs_levelset_grid_set_interp(grid, (bs_grid_interp)mode, &err), 0);
+    cr_assert_eq(bs_levelset_grid_set_interp(back, (bs_grid_interp)mode, &err), 0);
+    for (int i = 0; i < 200; i++) {
+      double x[3] = {urange(-1.5, 1.5), urange(-1.5, 1.5), urange(-1.5, 1.5)}, g1[3], g2[3], H1[9], H2[9];
+      double f1 = bs_levelset_eval(grid, 0, x, g1, H1), f2 = bs_levelset_eval(back, 0, x, g2, H2);
+      cr_assert(f1 == f2 && memcmp(g1, g2, sizeof g1) == 0 && memcmp(H1, H2, sizeof H1) == 0,
+                "%s: loaded grid differs at (%g, %g, %g)", bs_grid_interp_name((bs_grid_interp)mode), x[0], x[1],
+                x[2]);
+    }
+  }
+  bs_levelset_destroy(&grid);
+  bs_levelset_destroy(&back);
+  bs_levelset_destroy(&torus);
+}
+
+Test(levelset, grid_set_interp_errors_name_the_culprit) {
+  bs_error err;
+  const double c[3] = {0, 0, 0};
+  bs_levelset *sphere = NULL, *grid = NULL;
+  cr_assert_eq(bs_levelset_create_sphere(c, 1, &sphere, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_set_interp(sphere, BS_GRID_CUBIC, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "sphere"), "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_set_interp(NULL, BS_GRID_CUBIC, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "NULL"), "%s", err.msg);
+  const double lo[3] = {-1.5, -1.5, -1.5}, hi[3] = {1.5, 1.5, 1.5};
+  cr_assert_eq(bs_levelset_grid_sample(sphere, 0, lo, hi, 0.5, &grid, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_set_interp(grid, (bs_grid_interp)7, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "mode = 7"), "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_get_interp(grid), BS_GRID_CUBIC, "a rejected mode leaves the grid unchanged");
+  cr_assert_str_eq(bs_grid_interp_name(BS_GRID_LINEAR), "linear");
+  cr_assert_str_eq(bs_grid_interp_name(BS_GRID_CUBIC), "cubic");
+  bs_levelset_destroy(&grid);
+  bs_levelset_destroy(&sphere);
 }
 
 static void write_bytes(const char *path, const void *data, size_t n) {
