@@ -42,7 +42,8 @@ typedef struct bs_fem {
   int n_materials;
   bs_material *materials;
   int32_t *tet_material;/* per tet: index into materials                      */
-  bs_bsr *pattern;      /* the block pattern (values unused; copy it)        */
+  bs_bsr *pattern;      /* the block pattern: structure only, val is NULL
+                           (make matrices with bs_fem_matrix)                */
   int32_t *slots;       /* 16 per tet: slot of block (a, b) at 4*a + b       */
   int n_colors;
   int32_t *color_ptr;   /* n_colors + 1                                      */

@@ -152,6 +152,9 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
       }
   }
   if ((st = color_tets(f, err))) goto fail;
+  /* The pattern is structure only: matrices are made with bs_fem_matrix. */
+  free(f->pattern->val);
+  f->pattern->val = NULL;
   *out = f;
   return 0;
 fail:
@@ -160,13 +163,8 @@ fail:
 }
 
 int bs_fem_matrix(const bs_fem *fem, bs_bsr **out, bs_error *err) {
-  int32_t *ptr = NULL, *adj = NULL;
-  int st = bs_mesh_vertex_graph(fem->mesh, &ptr, &adj, err);
-  if (st) return st;
-  st = bs_bsr_create(fem->n_vertices, ptr, adj, out, err);
-  free(ptr);
-  free(adj);
-  return st;
+  /* the pattern's own rows as the graph (self loops are allowed): same blocks */
+  return bs_bsr_create(fem->n_vertices, fem->pattern->row_ptr, fem->pattern->col, out, err);
 }
 
 void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], double scale, bs_bsr *H) {
