@@ -159,6 +159,16 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   return 0;
 }
 
+/* The Hessian when the minimizer hands over grad E'(x): no second gradient. */
+static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
+  bs_integrator *I = ctx;
+  bs_bsr_zero(H);
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i])) I->terms[i]->ops->hessian(I->terms[i], x, H);
+  I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
+  return 0;
+}
+
 static void hook_project_gradient(const double *x, double *g, void *ctx) {
   bs_integrator *I = ctx;
   I->hooks.project_gradient(x, g, I->hooks.ctx);
@@ -184,6 +194,7 @@ static void make_objective(bs_integrator *I, bs_objective *o) {
   o->project = I->hooks.project ? hook_project : NULL;
   o->register_active = I->hooks.register_active ? hook_register : NULL;
   o->project_gradient = I->hooks.project_gradient ? hook_project_gradient : NULL;
+  o->hessian_g = I->hooks.project_hessian ? obj_hessian_g : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->ctx = I;
 }

@@ -161,6 +161,9 @@ typedef struct bs_objective {
      grad E' for the pairs labeled active by the last register_active (for a level-set
      constraint with normal n at an active vertex: g_v <- g_v - (g_v.n) n). */
   void (*project_gradient)(const double *x, double *g, void *ctx);
+  /* Optional (NULL): called instead of hessian, with g_raw = the unprojected gradient the
+     minimizer has just computed at the same x (saves the objective recomputing it). */
+  int (*hessian_g)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
   /* Optional (NULL), added: called after every accepted step of bs_minimize. */
   void (*trace)(const bs_min_iter *it, void *ctx);
   void *ctx;

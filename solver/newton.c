@@ -70,7 +70,7 @@ int bs_newton(bs_minimizer *m, const bs_objective *obj, int k_steps, double *x, 
       }
     }
     double t = bs_seconds();
-    int hrc = obj->hessian(x, m->H, obj->ctx);
+    int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
     st->t_assembly += bs_seconds() - t;
     if (hrc) {
       bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);
