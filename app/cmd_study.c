@@ -84,7 +84,7 @@ typedef struct run {
   char name[512], dir[1400];
   int n_sets;
   char **sets;     /* owned: "key=value" */
-  int todo;
+  int pending;
   pid_t pid;
   double t0;
   /* from the run's scene */
@@ -455,9 +455,9 @@ static void progress(int done, int total, double t0, int final) {
   fflush(stderr);
 }
 
-/* Runs the runs marked todo, at most S->jobs at a time. */
-static int run_all(study *S, int n_todo) {
-  if (n_todo == 0) return 0;
+/* Runs the pending runs, at most S->jobs at a time. */
+static int run_all(study *S, int n_pending) {
+  if (n_pending == 0) return 0;
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   char omp[16];
   const char *ompp = NULL;
@@ -468,11 +468,11 @@ static int run_all(study *S, int n_todo) {
   }
   double t0 = bs_seconds();
   int next = 0, running = 0, done = 0, rc = 0;
-  progress(0, n_todo, t0, 0);
-  while (done < n_todo) {
+  progress(0, n_pending, t0, 0);
+  while (done < n_pending) {
     while (running < S->jobs && next < S->n_runs) {
       run *r = &S->runs[next++];
-      if (!r->todo) continue;
+      if (!r->pending) continue;
       if (start_run(S, r, ompp)) {
         r->exit_code = 127;
         done++;
@@ -491,7 +491,7 @@ static int run_all(study *S, int n_todo) {
     }
     for (int i = 0; i < S->n_runs; i++) {
       run *r = &S->runs[i];
-      if (r->todo && r->pid == pid) {
+      if (r->pending && r->pid == pid) {
         r->pid = 0;
         r->wall = bs_seconds() - r->t0;
         r->maxrss_kib = ru.ru_maxrss;
@@ -499,7 +499,7 @@ static int run_all(study *S, int n_todo) {
         write_done(r);
         running--;
         done++;
-        progress(done, n_todo, t0, done == n_todo);
+        progress(done, n_pending, t0, done == n_pending);
         break;
       }
     }
@@ -1327,17 +1327,17 @@ int bs_cmd_study(int argc, char **argv) {
     goto done;
   }
   /* what is left to run */
-  int n_todo = 0;
+  int n_pending = 0;
   for (int i = 0; i < S.n_runs; i++) {
     run *r = &S.runs[i];
     char args[8192];
     args_line(r, args, sizeof args);
-    r->todo = !(read_done(r, args) == 0 && frames_complete(r));
-    n_todo += r->todo;
+    r->pending = !(read_done(r, args) == 0 && frames_complete(r));
+    n_pending += r->pending;
   }
-  printf("study %s: %d runs, %d to do (%d done before), in %s\n", S.name, S.n_runs, n_todo, S.n_runs - n_todo, S.out);
+  printf("study %s: %d runs, %d to do (%d done before), in %s\n", S.name, S.n_runs, n_pending, S.n_runs - n_pending, S.out);
   fflush(stdout);
-  run_all(&S, n_todo);
+  run_all(&S, n_pending);
 
   /* results */
   for (int i = 0; i < S.n_runs; i++) read_costs(&S.runs[i]);

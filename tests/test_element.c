@@ -31,39 +31,7 @@ static double tet_det(const double X[12]) {
   return D[0] * (D[4] * D[8] - D[5] * D[7]) - D[1] * (D[3] * D[8] - D[5] * D[6]) + D[2] * (D[3] * D[7] - D[4] * D[6]);
 }
 
-/* Eigenvalues of a symmetric n x n matrix (n <= 12), cyclic Jacobi: the PSD
- * check used by these tests only. */
-static void sym_eigvals(int n, const double *A_in, double *lam) {
-  double A[144];
-  memcpy(A, A_in, sizeof(double) * n * n);
-  for (int sweep = 0; sweep < 100; sweep++) {
-    double off = 0, diag = 0;
-    for (int p = 0; p < n; p++) {
-      diag += A[p * n + p] * A[p * n + p];
-      for (int q = p + 1; q < n; q++) off += A[p * n + q] * A[p * n + q];
-    }
-    if (off <= 1e-36 * diag || off == 0) break;
-    for (int p = 0; p < n; p++)
-      for (int q = p + 1; q < n; q++) {
-        double apq = A[p * n + q];
-        if (apq == 0) continue;
-        double th = (A[q * n + q] - A[p * n + p]) / (2 * apq);
-        double t = (th >= 0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1));
-        double c = 1 / sqrt(t * t + 1), s = t * c;
-        for (int k = 0; k < n; k++) {
-          double akp = A[k * n + p], akq = A[k * n + q];
-          A[k * n + p] = c * akp - s * akq;
-          A[k * n + q] = s * akp + c * akq;
-        }
-        for (int k = 0; k < n; k++) {
-          double apk = A[p * n + k], aqk = A[q * n + k];
-          A[p * n + k] = c * apk - s * aqk;
-          A[q * n + k] = s * apk + c * aqk;
-        }
-      }
-  }
-  for (int i = 0; i < n; i++) lam[i] = A[i * n + i];
-}
+#include "test_dense.h"
 
 static const bs_model models[5] = {BS_MODEL_FIXED_COROTATED, BS_MODEL_COROTATED, BS_MODEL_NEO_HOOKEAN,
                                    BS_MODEL_STABLE_NEO_HOOKEAN, BS_MODEL_LINEAR};
@@ -377,7 +345,7 @@ Test(element, invariants) {
         }
       cr_assert(dmax <= 1e-12 * Hs, "%s: Hessian differs from the dense G^T K G by %g", bs_model_name(m.model), dmax);
       /* the projected Hessian is PSD */
-      sym_eigvals(12, Hp, lam);
+      sym_eig_dense(12, Hp, lam, NULL);
       double lmin = lam[0], lmax = fabs(lam[0]);
       for (int k = 1; k < 12; k++) lmin = fmin(lmin, lam[k]), lmax = fmax(lmax, fabs(lam[k]));
       cr_assert(lmin >= -1e-10 * lmax, "%s %s: projected Hessian eigenvalue %g (max %g)", bs_model_name(m.model),
