@@ -42,10 +42,14 @@
  * Hessian blocks: a colliding vertex couples with its primitive's vertices,
  * which need not share a tet with it, so block (p, q) may be missing from the
  * fem's pattern (which the minimizer's matrix copies). bs_term hessian adds
- * every block that exists (diagonal blocks always) and counts the missing
- * ones (stats.missing_blocks); bs_term_self_missing_blocks returns them at x,
- * and bs_self_coupling_pairs lists the vertex pairs a collision within a
- * distance margin may couple, so that a pattern can be built with them.
+ * every block that exists (diagonal blocks always) and puts the others in the
+ * matrix's extra list (bs_bsr_add_block; the term asks for room for them in
+ * term->hessian_extra = 6 per boundary vertex, which the integrator reserves
+ * in the minimizer's Hessian), so that the Newton system holds the whole
+ * Hessian. Blocks that find no room are dropped and counted
+ * (stats.missing_blocks); bs_term_self_missing_blocks returns the off-pattern
+ * blocks at x, and bs_self_coupling_pairs lists the vertex pairs a collision
+ * within a distance margin may couple.
  *
  * Friction (section 5.3): for each colliding p with primitive vertices n_i
  * and closest-point barycentric weights w_i (w_0 = -1 for p), force f =
@@ -99,7 +103,7 @@ int bs_term_is_self(const bs_term *t);
 typedef struct bs_self_stats {
   int32_t colliding;      /* colliding vertices at the last evaluation          */
   double max_depth;       /* largest distance to the primitive then (m)         */
-  int64_t missing_blocks; /* coupling blocks the last Hessian could not store   */
+  int64_t missing_blocks; /* coupling blocks the last Hessian dropped (no room)  */
   int64_t evaluations;    /* evaluations since creation or the last reset       */
   int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step)          */
   double t_rebuild;       /* seconds: hierarchy topology rebuilds               */

@@ -379,6 +379,13 @@ void bs_obstacles_project_hessian(const double *x, const double *g, bs_bsr *H, v
       for (int k = 0; k < 9; k++) D[k] += C[k];
     }
   }
+  /* The same for the blocks outside the pattern (self-collision couplings). */
+  for (int64_t e = 0; e < H->n_extra; e++) {
+    int32_t i = H->extra_ij[2 * e], j = H->extra_ij[2 * e + 1];
+    double *B = H->extra_val + 9 * (size_t)e;
+    if (o->vact[j]) mat3_mul(B, o->J + 9 * (size_t)j, B);
+    if (o->vact[i]) mat3_tmul(o->J + 9 * (size_t)i, B, B);
+  }
 }
 
 /* ---- after the solve: postprocess push and friction --------------------------- */

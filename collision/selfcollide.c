@@ -739,6 +739,8 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
         for (int r = 0; r < 3; r++)
           for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
         if (s < 0) {
+          /* Off the fem pattern: into H's extra list when it has room. */
+          if (H && bs_bsr_add_block(H, c->v[a], c->v[b], B) > 0) continue;
           missing++;
           if (fn) fn(c->v[a], c->v[b], B, ctx);
           continue;
@@ -844,6 +846,8 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
   t->fem = fem;
   t->step = step;
   t->expensive = 1;
+  /* A colliding vertex couples with at most 3 primitive vertices: 6 blocks. */
+  t->hessian_extra = 6 * (int64_t)d->n_surf;
   t->data = d;
   *out = t;
   return 0;

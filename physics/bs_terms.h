@@ -60,6 +60,8 @@ struct bs_term {
   const bs_step_data *step;
   int dynamic_only;          /* 1: skipped in static solves (inertia, damping, drag) */
   int expensive;             /* 1: may be skipped in line searches (section 3.3)    */
+  int64_t hessian_extra;     /* most Hessian blocks it adds outside the fem pattern  */
+                             /* (bs_bsr extra list; 0 for every term but self-collision) */
   void *data;
 };
 

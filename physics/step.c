@@ -98,6 +98,9 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   step->x_n = I->x_n;
   step->load = 1.0;
   step->dt = 0;
+  /* Room for the Hessian blocks the terms may add outside the pattern. */
+  I->opts.min.hessian_extra = 0;
+  for (int i = 0; i < n_terms; i++) I->opts.min.hessian_extra += terms[i]->hessian_extra;
   int st = bs_minimizer_create(fem->pattern, &I->opts.min, &I->min, err);
   if (st) {
     bs_integrator_destroy(&I);

@@ -14,10 +14,21 @@
  * Masks: a mask is n bytes, 1 = free vertex, 0 = constrained vertex (all three
  * dofs); NULL means all free.
  *
+ * Extra blocks: a matrix may reserve room for blocks outside its pattern
+ * (bs_bsr_reserve_extra), kept as an unsorted list of (i, j, block) with
+ * i != j; duplicates are allowed and add up. They are for couplings that a
+ * fixed pattern cannot foresee (self-collision: a vertex and the triangle it
+ * penetrates, which need not share a tet). bs_bsr_add_block puts a block in
+ * its slot when the pattern has it, else in the list; bs_bsr_zero empties the
+ * list; bs_bsr_mul and bs_bsr_check include it. Code that reads val directly
+ * (the block-Jacobi preconditioner: diagonal blocks only, which are always in
+ * the pattern; the CHOLMOD copy: pattern blocks only, so with extras CHOLMOD
+ * solves with a part of the matrix) sees the pattern's blocks only.
+ *
  * Ownership: bs_bsr_create allocates the struct and its arrays; the caller owns
  * it and frees it with bs_bsr_destroy (accepts NULL, nulls the pointer). The
  * pattern (row_ptr, col, diag) never changes after creation; assemblers write
- * val only.
+ * val (and the extra list) only.
  *
  * Status: 0 ok; BS_EINPUT for a malformed graph (index out of range, negative
  * count) or a failed check (bs_bsr_check: asymmetry, unsorted or missing
@@ -46,6 +57,10 @@ typedef struct bs_bsr {
   int32_t *col;     /* nnzb, sorted within each row, the diagonal always present          */
   int32_t *diag;    /* n: slot of block (i,i)                                              */
   double *val;      /* 9 * nnzb, each block row-major: val[9*s + 3*a + b] = A(3i+a, 3j+b)  */
+  int64_t n_extra;   /* extra blocks stored (0 <= n_extra <= cap_extra)                    */
+  int64_t cap_extra; /* room reserved by bs_bsr_reserve_extra (0: none)                    */
+  int32_t *extra_ij; /* 2 * cap_extra: block e is (extra_ij[2e], extra_ij[2e+1]), i != j    */
+  double *extra_val; /* 9 * cap_extra: block e row-major, as in val                        */
 } bs_bsr;
 
 /* Pattern from a vertex adjacency graph in CSR (adj_ptr: n + 1 offsets, adj:
@@ -61,18 +76,32 @@ void bs_bsr_destroy(bs_bsr **A);
  * not hot loops). */
 int32_t bs_bsr_slot(const bs_bsr *A, int32_t i, int32_t j);
 
-/* Sets every stored value to 0 (the pattern stays). */
+/* Sets every stored value to 0 (the pattern stays) and empties the extra list. */
 void bs_bsr_zero(bs_bsr *A);
+
+/* Reserves room for cap >= 0 extra blocks (replacing any earlier reservation
+ * and its blocks). BS_EINPUT for a negative cap, BS_ENOMEM. */
+int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err);
+
+/* A_ij += B (row-major 3x3): into the slot of (i,j) when the pattern has it,
+ * else appended to the extra list. Returns 0 (slot), 1 (extra list) or -1
+ * (dropped: no slot and the list is full, or i, j out of range). Sequential:
+ * one thread at a time per matrix. */
+int bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]);
 
 /* y = A x. With mask (n bytes, 1 = free, 0 = constrained; NULL = all free):
  * y_i = sum over free j of A_ij x_j for free i, and y_i = 0 for constrained i.
- * x and y have 3n entries and must not overlap. OpenMP over rows. */
+ * x and y have 3n entries and must not overlap. OpenMP over rows; the extra
+ * blocks are added afterwards, sequentially in list order. */
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 
 /* Checker (an invariant test, not for hot loops): row_ptr monotone, columns in
  * range and strictly increasing within each row, diag[i] pointing at (i,i),
  * pattern symmetric ((i,j) stored iff (j,i) stored), values finite, and values
  * symmetric to relative tolerance: |A_ij - A_ji^T| <= tol * max|A| entrywise.
+ * Extra blocks: indices in range with i != j, values finite, and the sum of
+ * the extras at (i,j) equal to the transpose of the sum at (j,i) within the
+ * same bound (quadratic in n_extra: extras are few).
  * Returns 0, BS_EINPUT (structure or symmetry) or BS_ENUMERIC (non-finite);
  * the message names the block (i,j) and, for values, the entry. */
 int bs_bsr_check(const bs_bsr *A, double tol, bs_error *err);

@@ -183,9 +183,13 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
   int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
                        /* step predicts, |g.d|, is below the rounding level of E            */
-                       /* (64 eps |E|), accept alpha = 1 if E(y) <= E(x) + 64 eps |E| and   */
-                       /* |phi'(1)| <= c2 |phi'(0)| (an approximate Wolfe point), so that   */
-                       /* tol can go below what E resolves; counted in noise_steps         */
+                       /* (64 eps |E|) and a = 1 fails sufficient decrease, search on the   */
+                       /* slope for an approximate Wolfe point (Hager & Zhang 2005):        */
+                       /* E(y) <= E(x) + 64 eps |E|, c2 phi'(0) <= phi'(a) <= -0.8 phi'(0), */
+                       /* so that tol can go below what E resolves; counted in noise_steps */
+  int64_t hessian_extra; /* added: room for Hessian blocks outside the pattern (bs_bsr     */
+                       /* extra list, e.g. self-collision couplings), default 0; read by   */
+                       /* bs_minimizer_create only                                          */
 } bs_minimize_opts;
 
 /* Fills the defaults listed above. */

@@ -34,6 +34,8 @@ void bs_bsr_destroy(bs_bsr **A) {
   free((*A)->col);
   free((*A)->diag);
   free((*A)->val);
+  free((*A)->extra_ij);
+  free((*A)->extra_val);
   free(*A);
   *A = NULL;
 }
@@ -133,6 +135,57 @@ void bs_bsr_zero(bs_bsr *A) {
 #pragma omp parallel for schedule(static) if (n > 4096)
   for (int32_t i = 0; i < n; ++i)
     memset(v + 9 * (int64_t)rp[i], 0, 9 * (size_t)(rp[i + 1] - rp[i]) * sizeof *v);
+  A->n_extra = 0;
+}
+
+int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err) {
+  if (!A) return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: matrix is NULL");
+  if (cap < 0) return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: cap = %lld is negative", (long long)cap);
+  free(A->extra_ij);
+  free(A->extra_val);
+  A->extra_ij = NULL;
+  A->extra_val = NULL;
+  A->n_extra = A->cap_extra = 0;
+  if (cap == 0) return BS_OK;
+  A->extra_ij = bs_calloc(2 * (size_t)cap, sizeof *A->extra_ij, "bs_bsr extra blocks", err);
+  A->extra_val = bs_calloc(9 * (size_t)cap, sizeof *A->extra_val, "bs_bsr extra blocks", err);
+  if (!A->extra_ij || !A->extra_val) {
+    free(A->extra_ij);
+    free(A->extra_val);
+    A->extra_ij = NULL;
+    A->extra_val = NULL;
+    return BS_ENOMEM;
+  }
+  A->cap_extra = cap;
+  return BS_OK;
+}
+
+int bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]) {
+  const int32_t s = i == j && i >= 0 && i < A->n ? A->diag[i] : bs_bsr_slot(A, i, j);
+  if (s >= 0) {
+    double *a = A->val + 9 * (int64_t)s;
+    for (int e = 0; e < 9; ++e) a[e] += B[e];
+    return 0;
+  }
+  if (i < 0 || i >= A->n || j < 0 || j >= A->n || A->n_extra >= A->cap_extra) return -1;
+  const int64_t e = A->n_extra++;
+  A->extra_ij[2 * e] = i;
+  A->extra_ij[2 * e + 1] = j;
+  memcpy(A->extra_val + 9 * e, B, 9 * sizeof *B);
+  return 1;
+}
+
+/* y += extra blocks x (sequential, list order), honouring the mask. */
+static void mul_extra(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+  for (int64_t e = 0; e < A->n_extra; ++e) {
+    const int32_t i = A->extra_ij[2 * e], j = A->extra_ij[2 * e + 1];
+    if (mask && (!mask[i] || !mask[j])) continue;
+    const double *a = A->extra_val + 9 * e, *xj = x + 3 * (int64_t)j;
+    double *yi = y + 3 * (int64_t)i;
+    yi[0] += a[0] * xj[0] + a[1] * xj[1] + a[2] * xj[2];
+    yi[1] += a[3] * xj[0] + a[4] * xj[1] + a[5] * xj[2];
+    yi[2] += a[6] * xj[0] + a[7] * xj[1] + a[8] * xj[2];
+  }
 }
 
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
@@ -155,6 +208,7 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
       y[3 * (int64_t)i + 1] = y1;
       y[3 * (int64_t)i + 2] = y2;
     }
+    mul_extra(A, NULL, x, y);
     return;
   }
   /* Masked: written without data-dependent branches (selects instead), because
@@ -183,6 +237,48 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
     y[3 * (int64_t)i + 1] = f ? y1 : 0.0;
     y[3 * (int64_t)i + 2] = f ? y2 : 0.0;
   }
+  mul_extra(A, mask, x, y);
+}
+
+/* The extra list: indices, finiteness, and symmetry of the summed blocks. */
+static int check_extra(const bs_bsr *A, double tol, double amax, bs_error *err) {
+  if (A->n_extra < 0 || A->n_extra > A->cap_extra || (A->n_extra > 0 && (!A->extra_ij || !A->extra_val)))
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_check: extra list holds %lld blocks with room for %lld",
+                        (long long)A->n_extra, (long long)A->cap_extra);
+  for (int64_t e = 0; e < A->n_extra; ++e) {
+    const int32_t i = A->extra_ij[2 * e], j = A->extra_ij[2 * e + 1];
+    if (i < 0 || i >= A->n || j < 0 || j >= A->n || i == j)
+      return bs_error_set(err, BS_EINPUT, "bs_bsr_check: extra block %lld is (%d,%d): out of range or diagonal",
+                          (long long)e, (int)i, (int)j);
+    for (int k = 0; k < 9; ++k) {
+      const double v = A->extra_val[9 * e + k];
+      if (!isfinite(v))
+        return bs_error_set(err, BS_ENUMERIC, "bs_bsr_check: extra block (%d,%d) entry (%d,%d) is not finite (%g)",
+                            (int)i, (int)j, k / 3, k % 3, v);
+      if (fabs(v) > amax) amax = fabs(v);
+    }
+  }
+  const double bound = tol * amax;
+  for (int64_t e = 0; e < A->n_extra; ++e) {
+    const int32_t i = A->extra_ij[2 * e], j = A->extra_ij[2 * e + 1];
+    double s[9] = {0}, t[9] = {0};
+    for (int64_t f = 0; f < A->n_extra; ++f) {
+      const int32_t p = A->extra_ij[2 * f], q = A->extra_ij[2 * f + 1];
+      const double *b = A->extra_val + 9 * f;
+      if (p == i && q == j)
+        for (int k = 0; k < 9; ++k) s[k] += b[k];
+      if (p == j && q == i)
+        for (int k = 0; k < 9; ++k) t[k] += b[k];
+    }
+    for (int p = 0; p < 3; ++p)
+      for (int q = 0; q < 3; ++q)
+        if (fabs(s[3 * p + q] - t[3 * q + p]) > bound)
+          return bs_error_set(err, BS_EINPUT,
+                              "bs_bsr_check: extra blocks (%d,%d) entry (%d,%d) = %.17g differ from the transpose of "
+                              "extra blocks (%d,%d) (%.17g)",
+                              (int)i, (int)j, p, q, s[3 * p + q], (int)j, (int)i, t[3 * q + p]);
+  }
+  return BS_OK;
 }
 
 int bs_bsr_check(const bs_bsr *A, double tol, bs_error *err) {
@@ -257,5 +353,5 @@ int bs_bsr_check(const bs_bsr *A, double tol, bs_error *err) {
                                 b[3 * q + p], diff, tol, amax);
         }
     }
-  return BS_OK;
+  return check_extra(A, tol, amax, err);
 }

@@ -103,6 +103,51 @@ static double trial(ls_state *s, double a, int want_grad, int *has_grad, double 
   return E;
 }
 
+/* Rounding-level search (opts.accept_noise; paper 3.3): when the decrease the
+ * direction predicts, |phi'(0)|, is below the rounding level of E, values of
+ * phi cannot rank trial points, but slopes still can. Hager and Zhang's
+ * approximate Wolfe conditions (SIAM J. Optim. 16, 2005, with delta = 0.1 and
+ * sigma = c2) ask only
+ *     phi(a) <= phi(0) + noise  and  c2 phi'(0) <= phi'(a) <= (2 delta - 1) phi'(0),
+ * a point where the slope has fallen by the factor c2 without overshooting
+ * far. The bracket on the slope's sign is narrowed by the secant of phi'
+ * (kept 10% inside the bracket, else bisection); a = 1 first, doubling while
+ * the slope stays steep and no upper end is known. Gradients are evaluated at
+ * every trial point (no lower-bound shortcut: these searches are rare and
+ * short). Returns 1 with res filled when a point is found within the budget. */
+static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__ls_result *res) {
+  const double c2 = s->m->opts.c2, noise = bs__noise_level(s->phi0);
+  const double up = -0.8 * dphi0, down = c2 * dphi0; /* accept phi' in [down, up] */
+  double lo = 0, dlo = dphi0, hi = NAN, dhi = NAN, a = 1.0;
+  for (int k = 0; k < budget; ++k) {
+    double dphi;
+    make_point(s, a);
+    const double phi = grad_here(s, &dphi);
+    ++*evals;
+    if (!(phi <= s->phi0 + noise) || !isfinite(dphi) || dphi > up) {
+      hi = a, dhi = isfinite(dphi) && phi <= s->phi0 + noise ? dphi : NAN;
+    } else if (dphi < down) {
+      lo = a, dlo = dphi;
+    } else {
+      res->status = 2;
+      res->alpha = a;
+      res->phi = phi;
+      res->dphi = dphi;
+      return 1;
+    }
+    if (isnan(hi)) {
+      a = 2 * a;
+      if (a > ALPHA_MAX) return 0;
+      continue;
+    }
+    const double w = hi - lo;
+    if (!(w > 4.0 * DBL_EPSILON * hi)) return 0;
+    double c = isfinite(dhi) && dhi != dlo ? lo - dlo * w / (dhi - dlo) : NAN;
+    a = isfinite(c) ? fmin(fmax(c, lo + 0.1 * w), hi - 0.1 * w) : lo + 0.5 * w;
+  }
+  return 0;
+}
+
 void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0, double dphi0,
                      bs_minimize_stats *st, bs__ls_result *res) {
   const bs_minimize_opts *o = &m->opts;
@@ -134,18 +179,16 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
     double dphi, phi = trial(&s, a, 1, &hg, &dphi);
     ++evals;
     if (hg) NOTE_BEST(a, phi);
-    if (i == 0 && o->accept_noise && hg && !(phi <= phi0 + c1 * a * dphi0)) {
-      /* E cannot resolve the decrease this step predicts (paper 3.3): accept
-       * a = 1 if E is unchanged within its rounding and the slope fell. */
-      const double noise = bs__noise_level(phi0);
-      if (-dphi0 <= noise && phi <= phi0 + noise && fabs(dphi) <= -c2 * dphi0) {
+    if (i == 0 && o->accept_noise && !(phi <= phi0 + c1 * a * dphi0) && -dphi0 <= bs__noise_level(phi0)) {
+      /* E cannot resolve the decrease this step predicts (paper 3.3): search
+       * on the slope (approximate Wolfe conditions) instead. */
+      if (noise_search(&s, dphi0, o->max_ls - evals, &evals, res)) {
         res->evals = evals;
-        res->status = 2;
-        res->alpha = a;
-        res->phi = phi;
-        res->dphi = dphi;
         return;
       }
+      /* None found: the trial points stay what they were (phi(1) is the
+       * one the bracket below starts from). */
+      if (evals >= o->max_ls) goto capped;
     }
     if (!(phi <= phi0 + c1 * a * dphi0) || (i > 0 && phi >= phi_prev)) {
       lo = a_prev, phi_lo = phi_prev, dphi_lo = dphi_prev;

@@ -152,6 +152,9 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
   if (!(o->newton_rel_tol > 0) || !isfinite(o->newton_rel_tol))
     return bs_error_set(err, BS_EINPUT, "minimizer option newton_rel_tol must be finite and > 0, got %g",
                         o->newton_rel_tol);
+  if (o->hessian_extra < 0)
+    return bs_error_set(err, BS_EINPUT, "minimizer option hessian_extra must be >= 0, got %lld",
+                        (long long)o->hessian_extra);
   return 0;
 }
 
@@ -208,6 +211,11 @@ int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_
     return bs_error_set(err, BS_EINPUT,
                         "bs_minimizer_create: pattern is malformed (nnzb %lld, but its rows hold %lld distinct blocks)",
                         (long long)pattern->nnzb, (long long)m->H->nnzb);
+  }
+  if (o.hessian_extra > 0 && (rc = bs_bsr_reserve_extra(m->H, o.hessian_extra, err))) {
+    bs_error_prefix(err, "minimizer: Hessian blocks outside the pattern");
+    bs_minimizer_destroy(&m);
+    return rc;
   }
   size_t N = m->n3 > 0 ? (size_t)m->n3 : 1;
   double **vecs[] = {&m->g_raw, &m->g, &m->d, &m->r, &m->y, &m->gy_raw, &m->gy};

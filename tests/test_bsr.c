@@ -276,3 +276,64 @@ Test(bsr, check_catches_asymmetry_and_names_block) {
   free(adj);
   bs_bsr_destroy(&A);
 }
+
+/* Extra blocks (outside the pattern): add_block routes to the slot or the
+ * list, the product (plain and masked) matches a dense product that includes
+ * them, the checker catches an unmatched transpose, zero empties the list. */
+Test(bsr, extra_blocks_enter_the_product_and_the_checker) {
+  const int32_t n = 6;
+  /* A path graph 0-1-2-3-4-5: (0,5) and (1,4) are not in the pattern. */
+  int32_t ptr[7] = {0, 1, 3, 5, 7, 9, 10}, adj[10] = {1, 0, 2, 1, 3, 2, 4, 3, 5, 4};
+  bs_bsr *A;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  fill_random(A);
+  symmetrize(A);
+  double D[18][18];
+  memset(D, 0, sizeof D);
+  for (int32_t i = 0; i < n; ++i)
+    for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s)
+      for (int e = 0; e < 9; ++e) D[3 * i + e / 3][3 * A->col[s] + e % 3] = A->val[9 * s + e];
+  double B[9];
+  for (int e = 0; e < 9; ++e) B[e] = urand();
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), -1, "no room reserved: the block must be dropped");
+  cr_assert_eq(bs_bsr_reserve_extra(A, 3, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_bsr_reserve_extra(A, -1, &err), BS_EINPUT);
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), 1);
+  double Bt[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) Bt[3 * a + b] = B[3 * b + a];
+  /* the checker sees (0,5) without its transpose */
+  cr_assert_eq(bs_bsr_check(A, 1e-12, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "extra blocks (0,5)"), "%s", err.msg);
+  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), 1);
+  cr_assert_eq(bs_bsr_check(A, 1e-12, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_bsr_add_block(A, 1, 2, B), 0, "(1,2) is in the pattern: into its slot");
+  cr_assert_eq(bs_bsr_add_block(A, 2, 1, Bt), 0);
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), 1, "duplicates add up in the list");
+  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), -1, "the list is full");
+  for (int e = 0; e < 9; ++e) {
+    D[e / 3][15 + e % 3] += 2 * B[e];
+    D[15 + e / 3][e % 3] += Bt[e];
+    D[3 + e / 3][6 + e % 3] += B[e];
+    D[6 + e / 3][3 + e % 3] += Bt[e];
+  }
+  double x[18], y[18];
+  for (int k = 0; k < 18; ++k) x[k] = urand();
+  uint8_t mask[6] = {1, 1, 1, 1, 1, 0};
+  for (int masked = 0; masked < 2; ++masked) {
+    bs_bsr_mul(A, masked ? mask : NULL, x, y);
+    for (int r = 0; r < 18; ++r) {
+      double ref = 0;
+      if (!masked || mask[r / 3])
+        for (int c = 0; c < 18; ++c)
+          if (!masked || mask[c / 3]) ref += D[r][c] * x[c];
+      cr_assert(fabs(y[r] - ref) <= 1e-13 * (1 + fabs(ref)), "masked %d row %d: %.17g vs %.17g", masked, r,
+                y[r], ref);
+    }
+  }
+  bs_bsr_zero(A);
+  cr_assert_eq(A->n_extra, 0);
+  cr_assert_eq(bs_bsr_add_block(A, 1, 4, B), 1, "room is back after zero");
+  bs_bsr_destroy(&A);
+}
