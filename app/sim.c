@@ -124,7 +124,7 @@ void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth) {
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth) {
   *count = 0;
   *max_depth = 0;
-  if (s->obstacles) bs_obstacles_penetration(s->obstacles, s->time, s->x, count, max_depth);
+  if (s->obstacles) bs_obstacles_penetration(s->obstacles, s->time, s->x, 1e-10 * s->size, count, max_depth);
 }
 
 /* The scene's obstacles: level sets, their motion, the collision way. */
@@ -140,6 +140,7 @@ static int make_obstacles(bs_sim *s, bs_error *err) {
     }
   double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  s->size = diag;
   for (int i = 0; i < sc->n_obstacles; i++) {
     const bs_scene_obstacle *o = &sc->obstacles[i];
     bs_levelset *ls = NULL;

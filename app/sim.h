@@ -25,6 +25,7 @@ typedef struct bs_sim {
   const bs_scene *scene;
   bs_mesh *mesh;        /* all bodies merged                  */
   double *x0;           /* 3n: positions at t = 0 (transformed rest) */
+  double size;          /* m: diagonal of the bounding box of x0 */
   double *x, *v;        /* 3n: current state                   */
   uint8_t *mask;        /* n: 1 free, 0 scripted               */
   int n_scripts;
@@ -46,7 +47,9 @@ typedef struct bs_sim {
 int bs_sim_create(const bs_scene *scene, bs_sim **out, bs_error *err);
 void bs_sim_destroy(bs_sim **s);
 
-/* Vertices inside obstacles at the current state, and the largest depth (m). */
+/* Vertices inside obstacles at the current state deeper than 1e-10 of the
+ * bodies' size (the constraint guarantee: a projection lands on phi = 0 up to
+ * rounding), and the largest depth (m, over all vertices). */
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
 
 /* Self-colliding vertices at the current state and the largest depth (m). */

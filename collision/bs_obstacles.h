@@ -133,9 +133,12 @@ int bs_obstacles_terms(const bs_obstacles *o, bs_term *const **terms);
  * (NULL otherwise), post_solve when there is any obstacle (NULL otherwise). */
 void bs_obstacles_hooks(bs_obstacles *o, bs_step_hooks *hooks);
 
-/* Audit: the free vertices inside any obstacle at time t (phi_b < 0 for some
- * b) and the largest depth max(-phi_b) (0 when none). Either output may be NULL. */
-void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, int32_t *count, double *max_depth);
+/* Audit: the free vertices deeper than tol >= 0 (m) inside some obstacle at
+ * time t (phi_b < -tol for some b) and the largest depth max(-phi_b) over all
+ * free vertices (0 when none is inside; it may be below tol, e.g. the
+ * rounding of a projection onto phi = 0). Either output may be NULL. */
+void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, double tol, int32_t *count,
+                              double *max_depth);
 
 /* The number of (obstacle, vertex) pairs labeled active by the last
  * register_active (0 after a step ends). */

@@ -453,7 +453,8 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
 
 /* ---- audit ------------------------------------------------------------------ */
 
-void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, int32_t *count, double *max_depth) {
+void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, double tol, int32_t *count,
+                              double *max_depth) {
   int32_t c = 0;
   double dmax = 0;
   for (int32_t p = 0; p < o->nv; p++) {
@@ -461,10 +462,8 @@ void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, 
     int inside = 0;
     for (int b = 0; b < o->n; b++) {
       double phi = bs_levelset_eval(o->obs[b].ls, t, x + 3 * (size_t)p, NULL, NULL);
-      if (phi < 0) {
-        inside = 1;
-        if (-phi > dmax) dmax = -phi;
-      }
+      if (phi < -tol) inside = 1;
+      if (-phi > dmax) dmax = -phi;
     }
     c += inside;
   }

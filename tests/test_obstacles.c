@@ -199,9 +199,9 @@ static void check_projection(bs_levelset *ls, const char *what) {
   for (int32_t i = 0; i < 3 * s.nv; i++) cr_assert(fabs(x1[i] - x[i]) < 1e-12, "%s: P(P(x)) != P(x) at dof %d", what, i);
   int32_t cnt;
   double depth;
-  bs_obstacles_penetration(s.obs, s.step.time, x, &cnt, &depth);
+  bs_obstacles_penetration(s.obs, s.step.time, x, 0, &cnt, &depth);
   cr_assert(depth < 1e-12, "%s: depth %g after projection", what, depth);
-  bs_obstacles_penetration(s.obs, s.step.time, x0, &cnt, &depth);
+  bs_obstacles_penetration(s.obs, s.step.time, x0, 0, &cnt, &depth);
   cr_assert(cnt >= moved && depth > 0.05, "%s: audit before projection: %d inside, depth %g", what, cnt, depth);
   free(x0);
   free(x1);
@@ -415,7 +415,7 @@ static drop_result drop(bs_collide_mode mode, int steps, double vy0) {
     for (int32_t p = 0; p < s.nv; p++) r.min_phi = fmin(r.min_phi, s.x[3 * p + 1]);
     int32_t cnt;
     double depth;
-    bs_obstacles_penetration(s.obs, (n + 1) * dt, s.x, &cnt, &depth);
+    bs_obstacles_penetration(s.obs, (n + 1) * dt, s.x, 0, &cnt, &depth);
     r.max_depth = fmax(r.max_depth, depth);
   }
   double vy = 0;
