@@ -174,6 +174,15 @@ int bs_shim_signed_distance(const bs_shim_tree *t, const double *q, int64_t n, d
 int bs_shim_self_intersections(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
                                int32_t **pairs, int64_t *n_pairs, bs_error *err);
 
+/* The number of those pairs, the search stopping once cap > 0 pairs are found
+ * (then *count = cap and *truncated = 1; cap = 0: no limit). For audits of
+ * states that may be tangled (a random 65^3 cube: ~1e9 overlapping boxes),
+ * where the exact count would take hours and "at least cap" says enough.
+ * Errors as bs_shim_self_intersections, and BS_EINPUT for cap < 0 or NULL
+ * outputs. */
+int bs_shim_count_self_intersections(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
+                                     int64_t cap, int64_t *count, int *truncated, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

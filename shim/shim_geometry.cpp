@@ -509,8 +509,12 @@ bool triangles_intersect(const Soup &s, int32_t i, int32_t j) {
 typedef CGAL::Box_intersection_d::Box_with_info_d<double, 3, int32_t, CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>
     Box;
 
-int self_intersections(const double *x, int64_t n_points, const int32_t *t, int64_t n_tris, int32_t **pairs_out,
-                       int64_t *n_pairs_out, bs_error *err) {
+struct CapReached {}; // thrown by the callback to stop the search at the cap
+
+// cap > 0: stop once cap pairs are found (*truncated = 1); cap = 0: all pairs.
+int self_intersections(const double *x, int64_t n_points, const int32_t *t, int64_t n_tris, int64_t cap,
+                       int32_t **pairs_out, int64_t *n_pairs_out, int *truncated, bs_error *err) {
+  if (truncated) *truncated = 0;
   int rc = check_soup("bs_shim_self_intersections", x, n_points, t, n_tris, 0, err);
   if (rc) return rc;
   const Soup s = {x, t};
@@ -533,12 +537,21 @@ int self_intersections(const double *x, int64_t n_points, const int32_t *t, int6
   std::vector<const Box *> ptrs;
   ptrs.reserve(boxes.size());
   for (const Box &b : boxes) ptrs.push_back(&b);
-  auto callback = [&s, &pairs](const Box *b1, const Box *b2) {
+  auto callback = [&s, &pairs, cap](const Box *b1, const Box *b2) {
     const int32_t i = b1->info(), j = b2->info();
     if (triangles_intersect(s, i, j)) pairs.emplace_back(std::min(i, j), std::max(i, j));
+    if (cap > 0 && (int64_t)pairs.size() >= cap) throw CapReached();
   };
   // closed boxes: triangles that merely touch are candidates
-  CGAL::box_self_intersection_d(ptrs.begin(), ptrs.end(), callback);
+  if (cap > 0 && (int64_t)pairs.size() >= cap) {
+    if (truncated) *truncated = 1;
+  } else {
+    try {
+      CGAL::box_self_intersection_d(ptrs.begin(), ptrs.end(), callback);
+    } catch (const CapReached &) {
+      if (truncated) *truncated = 1;
+    }
+  }
   std::sort(pairs.begin(), pairs.end());
 
   *pairs_out = NULL;
@@ -714,7 +727,7 @@ extern "C" int bs_shim_self_intersections(const double *points, int64_t n_points
   *pairs = NULL;
   *n_pairs = 0;
   try {
-    return self_intersections(points, n_points, tris, n_tris, pairs, n_pairs, err);
+    return self_intersections(points, n_points, tris, n_tris, 0, pairs, n_pairs, NULL, err);
   } catch (const std::bad_alloc &) {
     return bs_error_set(err, BS_ENOMEM, "bs_shim_self_intersections: out of memory (%lld triangles)",
                         (long long)n_tris);
@@ -722,5 +735,29 @@ extern "C" int bs_shim_self_intersections(const double *points, int64_t n_points
     return bs_error_set(err, BS_EINTERNAL, "bs_shim_self_intersections: CGAL failed: %s", e.what());
   } catch (...) {
     return bs_error_set(err, BS_EINTERNAL, "bs_shim_self_intersections: CGAL failed (unknown exception)");
+  }
+}
+
+extern "C" int bs_shim_count_self_intersections(const double *points, int64_t n_points, const int32_t *tris,
+                                                int64_t n_tris, int64_t cap, int64_t *count, int *truncated,
+                                                bs_error *err) {
+  if (!count || !truncated)
+    return bs_error_set(err, BS_EINPUT, "bs_shim_count_self_intersections: %s is NULL", count ? "truncated" : "count");
+  *count = 0;
+  *truncated = 0;
+  if (cap < 0)
+    return bs_error_set(err, BS_EINPUT, "bs_shim_count_self_intersections: cap = %lld is negative", (long long)cap);
+  try {
+    int32_t *pairs = NULL;
+    int rc = self_intersections(points, n_points, tris, n_tris, cap, &pairs, count, truncated, err);
+    std::free(pairs);
+    return rc;
+  } catch (const std::bad_alloc &) {
+    return bs_error_set(err, BS_ENOMEM, "bs_shim_count_self_intersections: out of memory (%lld triangles)",
+                        (long long)n_tris);
+  } catch (const std::exception &e) {
+    return bs_error_set(err, BS_EINTERNAL, "bs_shim_count_self_intersections: CGAL failed: %s", e.what());
+  } catch (...) {
+    return bs_error_set(err, BS_EINTERNAL, "bs_shim_count_self_intersections: CGAL failed (unknown exception)");
   }
 }

@@ -811,6 +811,20 @@ Test(shim_self, random_soup_matches_pairwise_tests) {
       }
     }
   cr_assert_eq(k, n);
+  /* the count: exact without a cap, stopped at the cap with it */
+  bs_error err = {0};
+  int64_t cnt = -1;
+  int trunc = -1;
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, 0, &cnt, &trunc, &err), BS_OK, "%s", err.msg);
+  cr_assert(cnt == n && trunc == 0, "count %lld (truncated %d), pairs %lld", (long long)cnt, trunc, (long long)n);
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, n, &cnt, &trunc, &err), BS_OK, "%s", err.msg);
+  cr_assert(cnt == n && trunc == 1, "cap = n: count %lld truncated %d", (long long)cnt, trunc);
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, 3, &cnt, &trunc, &err), BS_OK, "%s", err.msg);
+  cr_assert(cnt == 3 && trunc == 1, "cap = 3: count %lld truncated %d", (long long)cnt, trunc);
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, n + 1, &cnt, &trunc, &err), BS_OK, "%s", err.msg);
+  cr_assert(cnt == n && trunc == 0, "cap above the count: %lld truncated %d", (long long)cnt, trunc);
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, -1, &cnt, &trunc, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "cap"), "%s", err.msg);
   bs_shim_free(p);
   free(x);
   free(t);
