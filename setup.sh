@@ -26,6 +26,23 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
+# The armadillo of data/scenes/paper/fig13_armadillo.json: data/meshes/armadillo.off
+# from the data archive of Debian's libcgal-demo (not committed). Optional: the
+# bench skips the scene without it.
+if [ ! -f data/meshes/armadillo.off ]; then
+  tmp=$(mktemp -d)
+  if (cd "$tmp" && { apt-get download -q libcgal-demo >/dev/null 2>&1 ||
+                     { apt-get update -q >/dev/null && apt-get download -q libcgal-demo >/dev/null 2>&1; }; } &&
+      dpkg-deb -x libcgal-demo_*.deb x &&
+      tar xzf x/usr/share/doc/libcgal-dev/data.tar.gz data/meshes/armadillo.off); then
+    mkdir -p data/meshes && mv "$tmp/data/meshes/armadillo.off" data/meshes/armadillo.off
+    echo "setup: extracted data/meshes/armadillo.off from libcgal-demo"
+  else
+    echo "setup: warning: could not extract armadillo.off from libcgal-demo (fig13_armadillo will be skipped)" >&2
+  fi
+  rm -rf "$tmp"
+fi
+
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" ${CMAKE_ARGS:-} >/dev/null
 cmake --build "$BUILD_DIR" -j "$JOBS"
 
