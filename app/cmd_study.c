@@ -17,7 +17,9 @@
  * (1 J if both are 0), from the run's own frames.csv.
  * Observed orders: least squares slope of log(error) against log(h), with
  * h = 2^-refine (space) or h = Δt (time), over the runs whose other settings
- * are the finest ones, the reference itself left out. */
+ * are the finest ones, the reference itself left out; and, unbiased by the
+ * reference, from successive levels (each run of that group against the next
+ * finer one: see successive_order). */
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -63,6 +65,9 @@ static const char *study_help =
     "(bounding-box diagonal at rest); velocity = RMS of v - v_ref over the reference's\n"
     "largest speed (1 m/s if it is 0); both the max over frames and at the last frame.\n"
     "Energy drift = max |total(t) - total(0)| over max(|total(0)|, max kinetic) (1 J if 0).\n"
+    "Orders: the slope of log error against log h (h = 2^-refine or dt) over the runs\n"
+    "whose other knobs are at the reference; and from successive levels (each run\n"
+    "against the next finer one), which the nearness of the reference does not bias.\n"
     "A failed run is recorded (failed column) and does not stop the study.\n";
 
 #define MAX_VARY 16
@@ -118,6 +123,9 @@ typedef struct study {
   int ref;             /* index of the reference run, -1 for a given folder */
   double size;         /* body size L (m)                                     */
   int64_t (*counts)[4];/* per body V, E, F, T at refine 0                    */
+  int64_t cmp[64];     /* compared vertices per body (the coarsest level)    */
+  double vscale;       /* velocity scale of the errors                       */
+  int direct;          /* compare whole states (no refinement relation)     */
 } study;
 
 /* ---- small helpers ------------------------------------------------------ */
@@ -925,7 +933,8 @@ static int write_csv(const study *S) {
   FILE *f = fopen(p, "w");
   if (!f) return -1;
   fprintf(f, "run");
-  for (int k = 0; k < S->n_vary; k++) fprintf(f, ",%s", S->vary[k].key);
+  /* the shorthand "method" would repeat the method column's name: its path instead */
+  for (int k = 0; k < S->n_vary; k++) fprintf(f, ",%s", !strcmp(S->vary[k].key, "method") ? S->vary[k].path : S->vary[k].key);
   fprintf(f, ",method,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,pos_err_max,"
              "pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,pareto\n");
   for (int i = 0; i < S->n_runs; i++) {
@@ -940,6 +949,8 @@ static int write_csv(const study *S) {
   fclose(f);
   return 0;
 }
+
+static double successive_order(const study *S, int k, const char *method, int *used, FILE *pts);
 
 /* Writes the data files and plots.gp, then runs gnuplot in the study folder. */
 static int make_plots(const study *S, char *msg, size_t msg_n) {
@@ -957,6 +968,7 @@ static int make_plots(const study *S, char *msg, size_t msg_n) {
   fprintf(gp, "# written by bigstep study; run with: gnuplot plots.gp (in this folder)\n"
               "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) { set terminal pngcairo size 900,600 } "
               "else { set terminal png size 900,600 }\n"
+              "set termoption noenhanced\n"
               "set grid\nset key outside right\nset format y '%%.0e'\n");
   /* 1. error against cost, the Pareto front marked */
   snprintf(p, sizeof p, "%s/plot_cost.dat", S->out);
@@ -1001,7 +1013,10 @@ static int make_plots(const study *S, char *msg, size_t msg_n) {
     if (S->vary[k].kind != K_REFINE) continue;
     snprintf(p, sizeof p, "%s/plot_refine_%d.dat", S->out, k);
     d = fopen(p, "w");
-    fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset xlabel '%s (h ~ 2^-level)'\n"
+    snprintf(p, sizeof p, "%s/plot_refine_successive_%d.dat", S->out, k);
+    FILE *ds = fopen(p, "w");
+    fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
+                "set xlabel '%s (h ~ 2^-level)'\n"
                 "set ylabel 'position error (max over frames, / body size)'\n"
                 "set title 'Error against refinement (other knobs at the reference)'\nplot ",
             k ? "_" : "", k ? S->vary[k].key : "", S->vary[k].key);
@@ -1016,12 +1031,25 @@ static int make_plots(const study *S, char *msg, size_t msg_n) {
         }
         fprintf(d, "\n\n");
       }
-      fprintf(gp, "'plot_refine_%d.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', ", k, m, methods[m]);
+      fprintf(gp, "'plot_refine_%d.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s: against the reference', ",
+              k, m, methods[m]);
       if (isfinite(o.p))
         fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f', ", o.logc, o.p, methods[m], o.p);
+      int used = 0;
+      if (ds) fprintf(ds, "# method %s: level, position error against the next finer level\n", methods[m]);
+      double ps = successive_order(S, k, methods[m], &used, ds);
+      if (ds) fprintf(ds, "\n\n");
+      if (ds && used > 0) {
+        char ord[64] = "";
+        if (isfinite(ps)) snprintf(ord, sizeof ord, " (order %.2f)", ps);
+        fprintf(gp, "'plot_refine_successive_%d.dat' index %d using 1:2 with linespoints pt 5 ps 1.1 title "
+                    "'%s: against the next finer level%s', ",
+                k, m, methods[m], ord);
+      }
     }
-    fprintf(gp, "1/0 notitle\nunset logscale\n");
+    fprintf(gp, "1/0 notitle\nunset logscale\nset key outside right\nset xtics autofreq\n");
     if (d) fclose(d);
+    if (ds) fclose(ds);
   }
   /* 3. iterations per step against steps per frame */
   for (int k = 0; k < S->n_vary; k++) {
@@ -1040,7 +1068,7 @@ static int make_plots(const study *S, char *msg, size_t msg_n) {
     if (d) fclose(d);
     fprintf(gp, "set output 'iterations_vs_steps.png'\nset format y '%%g'\nset logscale x 2\nset xlabel 'steps per frame'\n"
                 "set ylabel 'Newton iterations per step'\nset y2label 'CG iterations per step'\n"
-                "set ytics nomirror\nset y2tics\n"
+                "set ytics nomirror\nset y2tics\nset logscale y2\nset format y2 '%%g'\n"
                 "set title 'Iterations per step (other knobs at the reference)'\nplot ");
     for (int m = 0; m < nm; m++)
       fprintf(gp, "'plot_iterations.dat' index %d using 1:2 with linespoints pt 7 lw 2 title '%s Newton', "
@@ -1080,6 +1108,59 @@ static int make_plots(const study *S, char *msg, size_t msg_n) {
     return -1;
   }
   return 0;
+}
+
+/* Order of knob k from successive levels: the position error d_j of each run
+ * of the group against the next finer run of the group (not the reference),
+ * d_j ~ C h_j^p (1 - (h_j+1 / h_j)^p), fitted by least squares in log-log with
+ * the bracket solved for by fixed-point iteration. Unlike the fit against the
+ * reference, whose error at the level next to it is |u_h - u_h/2| and not
+ * |u_h - u|, this is unbiased (for halvings, the fit against a reference one
+ * level finer reports log2(2^p + 1) from two points). NAN when fewer than two
+ * pairs of finished runs. */
+static double successive_order(const study *S, int k, const char *method, int *used, FILE *pts) {
+  int *grp = malloc(sizeof(int) * (S->n_runs + 1)), ng = group(S, k, method, grp);
+  /* coarse to fine */
+  for (int i = 1; i < ng; i++)
+    for (int j = i; j > 0 && knob_h(S, &S->runs[grp[j]], k) > knob_h(S, &S->runs[grp[j - 1]], k); j--) {
+      int t = grp[j];
+      grp[j] = grp[j - 1];
+      grp[j - 1] = t;
+    }
+  double *h = malloc(sizeof(double) * (ng + 1)), *d = malloc(sizeof(double) * (ng + 1)),
+         *rho = malloc(sizeof(double) * (ng + 1)), *y = malloc(sizeof(double) * (ng + 1));
+  int m = 0;
+  for (int i = 0; i + 1 < ng; i++) {
+    const run *a = &S->runs[grp[i]], *b = &S->runs[grp[i + 1]];
+    double ha = knob_h(S, a, k), hb = knob_h(S, b, k);
+    if (a->exit_code != 0 || b->exit_code != 0 || !(hb < ha)) continue;
+    run tmp = *a;
+    int64_t off_b[64];
+    run_offsets(S, b->body_refine, off_b);
+    if (compare_run(S, &tmp, b->dir, S->cmp, off_b, S->vscale, S->direct) || !(tmp.pos_max > 0) ||
+        !isfinite(tmp.pos_max))
+      continue;
+    h[m] = ha;
+    d[m] = tmp.pos_max;
+    if (pts) fprintf(pts, "%s %.9g\n", S->vary[k].vals[a->idx[k]], tmp.pos_max);
+    rho[m] = hb / ha;
+    m++;
+  }
+  double logc, p = fit_order(m, h, d, &logc, used);
+  for (int it = 0; it < 100 && isfinite(p) && p > 0; it++) {
+    for (int j = 0; j < m; j++) y[j] = d[j] / (1 - pow(rho[j], p));
+    double q = fit_order(m, h, y, &logc, used);
+    if (!isfinite(q) || !(q > 0)) break;
+    int done = fabs(q - p) < 1e-10;
+    p = q;
+    if (done) break;
+  }
+  free(h);
+  free(d);
+  free(rho);
+  free(y);
+  free(grp);
+  return p;
 }
 
 static void print_summary(const study *S, const char *ref_desc) {
@@ -1124,6 +1205,10 @@ static void print_summary(const study *S, const char *ref_desc) {
       else
         printf("order in %s (vs %s): method %s: not measurable (fewer than 2 runs with a positive error)\n",
                is_t ? "time" : "space", v->key, methods[m]);
+      int used = 0;
+      double ps = successive_order(S, k, methods[m], &used, NULL);
+      if (isfinite(ps))
+        printf("  from successive levels (each run against the next finer): p = %.3f over %d pairs\n", ps, used);
     }
   }
   if (!any_t) printf("order in time: steps_per_frame not varied\n");
@@ -1378,6 +1463,9 @@ int bs_cmd_study(int argc, char **argv) {
     run_offsets(&S, ref_refine, off_ref);
     double vscale = max_speed(ref_dir);
     if (!(vscale > 0)) vscale = 1.0;
+    memcpy(S.cmp, cmp, sizeof cmp);
+    S.vscale = vscale;
+    S.direct = direct;
     int n_bad = 0;
     for (int i = 0; i < S.n_runs; i++)
       if (compare_run(&S, &S.runs[i], ref_dir, cmp, off_ref, vscale, direct)) n_bad++;
