@@ -43,6 +43,16 @@ double bs_tet_energy_grad(const bs_material *m, const double x[12], const double
 void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
                     double H[144]);
 
+/* The same on n tets at once, bit for bit the single-tet results: x is 12
+ * doubles per tet, Dm_inv 9, vol 1, e 1 (vol Psi), g 12, H 144, all packed
+ * (tet i at x + 12 i, ...). The SVDs run batched (bs_material_*_batch). */
+void bs_tet_energy_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
+                         double *e);
+void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, const double *Dm_inv,
+                              const double *vol, double *e, double *g);
+void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
+                          int project_psd, double *H);
+
 #ifdef __cplusplus
 }
 #endif

@@ -125,6 +125,15 @@ double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]);
  * positive semidefinite cone. */
 void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]);
 
+/* The same on n matrices at once (F, P: 9 doubles per matrix, packed; psi: n;
+ * dPdF: 81 per matrix), bit for bit the results of the single-matrix calls
+ * above, with the SVDs done BS_MATERIAL_BATCH at a time by bs_svd3_batch
+ * (several times faster per matrix than bs_svd3). */
+#define BS_MATERIAL_BATCH 8
+void bs_material_psi_batch(const bs_material *m, int n, const double *F, double *psi);
+void bs_material_psi_P_batch(const bs_material *m, int n, const double *F, double *psi, double *P);
+void bs_material_dPdF_batch(const bs_material *m, int n, const double *F, int project_psd, double *dPdF);
+
 #ifdef __cplusplus
 }
 #endif

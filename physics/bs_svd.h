@@ -37,6 +37,14 @@ extern "C" {
  * first (exact), so no step under- or overflows. F = 0 gives U = V = I. */
 void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]);
 
+/* bs_svd3 on n matrices: F, U, V are 9 doubles per matrix, sigma 3, packed
+ * (matrix i at F + 9 i). Results are bit for bit those of bs_svd3 on each
+ * matrix; the work is done BS_SVD_LANES matrices at a time in SIMD registers
+ * (branch-free selects; a sweep of the batch runs while any of its matrices
+ * still rotates), so a batch costs a fraction of n calls to bs_svd3. */
+#define BS_SVD_LANES 4
+void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V);
+
 /* A = Q diag(lambda) Q^T for symmetric A (only the upper triangle is read),
  * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
  * eigenvalues carry an absolute error of a few ulps of max |lambda|. */

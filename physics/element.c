@@ -44,6 +44,18 @@ static void shape_weights(const double Dm_inv[9], double w[4][3]) {
   }
 }
 
+/* g = vol G^T P. */
+static void grad_from_P(const double P[9], const double Dm_inv[9], double vol, double g[12]) {
+  double w[4][3];
+  shape_weights(Dm_inv, w);
+  for (int a = 0; a < 4; a++)
+    for (int c = 0; c < 3; c++)
+      g[3 * a + c] = vol * (P[3 * c] * w[a][0] + P[3 * c + 1] * w[a][1] + P[3 * c + 2] * w[a][2]);
+}
+
+/* H = vol G^T K G. */
+static void hessian_from_K(const double K[81], const double Dm_inv[9], double vol, double H[144]);
+
 double bs_tet_energy(const bs_material *m, const double x[12], const double Dm_inv[9], double vol) {
   double F[9];
   bs_tet_F(x, Dm_inv, F);
@@ -52,21 +64,23 @@ double bs_tet_energy(const bs_material *m, const double x[12], const double Dm_i
 
 double bs_tet_energy_grad(const bs_material *m, const double x[12], const double Dm_inv[9], double vol,
                           double g[12]) {
-  double F[9], P[9], w[4][3];
+  double F[9], P[9];
   bs_tet_F(x, Dm_inv, F);
   const double psi = bs_material_psi_P(m, F, P);
-  shape_weights(Dm_inv, w);
-  for (int a = 0; a < 4; a++)
-    for (int c = 0; c < 3; c++)
-      g[3 * a + c] = vol * (P[3 * c] * w[a][0] + P[3 * c + 1] * w[a][1] + P[3 * c + 2] * w[a][2]);
+  grad_from_P(P, Dm_inv, vol, g);
   return vol * psi;
 }
 
 void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
                     double H[144]) {
-  double F[9], K[81], w[4][3];
+  double F[9], K[81];
   bs_tet_F(x, Dm_inv, F);
   bs_material_dPdF(m, F, project_psd, K);
+  hessian_from_K(K, Dm_inv, vol, H);
+}
+
+static void hessian_from_K(const double K[81], const double Dm_inv[9], double vol, double H[144]) {
+  double w[4][3];
   shape_weights(Dm_inv, w);
   /* H[(a,c),(b,e)] = vol sum_{j,l} w[a][j] K[(c,j),(e,l)] w[b][l], by 3x3
    * blocks K_ce of K; only c <= e (and a <= b when c = e), then mirrored. */
@@ -83,4 +97,40 @@ void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_in
           H[12 * (3 * a + c) + 3 * b + e] = H[12 * (3 * b + e) + 3 * a + c] = v;
         }
     }
+}
+
+void bs_tet_energy_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
+                         double *e) {
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    double F[9 * BS_MATERIAL_BATCH], psi[BS_MATERIAL_BATCH];
+    for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
+    bs_material_psi_batch(m, nb, F, psi);
+    for (int i = 0; i < nb; i++) e[i0 + i] = vol[i0 + i] * psi[i];
+  }
+}
+
+void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, const double *Dm_inv,
+                              const double *vol, double *e, double *g) {
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    double F[9 * BS_MATERIAL_BATCH], P[9 * BS_MATERIAL_BATCH], psi[BS_MATERIAL_BATCH];
+    for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
+    bs_material_psi_P_batch(m, nb, F, psi, P);
+    for (int i = 0; i < nb; i++) {
+      grad_from_P(P + 9 * i, Dm_inv + 9 * (i0 + i), vol[i0 + i], g + 12 * (i0 + i));
+      e[i0 + i] = vol[i0 + i] * psi[i];
+    }
+  }
+}
+
+void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
+                          int project_psd, double *H) {
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    double F[9 * BS_MATERIAL_BATCH], K[81 * BS_MATERIAL_BATCH];
+    for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
+    bs_material_dPdF_batch(m, nb, F, project_psd, K);
+    for (int i = 0; i < nb; i++) hessian_from_K(K + 81 * i, Dm_inv + 9 * (i0 + i), vol[i0 + i], H + 144 * (i0 + i));
+  }
 }

@@ -177,13 +177,64 @@ void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], 
     }
 }
 
+/* The kernel loops work on batches of up to NB tets (BS_MATERIAL_BATCH: the
+ * SVDs of a batch run in SIMD lanes, bs_svd3_batch), split into runs of one
+ * material. Results are bit for bit those of the per-tet kernels, and the
+ * scatter order within a colour is unchanged. */
+enum { NB = BS_MATERIAL_BATCH };
+
+/* Gathers tets idx[0..n) (through map, or idx itself when map is NULL):
+ * coordinates, Dm_inv and volumes, packed. */
+static void gather_batch(const bs_fem *fem, const double *x, const int32_t *map, int32_t k0, int n, int32_t *tt,
+                         double *xt, double *Dm, double *vol) {
+  for (int i = 0; i < n; i++) {
+    const int32_t t = map ? map[k0 + i] : k0 + i;
+    tt[i] = t;
+    bs_fem_gather(fem, x, t, xt + 12 * i);
+    memcpy(Dm + 9 * i, fem->Dm_inv + 9 * (size_t)t, 9 * sizeof(double));
+    vol[i] = fem->volume[t];
+  }
+}
+
+/* Prefetches the vertex data (x, and out when not NULL) and the rest shape
+ * of the tets map[k0 .. min(k0 + NB, hi)): a colour's tets share no vertex, so
+ * consecutive ones are far apart in memory. */
+static void prefetch_batch(const bs_fem *fem, const double *x, const double *out, const int32_t *map, int32_t k0,
+                           int32_t hi) {
+  for (int32_t k = k0; k < hi && k < k0 + NB; k++) {
+    const int32_t t = map[k];
+    const int32_t *tv = fem->mesh->tets + 4 * (size_t)t;
+    __builtin_prefetch(fem->Dm_inv + 9 * (size_t)t, 0, 1);
+    for (int a = 0; a < 4; a++) {
+      __builtin_prefetch(x + 3 * (size_t)tv[a], 0, 1);
+      if (out) __builtin_prefetch(out + 3 * (size_t)tv[a], 1, 1);
+    }
+  }
+}
+
+/* Length of the run of tets tt[i..n) with the material of tt[i]. */
+static int material_run(const bs_fem *fem, const int32_t *tt, int i, int n) {
+  const int32_t mi = fem->tet_material[tt[i]];
+  int j = i + 1;
+  while (j < n && fem->tet_material[tt[j]] == mi) j++;
+  return j - i;
+}
+
 double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
   double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_tets > 2048)
-  for (int32_t t = 0; t < fem->n_tets; t++) {
-    double xt[12];
-    bs_fem_gather(fem, x, t, xt);
-    E += bs_tet_energy(&fem->materials[fem->tet_material[t]], xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t]);
+  const int32_t nt = fem->n_tets;
+#pragma omp parallel for schedule(static) reduction(+ : E) if (nt > 2048)
+  for (int32_t k0 = 0; k0 < nt; k0 += NB) {
+    const int n = nt - k0 < NB ? (int)(nt - k0) : NB;
+    int32_t tt[NB];
+    double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB];
+    gather_batch(fem, x, NULL, k0, n, tt, xt, Dm, vol);
+    for (int i = 0; i < n;) {
+      const int r = material_run(fem, tt, i, n);
+      bs_tet_energy_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i, e + i);
+      i += r;
+    }
+    for (int i = 0; i < n; i++) E += e[i];
   }
   return E;
 }
@@ -194,17 +245,26 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
   for (int c = 0; c < fem->n_colors; c++) {
     int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
 #pragma omp parallel for schedule(static) reduction(+ : E) if (hi - lo > 512)
-    for (int32_t k = lo; k < hi; k++) {
-      int32_t t = fem->color_tets[k];
-      double xt[12], ge[12];
-      bs_fem_gather(fem, x, t, xt);
-      E += bs_tet_energy_grad(&fem->materials[fem->tet_material[t]], xt, fem->Dm_inv + 9 * (size_t)t,
-                              fem->volume[t], ge);
-      for (int a = 0; a < 4; a++) {
-        double *gv = g + 3 * (size_t)tets[4 * t + a];
-        gv[0] += ge[3 * a];
-        gv[1] += ge[3 * a + 1];
-        gv[2] += ge[3 * a + 2];
+    for (int32_t k0 = lo; k0 < hi; k0 += NB) {
+      const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
+      int32_t tt[NB];
+      double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB], ge[12 * NB];
+      gather_batch(fem, x, fem->color_tets, k0, n, tt, xt, Dm, vol);
+      prefetch_batch(fem, x, g, fem->color_tets, k0 + NB, hi);
+      for (int i = 0; i < n;) {
+        const int r = material_run(fem, tt, i, n);
+        bs_tet_energy_grad_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
+                                 e + i, ge + 12 * i);
+        i += r;
+      }
+      for (int i = 0; i < n; i++) {
+        E += e[i];
+        for (int a = 0; a < 4; a++) {
+          double *gv = g + 3 * (size_t)tets[4 * tt[i] + a];
+          gv[0] += ge[12 * i + 3 * a];
+          gv[1] += ge[12 * i + 3 * a + 1];
+          gv[2] += ge[12 * i + 3 * a + 2];
+        }
       }
     }
   }
@@ -215,13 +275,29 @@ void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd,
   for (int c = 0; c < fem->n_colors; c++) {
     int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
 #pragma omp parallel for schedule(static) if (hi - lo > 512)
-    for (int32_t k = lo; k < hi; k++) {
-      int32_t t = fem->color_tets[k];
-      double xt[12], He[144];
-      bs_fem_gather(fem, x, t, xt);
-      bs_tet_hessian(&fem->materials[fem->tet_material[t]], xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t],
-                     project_psd, He);
-      bs_fem_scatter_hessian(fem, t, He, scale, H);
+    for (int32_t k0 = lo; k0 < hi; k0 += NB) {
+      const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
+      int32_t tt[NB];
+      double xt[12 * NB], Dm[9 * NB], vol[NB], He[144 * NB];
+      gather_batch(fem, x, fem->color_tets, k0, n, tt, xt, Dm, vol);
+      prefetch_batch(fem, x, NULL, fem->color_tets, k0 + NB, hi);
+      /* The blocks of the next batch are scattered over the whole matrix (a
+       * colour's tets share no vertex): fetch them while this batch computes. */
+      for (int32_t k = k0 + NB; k < hi && k < k0 + 2 * NB; k++) {
+        const int32_t *sl = fem->slots + 16 * (size_t)fem->color_tets[k];
+        for (int b = 0; b < 16; b++) {
+          const double *blk = H->val + 9 * (size_t)sl[b];
+          __builtin_prefetch(blk, 1, 1);
+          __builtin_prefetch(blk + 8, 1, 1);
+        }
+      }
+      for (int i = 0; i < n;) {
+        const int r = material_run(fem, tt, i, n);
+        bs_tet_hessian_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
+                             project_psd, He + 144 * i);
+        i += r;
+      }
+      for (int i = 0; i < n; i++) bs_fem_scatter_hessian(fem, tt[i], He + 144 * i, scale, H);
     }
   }
 }

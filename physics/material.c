@@ -214,16 +214,49 @@ double bs_material_psi(const bs_material *m, const double F[9]) {
   return sv_eval(m, s, 0, NULL, NULL, NULL, NULL);
 }
 
-double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]) {
-  if (m->model == BS_MODEL_LINEAR) return linear_psi_P(m, F, P);
-  double U[9], s[3], V[9], g[3];
-  bs_svd3(F, U, s, V);
+/* Psi and P from the SVD of F. */
+static double psi_P_from_svd(const bs_material *m, const double U[9], const double s[3], const double V[9],
+                             double P[9]) {
+  double g[3];
   const double psi = sv_eval(m, s, 1, g, NULL, NULL, NULL);
   for (int r = 0; r < 3; r++) {
     const double a0 = U[3 * r] * g[0], a1 = U[3 * r + 1] * g[1], a2 = U[3 * r + 2] * g[2];
     for (int c = 0; c < 3; c++) P[3 * r + c] = a0 * V[3 * c] + a1 * V[3 * c + 1] + a2 * V[3 * c + 2];
   }
   return psi;
+}
+
+double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]) {
+  if (m->model == BS_MODEL_LINEAR) return linear_psi_P(m, F, P);
+  double U[9], s[3], V[9];
+  bs_svd3(F, U, s, V);
+  return psi_P_from_svd(m, U, s, V, P);
+}
+
+void bs_material_psi_batch(const bs_material *m, int n, const double *F, double *psi) {
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    if (m->model == BS_MODEL_LINEAR) {
+      for (int i = 0; i < nb; i++) psi[i0 + i] = linear_psi_P(m, F + 9 * (i0 + i), NULL);
+      continue;
+    }
+    double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
+    bs_svd3_batch(nb, F + 9 * i0, U, s, V);
+    for (int i = 0; i < nb; i++) psi[i0 + i] = sv_eval(m, s + 3 * i, 0, NULL, NULL, NULL, NULL);
+  }
+}
+
+void bs_material_psi_P_batch(const bs_material *m, int n, const double *F, double *psi, double *P) {
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    if (m->model == BS_MODEL_LINEAR) {
+      for (int i = 0; i < nb; i++) psi[i0 + i] = linear_psi_P(m, F + 9 * (i0 + i), P + 9 * (i0 + i));
+      continue;
+    }
+    double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
+    bs_svd3_batch(nb, F + 9 * i0, U, s, V);
+    for (int i = 0; i < nb; i++) psi[i0 + i] = psi_P_from_svd(m, U + 9 * i, s + 3 * i, V + 9 * i, P + 9 * (i0 + i));
+  }
 }
 
 /* dP/dF from the singular-value-space blocks (see the top of this file). */
@@ -287,6 +320,15 @@ static void project_blocks(double H[9], double lp[3], double lm[3]) {
   }
 }
 
+/* dP/dF of an isotropic model from the SVD of F. */
+static void dPdF_from_svd(const bs_material *m, const double U[9], const double s[3], const double V[9],
+                          int project_psd, double dPdF[81]) {
+  double g[3], H[9], lp[3], lm[3];
+  sv_eval(m, s, 2, g, H, lp, lm);
+  if (project_psd) project_blocks(H, lp, lm);
+  assemble_dPdF(U, V, H, lp, lm, dPdF);
+}
+
 void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]) {
   if (m->model == BS_MODEL_LINEAR) {
     /* mu (d_ik d_jl + d_il d_jk) + lambda d_ij d_kl: constant, and PSD for
@@ -301,9 +343,20 @@ void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, 
       for (int k = 0; k < 3; k++) dPdF[9 * (4 * i) + 4 * k] += m->lambda;
     return;
   }
-  double U[9], s[3], V[9], g[3], H[9], lp[3], lm[3];
+  double U[9], s[3], V[9];
   bs_svd3(F, U, s, V);
-  sv_eval(m, s, 2, g, H, lp, lm);
-  if (project_psd) project_blocks(H, lp, lm);
-  assemble_dPdF(U, V, H, lp, lm, dPdF);
+  dPdF_from_svd(m, U, s, V, project_psd, dPdF);
+}
+
+void bs_material_dPdF_batch(const bs_material *m, int n, const double *F, int project_psd, double *dPdF) {
+  if (m->model == BS_MODEL_LINEAR) {
+    for (int i = 0; i < n; i++) bs_material_dPdF(m, F + 9 * i, project_psd, dPdF + 81 * i);
+    return;
+  }
+  for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
+    const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
+    double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
+    bs_svd3_batch(nb, F + 9 * i0, U, s, V);
+    for (int i = 0; i < nb; i++) dPdF_from_svd(m, U + 9 * i, s + 3 * i, V + 9 * i, project_psd, dPdF + 81 * (i0 + i));
+  }
 }

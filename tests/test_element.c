@@ -399,3 +399,53 @@ Test(element, collapsed_finite) {
     }
   }
 }
+
+/* The batched kernels are the single-tet kernels bit for bit, for every
+ * model, on a batch mixing ordinary, inverted, flat and collapsed tets, at
+ * batch sizes around the internal batch width. */
+Test(element, batch_bitwise) {
+  enum { N = 2 * BS_MATERIAL_BATCH + 3 };
+  for (int mi = 0; mi < 5; mi++) {
+    bs_material m = make(models[mi], 1e5, 0.3);
+    double x[12 * N], Dm[9 * N], vol[N];
+    for (int t = 0; t < N; t++) {
+      double X[12];
+      rest_tet(X);
+      bs_tet_rest(X, Dm + 9 * t, &vol[t]);
+      for (int i = 0; i < 12; i++) x[12 * t + i] = X[i] + 0.3 * nrand();
+      if (t % 5 == 1) /* inverted: swap two vertices */
+        for (int k = 0; k < 3; k++) {
+          double tmp = x[12 * t + k];
+          x[12 * t + k] = x[12 * t + 3 + k];
+          x[12 * t + 3 + k] = tmp;
+        }
+      if (t % 5 == 2) /* flat */
+        for (int k = 0; k < 3; k++) x[12 * t + 9 + k] = (x[12 * t + k] + x[12 * t + 3 + k]) / 2;
+      if (t % 7 == 3) /* collapsed */
+        for (int i = 3; i < 12; i++) x[12 * t + i] = x[12 * t + i % 3];
+    }
+    for (int n = 1; n <= N; n += (n < BS_MATERIAL_BATCH + 2 ? 1 : 3)) {
+      double e[N], ee[N], g[12 * N], H[144 * N];
+      bs_tet_energy_batch(&m, n, x, Dm, vol, ee);
+      bs_tet_energy_grad_batch(&m, n, x, Dm, vol, e, g);
+      for (int t = 0; t < n; t++) {
+        double gs[12];
+        double es = bs_tet_energy_grad(&m, x + 12 * t, Dm + 9 * t, vol[t], gs);
+        cr_assert(memcmp(&es, &e[t], sizeof es) == 0 && memcmp(gs, g + 12 * t, sizeof gs) == 0,
+                  "%s: batch of %d, tet %d: energy/gradient differ", bs_model_name(m.model), n, t);
+        double e1 = bs_tet_energy(&m, x + 12 * t, Dm + 9 * t, vol[t]);
+        cr_assert(memcmp(&e1, &ee[t], sizeof e1) == 0, "%s: batch of %d, tet %d: energy differs",
+                  bs_model_name(m.model), n, t);
+      }
+      for (int psd = 0; psd < 2; psd++) {
+        bs_tet_hessian_batch(&m, n, x, Dm, vol, psd, H);
+        for (int t = 0; t < n; t++) {
+          double Hs[144];
+          bs_tet_hessian(&m, x + 12 * t, Dm + 9 * t, vol[t], psd, Hs);
+          cr_assert(memcmp(Hs, H + 144 * t, sizeof Hs) == 0, "%s: batch of %d, tet %d, psd %d: Hessian differs",
+                    bs_model_name(m.model), n, t, psd);
+        }
+      }
+    }
+  }
+}

@@ -258,3 +258,50 @@ Test(svd, sym3_eig) {
                   i, lam[i], spectra[k][i]);
     }
 }
+
+/* bs_svd3_batch is bs_svd3 bit for bit, on a mix of every kind of matrix in
+ * one batch (so that lanes needing different sweep counts, the special lanes
+ * that fall back to bs_svd3, and batch sizes that are not a multiple of the
+ * lane count are all exercised). */
+Test(svd, batch_bitwise) {
+  enum { N = 4003 };
+  static double F[9 * N], U[9 * N], s[3 * N], V[9 * N];
+  for (int m = 0; m < N; m++) {
+    double *A = F + 9 * m, Q[9], R[9], sv[3];
+    switch (m % 9) {
+    case 0: for (int i = 0; i < 9; i++) A[i] = nrand(); break;
+    case 1: for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + 0.1 * nrand(); break;
+    case 2: /* rank deficient */
+      for (int i = 0; i < 3; i++) A[3 * i] = nrand(), A[3 * i + 1] = 2 * A[3 * i], A[3 * i + 2] = -A[3 * i];
+      break;
+    case 3: /* repeated singular values, inverted */
+      rand_rot(Q), rand_rot(R), sv[0] = sv[1] = 2, sv[2] = -2, compose(Q, sv, R, A);
+      break;
+    case 4: /* nearly flat */
+      rand_rot(Q), rand_rot(R), sv[0] = 1, sv[1] = 0.5, sv[2] = 1e-12 * nrand(), compose(Q, sv, R, A);
+      break;
+    case 5: for (int i = 0; i < 9; i++) A[i] = ldexp(nrand(), (m % 3 ? 1 : -1) * 1010); break; /* special */
+    case 6: for (int i = 0; i < 9; i++) A[i] = ldexp(nrand(), (m % 2 ? 1 : -1) * 990); break;  /* scaled */
+    case 7: for (int i = 0; i < 9; i++) A[i] = (m % 4 == 0) ? 0.0 : (i == 4 ? NAN : nrand()); break;
+    default: for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + 1e-9 * nrand(); break;
+    }
+  }
+  for (int n = 0; n <= 9; n++) { /* short batches, then the whole array */
+    bs_svd3_batch(n, F, U, s, V);
+    for (int m = 0; m < n; m++) {
+      double u[9], v[9], ss[3];
+      bs_svd3(F + 9 * m, u, ss, v);
+      cr_assert(memcmp(u, U + 9 * m, sizeof u) == 0 && memcmp(v, V + 9 * m, sizeof v) == 0 &&
+                    memcmp(ss, s + 3 * m, sizeof ss) == 0,
+                "batch of %d: matrix %d differs from bs_svd3", n, m);
+    }
+  }
+  bs_svd3_batch(N, F, U, s, V);
+  for (int m = 0; m < N; m++) {
+    double u[9], v[9], ss[3];
+    bs_svd3(F + 9 * m, u, ss, v);
+    cr_assert(memcmp(u, U + 9 * m, sizeof u) == 0 && memcmp(v, V + 9 * m, sizeof v) == 0 &&
+                  memcmp(ss, s + 3 * m, sizeof ss) == 0,
+              "matrix %d (kind %d) differs from bs_svd3", m, m % 9);
+  }
+}
