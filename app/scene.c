@@ -441,7 +441,8 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
-                                     "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma", NULL};
+                                     "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma",
+                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", NULL};
     if ((st = check_keys(c, so, "solver", sk))) return st;
     char buf[64];
     bs_error e2;
@@ -451,7 +452,21 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     buf[0] = 0;
     if ((st = get_str(c, so, "solver", "linear", 0, buf, sizeof buf))) return st;
     if (buf[0] && (bs_lin_kind_parse(buf, &s->solver.min.linear, &e2) || s->solver.min.linear == BS_LIN_MINRES))
-      return fail(c, "solver.linear", "must be \"cg\", \"pcg\" or \"cholmod\", got \"%s\"", buf);
+      return fail(c, "solver.linear", "must be \"cg\", \"pcg\", \"amg\" or \"cholmod\", got \"%s\"", buf);
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "amg_matrix", 0, buf, sizeof buf))) return st;
+    if (buf[0]) {
+      if (!strcmp(buf, "rest")) s->solver.amg_at_rest = 1;
+      else if (!strcmp(buf, "current")) s->solver.amg_at_rest = 0;
+      else return fail(c, "solver.amg_matrix", "must be \"rest\" or \"current\", got \"%s\"", buf);
+    }
+    if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor))) return st;
+    if (!(s->solver.min.amg_rebuild_factor == 0 ||
+          (s->solver.min.amg_rebuild_factor >= 1 && isfinite(s->solver.min.amg_rebuild_factor))))
+      return fail(c, "solver.amg_rebuild_factor", "must be 0 (never) or a finite value >= 1, got %g",
+                  s->solver.min.amg_rebuild_factor);
+    if ((st = get_int(c, so, "solver", "amg_rebuild_every", 0, 0, 100000000, &s->solver.min.amg_rebuild_every)))
+      return st;
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
     if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
     if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;

@@ -33,6 +33,21 @@ add_library(bs_dep_cholmod INTERFACE)
 target_include_directories(bs_dep_cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
 target_link_libraries(bs_dep_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${AMD_LIBRARY} ${SUITESPARSECONFIG_LIBRARY})
 
+# hypre (BoomerAMG, solver/amg.c) and the MPI it is built against (Debian's
+# libhypre-dev uses Open MPI; one process, MPI initialized as a singleton).
+find_package(MPI QUIET COMPONENTS C)
+if(NOT MPI_C_FOUND)
+  bs_missing("MPI for C (mpi.h, libmpi)" libopenmpi-dev)
+endif()
+find_path(HYPRE_INCLUDE_DIR HYPRE_parcsr_ls.h PATH_SUFFIXES hypre)
+find_library(HYPRE_LIBRARY HYPRE)
+if(NOT HYPRE_INCLUDE_DIR OR NOT HYPRE_LIBRARY)
+  bs_missing("hypre (HYPRE_parcsr_ls.h, libHYPRE)" libhypre-dev)
+endif()
+add_library(bs_dep_hypre INTERFACE)
+target_include_directories(bs_dep_hypre INTERFACE ${HYPRE_INCLUDE_DIR})
+target_link_libraries(bs_dep_hypre INTERFACE ${HYPRE_LIBRARY} MPI::MPI_C)
+
 find_package(CGAL QUIET)
 if(NOT CGAL_FOUND)
   bs_missing("CGAL" libcgal-dev)

@@ -20,6 +20,7 @@ struct bs_integrator {
   double *x_n, *x_hat, *g1, *g2, *grad;
   double *gh;             /* 3n: grad E' for the Hessian projection   */
   int has_expensive;
+  double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
 };
 
 static const char *method_names[] = {"optimization", "newton", "newton_k"};
@@ -44,6 +45,7 @@ void bs_integrator_opts_default(bs_integrator_opts *o) {
      the gradient says it is a good step (the paper, section 3.3, notes that E
      is noisy; without this, tolerances below the noise floor stall). */
   o->min.accept_noise = 1;
+  o->amg_at_rest = 1;
 }
 
 void bs_integrator_destroy(bs_integrator **pI) {
@@ -94,6 +96,7 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   I->script_ctx = script_ctx;
   if (opts) I->opts = *opts;
   else bs_integrator_opts_default(&I->opts);
+  I->amg_dt = -1;
   step->x_hat = I->x_hat;
   step->x_n = I->x_n;
   step->load = 1.0;
@@ -172,6 +175,16 @@ static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *
   return 0;
 }
 
+/* The AMG preconditioner matrix (bs_step.h, amg_at_rest): the dynamic terms'
+ * Hessians plus the PSD-projected elastic Hessian at rest or at x. */
+static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
+  bs_integrator *I = ctx;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && I->terms[i]->dynamic_only) I->terms[i]->ops->hessian(I->terms[i], x, P);
+  bs_fem_elastic_hessian(I->fem, I->opts.amg_at_rest ? I->fem->mesh->x : x, 1, 1.0, P);
+  return 0;
+}
+
 static void hook_project_gradient(const double *x, double *g, void *ctx) {
   bs_integrator *I = ctx;
   I->hooks.project_gradient(x, g, I->hooks.ctx);
@@ -199,6 +212,7 @@ static void make_objective(bs_integrator *I, bs_objective *o) {
   o->project_gradient = I->hooks.project_gradient ? hook_project_gradient : NULL;
   o->hessian_g = I->hooks.project_hessian ? obj_hessian_g : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
+  o->precond_matrix = obj_precond;
   o->ctx = I;
 }
 
@@ -221,7 +235,15 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   make_objective(I, &obj);
   int rc;
   I->opts.min.naive_guess = naive;
-  if ((rc = bs_minimizer_set_opts(I->min, &I->opts.min, err))) return rc;
+  bs_minimize_opts mo = I->opts.min;
+  if (mo.linear == BS_LIN_AMG) {
+    /* P changes with dt (M/dt^2) and between dynamic and static solves. */
+    const double pdt = I->static_mode ? 0.0 : I->step->dt;
+    if (pdt != I->amg_dt) bs_minimizer_amg_reset(I->min);
+    I->amg_dt = pdt;
+    if (I->opts.amg_at_rest) mo.amg_rebuild_factor = 0; /* P does not depend on x */
+  }
+  if ((rc = bs_minimizer_set_opts(I->min, &mo, err))) return rc;
   if (I->opts.method == BS_METHOD_OPTIMIZATION) rc = bs_minimize(I->min, &obj, x, &st->min, err);
   else rc = bs_newton(I->min, &obj, I->opts.method == BS_METHOD_NEWTON_K ? I->opts.newton_k : 0, x, &st->min, err);
   if (rc) return rc;

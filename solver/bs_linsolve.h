@@ -1,6 +1,7 @@
 /* bs_linsolve.h — linear solvers on bs_bsr matrices: conjugate gradient (CG),
- * block-Jacobi preconditioned CG (PCG), MINRES (Paige–Saunders) and CHOLMOD's
- * supernodal Cholesky.
+ * block-Jacobi preconditioned CG (PCG), CG preconditioned by one BoomerAMG
+ * V-cycle (AMG, bs_amg.h), MINRES (Paige–Saunders) and CHOLMOD's supernodal
+ * Cholesky.
  *
  * Units: x has the units of b divided by those of A; tolerances are relative.
  *
@@ -24,6 +25,17 @@
  * magnitude) falls back to the inverse of its diagonal entries
  * if they are all positive, else to the identity for that block; so M^-1 is
  * always SPD and PCG's early exit keeps the same meaning.
+ *
+ * AMG: the same PCG (same negative-curvature exit) with z = B r, B one V-cycle
+ * of a BoomerAMG hierarchy built by bs_linsolve_amg_setup from a matrix P the
+ * caller chooses, which must be SPD on the free dofs (not necessarily A: e.g.
+ * a rest-state stiffness plus M/dt^2 while A is the true Hessian). The
+ * hierarchy is kept and reused by every solve until the next setup. A solve
+ * whose mask differs from the hierarchy's (or before any setup) first sets up
+ * from A itself, which must then be SPD. If B turns out not positive definite
+ * (r.Br <= 0: P was not SPD), the solve stops with stats.precond_failed = 1 and
+ * returns its last iterate (b when there is none), which is still a descent
+ * direction of the quadratic.
  *
  * MINRES: for symmetric (possibly indefinite, nonsingular) A; iterates until
  * ||b - A x|| <= rel_tol ||b|| (recomputed explicitly at exit) or max_iter.
@@ -56,6 +68,7 @@
 
 #include <stdint.h>
 
+#include "bs_amg.h"
 #include "bs_base.h"
 #include "bs_bsr.h"
 
@@ -63,9 +76,9 @@
 extern "C" {
 #endif
 
-typedef enum { BS_LIN_CG = 0, BS_LIN_PCG, BS_LIN_CHOLMOD, BS_LIN_MINRES } bs_lin_kind;
+typedef enum { BS_LIN_CG = 0, BS_LIN_PCG, BS_LIN_CHOLMOD, BS_LIN_MINRES, BS_LIN_AMG } bs_lin_kind;
 
-/* "cg", "pcg", "cholmod", "minres" (exact, lower case); BS_EINPUT naming the
+/* "cg", "pcg", "cholmod", "minres", "amg" (exact, lower case); BS_EINPUT naming the
  * string otherwise. */
 int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err);
 /* The name parsed above, or "unknown". */
@@ -78,6 +91,7 @@ typedef struct bs_lin_stats {
   int converged;       /* 1: reached rel_tol (a direct solve counts as converged)           */
   double rel_residual; /* ||b - A x|| / ||b|| at exit (masked norms; 0 when b = 0)          */
   double seconds;      /* wall time of the call                                              */
+  int precond_failed;  /* 1: AMG's V-cycle was not positive definite (r.Br <= 0; see above)  */
 } bs_lin_stats;
 
 typedef struct bs_linsolve bs_linsolve; /* workspace sized once for a pattern */
@@ -94,6 +108,15 @@ void bs_linsolve_destroy(bs_linsolve **ls);
  * exit on the first iteration); MINRES and CHOLMOD recompute ||b - A x||. */
 int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
                       double rel_tol, int max_iter, double *x, bs_lin_stats *st, bs_error *err);
+
+/* AMG workspaces only (BS_EINPUT otherwise): builds the BoomerAMG hierarchy
+ * from P (SPD on the free dofs of mask; P's pattern size must match) and keeps
+ * it for the following solves. Errors as bs_amg_setup. */
+int bs_linsolve_amg_setup(bs_linsolve *ls, const bs_bsr *P, const uint8_t *mask, bs_error *err);
+/* 1 if ls is an AMG workspace holding a hierarchy for this mask. */
+int bs_linsolve_amg_ready(const bs_linsolve *ls, const uint8_t *mask);
+/* The hierarchy's info (zeros for another kind or NULL). */
+void bs_linsolve_amg_info(const bs_linsolve *ls, bs_amg_info *info);
 
 #ifdef __cplusplus
 }

@@ -23,7 +23,12 @@
  *      min(1/2, sigma sqrt(max(||g||, tol))) with opts.linear. CG/PCG exit on
  *      indefiniteness with their last iterate (the rhs on the first step);
  *      CHOLMOD reporting "not positive definite" falls back to CG for that
- *      iteration (counted in cholmod_fallbacks).
+ *      iteration (counted in cholmod_fallbacks). opts.linear = amg: the
+ *      same PCG with one BoomerAMG V-cycle (bs_amg.h) as preconditioner,
+ *      built from the matrix P of the objective's precond_matrix callback
+ *      (SPD on the free dofs: e.g. PSD-projected stiffness plus M/dt^2), or
+ *      from H itself when the callback is NULL (H must then be SPD). The
+ *      setup is reused across iterations and calls (see "AMG reuse").
  *   5. downhill: keep dx if dx.g < -kappa ||dx|| ||g||, else -dx if that
  *      passes (fallback_neg_dx), else -g (fallback_neg_grad).
  *   6. clamp ||dx|| to opts.clamp (clamps).
@@ -77,11 +82,22 @@
  * after them, else BS_MIN_STEPS_DONE with grad_norm: not reaching tol is
  * by design there and is not a max-iteration failure.
  *
+ * AMG reuse: the hierarchy is built (precond_matrix called at the current
+ * iterate x, then bs_linsolve_amg_setup) before the first solve, when the
+ * mask changes, after bs_minimizer_amg_reset, when opts.amg_rebuild_every > 0
+ * calls of bs_minimize have started since the last setup, and after a solve
+ * whose cost per decade of residual reduction (iterations / log10(1 /
+ * relative residual), of solves that converged without a negative-curvature
+ * exit) exceeds opts.amg_rebuild_factor times that of the first such solve
+ * after the setup (amg_rebuild_factor 0: never), or whose V-cycle was not
+ * positive definite. Setups are counted in stats.amg_setups and timed in
+ * stats.t_amg_setup (also part of t_linear).
+ *
  * Ownership: bs_minimizer_create copies opts and sizes every work buffer (a
  * Hessian with the pattern's sparsity, vectors, the linear-solver workspaces:
  * CG, MINRES and opts.linear) once for (n, pattern); bs_minimize and
  * bs_newton allocate nothing (CHOLMOD's numeric factorization aside). The
- * pattern is read during create only. The caller owns the minimizer
+ * pattern is read during create only. The AMG setup allocates inside hypre. The caller owns the minimizer
  * (bs_minimizer_destroy accepts NULL and nulls the pointer). The objective and
  * its ctx are borrowed for the duration of one call. One solve at a time per
  * minimizer. stats.reason_text points into the minimizer (valid until its
@@ -164,6 +180,11 @@ typedef struct bs_objective {
   /* Optional (NULL): called instead of hessian, with g_raw = the unprojected gradient the
      minimizer has just computed at the same x (saves the objective recomputing it). */
   int (*hessian_g)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
+  /* Optional (NULL), added: with opts.linear = amg, the matrix the AMG preconditioner
+     is built from, at x, assembled into P (the fem pattern, zeroed by the minimizer;
+     extras are ignored): symmetric positive definite on the free dofs. Called only when
+     a setup is due (see "AMG reuse"). Nonzero: not evaluable (BS_MIN_NONFINITE). */
+  int (*precond_matrix)(const double *x, bs_bsr *P, void *ctx);
   /* Optional (NULL), added: called after every accepted step of bs_minimize. */
   void (*trace)(const bs_min_iter *it, void *ctx);
   void *ctx;
@@ -178,7 +199,7 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   double c1, c2;       /* Wolfe constants, default 1e-4 and 0.9 (0 < c1 < c2 < 1)           */
   int max_ls;          /* line-search trial points cap per iteration, default 40 (>= 1)     */
   int naive_guess;     /* 1: take at least one iteration even if ||g|| < tol                */
-  bs_lin_kind linear;  /* cg (default), pcg, cholmod (minres accepted too)                 */
+  bs_lin_kind linear;  /* cg (default), pcg, amg, cholmod (minres accepted too)            */
   int cg_max_iter;     /* Krylov iterations cap per solve; 0 (default): 2 x free dofs + 100 */
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
   int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
@@ -190,6 +211,10 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   int64_t hessian_extra; /* added: room for Hessian blocks outside the pattern (bs_bsr     */
                        /* extra list, e.g. self-collision couplings), default 0; read by   */
                        /* bs_minimizer_create only                                          */
+  double amg_rebuild_factor; /* added: AMG rebuild when the cost per decade grows past this */
+                       /* factor times the post-setup one (see "AMG reuse"); default 3;     */
+                       /* 0: never (>= 0, else 0 or >= 1)                                   */
+  int amg_rebuild_every; /* added: AMG rebuild every N bs_minimize calls; 0 (default): no  */
 } bs_minimize_opts;
 
 /* Fills the defaults listed above. */
@@ -215,6 +240,8 @@ typedef struct bs_minimize_stats {
       clamps, ls_evaluations, cholmod_fallbacks;
   int ls_failures;                           /* added: steps taken without a Wolfe point  */
   int noise_steps;                           /* added: steps taken by opts.accept_noise   */
+  int amg_setups;                            /* added: AMG hierarchies built (linear = amg) */
+  double t_amg_setup;                        /* added: seconds in AMG setups (in t_linear) */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
   double grad_norm, E;                       /* final                                      */
   double t_eval, t_assembly, t_linear, t_line_search, t_total; /* seconds per phase        */
@@ -233,6 +260,10 @@ void bs_minimizer_destroy(bs_minimizer **m);
  * the workspace of a linear solver kind not used before (allocation happens here, never
  * inside bs_minimize). */
 int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_error *err);
+/* Forces an AMG setup before the next solve (e.g. when the preconditioner matrix the
+ * objective provides has changed: a new dt). No-op for NULL. */
+void bs_minimizer_amg_reset(bs_minimizer *m);
+
 /* The options in force. */
 const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m);
 

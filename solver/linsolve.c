@@ -6,6 +6,8 @@
  * there), so plain dot products over all 3n entries are the masked ones. */
 #include "bs_linsolve.h"
 
+#include "bs_amg.h"
+
 #include <cholmod.h>
 #include <float.h>
 #include <math.h>
@@ -21,6 +23,7 @@ struct bs_linsolve {
   double *r, *p, *q, *z;      /* CG / PCG (z: PCG only); q also for residuals */
   double *y, *v, *w, *w1, *w2, *r2; /* MINRES (with r, q)                     */
   double *minv;               /* PCG: 9n, inverse diagonal blocks         */
+  bs_amg *amg;                /* AMG-PCG: the BoomerAMG V-cycle            */
   /* CHOLMOD: scalar lower-triangular CSC of the free dofs. */
   cholmod_common cm;
   int cm_started;
@@ -36,23 +39,23 @@ struct bs_linsolve {
 
 /* ---- names ------------------------------------------------------------ */
 
-static const char *const kind_names[] = {"cg", "pcg", "cholmod", "minres"};
+static const char *const kind_names[] = {"cg", "pcg", "cholmod", "minres", "amg"};
 
 const char *bs_lin_kind_name(bs_lin_kind k) {
-  if ((int)k < 0 || (int)k > (int)BS_LIN_MINRES) return "unknown";
+  if ((int)k < 0 || (int)k > (int)BS_LIN_AMG) return "unknown";
   return kind_names[k];
 }
 
 int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err) {
   if (!name || !out)
     return bs_error_set(err, BS_EINPUT, "bs_lin_kind_parse: NULL argument");
-  for (int k = 0; k <= (int)BS_LIN_MINRES; ++k)
+  for (int k = 0; k <= (int)BS_LIN_AMG; ++k)
     if (strcmp(name, kind_names[k]) == 0) {
       *out = (bs_lin_kind)k;
       return BS_OK;
     }
   return bs_error_set(err, BS_EINPUT,
-                      "unknown linear solver \"%s\" (expected cg, pcg, cholmod or minres)", name);
+                      "unknown linear solver \"%s\" (expected cg, pcg, amg, cholmod or minres)", name);
 }
 
 /* ---- vector kernels (OpenMP, static schedules) ------------------------- */
@@ -221,8 +224,8 @@ static double apply_block_jacobi(int32_t n, const double *minv, const double *r,
 
 /* ---- CG / PCG ----------------------------------------------------------- */
 
-/* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally with the block
- * Jacobi preconditioner. Stops on ||r|| <= rel_tol ||b||, max_iter, or
+/* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally preconditioned
+ * (precond 1: block Jacobi; 2: one BoomerAMG V-cycle, set up beforehand). Stops on ||r|| <= rel_tol ||b||, max_iter, or
  * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
  * iteration, is returned with indefinite = 1). */
 static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
@@ -241,16 +244,31 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     return BS_OK;
   }
   double rz = rr;
-  if (precond) {
+  int rc;
+  if (precond == 1) {
     build_block_jacobi(A, mask, ls->minv);
     rz = apply_block_jacobi(n, ls->minv, r, z);
+  } else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz, err))) {
+    return rc;
+  }
+  const char *name = precond == 2 ? "amg-pcg" : precond ? "pcg" : "cg";
+  if (precond == 2 && !(rz > 0.0)) { /* B not SPD: return the right-hand side */
+    if (!isfinite(rz)) return matrix_error(A, mask, name, err);
+    st->precond_failed = 1;
+    vcopy(N, r, x);
+    bs_bsr_mul(A, mask, x, q);
+    double s = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
+    for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
+    st->rel_residual = sqrt(s) / bnorm;
+    return BS_OK;
   }
   vcopy(N, z, p);
   const double target = rel_tol * bnorm;
   for (int k = 0; k < max_iter; ++k) {
     bs_bsr_mul(A, mask, p, q);
     const double pq = vdot(N, p, q);
-    if (!isfinite(pq)) return matrix_error(A, mask, precond ? "pcg" : "cg", err);
+    if (!isfinite(pq)) return matrix_error(A, mask, name, err);
     if (pq <= 0.0) {
       st->indefinite = 1;
       if (k == 0) {
@@ -274,12 +292,20 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     }
     rr = s;
     st->iterations = k + 1;
-    if (!isfinite(rr)) return matrix_error(A, mask, precond ? "pcg" : "cg", err);
+    if (!isfinite(rr)) return matrix_error(A, mask, name, err);
     if (sqrt(rr) <= target) {
       st->converged = 1;
       break;
     }
-    const double rz_new = precond ? apply_block_jacobi(n, ls->minv, r, z) : rr;
+    double rz_new = rr;
+    if (precond == 1) rz_new = apply_block_jacobi(n, ls->minv, r, z);
+    else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz_new, err))) return rc;
+    if (precond == 2 && !(rz_new > 0.0)) { /* B not SPD (built from an indefinite matrix?) */
+      if (!isfinite(rz_new)) return matrix_error(A, mask, name, err);
+      st->rel_residual = sqrt(rr) / bnorm;
+      st->precond_failed = 1;
+      return BS_OK;
+    }
     const double beta = rz_new / rz;
     rz = rz_new;
 #pragma omp parallel for schedule(static) if (N > 16384)
@@ -576,6 +602,7 @@ void bs_linsolve_destroy(bs_linsolve **lsp) {
   free(ls->w2);
   free(ls->r2);
   free(ls->minv);
+  bs_amg_destroy(&ls->amg);
   free(ls->cmask);
   free(ls->fmap);
   free(ls->fvert);
@@ -588,7 +615,7 @@ int bs_linsolve_create(const bs_bsr *pattern, bs_lin_kind kind, bs_linsolve **ou
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: out is NULL");
   *out = NULL;
   if (!pattern) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: pattern is NULL");
-  if ((int)kind < 0 || (int)kind > (int)BS_LIN_MINRES)
+  if ((int)kind < 0 || (int)kind > (int)BS_LIN_AMG)
     return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: unknown solver kind %d", (int)kind);
   bs_linsolve *ls = bs_calloc(1, sizeof *ls, "bs_linsolve", err);
   if (!ls) return BS_ENOMEM;
@@ -606,9 +633,11 @@ int bs_linsolve_create(const bs_bsr *pattern, bs_lin_kind kind, bs_linsolve **ou
   BS_ALLOC(ls->r, N, "linsolve residual");
   BS_ALLOC(ls->q, N, "linsolve product");
   switch (kind) {
+  case BS_LIN_AMG:
   case BS_LIN_PCG:
     BS_ALLOC(ls->z, N, "pcg preconditioned residual");
-    BS_ALLOC(ls->minv, 9 * n, "pcg block Jacobi");
+    if (kind == BS_LIN_PCG) BS_ALLOC(ls->minv, 9 * n, "pcg block Jacobi");
+    else if (ok && bs_amg_create(&ls->amg, err)) ok = 0;
     /* fall through */
   case BS_LIN_CG:
     BS_ALLOC(ls->p, N, "cg direction");
@@ -668,6 +697,11 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   case BS_LIN_PCG:
     rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 1, x, st, err);
     break;
+  case BS_LIN_AMG:
+    /* No hierarchy for this mask yet: build it from A itself (A must be SPD). */
+    if (!bs_amg_same_mask(ls->amg, ls->n, mask)) rc = bs_linsolve_amg_setup(ls, A, mask, err);
+    if (rc == BS_OK) rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 2, x, st, err);
+    break;
   case BS_LIN_MINRES:
     rc = run_minres(ls, A, mask, b, rel_tol, max_iter, x, st, err);
     break;
@@ -677,4 +711,24 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   }
   st->seconds = bs_seconds() - t0;
   return rc;
+}
+
+int bs_linsolve_amg_setup(bs_linsolve *ls, const bs_bsr *P, const uint8_t *mask, bs_error *err) {
+  if (!ls || !P) return bs_error_set(err, BS_EINPUT, "bs_linsolve_amg_setup: NULL argument");
+  if (ls->kind != BS_LIN_AMG)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_amg_setup: the workspace is for %s, not amg",
+                        bs_lin_kind_name(ls->kind));
+  if (P->n != ls->n)
+    return bs_error_set(err, BS_EINPUT,
+                        "bs_linsolve_amg_setup: matrix has n = %d vertices, the workspace %d",
+                        (int)P->n, (int)ls->n);
+  return bs_amg_setup(ls->amg, P, mask, err);
+}
+
+int bs_linsolve_amg_ready(const bs_linsolve *ls, const uint8_t *mask) {
+  return ls && ls->kind == BS_LIN_AMG && bs_amg_same_mask(ls->amg, ls->n, mask);
+}
+
+void bs_linsolve_amg_info(const bs_linsolve *ls, bs_amg_info *info) {
+  bs_amg_get_info(ls && ls->kind == BS_LIN_AMG ? ls->amg : NULL, info);
 }

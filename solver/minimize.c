@@ -124,6 +124,8 @@ void bs_minimize_opts_default(bs_minimize_opts *o) {
   o->cg_max_iter = 0;
   o->newton_rel_tol = 1e-10;
   o->accept_noise = 0;
+  o->amg_rebuild_factor = 3.0;
+  o->amg_rebuild_every = 0;
 }
 
 int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
@@ -145,10 +147,16 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
                         o->c2);
   if (o->max_ls < 1)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_ls must be >= 1, got %d", o->max_ls);
-  if ((unsigned)o->linear > (unsigned)BS_LIN_MINRES)
+  if ((unsigned)o->linear > (unsigned)BS_LIN_AMG)
     return bs_error_set(err, BS_EINPUT, "minimizer option linear: unknown solver kind %d", (int)o->linear);
   if (o->cg_max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option cg_max_iter must be >= 0, got %d", o->cg_max_iter);
+  if (!(o->amg_rebuild_factor == 0 || (o->amg_rebuild_factor >= 1 && isfinite(o->amg_rebuild_factor))))
+    return bs_error_set(err, BS_EINPUT, "minimizer option amg_rebuild_factor must be 0 or a finite value >= 1, got %g",
+                        o->amg_rebuild_factor);
+  if (o->amg_rebuild_every < 0)
+    return bs_error_set(err, BS_EINPUT, "minimizer option amg_rebuild_every must be >= 0, got %d",
+                        o->amg_rebuild_every);
   if (!(o->newton_rel_tol > 0) || !isfinite(o->newton_rel_tol))
     return bs_error_set(err, BS_EINPUT, "minimizer option newton_rel_tol must be finite and > 0, got %g",
                         o->newton_rel_tol);
@@ -161,7 +169,7 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
 void bs_minimizer_destroy(bs_minimizer **pm) {
   if (!pm || !*pm) return;
   bs_minimizer *m = *pm;
-  for (int k = 0; k < 4; ++k) bs_linsolve_destroy(&m->lin[k]);
+  for (int k = 0; k < 5; ++k) bs_linsolve_destroy(&m->lin[k]);
   bs_bsr_destroy(&m->H);
   free(m->g_raw);
   free(m->g);
@@ -246,6 +254,10 @@ int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_erro
 
 const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m) { return m ? &m->opts : NULL; }
 
+void bs_minimizer_amg_reset(bs_minimizer *m) {
+  if (m) m->amg_reset = 1;
+}
+
 int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *x, bs_error *err) {
   if (!m) return bs_error_set(err, BS_EINPUT, "minimizer is NULL");
   if (!obj) return bs_error_set(err, BS_EINPUT, "objective is NULL");
@@ -267,7 +279,63 @@ int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *
 
 /* Step 4: H d = -g on the free dofs. Returns 0, 1 when the solve produced a
  * non-finite value (reason set), or a negative error. */
-static int newton_direction(bs_minimizer *m, const bs_objective *obj, double gnorm, int it, bs_minimize_stats *st,
+/* AMG: builds the hierarchy when due (see "AMG reuse" in bs_minimize.h).
+ * With the objective's precond_matrix, P is assembled in H's storage, so this
+ * runs before H is assembled (no second matrix); without it, after (P = H).
+ * Returns 0, 1 when P is not evaluable or not finite (reason set), or a
+ * negative error. */
+static int amg_prepare(bs_minimizer *m, const bs_objective *obj, const double *x, int it, bs_minimize_stats *st,
+                       bs_error *err) {
+  bs_linsolve *ls = m->lin[BS_LIN_AMG];
+  if (!m->amg_reset && bs_linsolve_amg_ready(ls, obj->mask)) return 0;
+  const double t = bs_seconds();
+  const bs_bsr *P = m->H;
+  if (obj->precond_matrix) {
+    bs_bsr_zero(m->H);
+    int prc = obj->precond_matrix(x, m->H, obj->ctx);
+    if (prc) {
+      bs__set_reason(m, st, BS_MIN_NONFINITE,
+                     "AMG preconditioner matrix not evaluable at iteration %d (callback returned %d)", it, prc);
+      return 1;
+    }
+  }
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc = bs_linsolve_amg_setup(ls, P, obj->mask, &e2);
+  const double dt = bs_seconds() - t;
+  st->t_amg_setup += dt;
+  st->t_linear += dt;
+  if (rc == BS_ENUMERIC) {
+    bs__set_reason(m, st, BS_MIN_NONFINITE, "AMG preconditioner matrix not finite at iteration %d (%s)", it, e2.msg);
+    return 1;
+  }
+  if (rc) {
+    if (err) *err = e2;
+    bs_error_prefix(err, "minimizer iteration %d: AMG setup", it);
+    return rc;
+  }
+  st->amg_setups++;
+  m->amg_reset = 0;
+  m->amg_calls = 0;
+  m->amg_base = 0.0;
+  return 0;
+}
+
+/* AMG: after a solve, requests a rebuild when the preconditioner has aged. */
+static void amg_judge(bs_minimizer *m, const bs_lin_stats *ls) {
+  if (ls->precond_failed) {
+    m->amg_reset = 1;
+    return;
+  }
+  if (!ls->converged || ls->indefinite || ls->iterations < 1 || !(ls->rel_residual > 0)) return;
+  const double decades = fmax(log10(1.0 / ls->rel_residual), 0.3);
+  const double cost = ls->iterations / decades;
+  if (m->amg_base == 0.0) m->amg_base = cost;
+  else if (m->opts.amg_rebuild_factor > 0 && cost > m->opts.amg_rebuild_factor * m->amg_base) m->amg_reset = 1;
+}
+
+static int newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
+                            bs_minimize_stats *st,
                             bs_min_iter *rec, bs_error *err) {
   const bs_minimize_opts *o = &m->opts;
   int64_t free_dofs = 0;
@@ -282,10 +350,15 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, double gno
   bs_lin_kind kind = o->linear;
   bs_lin_stats ls;
   memset(&ls, 0, sizeof ls);
+  if (kind == BS_LIN_AMG && !obj->precond_matrix) {
+    int arc = amg_prepare(m, obj, x, it, st, err);
+    if (arc) return arc;
+  }
   double t = bs_seconds();
   bs_error e2;
   bs_error_clear(&e2);
   int rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  if (rc == 0 && kind == BS_LIN_AMG) amg_judge(m, &ls);
   if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd) {
     st->cholmod_fallbacks++;
     rec->cholmod_fallback = 1;
@@ -318,6 +391,8 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
   const bs_minimize_opts *o = &m->opts;
   const int32_t n = m->n;
   const int64_t N = m->n3;
+  if (o->linear == BS_LIN_AMG && ++m->amg_calls >= o->amg_rebuild_every && o->amg_rebuild_every > 0)
+    m->amg_reset = 1;
   if (N == 0) { /* nothing to move: report E */
     double E0 = 0;
     double t = bs_seconds();
@@ -367,6 +442,12 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     rec.iteration = it;
     rec.grad_norm = gnorm;
 
+    /* AMG setup when due, from the objective's matrix (assembled in H's storage). */
+    if (o->linear == BS_LIN_AMG && obj->precond_matrix) {
+      rc = amg_prepare(m, obj, x, it, st, err);
+      if (rc < 0) return rc;
+      if (rc > 0) break;
+    }
     /* Step 2: Hessian. */
     double t = bs_seconds();
     int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
@@ -376,7 +457,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
       break;
     }
     /* Step 4: Newton direction. */
-    rc = newton_direction(m, obj, gnorm, it, st, &rec, err);
+    rc = newton_direction(m, obj, x, gnorm, it, st, &rec, err);
     if (rc < 0) return rc;
     if (rc > 0) break;
 

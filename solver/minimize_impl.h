@@ -12,7 +12,10 @@ struct bs_minimizer {
   int64_t n3;                 /* 3n                                                  */
   bs_minimize_opts opts;
   bs_bsr *H;                  /* Hessian storage with the pattern of create          */
-  bs_linsolve *lin[4];        /* workspaces by bs_lin_kind (CG and MINRES always)    */
+  bs_linsolve *lin[5];        /* workspaces by bs_lin_kind (CG and MINRES always)    */
+  int amg_reset;              /* 1: set up the AMG before the next solve             */
+  int amg_calls;              /* bs_minimize calls started since the last setup      */
+  double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
    * direction, right-hand side, trial point, raw and projected gradient there. */
   double *g_raw, *g, *d, *r, *y, *gy_raw, *gy;
