@@ -1,5 +1,5 @@
-/* fem.c — per-tet cache, lumped masses, block slots, colouring, and the
- * parallel elastic energy / gradient / Hessian assembly. */
+/* fem.c — per-tet cache, lumped masses, block slots, chunks and their
+ * colouring, and the parallel elastic energy / gradient / Hessian assembly. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,74 +18,121 @@ void bs_fem_destroy(bs_fem **pf) {
   bs_bsr_destroy(&f->pattern);
   free(f->slots);
   free(f->color_ptr);
-  free(f->color_tets);
+  free(f->chunk_ptr);
+  free(f->chunk_tets);
+  free(f->color_chunks);
   free(f);
   *pf = NULL;
 }
 
-/* Greedy colouring: each tet takes the smallest colour that no tet sharing a
- * vertex with it has taken yet. */
-static int color_tets(bs_fem *f, bs_error *err) {
+static int cmp_i32(const void *a, const void *b) {
+  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* Chunks: from the first tet not yet taken, breadth first through shared
+ * vertices over the tets not yet taken, until BS_FEM_CHUNK tets (fewer when
+ * the search runs out); then sorted. chunk_of[t] receives t's chunk. */
+static int make_chunks(bs_fem *f, int32_t *chunk_of, bs_error *err) {
   const bs_mesh *m = f->mesh;
-  int32_t nt = m->n_tets;
-  int32_t *color = malloc(sizeof(int32_t) * (size_t)(nt ? nt : 1));
-  int cap = 64;
-  int32_t *used = malloc(sizeof(int32_t) * (size_t)cap); /* used[c] == t: taken for tet t */
-  if (!color || !used) {
-    free(color);
-    free(used);
-    return bs_error_set(err, BS_ENOMEM, "out of memory colouring %d tets", nt);
-  }
-  for (int c = 0; c < cap; c++) used[c] = -1;
-  for (int32_t t = 0; t < nt; t++) color[t] = -1;
-  int nc = 0;
-  for (int32_t t = 0; t < nt; t++) {
-    for (int a = 0; a < 4; a++) {
-      int32_t v = m->tets[4 * t + a];
-      for (int32_t k = m->v2t_ptr[v]; k < m->v2t_ptr[v + 1]; k++) {
-        int32_t c = color[m->v2t[k]];
-        if (c >= 0) used[c] = t;
-      }
+  const int32_t nt = m->n_tets;
+  f->chunk_tets = malloc(sizeof(int32_t) * (size_t)(nt ? nt : 1));
+  f->chunk_ptr = malloc(sizeof(int32_t) * ((size_t)nt + 1));
+  if (!f->chunk_tets || !f->chunk_ptr) return bs_error_set(err, BS_ENOMEM, "out of memory chunking %d tets", nt);
+  int32_t *out = f->chunk_tets;
+  for (int32_t t = 0; t < nt; t++) chunk_of[t] = -1;
+  int32_t pos = 0, k = 0, seed = 0;
+  f->chunk_ptr[0] = 0;
+  while (pos < nt) {
+    while (chunk_of[seed] >= 0) seed++;
+    const int32_t start = pos;
+    chunk_of[seed] = k;
+    out[pos++] = seed;
+    for (int32_t head = start; head < pos && pos - start < BS_FEM_CHUNK; head++) {
+      const int32_t *tv = m->tets + 4 * (size_t)out[head];
+      for (int a = 0; a < 4 && pos - start < BS_FEM_CHUNK; a++)
+        for (int32_t p = m->v2t_ptr[tv[a]]; p < m->v2t_ptr[tv[a] + 1] && pos - start < BS_FEM_CHUNK; p++) {
+          const int32_t u = m->v2t[p];
+          if (chunk_of[u] < 0) {
+            chunk_of[u] = k;
+            out[pos++] = u;
+          }
+        }
     }
+    qsort(out + start, (size_t)(pos - start), sizeof(int32_t), cmp_i32);
+    f->chunk_ptr[++k] = pos;
+  }
+  f->n_chunks = k;
+  return 0;
+}
+
+/* Greedy colouring of the chunks, in order: each chunk takes the smallest
+ * colour that no chunk sharing a vertex with it has taken yet. */
+static int color_chunks(bs_fem *f, bs_error *err) {
+  const bs_mesh *m = f->mesh;
+  const int32_t nt = m->n_tets, nv = m->n_vertices;
+  const int32_t ns = nv > nt ? nv : nt;
+  int32_t *chunk_of = malloc(sizeof(int32_t) * (size_t)(nt ? nt : 1));
+  int32_t *color = malloc(sizeof(int32_t) * (size_t)(nt ? nt : 1));
+  int32_t *stamp = malloc(sizeof(int32_t) * (size_t)(ns ? ns : 1)); /* stamp[v] == k: v seen for chunk k */
+  int cap = 64;
+  int32_t *used = malloc(sizeof(int32_t) * (size_t)cap); /* used[c] == k: taken for chunk k */
+  int st = 0;
+  if (!chunk_of || !color || !stamp || !used) {
+    st = bs_error_set(err, BS_ENOMEM, "out of memory colouring %d tets", nt);
+    goto done;
+  }
+  if ((st = make_chunks(f, chunk_of, err))) goto done;
+  const int32_t nk = f->n_chunks;
+  for (int c = 0; c < cap; c++) used[c] = -1;
+  for (int32_t v = 0; v < nv; v++) stamp[v] = -1;
+  for (int32_t k = 0; k < nk; k++) color[k] = -1;
+  int nc = 0;
+  for (int32_t k = 0; k < nk; k++) {
+    for (int32_t q = f->chunk_ptr[k]; q < f->chunk_ptr[k + 1]; q++)
+      for (int a = 0; a < 4; a++) {
+        const int32_t v = m->tets[4 * (size_t)f->chunk_tets[q] + a];
+        if (stamp[v] == k) continue;
+        stamp[v] = k;
+        for (int32_t p = m->v2t_ptr[v]; p < m->v2t_ptr[v + 1]; p++) {
+          const int32_t c = color[chunk_of[m->v2t[p]]];
+          if (c >= 0) used[c] = k;
+        }
+      }
     int c = 0;
-    while (c < cap && used[c] == t) c++;
+    while (c < cap && used[c] == k) c++;
     if (c == cap) {
       int ncap = 2 * cap;
       int32_t *nu = realloc(used, sizeof(int32_t) * (size_t)ncap);
       if (!nu) {
-        free(color);
-        free(used);
-        return bs_error_set(err, BS_ENOMEM, "out of memory colouring tets");
+        st = bs_error_set(err, BS_ENOMEM, "out of memory colouring tets");
+        goto done;
       }
       used = nu;
       for (int i = cap; i < ncap; i++) used[i] = -1;
       cap = ncap;
     }
-    color[t] = c;
+    color[k] = c;
     if (c + 1 > nc) nc = c + 1;
   }
   f->n_colors = nc;
   f->color_ptr = calloc((size_t)nc + 1, sizeof(int32_t));
-  f->color_tets = malloc(sizeof(int32_t) * (size_t)(nt ? nt : 1));
-  if (!f->color_ptr || !f->color_tets) {
-    free(color);
-    free(used);
-    return bs_error_set(err, BS_ENOMEM, "out of memory colouring tets");
+  f->color_chunks = malloc(sizeof(int32_t) * (size_t)(nk ? nk : 1));
+  if (!f->color_ptr || !f->color_chunks) {
+    st = bs_error_set(err, BS_ENOMEM, "out of memory colouring tets");
+    goto done;
   }
-  for (int32_t t = 0; t < nt; t++) f->color_ptr[color[t] + 1]++;
+  for (int32_t k = 0; k < nk; k++) f->color_ptr[color[k] + 1]++;
   for (int c = 0; c < nc; c++) f->color_ptr[c + 1] += f->color_ptr[c];
-  int32_t *fill = malloc(sizeof(int32_t) * (size_t)(nc ? nc : 1));
-  if (!fill) {
-    free(color);
-    free(used);
-    return bs_error_set(err, BS_ENOMEM, "out of memory colouring tets");
-  }
-  memcpy(fill, f->color_ptr, sizeof(int32_t) * (size_t)nc);
-  for (int32_t t = 0; t < nt; t++) f->color_tets[fill[color[t]]++] = t;
-  free(fill);
+  /* stamp is free now: reuse it as the fill pointers (nc <= nk <= nt <= ns) */
+  memcpy(stamp, f->color_ptr, sizeof(int32_t) * (size_t)nc);
+  for (int32_t k = 0; k < nk; k++) f->color_chunks[stamp[color[k]]++] = k;
+done:
+  free(chunk_of);
   free(color);
+  free(stamp);
   free(used);
-  return 0;
+  return st;
 }
 
 int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *materials,
@@ -151,7 +198,7 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
         f->slots[16 * t + 4 * a + b] = s;
       }
   }
-  if ((st = color_tets(f, err))) goto fail;
+  if ((st = color_chunks(f, err))) goto fail;
   /* The pattern is structure only: matrices are made with bs_fem_matrix. */
   free(f->pattern->val);
   f->pattern->val = NULL;
@@ -167,70 +214,68 @@ int bs_fem_matrix(const bs_fem *fem, bs_bsr **out, bs_error *err) {
   return bs_bsr_create(fem->n_vertices, fem->pattern->row_ptr, fem->pattern->col, out, err);
 }
 
+/* blk += s * the 3x3 block at he (row stride 12); restrict: the block and
+ * the element matrix do not overlap. */
+static inline void scatter_block(double *restrict blk, const double *restrict he, double s) {
+  for (int i = 0; i < 3; i++) {
+    blk[3 * i + 0] += s * he[12 * i + 0];
+    blk[3 * i + 1] += s * he[12 * i + 1];
+    blk[3 * i + 2] += s * he[12 * i + 2];
+  }
+}
+
 void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], double scale, bs_bsr *H) {
-  const int32_t *sl = fem->slots + 16 * t;
+  const int32_t *sl = fem->slots + 16 * (size_t)t;
+  double *val = H->val;
   for (int a = 0; a < 4; a++)
-    for (int b = 0; b < 4; b++) {
-      double *blk = H->val + 9 * (size_t)sl[4 * a + b];
-      for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) blk[3 * i + j] += scale * He[12 * (3 * a + i) + 3 * b + j];
-    }
+    for (int b = 0; b < 4; b++) scatter_block(val + 9 * (size_t)sl[4 * a + b], He + 12 * 3 * a + 3 * b, scale);
 }
 
 /* The kernel loops work on batches of up to NB tets (BS_MATERIAL_BATCH: the
  * SVDs of a batch run in SIMD lanes, bs_svd3_batch), split into runs of one
- * material. Results are bit for bit those of the per-tet kernels, and the
- * scatter order within a colour is unchanged. */
+ * material. Results are bit for bit those of the per-tet kernels. */
 enum { NB = BS_MATERIAL_BATCH };
+_Static_assert(BS_FEM_CHUNK % BS_MATERIAL_BATCH == 0, "BS_FEM_CHUNK must be a multiple of BS_MATERIAL_BATCH");
 
-/* Gathers tets idx[0..n) (through map, or idx itself when map is NULL):
- * coordinates, Dm_inv and volumes, packed. */
-static void gather_batch(const bs_fem *fem, const double *x, const int32_t *map, int32_t k0, int n, int32_t *tt,
-                         double *xt, double *Dm, double *vol) {
+/* Gathers tets tt[0..n): coordinates, Dm_inv and volumes, packed. */
+static void gather_batch(const bs_fem *fem, const double *x, const int32_t *tt, int n, double *xt, double *Dm,
+                         double *vol) {
   for (int i = 0; i < n; i++) {
-    const int32_t t = map ? map[k0 + i] : k0 + i;
-    tt[i] = t;
+    const int32_t t = tt[i];
     bs_fem_gather(fem, x, t, xt + 12 * i);
     memcpy(Dm + 9 * i, fem->Dm_inv + 9 * (size_t)t, 9 * sizeof(double));
     vol[i] = fem->volume[t];
   }
 }
 
-/* Prefetches the vertex data (x, and out when not NULL) and the rest shape
- * of the tets map[k0 .. min(k0 + NB, hi)): a colour's tets share no vertex, so
- * consecutive ones are far apart in memory. */
-static void prefetch_batch(const bs_fem *fem, const double *x, const double *out, const int32_t *map, int32_t k0,
-                           int32_t hi) {
-  for (int32_t k = k0; k < hi && k < k0 + NB; k++) {
-    const int32_t t = map[k];
-    const int32_t *tv = fem->mesh->tets + 4 * (size_t)t;
-    __builtin_prefetch(fem->Dm_inv + 9 * (size_t)t, 0, 1);
-    for (int a = 0; a < 4; a++) {
-      __builtin_prefetch(x + 3 * (size_t)tv[a], 0, 1);
-      if (out) __builtin_prefetch(out + 3 * (size_t)tv[a], 1, 1);
-    }
-  }
-}
-
-/* Length of the run of tets tt[i..n) with the material of tt[i]. */
-static int material_run(const bs_fem *fem, const int32_t *tt, int i, int n) {
-  const int32_t mi = fem->tet_material[tt[i]];
-  int j = i + 1;
+/* Length of the run of tets tt[0..n) with the material of tt[0]. */
+static int material_run(const bs_fem *fem, const int32_t *tt, int n) {
+  const int32_t mi = fem->tet_material[tt[0]];
+  int j = 1;
   while (j < n && fem->tet_material[tt[j]] == mi) j++;
-  return j - i;
+  return j;
 }
 
-double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
+/* A colour's chunks run on several threads when it holds at least
+ * PAR_CHUNKS chunks (about 512 tets). */
+enum { PAR_CHUNKS = 4 };
+static int colour_parallel(const bs_fem *fem, int c) { return fem->color_ptr[c + 1] - fem->color_ptr[c] >= PAR_CHUNKS; }
+
+/* Energies are summed in a fixed order whatever the thread count: per block
+ * of EBLOCK tets (energy) or per chunk (gradient), then the partial sums in
+ * order (serially when the scratch array cannot be allocated). */
+enum { EBLOCK = 1024 };
+
+static double energy_block(const bs_fem *fem, const double *x, int32_t lo, int32_t hi) {
   double E = 0;
-  const int32_t nt = fem->n_tets;
-#pragma omp parallel for schedule(static) reduction(+ : E) if (nt > 2048)
-  for (int32_t k0 = 0; k0 < nt; k0 += NB) {
-    const int n = nt - k0 < NB ? (int)(nt - k0) : NB;
+  for (int32_t k0 = lo; k0 < hi; k0 += NB) {
+    const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
     int32_t tt[NB];
     double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB];
-    gather_batch(fem, x, NULL, k0, n, tt, xt, Dm, vol);
+    for (int i = 0; i < n; i++) tt[i] = k0 + i;
+    gather_batch(fem, x, tt, n, xt, Dm, vol);
     for (int i = 0; i < n;) {
-      const int r = material_run(fem, tt, i, n);
+      const int r = material_run(fem, tt + i, n - i);
       bs_tet_energy_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i, e + i);
       i += r;
     }
@@ -239,67 +284,121 @@ double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
   return E;
 }
 
-double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
+double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
+  const int32_t nt = fem->n_tets, nb = (int32_t)(((int64_t)nt + EBLOCK - 1) / EBLOCK);
+  double *part = nb > 1 ? malloc(sizeof(double) * (size_t)nb) : NULL;
+  if (!part) {
+    double E = 0;
+    for (int32_t lo = 0; lo < nt; lo += EBLOCK) E += energy_block(fem, x, lo, nt - lo < EBLOCK ? nt : lo + EBLOCK);
+    return E;
+  }
+#pragma omp parallel for schedule(static) if (nb > 2)
+  for (int32_t b = 0; b < nb; b++) {
+    const int32_t lo = b * EBLOCK;
+    part[b] = energy_block(fem, x, lo, nt - lo < EBLOCK ? nt : lo + EBLOCK);
+  }
   double E = 0;
+  for (int32_t b = 0; b < nb; b++) E += part[b];
+  free(part);
+  return E;
+}
+
+/* One chunk of the gradient: its tets in order, batch by batch. */
+static double gradient_chunk(const bs_fem *fem, const double *x, int32_t k, double *g) {
   const int32_t *tets = fem->mesh->tets;
-  for (int c = 0; c < fem->n_colors; c++) {
-    int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static) reduction(+ : E) if (hi - lo > 512)
-    for (int32_t k0 = lo; k0 < hi; k0 += NB) {
-      const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
-      int32_t tt[NB];
-      double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB], ge[12 * NB];
-      gather_batch(fem, x, fem->color_tets, k0, n, tt, xt, Dm, vol);
-      prefetch_batch(fem, x, g, fem->color_tets, k0 + NB, hi);
-      for (int i = 0; i < n;) {
-        const int r = material_run(fem, tt, i, n);
-        bs_tet_energy_grad_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
-                                 e + i, ge + 12 * i);
-        i += r;
-      }
-      for (int i = 0; i < n; i++) {
-        E += e[i];
-        for (int a = 0; a < 4; a++) {
-          double *gv = g + 3 * (size_t)tets[4 * tt[i] + a];
-          gv[0] += ge[12 * i + 3 * a];
-          gv[1] += ge[12 * i + 3 * a + 1];
-          gv[2] += ge[12 * i + 3 * a + 2];
-        }
+  const int32_t lo = fem->chunk_ptr[k], hi = fem->chunk_ptr[k + 1];
+  double E = 0;
+  for (int32_t k0 = lo; k0 < hi; k0 += NB) {
+    const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
+    const int32_t *tt = fem->chunk_tets + k0;
+    double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB], ge[12 * NB];
+    gather_batch(fem, x, tt, n, xt, Dm, vol);
+    for (int i = 0; i < n;) {
+      const int r = material_run(fem, tt + i, n - i);
+      bs_tet_energy_grad_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
+                               e + i, ge + 12 * i);
+      i += r;
+    }
+    for (int i = 0; i < n; i++) {
+      E += e[i];
+      for (int a = 0; a < 4; a++) {
+        double *gv = g + 3 * (size_t)tets[4 * (size_t)tt[i] + a];
+        gv[0] += ge[12 * i + 3 * a];
+        gv[1] += ge[12 * i + 3 * a + 1];
+        gv[2] += ge[12 * i + 3 * a + 2];
       }
     }
   }
   return E;
 }
 
-void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H) {
+double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
+  double *part = malloc(sizeof(double) * (size_t)(fem->n_chunks ? fem->n_chunks : 1));
+  double E = 0;
   for (int c = 0; c < fem->n_colors; c++) {
-    int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static) if (hi - lo > 512)
-    for (int32_t k0 = lo; k0 < hi; k0 += NB) {
-      const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
-      int32_t tt[NB];
-      double xt[12 * NB], Dm[9 * NB], vol[NB], He[144 * NB];
-      gather_batch(fem, x, fem->color_tets, k0, n, tt, xt, Dm, vol);
-      prefetch_batch(fem, x, NULL, fem->color_tets, k0 + NB, hi);
-      /* The blocks of the next batch are scattered over the whole matrix (a
-       * colour's tets share no vertex): fetch them while this batch computes. */
-      for (int32_t k = k0 + NB; k < hi && k < k0 + 2 * NB; k++) {
-        const int32_t *sl = fem->slots + 16 * (size_t)fem->color_tets[k];
-        for (int b = 0; b < 16; b++) {
-          const double *blk = H->val + 9 * (size_t)sl[b];
-          __builtin_prefetch(blk, 1, 1);
-          __builtin_prefetch(blk + 8, 1, 1);
-        }
+    const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
+    if (!part) { /* serial fallback, the same order: chunks as listed by colour */
+      for (int32_t q = lo; q < hi; q++) E += gradient_chunk(fem, x, fem->color_chunks[q], g);
+      continue;
+    }
+#pragma omp parallel for schedule(dynamic, 1) if (colour_parallel(fem, c))
+    for (int32_t q = lo; q < hi; q++) part[q] = gradient_chunk(fem, x, fem->color_chunks[q], g);
+  }
+  if (part) { /* part[q]: the chunk at position q of color_chunks */
+    for (int32_t q = 0; q < fem->n_chunks; q++) E += part[q];
+    free(part);
+  }
+  return E;
+}
+
+/* One chunk of the Hessian: its tets in order, batch by batch; scale s (or
+ * material_scale[m] when not NULL, tets with 0 skipped). */
+static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, double s,
+                          const double *material_scale, int32_t k, bs_bsr *H) {
+  const int32_t lo = fem->chunk_ptr[k], hi = fem->chunk_ptr[k + 1];
+  for (int32_t k0 = lo; k0 < hi; k0 += NB) {
+    const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
+    const int32_t *tt = fem->chunk_tets + k0;
+    double xt[12 * NB], Dm[9 * NB], vol[NB], He[144 * NB];
+    gather_batch(fem, x, tt, n, xt, Dm, vol);
+    /* fetch the batch's blocks while its Hessians are computed */
+    for (int i = 0; i < n; i++) {
+      const int32_t *sl = fem->slots + 16 * (size_t)tt[i];
+      for (int b = 0; b < 16; b++) {
+        const double *blk = H->val + 9 * (size_t)sl[b];
+        __builtin_prefetch(blk, 1, 3);
+        __builtin_prefetch(blk + 8, 1, 3);
       }
-      for (int i = 0; i < n;) {
-        const int r = material_run(fem, tt, i, n);
-        bs_tet_hessian_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
-                             project_psd, He + 144 * i);
-        i += r;
+    }
+    for (int i = 0; i < n;) {
+      const int32_t mi = fem->tet_material[tt[i]];
+      const int r = material_run(fem, tt + i, n - i);
+      const double sc = material_scale ? material_scale[mi] : s;
+      if (sc != 0 || !material_scale) {
+        bs_tet_hessian_batch(&fem->materials[mi], r, xt + 12 * i, Dm + 9 * i, vol + i, project_psd, He + 144 * i);
+        for (int j = i; j < i + r; j++) bs_fem_scatter_hessian(fem, tt[j], He + 144 * j, sc, H);
       }
-      for (int i = 0; i < n; i++) bs_fem_scatter_hessian(fem, tt[i], He + 144 * i, scale, H);
+      i += r;
     }
   }
+}
+
+static void hessian_all(const bs_fem *fem, const double *x, int project_psd, double s, const double *material_scale,
+                        bs_bsr *H) {
+  for (int c = 0; c < fem->n_colors; c++) {
+    const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
+#pragma omp parallel for schedule(dynamic, 1) if (colour_parallel(fem, c))
+    for (int32_t q = lo; q < hi; q++) hessian_chunk(fem, x, project_psd, s, material_scale, fem->color_chunks[q], H);
+  }
+}
+
+void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H) {
+  hessian_all(fem, x, project_psd, scale, NULL, H);
+}
+
+void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, int project_psd,
+                                   const double *material_scale, bs_bsr *H) {
+  hessian_all(fem, x, project_psd, 0, material_scale, H);
 }
 
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF) {

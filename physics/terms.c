@@ -148,21 +148,9 @@ static void damping_free(void *p) {
 
 static int damping_begin(bs_term *t, bs_error *err) {
   damping_data *dd = t->data;
-  const bs_fem *fem = t->fem;
   bs_bsr_zero(dd->D);
-  for (int c = 0; c < fem->n_colors; c++) {
-    int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-#pragma omp parallel for schedule(static) if (hi - lo > 512)
-    for (int32_t k = lo; k < hi; k++) {
-      int32_t e = fem->color_tets[k];
-      int32_t mi = fem->tet_material[e];
-      if (dd->k[mi] == 0) continue;
-      double xt[12], He[144];
-      bs_fem_gather(fem, t->step->x_n, e, xt);
-      bs_tet_hessian(&fem->materials[mi], xt, fem->Dm_inv + 9 * (size_t)e, fem->volume[e], 1, He);
-      bs_fem_scatter_hessian(fem, e, He, dd->k[mi], dd->D);
-    }
-  }
+  /* k_m H⁺(xⁿ) over the tets of each material m (k_m = 0: skipped) */
+  bs_fem_elastic_hessian_scaled(t->fem, t->step->x_n, 1, dd->k, dd->D);
   return 0;
 }
 

@@ -224,7 +224,7 @@ Test(terms, assembly_dense_and_threads) {
   omp_set_num_threads(saved);
   cr_expect(memcmp(H1->val, H2->val, sizeof(double) * 9 * (size_t)H1->nnzb) == 0, "Hessian differs with 1 and 2 threads");
   cr_expect(memcmp(g1, g2, sizeof(double) * n3) == 0, "gradient differs with 1 and 2 threads");
-  cr_expect(fabs(E1 - E2) <= 1e-12 * fabs(E1), "energy differs beyond round-off: %.17g vs %.17g", E1, E2);
+  cr_expect(E1 == E2, "energy differs with 1 and 2 threads: %.17g vs %.17g", E1, E2);
   double maxabs = 0, maxdiff = 0;
   for (int32_t i = 0; i < nv; i++)
     for (int32_t s = H1->row_ptr[i]; s < H1->row_ptr[i + 1]; s++) {
@@ -250,6 +250,56 @@ Test(terms, assembly_dense_and_threads) {
   teardown(&f);
 }
 
+/* The chunks partition the tets (ascending within a chunk, at most
+ * BS_FEM_CHUNK each); every chunk is in exactly one colour, ascending within a
+ * colour; no two chunks of a colour share a vertex. */
+static void check_colouring(const bs_fem *fem) {
+  const bs_mesh *m = fem->mesh;
+  cr_assert(fem->n_chunks >= 1 && fem->n_chunks <= m->n_tets, "%d chunks", fem->n_chunks);
+  cr_assert_eq(fem->chunk_ptr[0], 0);
+  cr_assert_eq(fem->chunk_ptr[fem->n_chunks], m->n_tets);
+  cr_assert_eq(fem->color_ptr[0], 0);
+  cr_assert_eq(fem->color_ptr[fem->n_colors], fem->n_chunks);
+  int32_t *tet_seen = calloc((size_t)m->n_tets, sizeof(int32_t));
+  for (int32_t k = 0; k < fem->n_chunks; k++) {
+    int32_t lo = fem->chunk_ptr[k], hi = fem->chunk_ptr[k + 1];
+    cr_expect(lo < hi && hi - lo <= BS_FEM_CHUNK, "chunk %d holds %d tets", k, hi - lo);
+    for (int32_t q = lo; q < hi; q++) {
+      int32_t t = fem->chunk_tets[q];
+      cr_assert(t >= 0 && t < m->n_tets, "tet %d out of range", t);
+      if (q > lo) cr_expect_gt(t, fem->chunk_tets[q - 1], "chunk %d: tets not ascending", k);
+      tet_seen[t]++;
+    }
+  }
+  for (int32_t t = 0; t < m->n_tets; t++) cr_expect_eq(tet_seen[t], 1, "tet %d in %d chunks", t, tet_seen[t]);
+  int32_t *seen_color = calloc((size_t)m->n_vertices, sizeof(int32_t));
+  int32_t *seen_chunk = calloc((size_t)m->n_vertices, sizeof(int32_t));
+  int32_t *chunk_seen = calloc((size_t)fem->n_chunks, sizeof(int32_t));
+  int32_t conflicts = 0;
+  for (int c = 0; c < fem->n_colors; c++) {
+    cr_expect(fem->color_ptr[c + 1] > fem->color_ptr[c], "colour %d is empty", c);
+    for (int32_t q = fem->color_ptr[c]; q < fem->color_ptr[c + 1]; q++) {
+      int32_t k = fem->color_chunks[q];
+      cr_assert(k >= 0 && k < fem->n_chunks, "chunk %d out of range", k);
+      if (q > fem->color_ptr[c]) cr_expect_gt(k, fem->color_chunks[q - 1], "colour %d: chunks not ascending", c);
+      chunk_seen[k]++;
+      for (int32_t p = fem->chunk_ptr[k]; p < fem->chunk_ptr[k + 1]; p++)
+        for (int a = 0; a < 4; a++) {
+          int32_t v = m->tets[4 * (size_t)fem->chunk_tets[p] + a];
+          if (seen_color[v] == c + 1 && seen_chunk[v] != k) conflicts++;
+          seen_color[v] = c + 1;
+          seen_chunk[v] = k;
+        }
+    }
+  }
+  cr_expect_eq(conflicts, 0, "%d vertices shared by two chunks of one colour", conflicts);
+  for (int32_t k = 0; k < fem->n_chunks; k++) cr_expect_eq(chunk_seen[k], 1, "chunk %d coloured %d times", k, chunk_seen[k]);
+  free(tet_seen);
+  free(seen_color);
+  free(seen_chunk);
+  free(chunk_seen);
+}
+
 /* Lumped masses sum to the total mass ρV; the colouring is valid. */
 Test(terms, masses_and_colouring) {
   fixture f;
@@ -258,22 +308,140 @@ Test(terms, masses_and_colouring) {
   for (int32_t v = 0; v < f.mesh->n_vertices; v++) m += f.fem->mass[v];
   for (int32_t t = 0; t < f.mesh->n_tets; t++) expect += f.mats[f.tet_mat[t]].density * f.fem->volume[t];
   cr_expect(fabs(m - expect) < 1e-12 * expect, "mass %g vs %g", m, expect);
-  int32_t *seen = calloc((size_t)f.mesh->n_vertices, sizeof(int32_t));
-  int32_t count = 0;
-  for (int c = 0; c < f.fem->n_colors; c++) {
-    for (int32_t k = f.fem->color_ptr[c]; k < f.fem->color_ptr[c + 1]; k++) {
-      int32_t t = f.fem->color_tets[k];
-      count++;
-      for (int a = 0; a < 4; a++) {
-        int32_t v = f.mesh->tets[4 * t + a];
-        cr_expect_neq(seen[v], c + 1, "colour %d holds two tets sharing vertex %d", c, v);
-        seen[v] = c + 1;
-      }
+  check_colouring(f.fem);
+  teardown(&f);
+  /* a box large enough for many chunks per colour (the parallel path) */
+  setup(&f, 12, BS_MODEL_FIXED_COROTATED);
+  check_colouring(f.fem);
+  cr_expect(f.fem->n_colors >= 2 && f.fem->n_colors <= 24, "%d colours for a 12^3 box", f.fem->n_colors);
+  cr_expect(f.fem->n_chunks <= 2 * (f.mesh->n_tets / BS_FEM_CHUNK + 1), "%d chunks for %d tets", f.fem->n_chunks,
+            f.mesh->n_tets);
+  teardown(&f);
+}
+
+/* An unordered mesh (tets shuffled, two materials): the chunk colouring is
+ * valid and still leaves colours with several chunks (the parallel path);
+ * energy, gradient, Hessian (plain and projected) and the damping matrix are
+ * bitwise identical with 1 and 2 threads and match per-tet sums in mesh order; the
+ * damping matrix leaves out the material whose coefficient is 0. */
+Test(terms, chunks_unordered_mesh_threads) {
+  bs_error err;
+  bs_mesh *box = NULL, *mesh = NULL;
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 0.8, 0.6};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 14, 14, 14, &box, &err), 0, "%s", err.msg);
+  const int32_t nt = box->n_tets;
+  int32_t *perm = malloc(sizeof(int32_t) * (size_t)nt), *tets = malloc(sizeof(int32_t) * 4 * (size_t)nt);
+  for (int32_t t = 0; t < nt; t++) perm[t] = t;
+  for (int32_t t = nt - 1; t > 0; t--) {
+    int32_t j = (int32_t)(urand() * (t + 1)), q = perm[t];
+    if (j > t) j = t;
+    perm[t] = perm[j];
+    perm[j] = q;
+  }
+  for (int32_t t = 0; t < nt; t++)
+    for (int a = 0; a < 4; a++) tets[4 * t + a] = box->tets[4 * perm[t] + a];
+  cr_assert_eq(bs_mesh_create(box->n_vertices, box->x, nt, tets, 0, NULL, &mesh, &err), 0, "%s", err.msg);
+  bs_material mats[2];
+  cr_assert_eq(bs_material_init(BS_MODEL_FIXED_COROTATED, 1e4, 0.3, 1000, &mats[0], &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_material_init(BS_MODEL_NEO_HOOKEAN, 3e4, 0.45, 500, &mats[1], &err), 0, "%s", err.msg);
+  int32_t *tm = malloc(sizeof(int32_t) * (size_t)nt);
+  for (int32_t t = 0; t < nt; t++) tm[t] = (t / 5) % 2;
+  bs_fem *fem = NULL;
+  cr_assert_eq(bs_fem_create(mesh, 2, mats, tm, &fem, &err), 0, "%s", err.msg);
+  check_colouring(fem);
+  int wide = 0;
+  for (int c = 0; c < fem->n_colors; c++) wide += fem->color_ptr[c + 1] - fem->color_ptr[c] >= 4;
+  cr_expect(wide >= fem->n_colors / 2, "only %d of %d colours hold 4 chunks or more", wide, fem->n_colors);
+  cr_expect(fem->n_colors <= 32, "%d colours for %d tets", fem->n_colors, nt);
+
+  size_t n3 = 3 * (size_t)mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3), *xn = malloc(sizeof(double) * n3);
+  for (size_t i = 0; i < n3; i++) {
+    x[i] = mesh->x[i] + 0.03 * (urand() - 0.5);
+    xn[i] = mesh->x[i] + 0.03 * (urand() - 0.5);
+  }
+  bs_step_data step = {.dt = 1.0 / 24, .x_hat = xn, .x_n = xn, .load = 1};
+  double kd[2] = {0, 0.03};
+  bs_bsr *H[2][3];
+  double *g[2], E[2], V[2];
+  int saved = omp_get_max_threads();
+  for (int r = 0; r < 2; r++) {
+    omp_set_num_threads(r + 1);
+    for (int i = 0; i < 2; i++) {
+      cr_assert_eq(bs_fem_matrix(fem, &H[r][i], &err), 0);
+      bs_fem_elastic_hessian(fem, x, i, 1.0, H[r][i]);
+    }
+    bs_term *damp = NULL;
+    cr_assert_eq(bs_term_damping_create(fem, &step, kd, &damp, &err), 0, "%s", err.msg);
+    cr_assert_eq(damp->ops->begin_step(damp, &err), 0);
+    cr_assert_eq(bs_fem_matrix(fem, &H[r][2], &err), 0);
+    damp->ops->hessian(damp, x, H[r][2]); /* D / dt */
+    bs_term_destroy(&damp);
+    g[r] = calloc(n3, sizeof(double));
+    E[r] = bs_fem_elastic_gradient(fem, x, g[r]);
+    V[r] = bs_fem_elastic_energy(fem, x);
+  }
+  omp_set_num_threads(saved);
+  size_t nval = 9 * (size_t)H[0][0]->nnzb;
+  const char *what[3] = {"Hessian", "projected Hessian", "damping matrix"};
+  for (int i = 0; i < 3; i++)
+    cr_expect(memcmp(H[0][i]->val, H[1][i]->val, sizeof(double) * nval) == 0, "%s differs with 1 and 2 threads",
+              what[i]);
+  cr_expect(memcmp(g[0], g[1], sizeof(double) * n3) == 0, "gradient differs with 1 and 2 threads");
+  cr_expect(E[0] == E[1], "energy (gradient) differs with 1 and 2 threads: %.17g vs %.17g", E[0], E[1]);
+  cr_expect(V[0] == V[1], "energy differs with 1 and 2 threads: %.17g vs %.17g", V[0], V[1]);
+  cr_expect(fabs(V[0] - E[0]) <= 1e-12 * fabs(V[0]), "energy %.17g vs %.17g from the gradient", V[0], E[0]);
+
+  /* references: per-tet kernels summed in mesh order */
+  bs_bsr *R[3];
+  double *gr = calloc(n3, sizeof(double)), Er = 0;
+  for (int i = 0; i < 3; i++) cr_assert_eq(bs_fem_matrix(fem, &R[i], &err), 0);
+  for (int32_t t = 0; t < nt; t++) {
+    double xt[12], He[144], ge[12];
+    const bs_material *mt = &mats[tm[t]];
+    bs_fem_gather(fem, x, t, xt);
+    Er += bs_tet_energy_grad(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], ge);
+    for (int a = 0; a < 4; a++)
+      for (int k = 0; k < 3; k++) gr[3 * (size_t)mesh->tets[4 * t + a] + k] += ge[3 * a + k];
+    for (int i = 0; i < 2; i++) {
+      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], i, He);
+      bs_fem_scatter_hessian(fem, t, He, 1.0, R[i]);
+    }
+    if (tm[t] == 1) {
+      bs_fem_gather(fem, xn, t, xt);
+      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], 1, He);
+      bs_fem_scatter_hessian(fem, t, He, kd[1] / step.dt, R[2]);
     }
   }
-  cr_expect_eq(count, f.mesh->n_tets);
-  free(seen);
-  teardown(&f);
+  for (int i = 0; i < 3; i++) {
+    double mx = 0, md = 0;
+    for (size_t q = 0; q < nval; q++) {
+      mx = fmax(mx, fabs(R[i]->val[q]));
+      md = fmax(md, fabs(R[i]->val[q] - H[0][i]->val[q]));
+    }
+    cr_expect(mx > 0 && md <= 1e-12 * mx, "%s differs from the per-tet sum: %g (max %g)", what[i], md, mx);
+  }
+  double mg = 0, dg = 0;
+  for (size_t q = 0; q < n3; q++) {
+    mg = fmax(mg, fabs(gr[q]));
+    dg = fmax(dg, fabs(gr[q] - g[0][q]));
+  }
+  cr_expect(mg > 0 && dg <= 1e-12 * mg, "gradient differs from the per-tet sum: %g (max %g)", dg, mg);
+  cr_expect(fabs(Er - E[0]) <= 1e-12 * fabs(Er), "energy %.17g vs per-tet %.17g", E[0], Er);
+  for (int i = 0; i < 3; i++) {
+    bs_bsr_destroy(&R[i]);
+    for (int r = 0; r < 2; r++) bs_bsr_destroy(&H[r][i]);
+  }
+  for (int r = 0; r < 2; r++) free(g[r]);
+  free(gr);
+  free(x);
+  free(xn);
+  free(tm);
+  free(perm);
+  free(tets);
+  bs_fem_destroy(&fem);
+  bs_mesh_destroy(&mesh);
+  bs_mesh_destroy(&box);
 }
 
 Test(terms, bad_input) {
