@@ -719,7 +719,9 @@ static double self_eval(const bs_term *t, const double *x, double *g) {
 static double self_value(const bs_term *t, const double *x) { return self_eval(t, x, NULL); }
 static double self_gradient(const bs_term *t, const double *x, double *g) { return self_eval(t, x, g); }
 
-/* Visits every off-pattern block of the Hessian at x (after detect). */
+/* Adds the Hessian at x (after detect) into H, or, with H NULL, visits the
+ * blocks off the fem pattern. Returns the blocks that found no place (H: no
+ * slot and no room left in its extra list; NULL: off the pattern). */
 typedef void (*missing_fn)(int32_t i, int32_t j, const double *B, void *ctx);
 
 static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn, void *ctx) {
@@ -734,19 +736,15 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
     int m = 3 * (c->nv + 1);
     for (int a = 0; a <= c->nv; a++)
       for (int b = 0; b <= c->nv; b++) {
-        int32_t s = a == b ? P->diag[c->v[a]] : bs_bsr_slot(P, c->v[a], c->v[b]);
         double B[9];
         for (int r = 0; r < 3; r++)
           for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
-        if (s < 0) {
-          /* Off the fem pattern: into H's extra list when it has room. */
-          if (H && bs_bsr_add_block(H, c->v[a], c->v[b], B) > 0) continue;
+        if (H) { /* its slot, else H's extra list */
+          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) < 0;
+        } else if (a != b && bs_bsr_slot(P, c->v[a], c->v[b]) < 0) {
           missing++;
           if (fn) fn(c->v[a], c->v[b], B, ctx);
-          continue;
         }
-        if (H)
-          for (int e = 0; e < 9; e++) H->val[9 * (size_t)s + e] += B[e];
       }
   }
   return missing;

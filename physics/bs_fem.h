@@ -22,7 +22,10 @@
  *
  * Ownership: bs_fem_create returns an object owned by the caller (free with
  * bs_fem_destroy); it keeps a pointer to the mesh and a copy of the materials,
- * and the mesh must outlive it. Units: SI (kg, m, s, Pa).
+ * and the mesh must outlive it. Evaluation allocates nothing: the energy's
+ * partial sums go to a scratch array of the fem, so one energy or gradient
+ * evaluation runs at a time per fem (each is parallel inside). Units: SI
+ * (kg, m, s, Pa).
  */
 #ifndef BS_FEM_H
 #define BS_FEM_H
@@ -57,6 +60,8 @@ typedef struct bs_fem {
   int n_colors;
   int32_t *color_ptr;   /* n_colors + 1, into color_chunks                   */
   int32_t *color_chunks;/* chunks grouped by colour, ascending in a colour   */
+  double *partial;      /* scratch: per-block / per-chunk energy sums of one */
+                        /* evaluation (so one evaluation at a time per fem)  */
 } bs_fem;
 
 /* Most tets in a chunk (a multiple of BS_MATERIAL_BATCH). */

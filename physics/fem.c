@@ -21,9 +21,12 @@ void bs_fem_destroy(bs_fem **pf) {
   free(f->chunk_ptr);
   free(f->chunk_tets);
   free(f->color_chunks);
+  free(f->partial);
   free(f);
   *pf = NULL;
 }
+
+enum { EBLOCK = 1024 }; /* tets per partial sum of bs_fem_elastic_energy */
 
 static int cmp_i32(const void *a, const void *b) {
   int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
@@ -199,6 +202,13 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
       }
   }
   if ((st = color_chunks(f, err))) goto fail;
+  /* Partial energy sums: one per chunk (gradient) or per EBLOCK tets (energy). */
+  const int32_t n_part = f->n_chunks > f->n_tets / EBLOCK + 1 ? f->n_chunks : f->n_tets / EBLOCK + 1;
+  f->partial = bs_calloc((size_t)n_part, sizeof(double), "the energy partial sums", err);
+  if (!f->partial) {
+    st = BS_ENOMEM;
+    goto fail;
+  }
   /* The pattern is structure only: matrices are made with bs_fem_matrix. */
   free(f->pattern->val);
   f->pattern->val = NULL;
@@ -262,9 +272,8 @@ enum { PAR_CHUNKS = 4 };
 static int colour_parallel(const bs_fem *fem, int c) { return fem->color_ptr[c + 1] - fem->color_ptr[c] >= PAR_CHUNKS; }
 
 /* Energies are summed in a fixed order whatever the thread count: per block
- * of EBLOCK tets (energy) or per chunk (gradient), then the partial sums in
- * order (serially when the scratch array cannot be allocated). */
-enum { EBLOCK = 1024 };
+ * of EBLOCK tets (energy) or per chunk (gradient) into fem->partial, then the
+ * partial sums in order. */
 
 static double energy_block(const bs_fem *fem, const double *x, int32_t lo, int32_t hi) {
   double E = 0;
@@ -286,12 +295,7 @@ static double energy_block(const bs_fem *fem, const double *x, int32_t lo, int32
 
 double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
   const int32_t nt = fem->n_tets, nb = (int32_t)(((int64_t)nt + EBLOCK - 1) / EBLOCK);
-  double *part = nb > 1 ? malloc(sizeof(double) * (size_t)nb) : NULL;
-  if (!part) {
-    double E = 0;
-    for (int32_t lo = 0; lo < nt; lo += EBLOCK) E += energy_block(fem, x, lo, nt - lo < EBLOCK ? nt : lo + EBLOCK);
-    return E;
-  }
+  double *part = fem->partial;
 #pragma omp parallel for schedule(static) if (nb > 2)
   for (int32_t b = 0; b < nb; b++) {
     const int32_t lo = b * EBLOCK;
@@ -299,7 +303,6 @@ double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
   }
   double E = 0;
   for (int32_t b = 0; b < nb; b++) E += part[b];
-  free(part);
   return E;
 }
 
@@ -333,21 +336,14 @@ static double gradient_chunk(const bs_fem *fem, const double *x, int32_t k, doub
 }
 
 double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
-  double *part = malloc(sizeof(double) * (size_t)(fem->n_chunks ? fem->n_chunks : 1));
-  double E = 0;
+  double *part = fem->partial; /* part[q]: the chunk at position q of color_chunks */
   for (int c = 0; c < fem->n_colors; c++) {
     const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
-    if (!part) { /* serial fallback, the same order: chunks as listed by colour */
-      for (int32_t q = lo; q < hi; q++) E += gradient_chunk(fem, x, fem->color_chunks[q], g);
-      continue;
-    }
 #pragma omp parallel for schedule(dynamic, 1) if (colour_parallel(fem, c))
     for (int32_t q = lo; q < hi; q++) part[q] = gradient_chunk(fem, x, fem->color_chunks[q], g);
   }
-  if (part) { /* part[q]: the chunk at position q of color_chunks */
-    for (int32_t q = 0; q < fem->n_chunks; q++) E += part[q];
-    free(part);
-  }
+  double E = 0;
+  for (int32_t q = 0; q < fem->n_chunks; q++) E += part[q];
   return E;
 }
 

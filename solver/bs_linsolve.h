@@ -77,6 +77,7 @@ extern "C" {
 #endif
 
 typedef enum { BS_LIN_CG = 0, BS_LIN_PCG, BS_LIN_CHOLMOD, BS_LIN_MINRES, BS_LIN_AMG } bs_lin_kind;
+#define BS_LIN_KINDS (BS_LIN_AMG + 1) /* number of kinds */
 
 /* "cg", "pcg", "cholmod", "minres", "amg" (exact, lower case); BS_EINPUT naming the
  * string otherwise. */

@@ -42,14 +42,14 @@ struct bs_linsolve {
 static const char *const kind_names[] = {"cg", "pcg", "cholmod", "minres", "amg"};
 
 const char *bs_lin_kind_name(bs_lin_kind k) {
-  if ((int)k < 0 || (int)k > (int)BS_LIN_AMG) return "unknown";
+  if ((int)k < 0 || (int)k >= BS_LIN_KINDS) return "unknown";
   return kind_names[k];
 }
 
 int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err) {
   if (!name || !out)
     return bs_error_set(err, BS_EINPUT, "bs_lin_kind_parse: NULL argument");
-  for (int k = 0; k <= (int)BS_LIN_AMG; ++k)
+  for (int k = 0; k < BS_LIN_KINDS; ++k)
     if (strcmp(name, kind_names[k]) == 0) {
       *out = (bs_lin_kind)k;
       return BS_OK;
@@ -615,7 +615,7 @@ int bs_linsolve_create(const bs_bsr *pattern, bs_lin_kind kind, bs_linsolve **ou
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: out is NULL");
   *out = NULL;
   if (!pattern) return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: pattern is NULL");
-  if ((int)kind < 0 || (int)kind > (int)BS_LIN_AMG)
+  if ((int)kind < 0 || (int)kind >= BS_LIN_KINDS)
     return bs_error_set(err, BS_EINPUT, "bs_linsolve_create: unknown solver kind %d", (int)kind);
   bs_linsolve *ls = bs_calloc(1, sizeof *ls, "bs_linsolve", err);
   if (!ls) return BS_ENOMEM;

@@ -147,7 +147,7 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
                         o->c2);
   if (o->max_ls < 1)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_ls must be >= 1, got %d", o->max_ls);
-  if ((unsigned)o->linear > (unsigned)BS_LIN_AMG)
+  if ((unsigned)o->linear >= (unsigned)BS_LIN_KINDS)
     return bs_error_set(err, BS_EINPUT, "minimizer option linear: unknown solver kind %d", (int)o->linear);
   if (o->cg_max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option cg_max_iter must be >= 0, got %d", o->cg_max_iter);
@@ -169,7 +169,7 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
 void bs_minimizer_destroy(bs_minimizer **pm) {
   if (!pm || !*pm) return;
   bs_minimizer *m = *pm;
-  for (int k = 0; k < 5; ++k) bs_linsolve_destroy(&m->lin[k]);
+  for (int k = 0; k < BS_LIN_KINDS; ++k) bs_linsolve_destroy(&m->lin[k]);
   bs_bsr_destroy(&m->H);
   free(m->g_raw);
   free(m->g);
@@ -277,8 +277,6 @@ int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *
 
 /* ---- the minimizer --------------------------------------------------------- */
 
-/* Step 4: H d = -g on the free dofs. Returns 0, 1 when the solve produced a
- * non-finite value (reason set), or a negative error. */
 /* AMG: builds the hierarchy when due (see "AMG reuse" in bs_minimize.h).
  * With the objective's precond_matrix, P is assembled in H's storage, so this
  * runs before H is assembled (no second matrix); without it, after (P = H).
@@ -334,9 +332,10 @@ static void amg_judge(bs_minimizer *m, const bs_lin_stats *ls) {
   else if (m->opts.amg_rebuild_factor > 0 && cost > m->opts.amg_rebuild_factor * m->amg_base) m->amg_reset = 1;
 }
 
+/* Step 4: H d = -g on the free dofs. Returns 0, 1 when the solve produced a
+ * non-finite value (reason set), or a negative error. */
 static int newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
-                            bs_minimize_stats *st,
-                            bs_min_iter *rec, bs_error *err) {
+                            bs_minimize_stats *st, bs_min_iter *rec, bs_error *err) {
   const bs_minimize_opts *o = &m->opts;
   int64_t free_dofs = 0;
   for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;

@@ -12,7 +12,7 @@ struct bs_minimizer {
   int64_t n3;                 /* 3n                                                  */
   bs_minimize_opts opts;
   bs_bsr *H;                  /* Hessian storage with the pattern of create          */
-  bs_linsolve *lin[5];        /* workspaces by bs_lin_kind (CG and MINRES always)    */
+  bs_linsolve *lin[BS_LIN_KINDS]; /* workspaces by bs_lin_kind (CG and MINRES always)    */
   int amg_reset;              /* 1: set up the AMG before the next solve             */
   int amg_calls;              /* bs_minimize calls started since the last setup      */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */

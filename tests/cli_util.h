@@ -34,4 +34,17 @@ static inline int bs_test_run(const char *cmd, char **out) {
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+/* The row under the "method ..." header of `bigstep run`'s summary
+ * (method steps s/frame dofs solves/step failed ...): *solves and *failed.
+ * Returns 0, or -1 when out holds no such row. */
+static inline int bs_test_summary_row(const char *out, double *solves, long *failed) {
+  const char *p = strstr(out, "\nmethod ");
+  if (!p || !(p = strchr(p + 1, '\n'))) return -1;
+  char m[32];
+  int steps;
+  double spf;
+  long dofs;
+  return sscanf(p + 1, "%31s %d %lf %ld %lf %ld", m, &steps, &spf, &dofs, solves, failed) == 6 ? 0 : -1;
+}
+
 #endif
