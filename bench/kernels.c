@@ -8,9 +8,10 @@
  * ratio of STREAM to it is the iteration's time over the product's bandwidth
  * floor.
  *
- *   bench_kernels [CELLS] [REPEATS]
+ *   bench_kernels [CELLS] [REPEATS] [ONLY]
  *
- * Medians of REPEATS (default 5) timings. Never run by the test suite. */
+ * Medians of REPEATS (default 5) timings. ONLY (e.g. "gradient"): run only the
+ * kernels whose label contains it, with 1 thread (for a profiler). Never run by the test suite. */
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -56,8 +57,9 @@ static double stream_triad(size_t n, int reps) {
 int main(int argc, char **argv) {
   int cells = argc > 1 ? atoi(argv[1]) : 64;
   int reps = argc > 2 ? atoi(argv[2]) : 5;
+  const char *only = argc > 3 ? argv[3] : NULL;
   if (cells < 1 || reps < 1 || reps > 64) {
-    fprintf(stderr, "usage: bench_kernels [CELLS] [REPEATS<=64]\n");
+    fprintf(stderr, "usage: bench_kernels [CELLS] [REPEATS<=64] [ONLY]\n");
     return 2;
   }
   bs_error err;
@@ -91,12 +93,13 @@ int main(int argc, char **argv) {
   printf("%-34s %8s %12s %12s %8s\n", "kernel", "threads", "ms", "ns/tet|GB/s", "ratio");
   int threads[2] = {1, maxt};
   double base[8] = {0};
-  for (int ti = 0; ti < (maxt > 1 ? 2 : 1); ti++) {
+  for (int ti = 0; ti < (maxt > 1 && !only ? 2 : 1); ti++) {
     omp_set_num_threads(threads[ti]);
     double t[64];
     int k = 0;
 #define TIME(label, body, per_tet, bytes)                                                                  \
   do {                                                                                                     \
+    if (only && !strstr(label, only)) break;                                                               \
     for (int r = 0; r < reps; r++) {                                                                       \
       double t0 = bs_seconds();                                                                            \
       body;                                                                                                \
@@ -118,6 +121,7 @@ int main(int argc, char **argv) {
          1, 0);
     double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
     TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
+    if (only) continue;
     {
       /* A = projected Hessian + M/dt^2: SPD, so PCG runs its 50 iterations. */
       bs_bsr_zero(H);

@@ -5,6 +5,10 @@
  *  - per tet: the rest-shape inverse Dm⁻¹ (row-major 3x3, Dm = [X1-X0, X2-X0,
  *    X3-X0]) and the rest volume V; F = Ds Dm⁻¹ at a configuration;
  *  - per tet: its material index into the materials given at creation;
+ *  - the per-tet arrays are stored in POSITION order, the order of the chunks
+ *    below (chunk_tets[k]: the tet at position k; tet_pos[t]: the position of
+ *    tet t), with the tets' vertices copied in that order (tets), so that the
+ *    kernels read a chunk's data contiguously;
  *  - per vertex: the lumped mass m_v = Σ ρ V / 4 over the tets around v;
  *  - the 3x3-block sparsity pattern of the vertex graph (solver's bs_bsr),
  *    built once, and for each tet the 16 block slots (a, b) it adds into, so
@@ -44,19 +48,22 @@ extern "C" {
 typedef struct bs_fem {
   const bs_mesh *mesh;
   int32_t n_vertices, n_tets;
-  double *Dm_inv;       /* 9 per tet                                         */
-  double *volume;       /* per tet, rest volume (> 0)                        */
+  double *Dm_inv;       /* 9 per position                                    */
+  double *volume;       /* per position, rest volume (> 0)                   */
   double *mass;         /* per vertex, lumped                                */
   double total_mass;
   int n_materials;
   bs_material *materials;
-  int32_t *tet_material;/* per tet: index into materials                      */
+  int32_t *tet_material;/* per position: index into materials                 */
   bs_bsr *pattern;      /* the block pattern: structure only, val is NULL
                            (make matrices with bs_fem_matrix)                */
-  int32_t *slots;       /* 16 per tet: slot of block (a, b) at 4*a + b       */
+  int32_t *slots;       /* 16 per position: slot of block (a, b) at 4*a + b  */
+  int32_t *tets;        /* 4 per position: the tet's vertices (mesh order)   */
+  int32_t *tet_pos;     /* per tet: its position                             */
   int32_t n_chunks;
-  int32_t *chunk_ptr;   /* n_chunks + 1, into chunk_tets                     */
-  int32_t *chunk_tets;  /* tets grouped by chunk, ascending in a chunk       */
+  int32_t *chunk_ptr;   /* n_chunks + 1, positions of each chunk             */
+  int32_t *chunk_tets;  /* per position: its tet; tets grouped by chunk,
+                           ascending in a chunk                              */
   int n_colors;
   int32_t *color_ptr;   /* n_colors + 1, into color_chunks                   */
   int32_t *color_chunks;/* chunks grouped by colour, ascending in a colour   */
@@ -84,7 +91,8 @@ static inline void bs_fem_gather(const bs_fem *fem, const double *x, int32_t t, 
     for (int k = 0; k < 3; k++) xt[3 * a + k] = x[3 * tv[a] + k];
 }
 
-/* Adds a tet's 12x12 (row-major) matrix into H through its slots. */
+/* Adds tet t's 12x12 (row-major) matrix into H through its slots (t a tet of
+ * the mesh, not a position). */
 void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], double scale, bs_bsr *H);
 
 /* Elastic energy Φ_e(x) (sum over tets, in an order that does not depend on

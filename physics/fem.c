@@ -20,6 +20,8 @@ void bs_fem_destroy(bs_fem **pf) {
   free(f->color_ptr);
   free(f->chunk_ptr);
   free(f->chunk_tets);
+  free(f->tets);
+  free(f->tet_pos);
   free(f->color_chunks);
   free(f->partial);
   free(f);
@@ -138,6 +140,42 @@ done:
   return st;
 }
 
+/* Stores the per-tet data in position order (chunk_tets: position -> tet),
+ * so that a chunk's tets are contiguous in memory; tet_pos is the inverse. */
+static int permute_to_positions(bs_fem *f, bs_error *err) {
+  const size_t nt = (size_t)f->n_tets;
+  const size_t n1 = nt ? nt : 1;
+  double *Dm = malloc(sizeof(double) * 9 * n1), *vol = malloc(sizeof(double) * n1);
+  int32_t *mat = malloc(sizeof(int32_t) * n1), *sl = malloc(sizeof(int32_t) * 16 * n1);
+  f->tets = malloc(sizeof(int32_t) * 4 * n1);
+  f->tet_pos = malloc(sizeof(int32_t) * n1);
+  if (!Dm || !vol || !mat || !sl || !f->tets || !f->tet_pos) {
+    free(Dm);
+    free(vol);
+    free(mat);
+    free(sl);
+    return bs_error_set(err, BS_ENOMEM, "out of memory ordering %zu tets", nt);
+  }
+  for (size_t k = 0; k < nt; k++) {
+    const size_t t = (size_t)f->chunk_tets[k];
+    f->tet_pos[t] = (int32_t)k;
+    memcpy(Dm + 9 * k, f->Dm_inv + 9 * t, 9 * sizeof(double));
+    vol[k] = f->volume[t];
+    mat[k] = f->tet_material[t];
+    memcpy(sl + 16 * k, f->slots + 16 * t, 16 * sizeof(int32_t));
+    memcpy(f->tets + 4 * k, f->mesh->tets + 4 * t, 4 * sizeof(int32_t));
+  }
+  free(f->Dm_inv);
+  free(f->volume);
+  free(f->tet_material);
+  free(f->slots);
+  f->Dm_inv = Dm;
+  f->volume = vol;
+  f->tet_material = mat;
+  f->slots = sl;
+  return 0;
+}
+
 int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *materials,
                   const int32_t *tet_material, bs_fem **out, bs_error *err) {
   *out = NULL;
@@ -202,6 +240,7 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
       }
   }
   if ((st = color_chunks(f, err))) goto fail;
+  if ((st = permute_to_positions(f, err))) goto fail;
   /* Partial energy sums: one per chunk (gradient) or per EBLOCK tets (energy). */
   const int32_t n_part = f->n_chunks > f->n_tets / EBLOCK + 1 ? f->n_chunks : f->n_tets / EBLOCK + 1;
   f->partial = bs_calloc((size_t)n_part, sizeof(double), "the energy partial sums", err);
@@ -234,11 +273,15 @@ static inline void scatter_block(double *restrict blk, const double *restrict he
   }
 }
 
-void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], double scale, bs_bsr *H) {
-  const int32_t *sl = fem->slots + 16 * (size_t)t;
+static void scatter_at(const bs_fem *fem, int32_t k, const double He[144], double scale, bs_bsr *H) {
+  const int32_t *sl = fem->slots + 16 * (size_t)k;
   double *val = H->val;
   for (int a = 0; a < 4; a++)
     for (int b = 0; b < 4; b++) scatter_block(val + 9 * (size_t)sl[4 * a + b], He + 12 * 3 * a + 3 * b, scale);
+}
+
+void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], double scale, bs_bsr *H) {
+  scatter_at(fem, fem->tet_pos[t], He, scale, H);
 }
 
 /* The kernel loops work on batches of up to NB tets (BS_MATERIAL_BATCH: the
@@ -247,22 +290,23 @@ void bs_fem_scatter_hessian(const bs_fem *fem, int32_t t, const double He[144], 
 enum { NB = BS_MATERIAL_BATCH };
 _Static_assert(BS_FEM_CHUNK % BS_MATERIAL_BATCH == 0, "BS_FEM_CHUNK must be a multiple of BS_MATERIAL_BATCH");
 
-/* Gathers tets tt[0..n): coordinates, Dm_inv and volumes, packed. */
-static void gather_batch(const bs_fem *fem, const double *x, const int32_t *tt, int n, double *xt, double *Dm,
-                         double *vol) {
-  for (int i = 0; i < n; i++) {
-    const int32_t t = tt[i];
-    bs_fem_gather(fem, x, t, xt + 12 * i);
-    memcpy(Dm + 9 * i, fem->Dm_inv + 9 * (size_t)t, 9 * sizeof(double));
-    vol[i] = fem->volume[t];
+/* Gathers the coordinates of the tets at positions k0..k0+n (their Dm_inv
+ * and volumes are contiguous at the same positions). */
+static void gather_batch(const bs_fem *fem, const double *x, int32_t k0, int n, double *restrict xt) {
+  const int32_t *tv = fem->tets + 4 * (size_t)k0;
+  for (int i = 0; i < 4 * n; i++) {
+    const double *xv = x + 3 * (size_t)tv[i];
+    xt[3 * i] = xv[0];
+    xt[3 * i + 1] = xv[1];
+    xt[3 * i + 2] = xv[2];
   }
 }
 
-/* Length of the run of tets tt[0..n) with the material of tt[0]. */
-static int material_run(const bs_fem *fem, const int32_t *tt, int n) {
-  const int32_t mi = fem->tet_material[tt[0]];
+/* Length of the run of positions k0..k0+n with the material of k0. */
+static int material_run(const bs_fem *fem, int32_t k0, int n) {
+  const int32_t mi = fem->tet_material[k0];
   int j = 1;
-  while (j < n && fem->tet_material[tt[j]] == mi) j++;
+  while (j < n && fem->tet_material[k0 + j] == mi) j++;
   return j;
 }
 
@@ -272,20 +316,20 @@ enum { PAR_CHUNKS = 4 };
 static int colour_parallel(const bs_fem *fem, int c) { return fem->color_ptr[c + 1] - fem->color_ptr[c] >= PAR_CHUNKS; }
 
 /* Energies are summed in a fixed order whatever the thread count: per block
- * of EBLOCK tets (energy) or per chunk (gradient) into fem->partial, then the
- * partial sums in order. */
+ * of EBLOCK positions (energy) or per chunk (gradient) into fem->partial,
+ * then the partial sums in order. */
 
 static double energy_block(const bs_fem *fem, const double *x, int32_t lo, int32_t hi) {
   double E = 0;
   for (int32_t k0 = lo; k0 < hi; k0 += NB) {
     const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
-    int32_t tt[NB];
-    double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB];
-    for (int i = 0; i < n; i++) tt[i] = k0 + i;
-    gather_batch(fem, x, tt, n, xt, Dm, vol);
+    double xt[12 * NB], e[NB];
+    gather_batch(fem, x, k0, n, xt);
     for (int i = 0; i < n;) {
-      const int r = material_run(fem, tt + i, n - i);
-      bs_tet_energy_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i, e + i);
+      const int32_t k = k0 + i;
+      const int r = material_run(fem, k, n - i);
+      bs_tet_energy_batch(&fem->materials[fem->tet_material[k]], r, xt + 12 * i, fem->Dm_inv + 9 * (size_t)k,
+                          fem->volume + k, e + i);
       i += r;
     }
     for (int i = 0; i < n; i++) E += e[i];
@@ -307,25 +351,25 @@ double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
 }
 
 /* One chunk of the gradient: its tets in order, batch by batch. */
-static double gradient_chunk(const bs_fem *fem, const double *x, int32_t k, double *g) {
-  const int32_t *tets = fem->mesh->tets;
-  const int32_t lo = fem->chunk_ptr[k], hi = fem->chunk_ptr[k + 1];
+static double gradient_chunk(const bs_fem *fem, const double *x, int32_t c, double *g) {
+  const int32_t lo = fem->chunk_ptr[c], hi = fem->chunk_ptr[c + 1];
   double E = 0;
   for (int32_t k0 = lo; k0 < hi; k0 += NB) {
     const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
-    const int32_t *tt = fem->chunk_tets + k0;
-    double xt[12 * NB], Dm[9 * NB], vol[NB], e[NB], ge[12 * NB];
-    gather_batch(fem, x, tt, n, xt, Dm, vol);
+    double xt[12 * NB], e[NB], ge[12 * NB];
+    gather_batch(fem, x, k0, n, xt);
     for (int i = 0; i < n;) {
-      const int r = material_run(fem, tt + i, n - i);
-      bs_tet_energy_grad_batch(&fem->materials[fem->tet_material[tt[i]]], r, xt + 12 * i, Dm + 9 * i, vol + i,
-                               e + i, ge + 12 * i);
+      const int32_t k = k0 + i;
+      const int r = material_run(fem, k, n - i);
+      bs_tet_energy_grad_batch(&fem->materials[fem->tet_material[k]], r, xt + 12 * i, fem->Dm_inv + 9 * (size_t)k,
+                               fem->volume + k, e + i, ge + 12 * i);
       i += r;
     }
+    const int32_t *tv = fem->tets + 4 * (size_t)k0;
     for (int i = 0; i < n; i++) {
       E += e[i];
       for (int a = 0; a < 4; a++) {
-        double *gv = g + 3 * (size_t)tets[4 * (size_t)tt[i] + a];
+        double *gv = g + 3 * (size_t)tv[4 * i + a];
         gv[0] += ge[12 * i + 3 * a];
         gv[1] += ge[12 * i + 3 * a + 1];
         gv[2] += ge[12 * i + 3 * a + 2];
@@ -350,16 +394,15 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
 /* One chunk of the Hessian: its tets in order, batch by batch; scale s (or
  * material_scale[m] when not NULL, tets with 0 skipped). */
 static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, double s,
-                          const double *material_scale, int32_t k, bs_bsr *H) {
-  const int32_t lo = fem->chunk_ptr[k], hi = fem->chunk_ptr[k + 1];
+                          const double *material_scale, int32_t c, bs_bsr *H) {
+  const int32_t lo = fem->chunk_ptr[c], hi = fem->chunk_ptr[c + 1];
   for (int32_t k0 = lo; k0 < hi; k0 += NB) {
     const int n = hi - k0 < NB ? (int)(hi - k0) : NB;
-    const int32_t *tt = fem->chunk_tets + k0;
-    double xt[12 * NB], Dm[9 * NB], vol[NB], He[144 * NB];
-    gather_batch(fem, x, tt, n, xt, Dm, vol);
+    double xt[12 * NB], He[144 * NB];
+    gather_batch(fem, x, k0, n, xt);
     /* fetch the batch's blocks while its Hessians are computed */
     for (int i = 0; i < n; i++) {
-      const int32_t *sl = fem->slots + 16 * (size_t)tt[i];
+      const int32_t *sl = fem->slots + 16 * (size_t)(k0 + i);
       for (int b = 0; b < 16; b++) {
         const double *blk = H->val + 9 * (size_t)sl[b];
         __builtin_prefetch(blk, 1, 3);
@@ -367,12 +410,13 @@ static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, d
       }
     }
     for (int i = 0; i < n;) {
-      const int32_t mi = fem->tet_material[tt[i]];
-      const int r = material_run(fem, tt + i, n - i);
+      const int32_t k = k0 + i, mi = fem->tet_material[k];
+      const int r = material_run(fem, k, n - i);
       const double sc = material_scale ? material_scale[mi] : s;
       if (sc != 0 || !material_scale) {
-        bs_tet_hessian_batch(&fem->materials[mi], r, xt + 12 * i, Dm + 9 * i, vol + i, project_psd, He + 144 * i);
-        for (int j = i; j < i + r; j++) bs_fem_scatter_hessian(fem, tt[j], He + 144 * j, sc, H);
+        bs_tet_hessian_batch(&fem->materials[mi], r, xt + 12 * i, fem->Dm_inv + 9 * (size_t)k, fem->volume + k,
+                             project_psd, He + 144 * i);
+        for (int j = i; j < i + r; j++) scatter_at(fem, k0 + j, He + 144 * j, sc, H);
       }
       i += r;
     }
@@ -403,7 +447,7 @@ int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_de
 #pragma omp parallel for schedule(static) reduction(+ : n) reduction(min : mn) if (fem->n_tets > 2048)
   for (int32_t t = 0; t < fem->n_tets; t++) {
     double xt[12], F[9];
-    bs_fem_gather(fem, x, t, xt);
+    gather_batch(fem, x, t, 1, xt); /* t: a position */
     bs_tet_F(xt, fem->Dm_inv + 9 * (size_t)t, F);
     double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
                F[2] * (F[3] * F[7] - F[4] * F[6]);

@@ -324,13 +324,207 @@ static void svd3_lanes(const double *restrict F, double *restrict U, double *res
   }
 }
 
+/* ---- the same lanes in AVX2 registers ---------------------------------
+ *
+ * GCC vectorizes svd3_lanes only in part (two lanes per register in the
+ * sweeps, the epilogue scalar), so on a CPU with AVX2 the four lanes run in
+ * one ymm register each, written with intrinsics. Operation for operation the
+ * arithmetic of bs_svd3 (no FMA: every product and sum is rounded as in the
+ * scalar code), so the results stay bit for bit those of bs_svd3. */
+#if defined(__GNUC__) && defined(__x86_64__)
+#define BS_SVD_AVX2 1
+#include <immintrin.h>
+
+#define AVX2_FN __attribute__((target("avx2")))
+typedef __m256d v4;
+
+AVX2_FN static inline v4 vsel(v4 m, v4 a, v4 b) { return _mm256_blendv_pd(b, a, m); } /* m ? a : b */
+AVX2_FN static inline v4 vabs(v4 a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
+AVX2_FN static inline v4 vdot3(v4 a0, v4 a1, v4 a2, v4 b0, v4 b1, v4 b2) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a0, b0), _mm256_mul_pd(a1, b1)), _mm256_mul_pd(a2, b2));
+}
+
+/* Loads 4 matrices of F into lanes (scaled as bs_svd3 does; special lanes
+ * hold 0) and W = I. */
+AVX2_FN static inline void avx2_load(const double *restrict F, v4 B[9], v4 W[9], double isc[L], int special[L]) {
+  double sc[L];
+  for (int l = 0; l < L; l++) {
+    double fm = 0.0, bad = 0.0;
+    for (int i = 0; i < 9; i++) {
+      const double a = fabs(F[9 * l + i]);
+      fm = a > fm ? a : fm;
+      bad += F[9 * l + i] - F[9 * l + i];
+    }
+    union {
+      double d;
+      uint64_t u;
+    } b = {fm};
+    const int ex = (int)((b.u >> 52) & 0x7ff) - 1022;
+    special[l] = !(bad == 0.0) | !(ex > -1000) | !(ex < 1000) | (fm == 0.0);
+    const int ec = special[l] ? 0 : ex;
+    sc[l] = pow2i(-ec);
+    isc[l] = pow2i(ec);
+  }
+  for (int i = 0; i < 9; i++) {
+    double b[L];
+    for (int l = 0; l < L; l++) b[l] = special[l] ? 0.0 : F[9 * l + i] * sc[l];
+    B[i] = _mm256_loadu_pd(b);
+    W[i] = _mm256_set1_pd(i % 4 == 0 ? 1.0 : 0.0);
+  }
+}
+
+/* One Jacobi rotation of the column pair (p, q) in every active lane; returns
+ * the mask of the lanes that rotated. */
+AVX2_FN static inline v4 avx2_rotate(v4 B[9], v4 W[9], int p, int q) {
+  const v4 zero = _mm256_setzero_pd(), two = _mm256_set1_pd(2.0);
+  const v4 a = vdot3(B[p], B[3 + p], B[6 + p], B[p], B[3 + p], B[6 + p]);
+  const v4 b = vdot3(B[q], B[3 + q], B[6 + q], B[q], B[3 + q], B[6 + q]);
+  const v4 g = vdot3(B[p], B[3 + p], B[6 + p], B[q], B[3 + q], B[6 + q]);
+  const v4 dab = _mm256_sub_pd(b, a);
+  const v4 rr = _mm256_sqrt_pd(
+      _mm256_add_pd(_mm256_mul_pd(dab, dab), _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(4.0), g), g)));
+  const v4 D = _mm256_add_pd(vabs(dab), rr);
+  const v4 act =
+      _mm256_and_pd(_mm256_cmp_pd(_mm256_mul_pd(g, g),
+                                  _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(SVD_TOL * SVD_TOL), a), b), _CMP_NLE_UQ),
+                    _mm256_cmp_pd(D, zero, _CMP_GT_OQ));
+  if (_mm256_movemask_pd(act) == 0) return act;
+  const v4 iq = _mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(_mm256_mul_pd(_mm256_mul_pd(two, rr), D)));
+  const v4 c = _mm256_mul_pd(D, iq);
+  const v4 s = _mm256_mul_pd(
+      vsel(_mm256_cmp_pd(dab, zero, _CMP_GE_OQ), _mm256_mul_pd(two, g), _mm256_mul_pd(_mm256_set1_pd(-2.0), g)), iq);
+  for (int r = 0; r < 3; r++) {
+    v4 *X[2] = {B, W};
+    for (int m = 0; m < 2; m++) {
+      const v4 xp = X[m][3 * r + p], xq = X[m][3 * r + q];
+      const v4 nxp = _mm256_sub_pd(_mm256_mul_pd(c, xp), _mm256_mul_pd(s, xq));
+      const v4 nxq = _mm256_add_pd(_mm256_mul_pd(s, xp), _mm256_mul_pd(c, xq));
+      X[m][3 * r + p] = vsel(act, nxp, xp);
+      X[m][3 * r + q] = vsel(act, nxq, xq);
+    }
+  }
+  return act;
+}
+
+/* After the sweeps: sort, make V a rotation, build U and sigma (bs_svd3's
+ * epilogue), and store the 4 lanes. */
+AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], double *restrict U,
+                                       double *restrict sigma, double *restrict V) {
+  const v4 zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  /* column lengths, then the compare-exchanges (2,1), (1,0), (2,1) */
+  v4 n[3];
+  for (int j = 0; j < 3; j++) n[j] = vdot3(B[j], B[3 + j], B[6 + j], B[j], B[3 + j], B[6 + j]);
+  static const int sj[3] = {2, 1, 2};
+  for (int e = 0; e < 3; e++) {
+    const int j = sj[e];
+    const v4 sw = _mm256_cmp_pd(n[j], n[j - 1], _CMP_GT_OQ);
+    const v4 t = n[j], t1 = n[j - 1];
+    n[j] = vsel(sw, t1, t);
+    n[j - 1] = vsel(sw, t, t1);
+    for (int r = 0; r < 3; r++) {
+      const v4 x0 = B[3 * r + j], x1 = B[3 * r + j - 1], y0 = W[3 * r + j], y1 = W[3 * r + j - 1];
+      B[3 * r + j] = vsel(sw, x1, x0);
+      B[3 * r + j - 1] = vsel(sw, x0, x1);
+      W[3 * r + j] = vsel(sw, y1, y0);
+      W[3 * r + j - 1] = vsel(sw, y0, y1);
+    }
+  }
+  /* det3(V) < 0: the last columns change sign (det3 in bs_svd3's order) */
+  const v4 det = _mm256_add_pd(
+      _mm256_sub_pd(_mm256_mul_pd(W[0], _mm256_sub_pd(_mm256_mul_pd(W[4], W[8]), _mm256_mul_pd(W[5], W[7]))),
+                    _mm256_mul_pd(W[1], _mm256_sub_pd(_mm256_mul_pd(W[3], W[8]), _mm256_mul_pd(W[5], W[6])))),
+      _mm256_mul_pd(W[2], _mm256_sub_pd(_mm256_mul_pd(W[3], W[7]), _mm256_mul_pd(W[4], W[6]))));
+  const v4 refl = _mm256_and_pd(_mm256_cmp_pd(det, zero, _CMP_LT_OQ), _mm256_set1_pd(-0.0));
+  for (int r = 0; r < 3; r++) {
+    W[3 * r + 2] = _mm256_xor_pd(W[3 * r + 2], refl);
+    B[3 * r + 2] = _mm256_xor_pd(B[3 * r + 2], refl);
+  }
+  v4 u0[3], u1[3], w1[3], u2[3];
+  const v4 s0 = _mm256_sqrt_pd(n[0]);
+  for (int r = 0; r < 3; r++) u0[r] = _mm256_div_pd(B[3 * r], s0);
+  const v4 d = vdot3(u0[0], u0[1], u0[2], B[1], B[4], B[7]);
+  for (int r = 0; r < 3; r++) u1[r] = _mm256_sub_pd(B[3 * r + 1], _mm256_mul_pd(d, u0[r]));
+  v4 nw2 = vdot3(u1[0], u1[1], u1[2], u1[0], u1[1], u1[2]);
+  /* fallback: any unit vector orthogonal to u0 (the k of bs_svd3) */
+  const v4 a0 = vabs(u0[0]), a1 = vabs(u0[1]), a2 = vabs(u0[2]);
+  const v4 k1 = _mm256_cmp_pd(a1, a0, _CMP_LT_OQ);
+  const v4 k2 = _mm256_cmp_pd(a2, vsel(k1, a1, a0), _CMP_LT_OQ); /* k = 2 */
+  const v4 ek[3] = {_mm256_andnot_pd(_mm256_or_pd(k1, k2), one), _mm256_and_pd(_mm256_andnot_pd(k2, k1), one),
+                    _mm256_and_pd(k2, one)};
+  const v4 uk = vsel(k2, u0[2], vsel(k1, u0[1], u0[0]));
+  for (int r = 0; r < 3; r++) w1[r] = _mm256_sub_pd(ek[r], _mm256_mul_pd(uk, u0[r]));
+  const v4 mw2 = vdot3(w1[0], w1[1], w1[2], w1[0], w1[1], w1[2]);
+  const v4 fb = _mm256_cmp_pd(nw2, _mm256_set1_pd(1e-300), _CMP_NGT_UQ);
+  nw2 = vsel(fb, mw2, nw2);
+  for (int r = 0; r < 3; r++) u1[r] = vsel(fb, w1[r], u1[r]);
+  const v4 inw = _mm256_div_pd(one, _mm256_sqrt_pd(nw2));
+  for (int r = 0; r < 3; r++) u1[r] = _mm256_mul_pd(u1[r], inw);
+  u2[0] = _mm256_sub_pd(_mm256_mul_pd(u0[1], u1[2]), _mm256_mul_pd(u0[2], u1[1]));
+  u2[1] = _mm256_sub_pd(_mm256_mul_pd(u0[2], u1[0]), _mm256_mul_pd(u0[0], u1[2]));
+  u2[2] = _mm256_sub_pd(_mm256_mul_pd(u0[0], u1[1]), _mm256_mul_pd(u0[1], u1[0]));
+  const v4 s1 = _mm256_sqrt_pd(n[1]);
+  v4 s2 = vdot3(u2[0], u2[1], u2[2], B[2], B[5], B[8]);
+  const v4 sgn = _mm256_and_pd(s2, _mm256_set1_pd(-0.0));
+  s2 = vsel(_mm256_cmp_pd(vabs(s2), s1, _CMP_GT_OQ), _mm256_or_pd(s1, sgn), s2);
+  double o[21][L];
+  for (int r = 0; r < 3; r++) {
+    _mm256_storeu_pd(o[3 * r], u0[r]);
+    _mm256_storeu_pd(o[3 * r + 1], u1[r]);
+    _mm256_storeu_pd(o[3 * r + 2], u2[r]);
+  }
+  for (int i = 0; i < 9; i++) _mm256_storeu_pd(o[9 + i], W[i]);
+  _mm256_storeu_pd(o[18], s0);
+  _mm256_storeu_pd(o[19], s1);
+  _mm256_storeu_pd(o[20], s2);
+  for (int l = 0; l < L; l++) {
+    for (int i = 0; i < 9; i++) {
+      U[9 * l + i] = o[i][l];
+      V[9 * l + i] = o[9 + i][l];
+    }
+    for (int i = 0; i < 3; i++) sigma[3 * l + i] = o[18 + i][l] * isc[l];
+  }
+}
+
+/* G groups of 4 lanes (4 G matrices). The groups' sweeps are interleaved:
+ * one rotation is a chain of dependent sqrt and divisions, so independent
+ * groups fill the pipeline while one waits. */
+AVX2_FN static void svd3_avx2(int G, const double *restrict F, double *restrict U, double *restrict sigma,
+                              double *restrict V, int *restrict special) {
+  v4 B[2][9], W[2][9];
+  double isc[2][L];
+  for (int h = 0; h < G; h++) avx2_load(F + 9 * L * h, B[h], W[h], isc[h], special + L * h);
+  int live[2] = {1, G > 1};
+  for (int sweep = 0; sweep < SVD_MAX_SWEEPS && (live[0] | live[1]); sweep++) {
+    v4 rot[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};
+    for (int k = 0; k < 3; k++)
+      for (int h = 0; h < 2; h++)
+        if (live[h]) rot[h] = _mm256_or_pd(rot[h], avx2_rotate(B[h], W[h], pair_p[k], pair_q[k]));
+    for (int h = 0; h < 2; h++) live[h] &= _mm256_movemask_pd(rot[h]) != 0;
+  }
+  for (int h = 0; h < G; h++)
+    avx2_finish(B[h], W[h], isc[h], U + 9 * L * h, sigma + 3 * L * h, V + 9 * L * h);
+}
+#undef AVX2_FN
+#endif
+
 void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) {
+#ifdef BS_SVD_AVX2
+  const int has_avx2 = __builtin_cpu_supports("avx2");
+#endif
   int i = 0;
-  for (; i + L <= n; i += L) {
-    int special[L];
-    svd3_lanes(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
-    LANES if (special[l]) bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l),
-                                  V + 9 * (size_t)(i + l));
+  while (i + L <= n) {
+    int special[2 * L], m = L;
+#ifdef BS_SVD_AVX2
+    if (has_avx2) {
+      m = i + 2 * L <= n ? 2 * L : L;
+      svd3_avx2(m / L, F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
+    } else
+#endif
+      svd3_lanes(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
+    for (int l = 0; l < m; l++)
+      if (special[l])
+        bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l), V + 9 * (size_t)(i + l));
+    i += m;
   }
   for (; i < n; i++) bs_svd3(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i);
 }

@@ -204,7 +204,9 @@ Test(terms, assembly_dense_and_threads) {
   for (int32_t t = 0; t < f.mesh->n_tets; t++) {
     double xt[12], He[144];
     bs_fem_gather(f.fem, x, t, xt);
-    bs_tet_hessian(&f.mats[f.tet_mat[t]], xt, f.fem->Dm_inv + 9 * t, f.fem->volume[t], 0, He);
+    const int32_t k = f.fem->tet_pos[t]; /* the fem stores per-tet data by position */
+    cr_assert_eq(f.fem->chunk_tets[k], t);
+    bs_tet_hessian(&f.mats[f.tet_mat[t]], xt, f.fem->Dm_inv + 9 * k, f.fem->volume[k], 0, He);
     const int32_t *tv = f.mesh->tets + 4 * t;
     for (int a = 0; a < 4; a++)
       for (int b = 0; b < 4; b++)
@@ -268,6 +270,9 @@ static void check_colouring(const bs_fem *fem) {
       int32_t t = fem->chunk_tets[q];
       cr_assert(t >= 0 && t < m->n_tets, "tet %d out of range", t);
       if (q > lo) cr_expect_gt(t, fem->chunk_tets[q - 1], "chunk %d: tets not ascending", k);
+      /* position q holds tet t's data */
+      cr_expect_eq(fem->tet_pos[t], q, "tet %d: position %d, expected %d", t, fem->tet_pos[t], q);
+      for (int a = 0; a < 4; a++) cr_expect_eq(fem->tets[4 * q + a], m->tets[4 * t + a], "position %d: vertex %d", q, a);
       tet_seen[t]++;
     }
   }
@@ -306,7 +311,8 @@ Test(terms, masses_and_colouring) {
   setup(&f, 3, BS_MODEL_FIXED_COROTATED);
   double m = 0, expect = 0;
   for (int32_t v = 0; v < f.mesh->n_vertices; v++) m += f.fem->mass[v];
-  for (int32_t t = 0; t < f.mesh->n_tets; t++) expect += f.mats[f.tet_mat[t]].density * f.fem->volume[t];
+  for (int32_t t = 0; t < f.mesh->n_tets; t++)
+    expect += f.mats[f.tet_mat[t]].density * f.fem->volume[f.fem->tet_pos[t]];
   cr_expect(fabs(m - expect) < 1e-12 * expect, "mass %g vs %g", m, expect);
   check_colouring(f.fem);
   teardown(&f);
@@ -399,17 +405,18 @@ Test(terms, chunks_unordered_mesh_threads) {
   for (int32_t t = 0; t < nt; t++) {
     double xt[12], He[144], ge[12];
     const bs_material *mt = &mats[tm[t]];
+    const size_t p = (size_t)fem->tet_pos[t]; /* per-tet data is stored by position */
     bs_fem_gather(fem, x, t, xt);
-    Er += bs_tet_energy_grad(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], ge);
+    Er += bs_tet_energy_grad(mt, xt, fem->Dm_inv + 9 * p, fem->volume[p], ge);
     for (int a = 0; a < 4; a++)
       for (int k = 0; k < 3; k++) gr[3 * (size_t)mesh->tets[4 * t + a] + k] += ge[3 * a + k];
     for (int i = 0; i < 2; i++) {
-      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], i, He);
+      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * p, fem->volume[p], i, He);
       bs_fem_scatter_hessian(fem, t, He, 1.0, R[i]);
     }
     if (tm[t] == 1) {
       bs_fem_gather(fem, xn, t, xt);
-      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * (size_t)t, fem->volume[t], 1, He);
+      bs_tet_hessian(mt, xt, fem->Dm_inv + 9 * p, fem->volume[p], 1, He);
       bs_fem_scatter_hessian(fem, t, He, kd[1] / step.dt, R[2]);
     }
   }
