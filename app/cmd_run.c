@@ -14,7 +14,7 @@
 
 static const char *run_help =
     "usage: bigstep run SCENE [--method M] [--steps-per-frame N] [--frames N]\n"
-    "                         [--set key.path=value]... [--out DIR] [--quiet]\n"
+    "                         [--set key.path=value]... [--out DIR] [--quiet] [--trace]\n"
     "\n"
     "Runs a scene (JSON; see README.md, 'Scenes'). Prints a line per frame and a\n"
     "summary in the columns of the paper's Figure 11; writes VTU/PVD files and a\n"
@@ -24,7 +24,8 @@ static const char *run_help =
     "  --frames N            time.frames\n"
     "  --set key.path=value  any scene key, arrays by index (bodies.0.material.youngs=1e6)\n"
     "  --out DIR             output.dir\n"
-    "  --quiet               no per-frame lines\n";
+    "  --quiet               no per-frame lines\n"
+    "  --trace               one line per solver iteration on stderr (to follow a slow step)\n";
 
 static int mkdir_p(const char *dir, bs_error *err) {
   char buf[1024];
@@ -130,7 +131,7 @@ int bs_cmd_run(int argc, char **argv) {
   const char *scene_path = NULL;
   const char **sets = calloc((size_t)argc * 2 + 8, sizeof(char *));
   char **owned = calloc((size_t)argc + 8, sizeof(char *));
-  int n_sets = 0, n_owned = 0, quiet = 0, rc = 0;
+  int n_sets = 0, n_owned = 0, quiet = 0, trace = 0, rc = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -140,6 +141,10 @@ int bs_cmd_run(int argc, char **argv) {
     }
     if (!strcmp(a, "--quiet")) {
       quiet = 1;
+      continue;
+    }
+    if (!strcmp(a, "--trace")) {
+      trace = 1;
       continue;
     }
     if (!strncmp(a, "--", 2)) {
@@ -200,7 +205,9 @@ int bs_cmd_run(int argc, char **argv) {
   bs_error_clear(&err);
   bs_scene *sc = NULL;
   bs_sim *s = NULL;
-  if (bs_scene_load(scene_path, n_sets, sets, &sc, &err) || bs_sim_create(sc, &s, &err)) {
+  int load_rc = bs_scene_load(scene_path, n_sets, sets, &sc, &err);
+  if (!load_rc && trace) sc->solver.trace = stderr;
+  if (load_rc || bs_sim_create(sc, &s, &err)) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     bs_scene_destroy(&sc);
     rc = BS_EXIT_FAIL;

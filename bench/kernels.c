@@ -10,8 +10,9 @@
  *
  *   bench_kernels [CELLS] [REPEATS] [ONLY]
  *
- * Medians of REPEATS (default 5) timings. ONLY (e.g. "gradient"): run only the
- * kernels whose label contains it, with 1 thread (for a profiler). Never run by the test suite. */
+ * Medians of REPEATS (default 5) timings. ONLY (e.g. "energy + gradient", "PCG"):
+ * run only the kernels whose label contains it, with as many threads as
+ * OMP_NUM_THREADS gives (for a profiler, or to compare two builds). Never run by the test suite. */
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -93,7 +94,8 @@ int main(int argc, char **argv) {
   printf("%-34s %8s %12s %12s %8s\n", "kernel", "threads", "ms", "ns/tet|GB/s", "ratio");
   int threads[2] = {1, maxt};
   double base[8] = {0};
-  for (int ti = 0; ti < (maxt > 1 && !only ? 2 : 1); ti++) {
+  const int ti0 = only && maxt > 1 ? 1 : 0; /* ONLY: one run, with maxt threads */
+  for (int ti = ti0; ti < (maxt > 1 ? 2 : 1); ti++) {
     omp_set_num_threads(threads[ti]);
     double t[64];
     int k = 0;
@@ -106,7 +108,7 @@ int main(int argc, char **argv) {
       t[r] = bs_seconds() - t0;                                                                            \
     }                                                                                                      \
     double m = median(t, reps);                                                                            \
-    if (ti == 0) base[k] = m;                                                                              \
+    if (ti == ti0) base[k] = m;                                                                              \
     double metric = per_tet ? 1e9 * m / mesh->n_tets : (bytes) / m / 1e9;                                  \
     printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, threads[ti], 1e3 * m, metric, base[k] / m);           \
     k++;                                                                                                   \
@@ -121,8 +123,7 @@ int main(int argc, char **argv) {
          1, 0);
     double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
     TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
-    if (only) continue;
-    {
+    if (!only || strstr("PCG iteration (block Jacobi)", only)) {
       /* A = projected Hessian + M/dt^2: SPD, so PCG runs its 50 iterations. */
       bs_bsr_zero(H);
       bs_fem_elastic_hessian(fem, x, 1, 1.0, H);
@@ -147,15 +148,17 @@ int main(int argc, char **argv) {
         t[r] = (bs_seconds() - t0) / iters;
       }
       double m = median(t, reps);
-      if (ti == 0) base[k] = m;
+      if (ti == ti0) base[k] = m;
       printf("%-34s %8d %12.2f %12.1f %8.2f\n", "PCG iteration (block Jacobi)", threads[ti], 1e3 * m, bytes / m / 1e9,
              base[k] / m);
       k++;
       if (iters != 50) printf("(PCG stopped after %d iterations)\n", iters);
       bs_linsolve_destroy(&ls);
     }
-    double triad = stream_triad(n3 * 8 > ((size_t)1 << 24) ? n3 * 8 : (size_t)1 << 24, reps); /* >= 384 MB */
-    printf("%-34s %8d %12s %12.1f\n", "STREAM triad (GB/s)", threads[ti], "", triad);
+    if (!only || strstr("STREAM triad", only)) {
+      double triad = stream_triad(n3 * 8 > ((size_t)1 << 24) ? n3 * 8 : (size_t)1 << 24, reps); /* >= 384 MB */
+      printf("%-34s %8d %12s %12.1f\n", "STREAM triad (GB/s)", threads[ti], "", triad);
+    }
   }
   free(x);
   free(g);

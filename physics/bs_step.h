@@ -22,6 +22,7 @@
 #define BS_STEP_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #include "bs_base.h"
 #include "bs_fem.h"
@@ -51,6 +52,10 @@ typedef struct bs_integrator_opts {
      (18.5k dofs, 6 frames) rest 96 with 1 setup, current 77 with 3 setups; fig8 random
      (16^3 cells, first frame) rest 259, current 351 (block-Jacobi PCG: failed at 500). */
   int amg_at_rest;
+  /* NULL (default): silent. Else one line per accepted iteration of every solve is
+     written there (iteration, ||grad E||, E, Krylov iterations, step length, line-search
+     trials): to follow a slow step. */
+  FILE *trace;
 } bs_integrator_opts;
 
 void bs_integrator_opts_default(bs_integrator_opts *o);

@@ -200,6 +200,14 @@ static void hook_register(const double *x, const double *g, void *ctx) {
   I->hooks.register_active(x, g, I->hooks.ctx);
 }
 
+static void obj_trace(const bs_min_iter *it, void *ctx) {
+  bs_integrator *I = ctx;
+  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s  alpha %.4g (%d trials)%s\n",
+          it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
+          it->alpha, it->ls_evaluations, it->direction ? (it->direction == 1 ? " fallback -dx" : " fallback -g") : "");
+  fflush(I->opts.trace);
+}
+
 static void make_objective(bs_integrator *I, bs_objective *o) {
   memset(o, 0, sizeof *o);
   o->n = I->fem->n_vertices;
@@ -213,6 +221,7 @@ static void make_objective(bs_integrator *I, bs_objective *o) {
   o->hessian_g = I->hooks.project_hessian ? obj_hessian_g : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->precond_matrix = obj_precond;
+  o->trace = I->opts.trace ? obj_trace : NULL;
   o->ctx = I;
 }
 

@@ -95,6 +95,11 @@ int bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]);
  * blocks are added afterwards, sequentially in list order. */
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 
+/* bs_bsr_mul, returning x . y over the free entries (constrained entries of x
+ * are skipped, so a non-finite one does not leak in), the dot fused into the
+ * product's row loop when there are no extra blocks (one pass over y, not two). */
+double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
+
 /* Checker (an invariant test, not for hot loops): row_ptr monotone, columns in
  * range and strictly increasing within each row, diag[i] pointing at (i,i),
  * pattern symmetric ((i,j) stored iff (j,i) stored), values finite, and values

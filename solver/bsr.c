@@ -188,12 +188,18 @@ static void mul_extra(const bs_bsr *A, const uint8_t *mask, const double *x, dou
   }
 }
 
-void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+/* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
+ * row is in registers; with extra blocks y changes afterwards, so the dot is
+ * then a separate pass). */
+static inline __attribute__((always_inline)) double mul_impl(const bs_bsr *A, const uint8_t *mask,
+                                                             const double *x, double *y, const int dot) {
   const int32_t n = A->n;
   const int32_t *rp = A->row_ptr, *col = A->col;
   const double *val = A->val;
+  const int fuse = dot && A->n_extra == 0;
+  double xy = 0.0;
   if (!mask) {
-#pragma omp parallel for schedule(static) if (n > 4096)
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
     for (int32_t i = 0; i < n; ++i) {
       double y0 = 0.0, y1 = 0.0, y2 = 0.0;
       for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
@@ -207,37 +213,55 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
       y[3 * (int64_t)i] = y0;
       y[3 * (int64_t)i + 1] = y1;
       y[3 * (int64_t)i + 2] = y2;
+      if (fuse) xy += x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
     }
-    mul_extra(A, NULL, x, y);
-    return;
-  }
+  } else {
   /* Masked: written without data-dependent branches (selects instead), because
    * a mispredicted branch on a scattered mask flushes the loads in flight and
    * halves the bandwidth; constrained rows are computed and then dropped.
    * Selects (not multiplications by 0/1) keep the contract exact: the blocks of
    * constrained columns never enter the sum, even if they hold NaN. */
-#pragma omp parallel for schedule(static) if (n > 4096)
-  for (int32_t i = 0; i < n; ++i) {
-    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-      const int32_t j = col[s];
-      const double *a = val + 9 * (int64_t)s;
-      const double *xj = x + 3 * (int64_t)j;
-      const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-      const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
-      const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
-      const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
-      const int f = mask[j] != 0;
-      y0 = f ? y0 + t0 : y0;
-      y1 = f ? y1 + t1 : y1;
-      y2 = f ? y2 + t2 : y2;
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
+    for (int32_t i = 0; i < n; ++i) {
+      double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+        const int32_t j = col[s];
+        const double *a = val + 9 * (int64_t)s;
+        const double *xj = x + 3 * (int64_t)j;
+        const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+        const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
+        const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
+        const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
+        const int f = mask[j] != 0;
+        y0 = f ? y0 + t0 : y0;
+        y1 = f ? y1 + t1 : y1;
+        y2 = f ? y2 + t2 : y2;
+      }
+      const int f = mask[i] != 0;
+      y0 = f ? y0 : 0.0;
+      y1 = f ? y1 : 0.0;
+      y2 = f ? y2 : 0.0;
+      y[3 * (int64_t)i] = y0;
+      y[3 * (int64_t)i + 1] = y1;
+      y[3 * (int64_t)i + 2] = y2;
+      /* a constrained row adds 0 * x_i, which is NaN for a non-finite x_i: drop it */
+      if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
     }
-    const int f = mask[i] != 0;
-    y[3 * (int64_t)i] = f ? y0 : 0.0;
-    y[3 * (int64_t)i + 1] = f ? y1 : 0.0;
-    y[3 * (int64_t)i + 2] = f ? y2 : 0.0;
   }
+  if (A->n_extra == 0) return xy;
   mul_extra(A, mask, x, y);
+  if (!dot) return 0.0;
+  const int64_t N = 3 * (int64_t)n;
+  xy = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
+  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
+  return xy;
+}
+
+void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) { (void)mul_impl(A, mask, x, y, 0); }
+
+double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+  return mul_impl(A, mask, x, y, 1);
 }
 
 /* The extra list: indices, finiteness, and symmetry of the summed blocks. */

@@ -266,8 +266,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
   vcopy(N, z, p);
   const double target = rel_tol * bnorm;
   for (int k = 0; k < max_iter; ++k) {
-    bs_bsr_mul(A, mask, p, q);
-    const double pq = vdot(N, p, q);
+    const double pq = bs_bsr_mul_dot(A, mask, p, q);
     if (!isfinite(pq)) return matrix_error(A, mask, name, err);
     if (pq <= 0.0) {
       st->indefinite = 1;
@@ -283,12 +282,38 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
       break;
     }
     const double alpha = rz / pq;
-    double s = 0.0;
+    double s = 0.0, rz_new = 0.0;
+    if (precond == 1) {
+      /* one pass: the updates, ||r||^2, z = M^-1 r and r . z (z is wasted only
+         on the last iteration) */
+      const double *minv = ls->minv;
+#pragma omp parallel for schedule(static) reduction(+ : s, rz_new) if (n > 4096)
+      for (int32_t i = 0; i < n; ++i) {
+        const int64_t m = 3 * (int64_t)i;
+        const double *M = minv + 9 * (int64_t)i;
+        x[m] += alpha * p[m];
+        x[m + 1] += alpha * p[m + 1];
+        x[m + 2] += alpha * p[m + 2];
+        const double r0 = r[m] - alpha * q[m], r1 = r[m + 1] - alpha * q[m + 1], r2 = r[m + 2] - alpha * q[m + 2];
+        r[m] = r0;
+        r[m + 1] = r1;
+        r[m + 2] = r2;
+        s += r0 * r0 + r1 * r1 + r2 * r2;
+        const double z0 = M[0] * r0 + M[1] * r1 + M[2] * r2;
+        const double z1 = M[3] * r0 + M[4] * r1 + M[5] * r2;
+        const double z2 = M[6] * r0 + M[7] * r1 + M[8] * r2;
+        z[m] = z0;
+        z[m + 1] = z1;
+        z[m + 2] = z2;
+        rz_new += r0 * z0 + r1 * z1 + r2 * z2;
+      }
+    } else {
 #pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-    for (int64_t m = 0; m < N; ++m) {
-      x[m] += alpha * p[m];
-      r[m] -= alpha * q[m];
-      s += r[m] * r[m];
+      for (int64_t m = 0; m < N; ++m) {
+        x[m] += alpha * p[m];
+        r[m] -= alpha * q[m];
+        s += r[m] * r[m];
+      }
     }
     rr = s;
     st->iterations = k + 1;
@@ -297,8 +322,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
       st->converged = 1;
       break;
     }
-    double rz_new = rr;
-    if (precond == 1) rz_new = apply_block_jacobi(n, ls->minv, r, z);
+    if (precond == 0) rz_new = rr;
     else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz_new, err))) return rc;
     if (precond == 2 && !(rz_new > 0.0)) { /* B not SPD (built from an indefinite matrix?) */
       if (!isfinite(rz_new)) return matrix_error(A, mask, name, err);

@@ -179,6 +179,24 @@ Test(bsr, product_matches_dense) {
     if (!mask[k / 3]) x[k] = 1e30;
   bs_bsr_mul(A, mask, x, y2);
   cr_assert_eq(memcmp(y, y2, N * sizeof *y), 0);
+  /* The fused product and dot: the same y, and x . y over the free entries (the
+     1e30 in constrained entries of x stay out of it). */
+  for (int masked = 0; masked < 2; ++masked) {
+    const uint8_t *mk = masked ? mask : NULL;
+    if (!masked)
+      for (int64_t k = 0; k < N; ++k) x[k] = urand();
+    bs_bsr_mul(A, mk, x, y);
+    double ref = 0;
+    for (int64_t k = 0; k < N; ++k)
+      if (!mk || mk[k / 3]) ref += x[k] * y[k];
+    for (int64_t k = 0; k < N; ++k) y2[k] = NAN;
+    const double xy = bs_bsr_mul_dot(A, mk, x, y2);
+    cr_assert_eq(memcmp(y, y2, N * sizeof *y), 0, "masked %d: the fused product differs", masked);
+    cr_assert(fabs(xy - ref) <= 1e-13 * (1 + fabs(ref)), "masked %d: x.y %.17g vs %.17g", masked, xy, ref);
+    if (!masked)
+      for (int64_t k = 0; k < N; ++k)
+        if (!mask[k / 3]) x[k] = 1e30;
+  }
   free(y2);
   free(mask);
   free(D);
@@ -331,6 +349,13 @@ Test(bsr, extra_blocks_enter_the_product_and_the_checker) {
       cr_assert(fabs(y[r] - ref) <= 1e-13 * (1 + fabs(ref)), "masked %d row %d: %.17g vs %.17g", masked, r,
                 y[r], ref);
     }
+    /* with extra blocks the dot of bs_bsr_mul_dot comes after them */
+    double y2[18], dref = 0;
+    for (int k = 0; k < 18; ++k)
+      if (!masked || mask[k / 3]) dref += x[k] * y[k];
+    const double xy = bs_bsr_mul_dot(A, masked ? mask : NULL, x, y2);
+    cr_assert_eq(memcmp(y, y2, sizeof y), 0, "masked %d: the fused product differs", masked);
+    cr_assert(fabs(xy - dref) <= 1e-13 * (1 + fabs(dref)), "masked %d: x.y %.17g vs %.17g", masked, xy, dref);
   }
   bs_bsr_zero(A);
   cr_assert_eq(A->n_extra, 0);
