@@ -394,8 +394,10 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
       if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err))) goto done;
       s->terms[s->n_terms++] = s->self;
     }
+    bs_integrator_opts io = sc->solver;
+    io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
     if ((st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
-                                   s->n_scripts ? script_positions : NULL, s, &sc->solver, &s->integrator, err)))
+                                   s->n_scripts ? script_positions : NULL, s, &io, &s->integrator, err)))
       goto done;
     bs_step_hooks hooks;
     memset(&hooks, 0, sizeof hooks);

@@ -312,6 +312,19 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   } else {
     memcpy(x, I->g1, sizeof(double) * n3);
   }
+  /* A third candidate with opts.guess_xn (bs_step.h): xⁿ itself, scripted
+     vertices at tⁿ⁺¹, projected; chosen only when its E is the smallest. */
+  if (I->opts.guess_xn) {
+    memcpy(I->g1, I->x_n, sizeof(double) * n3);
+    if (I->script) I->script(t + dt, I->g1, I->script_ctx);
+    if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
+    const double E0 = bs_integrator_energy(I, I->g1), Eb = st->guess ? E2 : E1;
+    if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
+      memcpy(x, I->g1, sizeof(double) * n3);
+      st->guess = 2;
+      naive = 1;
+    }
+  }
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
   if (I->hooks.post_solve) {
