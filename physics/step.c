@@ -139,6 +139,19 @@ static int obj_lower_bound(const double *x, double *E, void *ctx) {
   return isfinite(s) ? 0 : 1;
 }
 
+/* E at an initial-guess candidate when it may beat best; when the cheap terms
+ * alone already reach best, their sum (a lower bound of E, since the expensive
+ * terms are >= 0: section 3.3's shortcut) and the expensive terms are skipped. */
+static double guess_energy(bs_integrator *I, const double *x, double best) {
+  double s = 0;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
+  if (!isfinite(s) || s >= best) return s;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
+  return s;
+}
+
 static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
   bs_integrator *I = ctx;
   memset(g, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
@@ -303,7 +316,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     I->hooks.project(I->g1, I->hooks.ctx);
     I->hooks.project(I->g2, I->hooks.ctx);
   }
-  double E1 = bs_integrator_energy(I, I->g1), E2 = bs_integrator_energy(I, I->g2);
+  const double E1 = guess_energy(I, I->g1, INFINITY), E2 = guess_energy(I, I->g2, E1);
   int naive = 1;
   if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
     memcpy(x, I->g2, sizeof(double) * n3);
@@ -318,7 +331,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     memcpy(I->g1, I->x_n, sizeof(double) * n3);
     if (I->script) I->script(t + dt, I->g1, I->script_ctx);
     if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-    const double E0 = bs_integrator_energy(I, I->g1), Eb = st->guess ? E2 : E1;
+    const double Eb = st->guess ? E2 : E1, E0 = guess_energy(I, I->g1, isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
       memcpy(x, I->g1, sizeof(double) * n3);
       st->guess = 2;
