@@ -10,8 +10,15 @@
  *      - project: P(x) applies, for every free vertex p and every constraint
  *        obstacle b IN THE ORDER THEY WERE ADDED, P_bp to x_p when (b, p) is
  *        labeled active or violated (phi_b(x_p) < 0); P = P_B o ... o P_1.
- *        Scripted vertices (mask 0) are never moved. Each call also records
- *        which pairs it projected.
+ *        Added to the paper: an active pair outside the obstacle is projected
+ *        only while grad phi_b there is within 45 degrees of its normal at
+ *        registration; past an edge or corner (a box) it is released, left
+ *        free, because projecting would pull a vertex sliding off a face back
+ *        onto the edge, where it stays stuck and the line search fails (the
+ *        paper-scale figure 13 failed 6 of its first 9 steps that way, a
+ *        constraint box striker 6 of 30). Scripted vertices (mask 0) are
+ *        never moved. Each call also records which pairs it projected and
+ *        which active pairs it released.
  *      - register_active(x, g'): at a feasible x, with g' = grad E'(x), the
  *        pair (b, p) is active when it touches, |phi_b(x_p)| <= tol_b, and
  *        g'_p . grad phi_b(x_p) >= 0; every other pair is inactive.
@@ -23,7 +30,7 @@
  *        recorded by the last projection.
  *      - project_gradient(x, g): g <- J_P(x)^T g, with J_P = J_B ... J_1 and
  *        J_b = I - n n^T (n = grad phi_b(x_p)) for the pairs that are active
- *        or were projected by the last call of project (applied from B down
+ *        and not released, or were projected by the last call of project (applied from B down
  *        to 1, the transpose of the composition). At a registered iterate only
  *        the active pairs count (register_active has just forgotten the
  *        projected ones); at a line-search point y = P(x + a d) the pairs the

@@ -16,7 +16,20 @@ typedef struct obstacle {
   bs_term *term;      /* penalty mode                                        */
   uint8_t *active;    /* constraint mode: n_vertices labels                  */
   uint8_t *projected; /* constraint mode: pairs moved by the last project    */
+  uint8_t *released;  /* constraint mode: active pairs the last project left  */
+                      /* free (moved off an edge or corner, see RELEASE_COS)  */
+  float *nreg;        /* constraint mode: 3 per vertex, the normal of an      */
+                      /* active pair at its registration                      */
 } obstacle;
+
+/* An active pair is projected back onto the obstacle at a trial point outside
+ * it only while the obstacle's normal there stays within 45 degrees of its
+ * normal at registration (the paper's curved path over a smooth surface);
+ * past an edge or a corner of a box the normal turns by up to 90 degrees, and
+ * projecting would pull a vertex sliding off the face back onto the edge,
+ * where it stays stuck (the failing steps of the paper-scale figure 13: a
+ * vertex at a cube's bottom edge, the descent direction down along the face). */
+#define RELEASE_COS 0.70710678118654752
 
 struct bs_obstacles {
   const bs_fem *fem;
@@ -79,6 +92,8 @@ void bs_obstacles_destroy(bs_obstacles **po) {
     bs_levelset_destroy(&o->obs[i].ls);
     free(o->obs[i].active);
     free(o->obs[i].projected);
+    free(o->obs[i].released);
+    free(o->obs[i].nreg);
   }
   free(o->obs);
   free(o->terms);
@@ -178,14 +193,18 @@ int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, dou
   } else if (mode == BS_COLLIDE_CONSTRAINT) {
     ob.active = calloc(nv ? nv : 1, 1);
     ob.projected = calloc(nv ? nv : 1, 1);
+    ob.released = calloc(nv ? nv : 1, 1);
+    ob.nreg = malloc(sizeof(float) * 3 * (nv ? nv : 1));
     if (!o->J) {
       o->J = malloc(sizeof(double) * 9 * (nv ? nv : 1));
       o->C = malloc(sizeof(double) * 9 * (nv ? nv : 1));
       o->vact = calloc(nv ? nv : 1, 1);
     }
-    if (!ob.active || !ob.projected || !o->J || !o->C || !o->vact) {
+    if (!ob.active || !ob.projected || !ob.released || !ob.nreg || !o->J || !o->C || !o->vact) {
       free(ob.active);
       free(ob.projected);
+      free(ob.released);
+      free(ob.nreg);
       rc = bs_error_set(err, BS_ENOMEM, "obstacle %d (%s): out of memory (%zu vertices)", idx, kind, nv);
       goto fail;
     }
@@ -224,6 +243,7 @@ static void clear_labels(bs_obstacles *o) {
     if (o->obs[b].mode == BS_COLLIDE_CONSTRAINT) {
       memset(o->obs[b].active, 0, (size_t)o->nv);
       memset(o->obs[b].projected, 0, (size_t)o->nv);
+      memset(o->obs[b].released, 0, (size_t)o->nv);
     }
   o->n_active = 0;
 }
@@ -254,10 +274,17 @@ void bs_obstacles_project(double *x, void *ctx) {
 #pragma omp parallel for schedule(static) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
       ob->projected[p] = 0;
+      ob->released[p] = 0;
       if (!o->mask[p]) continue;
       double *xp = x + 3 * (size_t)p, g[3];
       double phi = bs_levelset_eval_frame(ob->ls, &f, xp, g, NULL);
-      if (ob->active[p] || phi < 0) {
+      int proj = phi < 0;
+      if (!proj && ob->active[p]) {
+        const float *nr = ob->nreg + 3 * (size_t)p;
+        proj = g[0] * nr[0] + g[1] * nr[1] + g[2] * nr[2] >= RELEASE_COS;
+        ob->released[p] = (uint8_t)!proj;
+      }
+      if (proj) {
         for (int k = 0; k < 3; k++) xp[k] -= phi * g[k];
         ob->projected[p] = 1;
       }
@@ -280,12 +307,14 @@ void bs_obstacles_register_active(const double *x, const double *g, void *ctx) {
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
       ob->projected[p] = 0;
+      ob->released[p] = 0;
       ob->active[p] = 0;
       if (!o->mask[p]) continue;
       double n[3];
       double phi = bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
       if (fabs(phi) <= tol && dot3(g + 3 * (size_t)p, n) >= 0) {
         ob->active[p] = 1;
+        for (int k = 0; k < 3; k++) ob->nreg[3 * (size_t)p + k] = (float)n[k];
         count++;
       }
     }
@@ -305,7 +334,7 @@ void bs_obstacles_project_gradient(const double *x, double *g, void *ctx) {
     bs_levelset_frame_at(ob->ls, t, &f);
 #pragma omp parallel for schedule(static) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
-      if (!o->mask[p] || !(ob->active[p] || ob->projected[p])) continue;
+      if (!o->mask[p] || !((ob->active[p] && !ob->released[p]) || ob->projected[p])) continue;
       double n[3], *gp = g + 3 * (size_t)p;
       bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
       double s = dot3(gp, n);

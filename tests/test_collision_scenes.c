@@ -137,3 +137,19 @@ Test(collision_scenes, two_spheres_impact_does_not_tangle, .timeout = 600) {
   cr_expect(from_xn > 0, "no step started from x^n");
   cr_log_info("two_spheres: %d steps started from x^n\n", from_xn);
 }
+
+/* A moving box as a constraint obstacle (box_stack_strike's striker set to
+ * `constraint`): every step converges. Vertices pressed against the striker
+ * slide off its edges (bs_obstacles.c, RELEASE_COS); before, 6 of the steps
+ * failed in the line search once the striker reached the wall. */
+Test(collision_scenes, constraint_box_striker_converges, .timeout = 600) {
+  char *out = NULL;
+  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR
+                       "/data/scenes/box_stack_strike.json --quiet --set obstacles.1.collision=constraint "
+                       "--set output.dir=/tmp/bs_test_striker --set output.vtu_every=0",
+                       &out);
+  cr_expect_eq(rc, 0, "a step failed:\n%s", out);
+  cr_expect(strstr(out, "at the last frame: 0 inverted tets") != NULL, "%s", out);
+  cr_expect(strstr(out, "0 vertices inside obstacles") != NULL, "%s", out);
+  free(out);
+}

@@ -594,3 +594,57 @@ Test(obstacles, corner_of_two_constraints) {
   cr_assert(fabs(x[0] + 0.15) < 1e-14 && fabs(x[1]) < 1e-14 && x[2] == 0.05, "(%g %g %g)", x[0], x[1], x[2]);
   sim_destroy(&s);
 }
+
+/* An active pair on a box face is projected back while the trial point stays
+ * over that face (the curved path), and released once it has slid past the
+ * edge (projecting would pull it back onto the edge, where it would stay:
+ * the failing steps of figure 13 before this rule). The gradient of a
+ * released pair is left unprojected (P is the identity there). */
+Test(obstacles, active_pair_slides_off_a_box_edge) {
+  sim s;
+  double lo[3] = {2, 2, 2}, hi[3] = {2.1, 2.1, 2.1}; /* a small block far from the box */
+  sim_create(&s, lo, hi, 1, 1e5, NULL);
+  bs_levelset *box;
+  bs_error err;
+  const double c[3] = {0, 0, 0}, h[3] = {0.5, 0.5, 0.5};
+  cr_assert_eq(bs_levelset_create_box(c, h, &box, &err), 0, "%s", err.msg);
+  add(&s, box, BS_COLLIDE_CONSTRAINT, 0, 0);
+  sim_finish(&s, 1e-6, 0);
+  s.step.time = 0;
+  const size_t n3 = 3 * (size_t)s.nv;
+  double *x = malloc(sizeof(double) * n3), *g = calloc(n3, sizeof(double));
+  memcpy(x, s.x, sizeof(double) * n3);
+  /* vertex 0 on the +x face, 1 cm below the top edge, pressed into the box */
+  x[0] = 0.5;
+  x[1] = 0.49;
+  x[2] = 0.1;
+  g[0] = 1.0;
+  g[1] = -2.0;
+  bs_obstacles_register_active(x, g, s.obs);
+  cr_assert_eq(bs_obstacles_active_count(s.obs), 1);
+  /* still over the face, a little outside: back onto the face */
+  x[0] = 0.51;
+  x[1] = 0.2;
+  bs_obstacles_project(x, s.obs);
+  cr_assert(fabs(x[0] - 0.5) < 1e-15 && x[1] == 0.2 && x[2] == 0.1, "(%.17g %.17g %.17g)", x[0], x[1], x[2]);
+  double gp[3] = {1.0, -2.0, 0.5};
+  memcpy(g, gp, sizeof gp);
+  bs_obstacles_project_gradient(x, g, s.obs);
+  cr_assert(g[0] == 0.0 && g[1] == -2.0 && g[2] == 0.5, "projected gradient (%g %g %g)", g[0], g[1], g[2]);
+  /* slid up past the top edge, just outside: released, left where it is */
+  x[0] = 0.501;
+  x[1] = 0.6;
+  bs_obstacles_project(x, s.obs);
+  cr_assert(x[0] == 0.501 && x[1] == 0.6 && x[2] == 0.1, "released vertex moved to (%g %g %g)", x[0], x[1], x[2]);
+  memcpy(g, gp, sizeof gp);
+  bs_obstacles_project_gradient(x, g, s.obs);
+  cr_assert(g[0] == 1.0 && g[1] == -2.0 && g[2] == 0.5, "released gradient changed to (%g %g %g)", g[0], g[1], g[2]);
+  /* inside the box a pair is always projected (violated) */
+  x[0] = 0.45;
+  x[1] = 0.3;
+  bs_obstacles_project(x, s.obs);
+  cr_assert(fabs(x[0] - 0.5) < 1e-15, "violated pair not projected: x = %g", x[0]);
+  free(x);
+  free(g);
+  sim_destroy(&s);
+}
