@@ -105,6 +105,9 @@ typedef struct bs_self_stats {
   double max_depth;       /* largest distance to the primitive then (m)         */
   int64_t missing_blocks; /* coupling blocks the last Hessian dropped (no room)  */
   int64_t evaluations;    /* evaluations since creation or the last reset       */
+  int64_t reused;         /* of which answered by the last detection (the same  */
+                          /* positions, bitwise: value, gradient, Hessian at one */
+                          /* iterate); invalidated by begin_step                */
   int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step)          */
   double t_rebuild;       /* seconds: hierarchy topology rebuilds               */
   double t_refit;         /* seconds: box refits                                */

@@ -356,6 +356,13 @@ typedef struct self_data {
   int32_t *hint;        /* last primitive triangle, -1 none                 */
   contact *con;
   int failed;           /* a shim call failed (non-finite input)            */
+  /* the last detection: positions and result, reused when detect is called
+     again at the same positions (value then gradient then Hessian at one
+     iterate, friction at the solution) */
+  double *x_last;       /* 3 n_vertices                                     */
+  int have_last;
+  int32_t last_count, last_colliding;
+  double last_depth;
   bs_self_stats stats;
 } self_data;
 
@@ -372,6 +379,7 @@ static void self_free(void *p) {
   free(d->coll_tet);
   free(d->hint);
   free(d->con);
+  free(d->x_last);
   free(d);
 }
 
@@ -637,8 +645,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
 
 /* Detection and primitives at x; fills d->con. Returns the number of
  * colliding vertices, or -1 on a shim error (non-finite x). */
-static int32_t detect(self_data *d, const double *x) {
-  d->stats.evaluations++;
+static int32_t detect_at(self_data *d, const double *x) {
   bvh_refit(d, x);
   const bvh_node *root = &d->nodes[0];
   for (int k = 0; k < 3; k++)
@@ -691,6 +698,28 @@ static int32_t detect(self_data *d, const double *x) {
   d->stats.colliding = count;
   d->stats.max_depth = depth;
   return count;
+}
+
+/* detect_at, or its last result when x is bitwise the x of the last call
+ * (a memcmp of 3 n doubles against a point-in-tet search per surface vertex). */
+static int32_t detect(self_data *d, const double *x) {
+  const size_t bytes = 3 * sizeof(double) * (size_t)d->mesh->n_vertices;
+  d->stats.evaluations++;
+  if (d->have_last && memcmp(x, d->x_last, bytes) == 0) {
+    d->stats.reused++;
+    d->stats.colliding = d->last_colliding;
+    d->stats.max_depth = d->last_depth;
+    return d->last_count;
+  }
+  const int32_t cnt = detect_at(d, x);
+  d->have_last = cnt >= 0;
+  if (cnt >= 0) {
+    memcpy(d->x_last, x, bytes);
+    d->last_count = cnt;
+    d->last_colliding = d->stats.colliding;
+    d->last_depth = d->stats.max_depth;
+  }
+  return cnt;
 }
 
 static void gather(const double *x, const contact *c, double *y) {
@@ -771,6 +800,7 @@ static int self_begin_step(bs_term *t, bs_error *err) {
         if (!isfinite(x[3 * (size_t)v + k]))
           return bs_error_set(err, BS_ENUMERIC, "self-collision: position of vertex %d is not finite", (int)v);
     bvh_rebuild(d, x);
+    d->have_last = 0;
   }
   return 0;
 }
@@ -809,7 +839,9 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     d->nthreads = omp_get_max_threads();
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->nodes || !d->order || !d->cent || !d->cand)
+    d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
+    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->nodes || !d->order || !d->cent || !d->cand ||
+        !d->x_last)
       st = BS_ENOMEM;
   }
   if (!st) {

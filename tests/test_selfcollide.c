@@ -262,6 +262,8 @@ Test(self_detect, pushed_vertex_is_found) {
   cr_expect_eq(st.colliding, 1);
   cr_expect(st.evaluations >= 3 && st.rebuilds == 1, "evaluations %lld rebuilds %lld", (long long)st.evaluations,
             (long long)st.rebuilds);
+  /* detect, value and gradient at the same positions: one search, two reuses */
+  cr_expect(st.reused >= 2, "reused %lld of %lld", (long long)st.reused, (long long)st.evaluations);
   bs_term_self_reset_stats(w.self);
   cr_assert_eq(bs_term_self_stats(w.self, &st, &err), 0, "%s", err.msg);
   cr_expect_eq(st.evaluations, 0);
