@@ -107,7 +107,7 @@ typedef struct bs_self_stats {
   int64_t evaluations;    /* evaluations since creation or the last reset       */
   int64_t reused;         /* of which answered by the last detection (the same  */
                           /* positions, bitwise: value, gradient, Hessian at one */
-                          /* iterate); invalidated by begin_step                */
+                          /* iterate, f(xⁿ) after the last step's friction)     */
   int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step)          */
   double t_rebuild;       /* seconds: hierarchy topology rebuilds               */
   double t_refit;         /* seconds: box refits                                */

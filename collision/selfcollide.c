@@ -799,8 +799,7 @@ static int self_begin_step(bs_term *t, bs_error *err) {
       for (int k = 0; k < 3; k++)
         if (!isfinite(x[3 * (size_t)v + k]))
           return bs_error_set(err, BS_ENUMERIC, "self-collision: position of vertex %d is not finite", (int)v);
-    bvh_rebuild(d, x);
-    d->have_last = 0;
+    bvh_rebuild(d, x); /* the last detection stays valid: the same positions give the same contacts */
   }
   return 0;
 }
