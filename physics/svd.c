@@ -191,29 +191,34 @@ static inline double pow2i(int e) { /* 2^e for -1022 <= e <= 1023 */
   return v.d;
 }
 
+/* One lane's scale: 2^-e and 2^e with e the exponent of max |F_ij| (from
+ * its bits: exact for the normal maxima of the lanes that stay in the batch,
+ * 2^-1000 <= max < 2^1000); returns 1 for a lane bs_svd3 must take instead
+ * (non-finite, zero, or out of that range), whose scales are then 1. */
+static inline int lane_scale(const double *F, double *sc, double *isc) {
+  double fm = 0.0, bad = 0.0;
+  for (int i = 0; i < 9; i++) {
+    const double a = fabs(F[i]);
+    fm = a > fm ? a : fm;
+    bad += F[i] - F[i];
+  }
+  union {
+    double d;
+    uint64_t u;
+  } b = {fm};
+  const int ex = (int)((b.u >> 52) & 0x7ff) - 1022; /* frexp's exponent */
+  const int special = !(bad == 0.0) | !(ex > -1000) | !(ex < 1000) | (fm == 0.0);
+  const int ec = special ? 0 : ex;
+  *sc = pow2i(-ec);
+  *isc = pow2i(ec);
+  return special;
+}
+
 BS_SVD_CLONES
 static void svd3_lanes(const double *restrict F, double *restrict U, double *restrict sigma, double *restrict V,
                        int *restrict special) {
   double B[9][L], W[9][L], sc[L], isc[L];
-  /* Scale: fm's exponent from its bits (exact for normal fm, which every
-   * lane that stays here has: 2^-1000 <= fm < 2^1000). */
-  LANES {
-    double fm = 0.0, bad = 0.0;
-    for (int i = 0; i < 9; i++) {
-      const double a = fabs(F[9 * l + i]);
-      fm = a > fm ? a : fm;
-      bad += F[9 * l + i] - F[9 * l + i];
-    }
-    union {
-      double d;
-      uint64_t u;
-    } b = {fm};
-    const int ex = (int)((b.u >> 52) & 0x7ff) - 1022; /* frexp's exponent */
-    special[l] = !(bad == 0.0) | !(ex > -1000) | !(ex < 1000) | (fm == 0.0);
-    const int ec = special[l] ? 0 : ex;
-    sc[l] = pow2i(-ec);
-    isc[l] = pow2i(ec);
-  }
+  LANES special[l] = lane_scale(F + 9 * l, &sc[l], &isc[l]);
   for (int i = 0; i < 9; i++) LANES {
       B[i][l] = special[l] ? 0.0 : F[9 * l + i] * sc[l];
       W[i][l] = (i % 4 == 0) ? 1.0 : 0.0;
@@ -348,23 +353,7 @@ AVX2_FN static inline v4 vdot3(v4 a0, v4 a1, v4 a2, v4 b0, v4 b1, v4 b2) {
  * hold 0) and W = I. */
 AVX2_FN static inline void avx2_load(const double *restrict F, v4 B[9], v4 W[9], double isc[L], int special[L]) {
   double sc[L];
-  for (int l = 0; l < L; l++) {
-    double fm = 0.0, bad = 0.0;
-    for (int i = 0; i < 9; i++) {
-      const double a = fabs(F[9 * l + i]);
-      fm = a > fm ? a : fm;
-      bad += F[9 * l + i] - F[9 * l + i];
-    }
-    union {
-      double d;
-      uint64_t u;
-    } b = {fm};
-    const int ex = (int)((b.u >> 52) & 0x7ff) - 1022;
-    special[l] = !(bad == 0.0) | !(ex > -1000) | !(ex < 1000) | (fm == 0.0);
-    const int ec = special[l] ? 0 : ex;
-    sc[l] = pow2i(-ec);
-    isc[l] = pow2i(ec);
-  }
+  for (int l = 0; l < L; l++) special[l] = lane_scale(F + 9 * l, &sc[l], &isc[l]);
   for (int i = 0; i < 9; i++) {
     double b[L];
     for (int l = 0; l < L; l++) b[l] = special[l] ? 0.0 : F[9 * l + i] * sc[l];
