@@ -139,17 +139,22 @@ static int obj_lower_bound(const double *x, double *E, void *ctx) {
   return isfinite(s) ? 0 : 1;
 }
 
-/* E at an initial-guess candidate when it may beat best; when the cheap terms
- * alone already reach best, their sum (a lower bound of E, since the expensive
- * terms are >= 0: section 3.3's shortcut) and the expensive terms are skipped. */
-static double guess_energy(bs_integrator *I, const double *x, double best) {
+/* The terms of E at x: the cheap ones (every term but the expensive ones, i.e.
+ * self-collision) or the expensive ones, which are >= 0 (section 3.3). */
+static double terms_energy(bs_integrator *I, const double *x, int expensive) {
   double s = 0;
   for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
-  if (!isfinite(s) || s >= best) return s;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
+    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive == !expensive)
+      s += I->terms[i]->ops->value(I->terms[i], x);
   return s;
+}
+
+/* E at an initial-guess candidate whose cheap terms sum to cheap, when it may
+ * beat best; else cheap itself (a lower bound of E that already reaches best:
+ * the expensive terms, >= 0, are skipped, as in section 3.3). */
+static double guess_energy(bs_integrator *I, const double *x, double cheap, double best) {
+  if (!isfinite(cheap) || cheap >= best) return cheap;
+  return cheap + terms_energy(I, x, 1);
 }
 
 static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
@@ -316,7 +321,18 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     I->hooks.project(I->g1, I->hooks.ctx);
     I->hooks.project(I->g2, I->hooks.ctx);
   }
-  const double E1 = guess_energy(I, I->g1, INFINITY), E2 = guess_energy(I, I->g2, E1);
+  /* the candidate with the smaller cheap part first: the other's expensive
+     terms are then often skipped (and the detection left for the solve is the
+     chosen guess's) */
+  const double c1 = terms_energy(I, I->g1, 0), c2 = terms_energy(I, I->g2, 0);
+  double E1, E2;
+  if (c2 < c1) {
+    E2 = guess_energy(I, I->g2, c2, INFINITY);
+    E1 = guess_energy(I, I->g1, c1, E2);
+  } else {
+    E1 = guess_energy(I, I->g1, c1, INFINITY);
+    E2 = guess_energy(I, I->g2, c2, E1);
+  }
   int naive = 1;
   if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
     memcpy(x, I->g2, sizeof(double) * n3);
@@ -331,7 +347,8 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     memcpy(I->g1, I->x_n, sizeof(double) * n3);
     if (I->script) I->script(t + dt, I->g1, I->script_ctx);
     if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-    const double Eb = st->guess ? E2 : E1, E0 = guess_energy(I, I->g1, isfinite(Eb) ? Eb : INFINITY);
+    const double Eb = st->guess ? E2 : E1;
+    const double E0 = guess_energy(I, I->g1, terms_energy(I, I->g1, 0), isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
       memcpy(x, I->g1, sizeof(double) * n3);
       st->guess = 2;
