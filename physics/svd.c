@@ -165,22 +165,20 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
   }
 }
 
-/* ---- bs_svd3_batch: bs_svd3 on BS_SVD_LANES matrices at a time ----------
+/* ---- bs_svd3_batch: bs_svd3 on 4 matrices at a time in AVX2 registers ----
  *
- * The same arithmetic as bs_svd3, operation for operation, written lane-wise
- * so that the compiler keeps BS_SVD_LANES independent matrices in SIMD
- * registers: every "if" of bs_svd3 becomes a select, and a sweep runs while
+ * The arithmetic of bs_svd3, operation for operation, with the 4 matrices in
+ * the 4 lanes of ymm registers (intrinsics; no FMA, so every product and sum
+ * is rounded as in the scalar code and the results are bit for bit those of
+ * bs_svd3): every "if" of bs_svd3 becomes a select, and a sweep runs while
  * any lane still rotates (a lane whose sweep rotated nothing is unchanged by
- * the next one: it rotates nothing again). Results are bit for bit those of
- * bs_svd3. Lanes that bs_svd3 treats specially (non-finite, zero, or scaled
- * with |exponent| >= 1000) go through bs_svd3 itself. */
-#define L BS_SVD_LANES
-#define LANES _Pragma("omp simd") for (int l = 0; l < L; l++)
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
-#define BS_SVD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define BS_SVD_CLONES
-#endif
+ * the next one: it rotates nothing again). Lanes that bs_svd3 treats
+ * specially (non-finite, zero, or scaled with |exponent| >= 1000) go through
+ * bs_svd3 itself; so does every matrix on a CPU without AVX2, and the last
+ * n mod 4. (A portable version written for the compiler's auto-vectorizer
+ * got two lanes per register in the sweeps and none in the epilogue;
+ * interleaving two groups of four measured no gain.) */
+#define L 4
 
 static inline double pow2i(int e) { /* 2^e for -1022 <= e <= 1023 */
   union {
@@ -214,128 +212,6 @@ static inline int lane_scale(const double *F, double *sc, double *isc) {
   return special;
 }
 
-BS_SVD_CLONES
-static void svd3_lanes(const double *restrict F, double *restrict U, double *restrict sigma, double *restrict V,
-                       int *restrict special) {
-  double B[9][L], W[9][L], sc[L], isc[L];
-  LANES special[l] = lane_scale(F + 9 * l, &sc[l], &isc[l]);
-  for (int i = 0; i < 9; i++) LANES {
-      B[i][l] = special[l] ? 0.0 : F[9 * l + i] * sc[l];
-      W[i][l] = (i % 4 == 0) ? 1.0 : 0.0;
-    }
-  for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
-    int rot[L];
-    LANES rot[l] = 0;
-    for (int k = 0; k < 3; k++) {
-      const int p = pair_p[k], q = pair_q[k];
-      double *B0p = B[p], *B1p = B[3 + p], *B2p = B[6 + p], *B0q = B[q], *B1q = B[3 + q], *B2q = B[6 + q];
-      double *W0p = W[p], *W1p = W[3 + p], *W2p = W[6 + p], *W0q = W[q], *W1q = W[3 + q], *W2q = W[6 + q];
-      LANES {
-        const double a = B0p[l] * B0p[l] + B1p[l] * B1p[l] + B2p[l] * B2p[l];
-        const double b = B0q[l] * B0q[l] + B1q[l] * B1q[l] + B2q[l] * B2q[l];
-        const double g = B0p[l] * B0q[l] + B1p[l] * B1q[l] + B2p[l] * B2q[l];
-        const double dab = b - a, rr = sqrt(dab * dab + 4.0 * g * g);
-        const double D = fabs(dab) + rr;
-        const int act = !(g * g <= SVD_TOL * SVD_TOL * a * b) & (D > 0);
-        const double iq = 1.0 / sqrt(2.0 * rr * D);
-        const double c = D * iq, s = (dab >= 0 ? 2.0 * g : -2.0 * g) * iq;
-#define ROT(XP, XQ)                                                                                                    \
-  do {                                                                                                                 \
-    const double xp = XP[l], xq = XQ[l], nxp = c * xp - s * xq, nxq = s * xp + c * xq;                               \
-    XP[l] = act ? nxp : xp;                                                                                            \
-    XQ[l] = act ? nxq : xq;                                                                                            \
-  } while (0)
-        ROT(B0p, B0q);
-        ROT(W0p, W0q);
-        ROT(B1p, B1q);
-        ROT(W1p, W1q);
-        ROT(B2p, B2q);
-        ROT(W2p, W2q);
-#undef ROT
-        rot[l] |= act;
-      }
-    }
-    int any = 0;
-    LANES any |= rot[l];
-    if (!any) break;
-  }
-  LANES {
-    double b[9], v[9], n[3];
-    for (int i = 0; i < 9; i++) {
-      b[i] = B[i][l];
-      v[i] = W[i][l];
-    }
-    for (int j = 0; j < 3; j++) n[j] = b[j] * b[j] + b[3 + j] * b[3 + j] + b[6 + j] * b[6 + j];
-    /* the bubble sort of bs_svd3 as compare-exchanges: (2,1), (1,0), (2,1) */
-    static const int sj[3] = {2, 1, 2};
-    for (int e = 0; e < 3; e++) {
-      const int j = sj[e];
-      const int sw = n[j] > n[j - 1];
-      const double t = n[j], t1 = n[j - 1];
-      n[j] = sw ? t1 : t;
-      n[j - 1] = sw ? t : t1;
-      for (int r = 0; r < 3; r++) {
-        const double x0 = b[3 * r + j], x1 = b[3 * r + j - 1], y0 = v[3 * r + j], y1 = v[3 * r + j - 1];
-        b[3 * r + j] = sw ? x1 : x0;
-        b[3 * r + j - 1] = sw ? x0 : x1;
-        v[3 * r + j] = sw ? y1 : y0;
-        v[3 * r + j - 1] = sw ? y0 : y1;
-      }
-    }
-    const int refl = det3(v) < 0.0;
-    for (int r = 0; r < 3; r++) {
-      v[3 * r + 2] = refl ? -v[3 * r + 2] : v[3 * r + 2];
-      b[3 * r + 2] = refl ? -b[3 * r + 2] : b[3 * r + 2];
-    }
-    double u0[3], u1[3], w1[3], u2[3];
-    const double s0 = sqrt(n[0]);
-    for (int r = 0; r < 3; r++) u0[r] = b[3 * r] / s0;
-    const double d = u0[0] * b[1] + u0[1] * b[4] + u0[2] * b[7];
-    double nw2 = 0, mw2 = 0;
-    for (int r = 0; r < 3; r++) {
-      u1[r] = b[3 * r + 1] - d * u0[r];
-      nw2 += u1[r] * u1[r];
-    }
-    /* fallback: any unit vector orthogonal to u0 (the k of bs_svd3) */
-    const double a0 = fabs(u0[0]), a1 = fabs(u0[1]), a2 = fabs(u0[2]);
-    const int k1 = a1 < a0;
-    const double ak = k1 ? a1 : a0;
-    const int k = a2 < ak ? 2 : k1;
-    const double uk = k == 0 ? u0[0] : (k == 1 ? u0[1] : u0[2]);
-    for (int r = 0; r < 3; r++) {
-      w1[r] = (r == k ? 1.0 : 0.0) - uk * u0[r];
-      mw2 += w1[r] * w1[r];
-    }
-    const int fb = !(nw2 > 1e-300);
-    nw2 = fb ? mw2 : nw2;
-    for (int r = 0; r < 3; r++) u1[r] = fb ? w1[r] : u1[r];
-    const double inw = 1.0 / sqrt(nw2);
-    for (int r = 0; r < 3; r++) u1[r] *= inw;
-    u2[0] = u0[1] * u1[2] - u0[2] * u1[1];
-    u2[1] = u0[2] * u1[0] - u0[0] * u1[2];
-    u2[2] = u0[0] * u1[1] - u0[1] * u1[0];
-    const double s1 = sqrt(n[1]);
-    double s2 = u2[0] * b[2] + u2[1] * b[5] + u2[2] * b[8];
-    s2 = fabs(s2) > s1 ? copysign(s1, s2) : s2;
-    for (int r = 0; r < 3; r++) {
-      U[9 * l + 3 * r] = u0[r];
-      U[9 * l + 3 * r + 1] = u1[r];
-      U[9 * l + 3 * r + 2] = u2[r];
-    }
-    for (int i = 0; i < 9; i++) V[9 * l + i] = v[i];
-    sigma[3 * l] = s0 * isc[l];
-    sigma[3 * l + 1] = s1 * isc[l];
-    sigma[3 * l + 2] = s2 * isc[l];
-  }
-}
-
-/* ---- the same lanes in AVX2 registers ---------------------------------
- *
- * GCC vectorizes svd3_lanes only in part (two lanes per register in the
- * sweeps, the epilogue scalar), so on a CPU with AVX2 the four lanes run in
- * one ymm register each, written with intrinsics. Operation for operation the
- * arithmetic of bs_svd3 (no FMA: every product and sum is rounded as in the
- * scalar code), so the results stay bit for bit those of bs_svd3. */
 #if defined(__GNUC__) && defined(__x86_64__)
 #define BS_SVD_AVX2 1
 #include <immintrin.h>
@@ -474,50 +350,37 @@ AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], do
   }
 }
 
-/* G groups of 4 lanes (4 G matrices). The groups' sweeps are interleaved:
- * one rotation is a chain of dependent sqrt and divisions, so independent
- * groups fill the pipeline while one waits. */
-AVX2_FN static void svd3_avx2(int G, const double *restrict F, double *restrict U, double *restrict sigma,
+/* Four matrices: load, sweeps while any lane still rotates, finish. */
+AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, double *restrict sigma,
                               double *restrict V, int *restrict special) {
-  v4 B[2][9], W[2][9];
-  double isc[2][L];
-  for (int h = 0; h < G; h++) avx2_load(F + 9 * L * h, B[h], W[h], isc[h], special + L * h);
-  int live[2] = {1, G > 1};
-  for (int sweep = 0; sweep < SVD_MAX_SWEEPS && (live[0] | live[1]); sweep++) {
-    v4 rot[2] = {_mm256_setzero_pd(), _mm256_setzero_pd()};
-    for (int k = 0; k < 3; k++)
-      for (int h = 0; h < 2; h++)
-        if (live[h]) rot[h] = _mm256_or_pd(rot[h], avx2_rotate(B[h], W[h], pair_p[k], pair_q[k]));
-    for (int h = 0; h < 2; h++) live[h] &= _mm256_movemask_pd(rot[h]) != 0;
+  v4 B[9], W[9];
+  double isc[L];
+  avx2_load(F, B, W, isc, special);
+  for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
+    v4 rot = _mm256_setzero_pd();
+    for (int k = 0; k < 3; k++) rot = _mm256_or_pd(rot, avx2_rotate(B, W, pair_p[k], pair_q[k]));
+    if (_mm256_movemask_pd(rot) == 0) break; /* no lane rotated: every lane converged */
   }
-  for (int h = 0; h < G; h++)
-    avx2_finish(B[h], W[h], isc[h], U + 9 * L * h, sigma + 3 * L * h, V + 9 * L * h);
+  avx2_finish(B, W, isc, U, sigma, V);
 }
 #undef AVX2_FN
 #endif
 
 void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) {
-#ifdef BS_SVD_AVX2
-  const int has_avx2 = __builtin_cpu_supports("avx2");
-#endif
   int i = 0;
-  while (i + L <= n) {
-    int special[2 * L], m = L;
 #ifdef BS_SVD_AVX2
-    if (has_avx2) {
-      m = i + 2 * L <= n ? 2 * L : L;
-      svd3_avx2(m / L, F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
-    } else
+  if (__builtin_cpu_supports("avx2"))
+    for (; i + L <= n; i += L) {
+      int special[L];
+      svd3_avx2(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
+      for (int l = 0; l < L; l++)
+        if (special[l])
+          bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l),
+                  V + 9 * (size_t)(i + l));
+    }
 #endif
-      svd3_lanes(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
-    for (int l = 0; l < m; l++)
-      if (special[l])
-        bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l), V + 9 * (size_t)(i + l));
-    i += m;
-  }
   for (; i < n; i++) bs_svd3(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i);
 }
-#undef LANES
 #undef L
 
 void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {

@@ -203,21 +203,24 @@ static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *min
   }
 }
 
+/* z_i = M_i r_i for one vertex (M_i the 3x3 inverse block); returns r_i . z_i. */
+static inline double block_jacobi_row(const double *M, double r0, double r1, double r2, double *zi) {
+  const double z0 = M[0] * r0 + M[1] * r1 + M[2] * r2;
+  const double z1 = M[3] * r0 + M[4] * r1 + M[5] * r2;
+  const double z2 = M[6] * r0 + M[7] * r1 + M[8] * r2;
+  zi[0] = z0;
+  zi[1] = z1;
+  zi[2] = z2;
+  return r0 * z0 + r1 * z1 + r2 * z2;
+}
+
 /* z = M^-1 r; returns r . z. */
 static double apply_block_jacobi(int32_t n, const double *minv, const double *r, double *z) {
   double s = 0.0;
 #pragma omp parallel for schedule(static) reduction(+ : s) if (n > 4096)
   for (int32_t i = 0; i < n; ++i) {
-    const double *M = minv + 9 * (int64_t)i;
     const double *ri = r + 3 * (int64_t)i;
-    double *zi = z + 3 * (int64_t)i;
-    const double z0 = M[0] * ri[0] + M[1] * ri[1] + M[2] * ri[2];
-    const double z1 = M[3] * ri[0] + M[4] * ri[1] + M[5] * ri[2];
-    const double z2 = M[6] * ri[0] + M[7] * ri[1] + M[8] * ri[2];
-    zi[0] = z0;
-    zi[1] = z1;
-    zi[2] = z2;
-    s += ri[0] * z0 + ri[1] * z1 + ri[2] * z2;
+    s += block_jacobi_row(minv + 9 * (int64_t)i, ri[0], ri[1], ri[2], z + 3 * (int64_t)i);
   }
   return s;
 }
@@ -290,7 +293,6 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
 #pragma omp parallel for schedule(static) reduction(+ : s, rz_new) if (n > 4096)
       for (int32_t i = 0; i < n; ++i) {
         const int64_t m = 3 * (int64_t)i;
-        const double *M = minv + 9 * (int64_t)i;
         x[m] += alpha * p[m];
         x[m + 1] += alpha * p[m + 1];
         x[m + 2] += alpha * p[m + 2];
@@ -299,13 +301,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
         r[m + 1] = r1;
         r[m + 2] = r2;
         s += r0 * r0 + r1 * r1 + r2 * r2;
-        const double z0 = M[0] * r0 + M[1] * r1 + M[2] * r2;
-        const double z1 = M[3] * r0 + M[4] * r1 + M[5] * r2;
-        const double z2 = M[6] * r0 + M[7] * r1 + M[8] * r2;
-        z[m] = z0;
-        z[m + 1] = z1;
-        z[m + 2] = z2;
-        rz_new += r0 * z0 + r1 * z1 + r2 * z2;
+        rz_new += block_jacobi_row(minv + 9 * (int64_t)i, r0, r1, r2, z + m);
       }
     } else {
 #pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
