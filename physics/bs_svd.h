@@ -45,6 +45,27 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]);
  * near I); elsewhere it is bs_svd3 on each matrix. */
 void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V);
 
+/* The rotation R of the polar decomposition F = R S (S symmetric positive
+ * definite) when det F > 0: the rotation closest to F, which for det F > 0 is
+ * U V^T of bs_svd3. Returns 1 with R written, or 0 (R untouched) when F is
+ * not in the range this method is for, and the caller takes bs_svd3:
+ * non-finite, ||F||^2 outside [1e-30, 1e30], det F <= 1e-9 ||F||^3 (inverted,
+ * or flattened to below ~3e-9, or stretched beyond ~3e4 times in one
+ * direction), or no convergence in 20 steps.
+ *
+ * Method: Newton's iteration X <- (g X + X^-T / g) / 2 from X = F (Higham
+ * 1986; X^-T is cof(X) / det X), scaled by g = (||X^-1|| / ||X||)^(1/2)
+ * (Frobenius norms) until a step is below 0.1, unscaled (g = 1) after that.
+ * It stops at the first iterate with ||X_new - X|| <= 1e-8 ||R||: convergence
+ * is quadratic, so that iterate is R to rounding. Near rest this takes 2 to 4
+ * steps of one cofactor matrix and one division each, a fraction of bs_svd3. */
+int bs_polar3(const double F[9], double R[9]);
+
+/* bs_polar3 on n matrices (packed, 9 doubles each); ok[i] is its return
+ * value for matrix i. Bit for bit bs_polar3's results; on a CPU with AVX2, 4
+ * matrices at a time in the lanes of AVX2 registers. */
+void bs_polar3_batch(int n, const double *F, double *R, int *ok);
+
 /* A = Q diag(lambda) Q^T for symmetric A (only the upper triangle is read),
  * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
  * eigenvalues carry an absolute error of a few ulps of max |lambda|. */

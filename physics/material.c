@@ -207,8 +207,46 @@ static double linear_psi_P(const bs_material *m, const double F[9], double P[9])
   return m->mu * ee + 0.5 * m->lambda * tr * tr;
 }
 
+/* The corotated models need only the rotation R of F = R S: with
+ * D = F - R = U diag(s - 1) V^T (det F > 0),
+ *   sum (s_i - 1)^2 = |D|^2,   sum (s_i - 1) = tr(R^T D),   cof F = U diag(dJ/ds) V^T,
+ * so Psi and P follow from R (bs_polar3, a fraction of the SVD's cost) without
+ * cancellation near rest; J - 1 is expanded in G = F - I. Where bs_polar3
+ * declines (inverted, flat or far-out F), the SVD path below is taken. */
+static int uses_polar(const bs_material *m) {
+  return m->model == BS_MODEL_FIXED_COROTATED || m->model == BS_MODEL_COROTATED;
+}
+
+static double polar_psi_P(const bs_material *m, const double F[9], const double R[9], double *P) {
+  double D[9], dd = 0.0, rd = 0.0;
+  for (int i = 0; i < 9; i++) {
+    D[i] = F[i] - R[i];
+    dd += D[i] * D[i];
+    rd += R[i] * D[i];
+  }
+  if (m->model == BS_MODEL_COROTATED) {
+    if (P)
+      for (int i = 0; i < 9; i++) P[i] = 2.0 * m->mu * D[i] + m->lambda * rd * R[i];
+    return m->mu * dd + 0.5 * m->lambda * rd * rd;
+  }
+  const double G[9] = {F[0] - 1.0, F[1], F[2], F[3], F[4] - 1.0, F[5], F[6], F[7], F[8] - 1.0};
+  const double minors = (G[0] * G[4] - G[1] * G[3]) + (G[0] * G[8] - G[2] * G[6]) + (G[4] * G[8] - G[5] * G[7]);
+  const double detG = G[0] * (G[4] * G[8] - G[5] * G[7]) + G[1] * (G[5] * G[6] - G[3] * G[8]) +
+                      G[2] * (G[3] * G[7] - G[4] * G[6]);
+  const double Jm1 = (G[0] + G[4] + G[8]) + minors + detG;
+  if (P) {
+    const double c[9] = {F[4] * F[8] - F[5] * F[7], F[5] * F[6] - F[3] * F[8], F[3] * F[7] - F[4] * F[6],
+                         F[2] * F[7] - F[1] * F[8], F[0] * F[8] - F[2] * F[6], F[1] * F[6] - F[0] * F[7],
+                         F[1] * F[5] - F[2] * F[4], F[2] * F[3] - F[0] * F[5], F[0] * F[4] - F[1] * F[3]};
+    for (int i = 0; i < 9; i++) P[i] = 2.0 * m->mu * D[i] + m->lambda * Jm1 * c[i];
+  }
+  return m->mu * dd + 0.5 * m->lambda * Jm1 * Jm1;
+}
+
 double bs_material_psi(const bs_material *m, const double F[9]) {
   if (m->model == BS_MODEL_LINEAR) return linear_psi_P(m, F, NULL);
+  double R[9];
+  if (uses_polar(m) && bs_polar3(F, R)) return polar_psi_P(m, F, R, NULL);
   double U[9], s[3], V[9];
   bs_svd3(F, U, s, V);
   return sv_eval(m, s, 0, NULL, NULL, NULL, NULL);
@@ -228,34 +266,57 @@ static double psi_P_from_svd(const bs_material *m, const double U[9], const doub
 
 double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]) {
   if (m->model == BS_MODEL_LINEAR) return linear_psi_P(m, F, P);
+  double R[9];
+  if (uses_polar(m) && bs_polar3(F, R)) return polar_psi_P(m, F, R, P);
   double U[9], s[3], V[9];
   bs_svd3(F, U, s, V);
   return psi_P_from_svd(m, U, s, V, P);
 }
 
+/* Psi (and P when P is not NULL) of nb <= BS_MATERIAL_BATCH matrices: the
+ * corotated models by bs_polar3_batch, the matrices it declines (and every
+ * matrix of the other models) by one bs_svd3_batch on those alone. */
+static void psi_P_batch(const bs_material *m, int nb, const double *F, double *psi, double *P) {
+  enum { B = BS_MATERIAL_BATCH };
+  int ok[B], idx[B], ns = 0;
+  if (uses_polar(m)) {
+    double R[9 * B];
+    bs_polar3_batch(nb, F, R, ok);
+    for (int i = 0; i < nb; i++)
+      if (ok[i])
+        psi[i] = polar_psi_P(m, F + 9 * i, R + 9 * i, P ? P + 9 * i : NULL);
+      else
+        idx[ns++] = i;
+  } else
+    for (int i = 0; i < nb; i++) idx[ns++] = i;
+  if (ns == 0) return;
+  double Fs[9 * B], U[9 * B], s[3 * B], V[9 * B];
+  for (int k = 0; k < ns; k++) memcpy(Fs + 9 * k, F + 9 * idx[k], 9 * sizeof(double));
+  bs_svd3_batch(ns, Fs, U, s, V);
+  for (int k = 0; k < ns; k++) {
+    const int i = idx[k];
+    psi[i] = P ? psi_P_from_svd(m, U + 9 * k, s + 3 * k, V + 9 * k, P + 9 * i)
+               : sv_eval(m, s + 3 * k, 0, NULL, NULL, NULL, NULL);
+  }
+}
+
 void bs_material_psi_batch(const bs_material *m, int n, const double *F, double *psi) {
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
-    if (m->model == BS_MODEL_LINEAR) {
+    if (m->model == BS_MODEL_LINEAR)
       for (int i = 0; i < nb; i++) psi[i0 + i] = linear_psi_P(m, F + 9 * (i0 + i), NULL);
-      continue;
-    }
-    double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
-    bs_svd3_batch(nb, F + 9 * i0, U, s, V);
-    for (int i = 0; i < nb; i++) psi[i0 + i] = sv_eval(m, s + 3 * i, 0, NULL, NULL, NULL, NULL);
+    else
+      psi_P_batch(m, nb, F + 9 * i0, psi + i0, NULL);
   }
 }
 
 void bs_material_psi_P_batch(const bs_material *m, int n, const double *F, double *psi, double *P) {
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
-    if (m->model == BS_MODEL_LINEAR) {
+    if (m->model == BS_MODEL_LINEAR)
       for (int i = 0; i < nb; i++) psi[i0 + i] = linear_psi_P(m, F + 9 * (i0 + i), P + 9 * (i0 + i));
-      continue;
-    }
-    double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
-    bs_svd3_batch(nb, F + 9 * i0, U, s, V);
-    for (int i = 0; i < nb; i++) psi[i0 + i] = psi_P_from_svd(m, U + 9 * i, s + 3 * i, V + 9 * i, P + 9 * (i0 + i));
+    else
+      psi_P_batch(m, nb, F + 9 * i0, psi + i0, P + 9 * i0);
   }
 }
 

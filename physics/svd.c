@@ -7,7 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-enum { SVD_MAX_SWEEPS = 24, EIG_MAX_SWEEPS = 40 };
+enum { SVD_MAX_SWEEPS = 24, EIG_MAX_SWEEPS = 40, POLAR_MAX_ITERS = 20 };
 
 /* Off-diagonal Gram entries below this multiple of eps |b_p||b_q| count as
  * zero. A dot product of 3-vectors is only computed to ~3 eps, so a bound of
@@ -163,6 +163,69 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
     sigma[1] = ldexp(s1, ex);
     sigma[2] = ldexp(s2, ex);
   }
+}
+
+/* ---- polar rotation (bs_polar3) --------------------------------------------
+ * Each helper below has an AVX2 twin that does the same operations in the same
+ * order per lane, so that the batch is bit for bit the scalar result. */
+
+/* The iteration ends at the first iterate with |X_new - X|^2 <= POLAR_TOL2.
+ * Iterates converge to a rotation (|R|^2 = 3), so this is a relative step of
+ * 1e-8, and by the quadratic convergence X_new is exact to rounding. */
+#define POLAR_TOL2 3e-16
+/* Steps after one with |X_new - X|^2 below this are unscaled (g = 1: no
+ * sqrt, no norms), which converge as fast from there (Higham 1986). */
+#define POLAR_SCALE2 1e-2
+
+/* The range bs_polar3 takes: finite, 1e-30 <= ||F||^2 <= 1e30 and
+ * det F > 1e-9 ||F||^3. */
+static inline int polar_admissible(const double F[9]) {
+  double n2 = 0.0;
+  for (int i = 0; i < 9; i++) n2 += F[i] * F[i];
+  const double det = (F[0] * (F[4] * F[8] - F[5] * F[7]) + F[1] * (F[5] * F[6] - F[3] * F[8])) +
+                     F[2] * (F[3] * F[7] - F[4] * F[6]);
+  return n2 >= 1e-30 && n2 <= 1e30 && det > 1e-9 * (n2 * sqrt(n2));
+}
+
+/* One Newton step Xn = (g X + cof(X) / (g det X)) / 2, scaled (g as in
+ * bs_svd.h) or not (g = 1); returns |Xn - X|^2. */
+static inline double polar_step(const double X[9], double Xn[9], int scaled) {
+  const double c[9] = {X[4] * X[8] - X[5] * X[7], X[5] * X[6] - X[3] * X[8], X[3] * X[7] - X[4] * X[6],
+                       X[2] * X[7] - X[1] * X[8], X[0] * X[8] - X[2] * X[6], X[1] * X[6] - X[0] * X[7],
+                       X[1] * X[5] - X[2] * X[4], X[2] * X[3] - X[0] * X[5], X[0] * X[4] - X[1] * X[3]};
+  const double det = (X[0] * c[0] + X[1] * c[1]) + X[2] * c[2];
+  double g = 1.0;
+  if (scaled) {
+    double nx = 0.0, nc = 0.0;
+    for (int i = 0; i < 9; i++) {
+      nx += X[i] * X[i];
+      nc += c[i] * c[i];
+    }
+    g = sqrt(sqrt(nc / ((det * det) * nx)));
+  }
+  const double a = 0.5 * g, b = 0.5 / (g * det);
+  double dd = 0.0;
+  for (int i = 0; i < 9; i++) {
+    Xn[i] = a * X[i] + b * c[i];
+    const double d = Xn[i] - X[i];
+    dd += d * d;
+  }
+  return dd;
+}
+
+int bs_polar3(const double F[9], double R[9]) {
+  if (!polar_admissible(F)) return 0;
+  double X[9], Xn[9], dd = 1.0;
+  for (int i = 0; i < 9; i++) X[i] = F[i];
+  for (int it = 0; it < POLAR_MAX_ITERS; it++) {
+    dd = polar_step(X, Xn, dd > POLAR_SCALE2);
+    for (int i = 0; i < 9; i++) X[i] = Xn[i];
+    if (dd <= POLAR_TOL2) {
+      for (int i = 0; i < 9; i++) R[i] = X[i];
+      return 1;
+    }
+  }
+  return 0;
 }
 
 /* ---- bs_svd3_batch: bs_svd3 on 4 matrices at a time in AVX2 registers ----
@@ -363,6 +426,75 @@ AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, doub
   }
   avx2_finish(B, W, isc, U, sigma, V);
 }
+/* bs_polar3 on 4 matrices (see polar_admissible and polar_step, whose
+ * operations this repeats per lane): lanes outside the range start and stay
+ * at I; a lane stops at its converged iterate. */
+AVX2_FN static void polar3_avx2(const double *restrict F, double *restrict R, int *restrict ok) {
+  const v4 one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
+  v4 X[9];
+  for (int i = 0; i < 9; i++) {
+    double b[L];
+    for (int l = 0; l < L; l++) b[l] = F[9 * l + i];
+    X[i] = _mm256_loadu_pd(b);
+  }
+  v4 n2 = zero;
+  for (int i = 0; i < 9; i++) n2 = _mm256_add_pd(n2, _mm256_mul_pd(X[i], X[i]));
+  const v4 det0 = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(X[0], _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]))),
+                    _mm256_mul_pd(X[1], _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8])))),
+      _mm256_mul_pd(X[2], _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]))));
+  v4 active = _mm256_and_pd(
+      _mm256_and_pd(_mm256_cmp_pd(n2, _mm256_set1_pd(1e-30), _CMP_GE_OQ),
+                    _mm256_cmp_pd(n2, _mm256_set1_pd(1e30), _CMP_LE_OQ)),
+      _mm256_cmp_pd(det0, _mm256_mul_pd(_mm256_set1_pd(1e-9), _mm256_mul_pd(n2, _mm256_sqrt_pd(n2))), _CMP_GT_OQ));
+  for (int i = 0; i < 9; i++) X[i] = vsel(active, X[i], i % 4 == 0 ? one : zero);
+  v4 done = zero, dd = one; /* dd: each lane's last |X_new - X|^2 */
+  for (int it = 0; it < POLAR_MAX_ITERS && _mm256_movemask_pd(active); it++) {
+    v4 c[9];
+    c[0] = _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]));
+    c[1] = _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8]));
+    c[2] = _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]));
+    c[3] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[7]), _mm256_mul_pd(X[1], X[8]));
+    c[4] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[8]), _mm256_mul_pd(X[2], X[6]));
+    c[5] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[6]), _mm256_mul_pd(X[0], X[7]));
+    c[6] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[5]), _mm256_mul_pd(X[2], X[4]));
+    c[7] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[3]), _mm256_mul_pd(X[0], X[5]));
+    c[8] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[4]), _mm256_mul_pd(X[1], X[3]));
+    const v4 det = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(X[0], c[0]), _mm256_mul_pd(X[1], c[1])),
+                                 _mm256_mul_pd(X[2], c[2]));
+    v4 g = one;
+    const v4 scaled = _mm256_and_pd(active, _mm256_cmp_pd(dd, _mm256_set1_pd(POLAR_SCALE2), _CMP_GT_OQ));
+    if (_mm256_movemask_pd(scaled)) {
+      v4 nx = zero, nc = zero;
+      for (int i = 0; i < 9; i++) {
+        nx = _mm256_add_pd(nx, _mm256_mul_pd(X[i], X[i]));
+        nc = _mm256_add_pd(nc, _mm256_mul_pd(c[i], c[i]));
+      }
+      g = vsel(scaled, _mm256_sqrt_pd(_mm256_sqrt_pd(_mm256_div_pd(nc, _mm256_mul_pd(_mm256_mul_pd(det, det), nx)))),
+               one);
+    }
+    const v4 a = _mm256_mul_pd(half, g), b = _mm256_div_pd(half, _mm256_mul_pd(g, det));
+    v4 d2 = zero;
+    for (int i = 0; i < 9; i++) {
+      const v4 xn = _mm256_add_pd(_mm256_mul_pd(a, X[i]), _mm256_mul_pd(b, c[i]));
+      const v4 d = _mm256_sub_pd(xn, X[i]);
+      d2 = _mm256_add_pd(d2, _mm256_mul_pd(d, d));
+      X[i] = vsel(active, xn, X[i]);
+    }
+    dd = vsel(active, d2, dd);
+    const v4 conv = _mm256_and_pd(active, _mm256_cmp_pd(d2, _mm256_set1_pd(POLAR_TOL2), _CMP_LE_OQ));
+    done = _mm256_or_pd(done, conv);
+    active = _mm256_andnot_pd(conv, active);
+  }
+  double o[9][L];
+  for (int i = 0; i < 9; i++) _mm256_storeu_pd(o[i], X[i]);
+  const int m = _mm256_movemask_pd(done);
+  for (int l = 0; l < L; l++) {
+    ok[l] = (m >> l) & 1;
+    if (ok[l])
+      for (int i = 0; i < 9; i++) R[9 * l + i] = o[i][l];
+  }
+}
 #undef AVX2_FN
 #endif
 
@@ -380,6 +512,14 @@ void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) 
     }
 #endif
   for (; i < n; i++) bs_svd3(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i);
+}
+void bs_polar3_batch(int n, const double *F, double *R, int *ok) {
+  int i = 0;
+#ifdef BS_SVD_AVX2
+  if (__builtin_cpu_supports("avx2"))
+    for (; i + L <= n; i += L) polar3_avx2(F + 9 * (size_t)i, R + 9 * (size_t)i, ok + i);
+#endif
+  for (; i < n; i++) ok[i] = bs_polar3(F + 9 * (size_t)i, R + 9 * (size_t)i);
 }
 #undef L
 

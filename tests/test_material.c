@@ -549,3 +549,58 @@ Test(material, degenerate_finite) {
     }
   }
 }
+
+/* The corotated models take Psi and P from the polar rotation (bs_polar3)
+ * where it applies and from the SVD elsewhere: both must be the closed forms
+ * in singular values (to rounding, relative to the strain: no cancellation
+ * near rest), on both sides of the switch det F = 1e-9 ||F||^3, and the batch
+ * must be the single-matrix calls bit for bit. */
+Test(material, corotated_polar_path) {
+  for (int mi = 0; mi < 2; mi++) {
+    bs_material m = make(models[mi], 1e5, 0.3);
+    enum { N = 3000 };
+    static double Fs[9 * N], Pb[9 * N], psib[N];
+    int polar = 0;
+    for (int t = 0; t < N; t++) {
+      double Q[9], R[9], s[3], *F = Fs + 9 * t;
+      rand_rot(Q);
+      rand_rot(R);
+      const double eps = t % 3 == 2 ? 0.5 : pow(10.0, -10 * urand()); /* strain 1e-10 .. 1, or large */
+      for (int k = 0; k < 3; k++) s[k] = 1.0 + eps * (2 * urand() - 1);
+      if (t % 7 == 0) s[2] = 1e-4 * (urand() - 0.5); /* near the switch, and inverted */
+      compose(Q, s, R, F);
+      double U[9], sv[3], V[9], P[9], Pref[9], Rp[9];
+      polar += bs_polar3(F, Rp);
+      bs_svd3(F, U, sv, V);
+      /* the closed forms of material.c's sv_eval */
+      const double d[3] = {sv[0] - 1, sv[1] - 1, sv[2] - 1};
+      const double Jm1 = d[0] + d[1] + d[2] + d[0] * d[1] + d[0] * d[2] + d[1] * d[2] + d[0] * d[1] * d[2];
+      const double Sd = d[0] + d[1] + d[2], Jk[3] = {sv[1] * sv[2], sv[0] * sv[2], sv[0] * sv[1]};
+      double g[3], psi_ref = m.mu * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      psi_ref += 0.5 * m.lambda * (mi == 0 ? Jm1 * Jm1 : Sd * Sd);
+      for (int k = 0; k < 3; k++) g[k] = 2 * m.mu * d[k] + m.lambda * (mi == 0 ? Jm1 * Jk[k] : Sd);
+      for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+          Pref[3 * r + c] = U[3 * r] * g[0] * V[3 * c] + U[3 * r + 1] * g[1] * V[3 * c + 1] +
+                            U[3 * r + 2] * g[2] * V[3 * c + 2];
+      const double psi = bs_material_psi_P(&m, F, P), ps = bs_material_psi(&m, F);
+      const double e = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2]))), k = m.mu + m.lambda;
+      cr_assert(psi == ps, "%s: psi and psi_P disagree: %.17g %.17g", bs_model_name(m.model), psi, ps);
+      cr_assert(fabs(psi - psi_ref) <= 1e-13 * k * e * (1 + e * e * e * e),
+                "%s: psi %.17g, closed form %.17g at strain %g", bs_model_name(m.model), psi, psi_ref, e);
+      cr_assert(maxdiff(9, P, Pref) <= 1e-13 * k * (1 + e * e * e), "%s: P differs from U g V^T by %g at strain %g",
+                bs_model_name(m.model), maxdiff(9, P, Pref), e);
+    }
+    cr_assert(polar > N / 2 && polar < N, "%d of %d on the polar path: the sample misses a path", polar, N);
+    bs_material_psi_P_batch(&m, N, Fs, psib, Pb);
+    for (int t = 0; t < N; t++) {
+      double P[9];
+      const double psi = bs_material_psi_P(&m, Fs + 9 * t, P);
+      cr_assert(memcmp(&psi, psib + t, sizeof psi) == 0 && memcmp(P, Pb + 9 * t, sizeof P) == 0,
+                "%s: batch differs at %d", bs_model_name(m.model), t);
+    }
+    bs_material_psi_batch(&m, N, Fs, psib);
+    for (int t = 0; t < N; t++)
+      cr_assert(psib[t] == bs_material_psi(&m, Fs + 9 * t), "%s: psi batch differs at %d", bs_model_name(m.model), t);
+  }
+}

@@ -305,3 +305,130 @@ Test(svd, batch_bitwise) {
               "matrix %d (kind %d) differs from bs_svd3", m, m % 9);
   }
 }
+
+/* ---- bs_polar3 ---- */
+
+/* R is the polar rotation of F: orthogonal, det +1, R^T F symmetric positive
+ * definite (which fixes it), and U V^T of bs_svd3. */
+static void check_polar(const double F[9], double cond, const char *what) {
+  double R[9], U[9], s[3], V[9], S[9], lam[3], Q[9];
+  cr_assert(bs_polar3(F, R) == 1, "%s: bs_polar3 declined (cond %g)", what, cond);
+  cr_assert(orth_err(R) <= 1e-14, "%s: R^T R - I = %g", what, orth_err(R));
+  cr_assert(fabs(det3(R) - 1) <= 1e-14, "%s: det R = %.17g", what, det3(R));
+  const double nF = fro(F);
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double v = 0;
+      for (int k = 0; k < 3; k++) v += R[3 * k + i] * F[3 * k + j];
+      S[3 * i + j] = v;
+    }
+  for (int i = 0; i < 3; i++)
+    for (int j = i + 1; j < 3; j++)
+      cr_assert(fabs(S[3 * i + j] - S[3 * j + i]) <= 1e-14 * cond * nF, "%s: R^T F not symmetric (%g)", what,
+                fabs(S[3 * i + j] - S[3 * j + i]) / nF);
+  bs_sym3_eig(S, lam, Q);
+  cr_assert(lam[2] > 0, "%s: R^T F has eigenvalue %g", what, lam[2]);
+  bs_svd3(F, U, s, V);
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      const double uv = U[3 * i] * V[3 * j] + U[3 * i + 1] * V[3 * j + 1] + U[3 * i + 2] * V[3 * j + 2];
+      cr_assert(fabs(uv - R[3 * i + j]) <= 1e-15 * cond * 10, "%s: R differs from U V^T by %g (cond %g)", what,
+                fabs(uv - R[3 * i + j]), cond);
+    }
+}
+
+Test(svd, polar_rotation) {
+  int accepted = 0;
+  for (int t = 0; t < 20000; t++) {
+    double Q[9], P[9], sv[3], F[9];
+    rand_rot(Q);
+    rand_rot(P);
+    /* singular values log-uniform over up to 9 decades, at scales 1e-7..1e7;
+     * accepted exactly when det F > 1e-9 ||F||^3 (margins of 1% skipped) */
+    const double scale = pow(10.0, 14 * urand() - 7), spread = pow(10.0, 9 * urand());
+    for (int k = 0; k < 3; k++) sv[k] = pow(spread, urand() - 1); /* in [1/spread, 1] */
+    compose(Q, sv, P, F);
+    for (int i = 0; i < 9; i++) F[i] *= scale;
+    const double n2 = sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2], r = sv[0] * sv[1] * sv[2] / (n2 * sqrt(n2));
+    const double cond = fmax(sv[0], fmax(sv[1], sv[2])) / fmin(sv[0], fmin(sv[1], sv[2]));
+    if (r > 1.01e-9) {
+      double R[9];
+      cr_assert(bs_polar3(F, R) == 1, "declined sigma = %.17g %.17g %.17g (scale %g, det F / ||F||^3 = %g)", sv[0],
+                sv[1], sv[2], scale, r);
+      check_polar(F, cond, "random");
+      accepted++;
+    } else if (r < 0.99e-9) {
+      double R[9];
+      cr_assert(bs_polar3(F, R) == 0, "accepted det F / ||F||^3 = %g", r);
+    }
+  }
+  cr_assert(accepted > 5000 && accepted < 19500, "%d of 20000 in range: the sample misses one side", accepted);
+  for (int t = 0; t < 2000; t++) { /* near rest and near a rotation */
+    double Q[9], F[9], A[9];
+    rand_rot(Q);
+    const double eps = pow(10.0, -1 - 11 * urand()); /* 1e-12 .. 0.1 */
+    for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + eps * nrand();
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++) F[3 * i + j] = Q[3 * i] * A[j] + Q[3 * i + 1] * A[3 + j] + Q[3 * i + 2] * A[6 + j];
+    check_polar(F, 1.0 + 10 * eps, "near a rotation");
+  }
+  const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  double R[9];
+  cr_assert(bs_polar3(I, R) == 1 && memcmp(R, I, sizeof R) == 0, "the polar rotation of I is not I exactly");
+}
+
+/* Outside its range bs_polar3 returns 0 and leaves R alone. */
+Test(svd, polar_declines) {
+  double Q[9], P[9], F[9], R[9];
+  rand_rot(Q);
+  rand_rot(P);
+  const double inv[3] = {2, 1, -0.5}, flat[3] = {1, 1, 1e-9}, far[3] = {1e16, 2e16, 3e16}, tiny[3] = {1e-16, 2e-16, 1e-16};
+  const double *cases[4] = {inv, flat, far, tiny};
+  const char *names[4] = {"inverted", "nearly flat", "||F|| beyond 1e15", "||F|| below 1e-15"};
+  for (int c = 0; c < 4; c++) {
+    compose(Q, cases[c], P, F);
+    for (int i = 0; i < 9; i++) R[i] = 7.0;
+    cr_assert(bs_polar3(F, R) == 0, "%s: bs_polar3 accepted", names[c]);
+    for (int i = 0; i < 9; i++) cr_assert(R[i] == 7.0, "%s: R was written", names[c]);
+  }
+  double Z[9] = {0}, N[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, Inf[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  N[4] = NAN;
+  Inf[8] = INFINITY;
+  cr_assert(bs_polar3(Z, R) == 0, "F = 0 accepted");
+  cr_assert(bs_polar3(N, R) == 0, "F with NaN accepted");
+  cr_assert(bs_polar3(Inf, R) == 0, "F with Inf accepted");
+}
+
+/* bs_polar3_batch is bs_polar3 bit for bit, lanes of every kind mixed. */
+Test(svd, polar_batch_bitwise) {
+  enum { N = 2003 };
+  static double F[9 * N], R[9 * N];
+  static int ok[N];
+  for (int m = 0; m < N; m++) {
+    double *A = F + 9 * m, Q[9], P[9], sv[3];
+    switch (m % 6) {
+    case 0: for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + 0.01 * nrand(); break;
+    case 1: for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + 0.3 * nrand(); break; /* some inverted */
+    case 2:
+      rand_rot(Q), rand_rot(P), sv[0] = 3, sv[1] = 1, sv[2] = 1e-3, compose(Q, sv, P, A);
+      break;
+    case 3: for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) + 1e-12 * nrand(); break;
+    case 4: for (int i = 0; i < 9; i++) A[i] = (i == 4 && m % 4 == 0) ? NAN : nrand(); break;
+    default: rand_rot(A); break;
+    }
+  }
+  int accepted = 0;
+  for (int n = 0; n <= N; n = n < 9 ? n + 1 : N) {
+    for (int i = 0; i < 9 * n; i++) R[i] = -1.0;
+    bs_polar3_batch(n, F, R, ok);
+    for (int m = 0; m < n; m++) {
+      double r[9];
+      const int o = bs_polar3(F + 9 * m, r);
+      cr_assert(o == ok[m], "batch of %d: matrix %d: ok %d, bs_polar3 %d", n, m, ok[m], o);
+      if (o) cr_assert(memcmp(r, R + 9 * m, sizeof r) == 0, "batch of %d: matrix %d differs", n, m);
+      accepted += (n == N) & o;
+    }
+    if (n == N) break;
+  }
+  cr_assert(accepted > N / 2 && accepted < N, "%d of %d accepted: the mix does not exercise both paths", accepted, N);
+}
