@@ -125,14 +125,30 @@ double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]);
  * positive semidefinite cone. */
 void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]);
 
+/* dP/dF in the modal form above, for the element kernels (which never form
+ * the 9x9 matrix): the SVD F = U diag(s) V^T and the blocks, projected as
+ * bs_material_dPdF does when project_psd = 1:
+ *   dP/dF = sum_ij H_ij d_i d_j^T + sum_p (lp_p S_p S_p^T + lm_p T_p T_p^T) / 2,
+ * d_i = vec(u_i v_i^T), S_p, T_p = vec(u_i v_j^T +- u_j v_i^T) for the pairs
+ * p = (i, j) = (0, 1), (0, 2), (1, 2); u_i, v_i the columns of U and V.
+ * Not for BS_MODEL_LINEAR, whose dP/dF is the constant of bs_material_dPdF. */
+typedef struct bs_dPdF_modes {
+  double U[9], V[9]; /* rotations, row-major                  */
+  double H[9];       /* symmetric 3x3 block on the d_i          */
+  double lp[3], lm[3];
+} bs_dPdF_modes;
+void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project_psd, bs_dPdF_modes *out);
+
 /* The same on n matrices at once (F, P: 9 doubles per matrix, packed; psi: n;
- * dPdF: 81 per matrix), bit for bit the results of the single-matrix calls
- * above, with the SVDs done BS_MATERIAL_BATCH at a time by bs_svd3_batch
- * (several times faster per matrix than bs_svd3). */
+ * modes: n), bit for bit the results of the single-matrix calls above, with
+ * the SVDs done BS_MATERIAL_BATCH at a time by bs_svd3_batch (several times
+ * faster per matrix than bs_svd3); Psi and P of the corotated models come
+ * from the polar rotation (bs_polar3) where it applies. */
 #define BS_MATERIAL_BATCH 8
 void bs_material_psi_batch(const bs_material *m, int n, const double *F, double *psi);
 void bs_material_psi_P_batch(const bs_material *m, int n, const double *F, double *psi, double *P);
-void bs_material_dPdF_batch(const bs_material *m, int n, const double *F, int project_psd, double *dPdF);
+void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, int project_psd,
+                                  bs_dPdF_modes *out);
 
 #ifdef __cplusplus
 }

@@ -71,12 +71,84 @@ double bs_tet_energy_grad(const bs_material *m, const double x[12], const double
   return vol * psi;
 }
 
+/* H = vol G^T dP/dF G from the modal form of dP/dF (bs_dPdF_modes). Every
+ * mode's 3-vector at a vertex a lies in span(u_0, u_1, u_2): with
+ * x_i = v_i . w_a and y_i = v_i . w_b, block (a, b) of H is vol U N U^T, where
+ *   N_ii = H_ii x_i y_i + sum over the pairs p = {i, j}: (lp_p + lm_p)/2 x_j y_j,
+ *   N_ij = H_ij x_i y_j + (lp_p - lm_p)/2 x_j y_i   (i != j, p = {i, j}).
+ * The blocks among vertices 1..3 are formed so; those with vertex 0 are
+ * minus the sums of the others (w_0 = -(w_1 + w_2 + w_3)). Diagonal blocks
+ * are made exactly symmetric, and block (b, a) is block (a, b) transposed. */
+static void hessian_from_modes(const bs_dPdF_modes *md, const double Dm_inv[9], double vol, double H[144]) {
+  const double *U = md->U, *V = md->V, *Hs = md->H;
+  double x[4][3]; /* x[a][i] = v_i . w_a, a = 1..3 (w_a = row a-1 of Dm_inv) */
+  for (int a = 1; a < 4; a++)
+    for (int i = 0; i < 3; i++)
+      x[a][i] = V[i] * Dm_inv[3 * (a - 1)] + V[3 + i] * Dm_inv[3 * (a - 1) + 1] + V[6 + i] * Dm_inv[3 * (a - 1) + 2];
+  /* pairs (0,1), (0,2), (1,2): halves of the sums and differences, times vol */
+  double sp[3], dm[3], h[9];
+  for (int p = 0; p < 3; p++) {
+    sp[p] = 0.5 * vol * (md->lp[p] + md->lm[p]);
+    dm[p] = 0.5 * vol * (md->lp[p] - md->lm[p]);
+  }
+  for (int i = 0; i < 9; i++) h[i] = vol * Hs[i];
+  double B[4][4][9]; /* B[a][b]: block (a, b), row-major */
+  for (int a = 1; a < 4; a++)
+    for (int b = a; b < 4; b++) {
+      double xy[9];
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) xy[3 * i + j] = x[a][i] * x[b][j];
+      const double N[9] = {h[0] * xy[0] + sp[0] * xy[4] + sp[1] * xy[8],
+                           h[1] * xy[1] + dm[0] * xy[3],
+                           h[2] * xy[2] + dm[1] * xy[6],
+                           h[1] * xy[3] + dm[0] * xy[1],
+                           h[4] * xy[4] + sp[0] * xy[0] + sp[2] * xy[8],
+                           h[5] * xy[5] + dm[2] * xy[7],
+                           h[2] * xy[6] + dm[1] * xy[2],
+                           h[5] * xy[7] + dm[2] * xy[5],
+                           h[8] * xy[8] + sp[1] * xy[0] + sp[2] * xy[4]};
+      double M[9]; /* U N */
+      for (int r = 0; r < 3; r++)
+        for (int j = 0; j < 3; j++) M[3 * r + j] = U[3 * r] * N[j] + U[3 * r + 1] * N[3 + j] + U[3 * r + 2] * N[6 + j];
+      double *Bab = B[a][b];
+      for (int r = 0; r < 3; r++)
+        for (int c = (a == b ? r : 0); c < 3; c++)
+          Bab[3 * r + c] = M[3 * r] * U[3 * c] + M[3 * r + 1] * U[3 * c + 1] + M[3 * r + 2] * U[3 * c + 2];
+      if (a == b)
+        for (int r = 0; r < 3; r++)
+          for (int c = r + 1; c < 3; c++) Bab[3 * c + r] = Bab[3 * r + c];
+    }
+  for (int a = 2; a < 4; a++)
+    for (int b = 1; b < a; b++)
+      for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) B[a][b][3 * r + c] = B[b][a][3 * c + r];
+  for (int b = 1; b < 4; b++)
+    for (int k = 0; k < 9; k++) B[0][b][k] = -(B[1][b][k] + B[2][b][k] + B[3][b][k]);
+  for (int r = 0; r < 3; r++)
+    for (int c = r; c < 3; c++)
+      B[0][0][3 * r + c] = B[0][0][3 * c + r] = -(B[0][1][3 * r + c] + B[0][2][3 * r + c] + B[0][3][3 * r + c]);
+  for (int b = 1; b < 4; b++)
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++) B[b][0][3 * r + c] = B[0][b][3 * c + r];
+  for (int a = 0; a < 4; a++)
+    for (int b = 0; b < 4; b++)
+      for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) H[12 * (3 * a + r) + 3 * b + c] = B[a][b][3 * r + c];
+}
+
 void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
                     double H[144]) {
-  double F[9], K[81];
+  double F[9];
   bs_tet_F(x, Dm_inv, F);
-  bs_material_dPdF(m, F, project_psd, K);
-  hessian_from_K(K, Dm_inv, vol, H);
+  if (m->model == BS_MODEL_LINEAR) {
+    double K[81];
+    bs_material_dPdF(m, F, project_psd, K);
+    hessian_from_K(K, Dm_inv, vol, H);
+    return;
+  }
+  bs_dPdF_modes md;
+  bs_material_dPdF_modes(m, F, project_psd, &md);
+  hessian_from_modes(&md, Dm_inv, vol, H);
 }
 
 static void hessian_from_K(const double K[81], const double Dm_inv[9], double vol, double H[144]) {
@@ -126,11 +198,16 @@ void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, cons
 
 void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
                           int project_psd, double *H) {
+  if (m->model == BS_MODEL_LINEAR) {
+    for (int i = 0; i < n; i++) bs_tet_hessian(m, x + 12 * i, Dm_inv + 9 * i, vol[i], project_psd, H + 144 * i);
+    return;
+  }
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
-    double F[9 * BS_MATERIAL_BATCH], K[81 * BS_MATERIAL_BATCH];
+    double F[9 * BS_MATERIAL_BATCH];
+    bs_dPdF_modes md[BS_MATERIAL_BATCH];
     for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
-    bs_material_dPdF_batch(m, nb, F, project_psd, K);
-    for (int i = 0; i < nb; i++) hessian_from_K(K + 81 * i, Dm_inv + 9 * (i0 + i), vol[i0 + i], H + 144 * (i0 + i));
+    bs_material_dPdF_modes_batch(m, nb, F, project_psd, md);
+    for (int i = 0; i < nb; i++) hessian_from_modes(md + i, Dm_inv + 9 * (i0 + i), vol[i0 + i], H + 144 * (i0 + i));
   }
 }

@@ -381,13 +381,20 @@ static void project_blocks(double H[9], double lp[3], double lm[3]) {
   }
 }
 
-/* dP/dF of an isotropic model from the SVD of F. */
-static void dPdF_from_svd(const bs_material *m, const double U[9], const double s[3], const double V[9],
-                          int project_psd, double dPdF[81]) {
-  double g[3], H[9], lp[3], lm[3];
-  sv_eval(m, s, 2, g, H, lp, lm);
-  if (project_psd) project_blocks(H, lp, lm);
-  assemble_dPdF(U, V, H, lp, lm, dPdF);
+/* The modal form of dP/dF from the SVD of F. */
+static void modes_from_svd(const bs_material *m, const double U[9], const double s[3], const double V[9],
+                           int project_psd, bs_dPdF_modes *md) {
+  double g[3];
+  sv_eval(m, s, 2, g, md->H, md->lp, md->lm);
+  if (project_psd) project_blocks(md->H, md->lp, md->lm);
+  memcpy(md->U, U, sizeof md->U);
+  memcpy(md->V, V, sizeof md->V);
+}
+
+void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project_psd, bs_dPdF_modes *out) {
+  double U[9], s[3], V[9];
+  bs_svd3(F, U, s, V);
+  modes_from_svd(m, U, s, V, project_psd, out);
 }
 
 void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]) {
@@ -404,20 +411,17 @@ void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, 
       for (int k = 0; k < 3; k++) dPdF[9 * (4 * i) + 4 * k] += m->lambda;
     return;
   }
-  double U[9], s[3], V[9];
-  bs_svd3(F, U, s, V);
-  dPdF_from_svd(m, U, s, V, project_psd, dPdF);
+  bs_dPdF_modes md;
+  bs_material_dPdF_modes(m, F, project_psd, &md);
+  assemble_dPdF(md.U, md.V, md.H, md.lp, md.lm, dPdF);
 }
 
-void bs_material_dPdF_batch(const bs_material *m, int n, const double *F, int project_psd, double *dPdF) {
-  if (m->model == BS_MODEL_LINEAR) {
-    for (int i = 0; i < n; i++) bs_material_dPdF(m, F + 9 * i, project_psd, dPdF + 81 * i);
-    return;
-  }
+void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, int project_psd,
+                                  bs_dPdF_modes *out) {
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
     double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];
     bs_svd3_batch(nb, F + 9 * i0, U, s, V);
-    for (int i = 0; i < nb; i++) dPdF_from_svd(m, U + 9 * i, s + 3 * i, V + 9 * i, project_psd, dPdF + 81 * (i0 + i));
+    for (int i = 0; i < nb; i++) modes_from_svd(m, U + 9 * i, s + 3 * i, V + 9 * i, project_psd, out + i0 + i);
   }
 }
