@@ -131,7 +131,8 @@ void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, 
  *   dP/dF = sum_ij H_ij d_i d_j^T + sum_p (lp_p S_p S_p^T + lm_p T_p T_p^T) / 2,
  * d_i = vec(u_i v_i^T), S_p, T_p = vec(u_i v_j^T +- u_j v_i^T) for the pairs
  * p = (i, j) = (0, 1), (0, 2), (1, 2); u_i, v_i the columns of U and V.
- * Not for BS_MODEL_LINEAR, whose dP/dF is the constant of bs_material_dPdF. */
+ * BS_MODEL_LINEAR has no such form (its dP/dF is the constant of
+ * bs_material_dPdF): for it every field of out is NaN. */
 typedef struct bs_dPdF_modes {
   double U[9], V[9]; /* rotations, row-major                  */
   double H[9];       /* symmetric 3x3 block on the d_i          */

@@ -2,6 +2,9 @@
 #include "bs_element.h"
 
 #include <math.h>
+#include <string.h>
+
+#include "polar_avx2.h"
 
 void bs_tet_rest(const double X[12], double Dm_inv[9], double *volume) {
   double D[9];
@@ -171,14 +174,141 @@ static void hessian_from_K(const double K[81], const double Dm_inv[9], double vo
     }
 }
 
+/* ---- fused kernels of the corotated models (AVX2) ---------------------------
+ * Energy (and gradient) of 4 tets in the lanes of AVX2 registers: bs_tet_F,
+ * bs_polar3 (polar_avx2.h), the polar formulas of material.c's polar_psi_P and
+ * grad_from_P, each operation in the order of the scalar code and without
+ * FMA, so every lane is bs_tet_energy(_grad) bit for bit (test_element's
+ * batch_bitwise). This saves the transposes between the stages: F, R, P and
+ * the gradient never leave the registers. Lanes that bs_polar3 declines
+ * (inverted or extreme F) are returned to the caller, which takes them
+ * through bs_material_psi_P_batch like any other model. */
+#ifdef BS_POLAR_AVX2
+typedef __m256d v4;
+#define VADD _mm256_add_pd
+#define VSUB _mm256_sub_pd
+#define VMUL _mm256_mul_pd
+
+/* Returns the mask of the lanes done (e, g written); F of every lane is
+ * written to Fout (9 per tet). g == NULL: energy only. */
+BS_AVX2_FN static int corotated_x4(const bs_material *m, const double *x, const double *Dm, const double *vol,
+                                   double *e, double *g, double *Fout) {
+  v4 X[12], W[9], F[9], R[9];
+  for (int i = 0; i < 12; i++) X[i] = _mm256_set_pd(x[36 + i], x[24 + i], x[12 + i], x[i]);
+  for (int i = 0; i < 9; i++) W[i] = _mm256_set_pd(Dm[27 + i], Dm[18 + i], Dm[9 + i], Dm[i]);
+  const v4 V = _mm256_set_pd(vol[3], vol[2], vol[1], vol[0]);
+  for (int r = 0; r < 3; r++) { /* bs_tet_F */
+    const v4 d1 = VSUB(X[3 + r], X[r]), d2 = VSUB(X[6 + r], X[r]), d3 = VSUB(X[9 + r], X[r]);
+    for (int j = 0; j < 3; j++) F[3 * r + j] = VADD(VADD(VMUL(d1, W[j]), VMUL(d2, W[3 + j])), VMUL(d3, W[6 + j]));
+  }
+  for (int i = 0; i < 9; i++) R[i] = F[i];
+  const int done = _mm256_movemask_pd(bs_polar_avx2(R));
+  double o[13][4];
+  for (int i = 0; i < 9; i++) _mm256_storeu_pd(o[i], F[i]);
+  for (int l = 0; l < 4; l++)
+    for (int i = 0; i < 9; i++) Fout[9 * l + i] = o[i][l];
+  if (!done) return 0;
+  /* polar_psi_P */
+  v4 D[9], dd = _mm256_setzero_pd(), rd = _mm256_setzero_pd();
+  for (int i = 0; i < 9; i++) {
+    D[i] = VSUB(F[i], R[i]);
+    dd = VADD(dd, VMUL(D[i], D[i]));
+    rd = VADD(rd, VMUL(R[i], D[i]));
+  }
+  const v4 mu = _mm256_set1_pd(m->mu), la = _mm256_set1_pd(m->lambda), hla = _mm256_set1_pd(0.5 * m->lambda);
+  const v4 mu2 = _mm256_set1_pd(2.0 * m->mu), one = _mm256_set1_pd(1.0);
+  v4 psi, P[9], s, Q[9]; /* P = mu2 D + s Q */
+  if (m->model == BS_MODEL_COROTATED) {
+    psi = VADD(VMUL(mu, dd), VMUL(VMUL(hla, rd), rd));
+    s = VMUL(la, rd);
+    for (int i = 0; i < 9; i++) Q[i] = R[i];
+  } else {
+    v4 G[9];
+    for (int i = 0; i < 9; i++) G[i] = i % 4 == 0 ? VSUB(F[i], one) : F[i];
+    const v4 minors = VADD(VADD(VSUB(VMUL(G[0], G[4]), VMUL(G[1], G[3])), VSUB(VMUL(G[0], G[8]), VMUL(G[2], G[6]))),
+                           VSUB(VMUL(G[4], G[8]), VMUL(G[5], G[7])));
+    const v4 detG = VADD(VADD(VMUL(G[0], VSUB(VMUL(G[4], G[8]), VMUL(G[5], G[7]))),
+                              VMUL(G[1], VSUB(VMUL(G[5], G[6]), VMUL(G[3], G[8])))),
+                         VMUL(G[2], VSUB(VMUL(G[3], G[7]), VMUL(G[4], G[6]))));
+    const v4 Jm1 = VADD(VADD(VADD(VADD(G[0], G[4]), G[8]), minors), detG);
+    psi = VADD(VMUL(mu, dd), VMUL(VMUL(hla, Jm1), Jm1));
+    s = VMUL(la, Jm1);
+    Q[0] = VSUB(VMUL(F[4], F[8]), VMUL(F[5], F[7]));
+    Q[1] = VSUB(VMUL(F[5], F[6]), VMUL(F[3], F[8]));
+    Q[2] = VSUB(VMUL(F[3], F[7]), VMUL(F[4], F[6]));
+    Q[3] = VSUB(VMUL(F[2], F[7]), VMUL(F[1], F[8]));
+    Q[4] = VSUB(VMUL(F[0], F[8]), VMUL(F[2], F[6]));
+    Q[5] = VSUB(VMUL(F[1], F[6]), VMUL(F[0], F[7]));
+    Q[6] = VSUB(VMUL(F[1], F[5]), VMUL(F[2], F[4]));
+    Q[7] = VSUB(VMUL(F[2], F[3]), VMUL(F[0], F[5]));
+    Q[8] = VSUB(VMUL(F[0], F[4]), VMUL(F[1], F[3]));
+  }
+  _mm256_storeu_pd(o[12], VMUL(V, psi));
+  if (g) {
+    for (int i = 0; i < 9; i++) P[i] = VADD(VMUL(mu2, D[i]), VMUL(s, Q[i]));
+    /* grad_from_P: w_a = row a-1 of Dm_inv, w_0 = -(w_1 + w_2 + w_3) */
+    v4 w0[3];
+    for (int j = 0; j < 3; j++)
+      w0[j] = _mm256_xor_pd(VADD(VADD(W[j], W[3 + j]), W[6 + j]), _mm256_set1_pd(-0.0));
+    for (int a = 0; a < 4; a++) {
+      const v4 *w = a == 0 ? w0 : W + 3 * (a - 1);
+      for (int c = 0; c < 3; c++)
+        _mm256_storeu_pd(o[3 * a + c],
+                         VMUL(V, VADD(VADD(VMUL(P[3 * c], w[0]), VMUL(P[3 * c + 1], w[1])), VMUL(P[3 * c + 2], w[2]))));
+    }
+  }
+  for (int l = 0; l < 4; l++) {
+    if (!((done >> l) & 1)) continue;
+    e[l] = o[12][l];
+    if (g)
+      for (int i = 0; i < 12; i++) g[12 * l + i] = o[i][l];
+  }
+  return done;
+}
+#undef VADD
+#undef VSUB
+#undef VMUL
+#endif
+
+/* Energy (and gradient when g != NULL) of n <= BS_MATERIAL_BATCH tets: the
+ * corotated models 4 at a time by corotated_x4 where the CPU has AVX2, every
+ * other tet (declined lanes, the rest of the batch, other models) by
+ * bs_material_psi(_P)_batch. */
+static void energy_grad_block(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
+                              double *e, double *g) {
+  enum { B = BS_MATERIAL_BATCH };
+  double F[9 * B], Fr[9 * B], P[9 * B], psi[B];
+  int idx[B], nr = 0, i = 0;
+#ifdef BS_POLAR_AVX2
+  if ((m->model == BS_MODEL_FIXED_COROTATED || m->model == BS_MODEL_COROTATED) && __builtin_cpu_supports("avx2"))
+    for (; i + 4 <= n; i += 4) {
+      const int done = corotated_x4(m, x + 12 * i, Dm_inv + 9 * i, vol + i, e + i, g ? g + 12 * i : NULL, F + 9 * i);
+      for (int l = 0; l < 4; l++)
+        if (!((done >> l) & 1)) idx[nr++] = i + l;
+    }
+#endif
+  for (; i < n; i++) {
+    bs_tet_F(x + 12 * i, Dm_inv + 9 * i, F + 9 * i);
+    idx[nr++] = i;
+  }
+  if (nr == 0) return;
+  for (int k = 0; k < nr; k++) memcpy(Fr + 9 * k, F + 9 * idx[k], 9 * sizeof(double));
+  if (g)
+    bs_material_psi_P_batch(m, nr, Fr, psi, P);
+  else
+    bs_material_psi_batch(m, nr, Fr, psi);
+  for (int k = 0; k < nr; k++) {
+    const int t = idx[k];
+    if (g) grad_from_P(P + 9 * k, Dm_inv + 9 * t, vol[t], g + 12 * t);
+    e[t] = vol[t] * psi[k];
+  }
+}
+
 void bs_tet_energy_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
                          double *e) {
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
-    double F[9 * BS_MATERIAL_BATCH], psi[BS_MATERIAL_BATCH];
-    for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
-    bs_material_psi_batch(m, nb, F, psi);
-    for (int i = 0; i < nb; i++) e[i0 + i] = vol[i0 + i] * psi[i];
+    energy_grad_block(m, nb, x + 12 * i0, Dm_inv + 9 * i0, vol + i0, e + i0, NULL);
   }
 }
 
@@ -186,13 +316,7 @@ void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, cons
                               const double *vol, double *e, double *g) {
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
-    double F[9 * BS_MATERIAL_BATCH], P[9 * BS_MATERIAL_BATCH], psi[BS_MATERIAL_BATCH];
-    for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
-    bs_material_psi_P_batch(m, nb, F, psi, P);
-    for (int i = 0; i < nb; i++) {
-      grad_from_P(P + 9 * i, Dm_inv + 9 * (i0 + i), vol[i0 + i], g + 12 * (i0 + i));
-      e[i0 + i] = vol[i0 + i] * psi[i];
-    }
+    energy_grad_block(m, nb, x + 12 * i0, Dm_inv + 9 * i0, vol + i0, e + i0, g + 12 * i0);
   }
 }
 

@@ -392,6 +392,11 @@ static void modes_from_svd(const bs_material *m, const double U[9], const double
 }
 
 void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project_psd, bs_dPdF_modes *out) {
+  if (m->model == BS_MODEL_LINEAR) { /* no modal form: NaN, loudly */
+    double *o = (double *)out;
+    for (size_t i = 0; i < sizeof *out / sizeof(double); i++) o[i] = NAN;
+    return;
+  }
   double U[9], s[3], V[9];
   bs_svd3(F, U, s, V);
   modes_from_svd(m, U, s, V, project_psd, out);
@@ -418,6 +423,10 @@ void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, 
 
 void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, int project_psd,
                                   bs_dPdF_modes *out) {
+  if (m->model == BS_MODEL_LINEAR) {
+    for (int i = 0; i < n; i++) bs_material_dPdF_modes(m, F + 9 * i, project_psd, out + i);
+    return;
+  }
   for (int i0 = 0; i0 < n; i0 += BS_MATERIAL_BATCH) {
     const int nb = n - i0 < BS_MATERIAL_BATCH ? n - i0 : BS_MATERIAL_BATCH;
     double U[9 * BS_MATERIAL_BATCH], s[3 * BS_MATERIAL_BATCH], V[9 * BS_MATERIAL_BATCH];

@@ -1,13 +1,14 @@
 /* svd.c — signed 3x3 SVD (one-sided Jacobi) and symmetric 3x3 eigen-
  * decomposition (two-sided Jacobi). See bs_svd.h for the contracts. */
 #include "bs_svd.h"
+#include "polar_avx2.h"
 
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
-enum { SVD_MAX_SWEEPS = 24, EIG_MAX_SWEEPS = 40, POLAR_MAX_ITERS = 20 };
+enum { SVD_MAX_SWEEPS = 24, EIG_MAX_SWEEPS = 40 };
 
 /* Off-diagonal Gram entries below this multiple of eps |b_p||b_q| count as
  * zero. A dot product of 3-vectors is only computed to ~3 eps, so a bound of
@@ -169,14 +170,6 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
  * Each helper below has an AVX2 twin that does the same operations in the same
  * order per lane, so that the batch is bit for bit the scalar result. */
 
-/* The iteration ends at the first iterate with |X_new - X|^2 <= POLAR_TOL2.
- * Iterates converge to a rotation (|R|^2 = 3), so this is a relative step of
- * 1e-8, and by the quadratic convergence X_new is exact to rounding. */
-#define POLAR_TOL2 3e-16
-/* Steps after one with |X_new - X|^2 below this are unscaled (g = 1: no
- * sqrt, no norms), which converge as fast from there (Higham 1986). */
-#define POLAR_SCALE2 1e-2
-
 /* The range bs_polar3 takes: finite, 1e-30 <= ||F||^2 <= 1e30 and
  * det F > 1e-9 ||F||^3. */
 static inline int polar_admissible(const double F[9]) {
@@ -275,14 +268,12 @@ static inline int lane_scale(const double *F, double *sc, double *isc) {
   return special;
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
+#ifdef BS_POLAR_AVX2
 #define BS_SVD_AVX2 1
-#include <immintrin.h>
-
-#define AVX2_FN __attribute__((target("avx2")))
+#define AVX2_FN BS_AVX2_FN
 typedef __m256d v4;
 
-AVX2_FN static inline v4 vsel(v4 m, v4 a, v4 b) { return _mm256_blendv_pd(b, a, m); } /* m ? a : b */
+AVX2_FN static inline v4 vsel(v4 m, v4 a, v4 b) { return bs_avx2_sel(m, a, b); } /* m ? a : b */
 AVX2_FN static inline v4 vabs(v4 a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
 AVX2_FN static inline v4 vdot3(v4 a0, v4 a1, v4 a2, v4 b0, v4 b1, v4 b2) {
   return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a0, b0), _mm256_mul_pd(a1, b1)), _mm256_mul_pd(a2, b2));
@@ -426,69 +417,13 @@ AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, doub
   }
   avx2_finish(B, W, isc, U, sigma, V);
 }
-/* bs_polar3 on 4 matrices (see polar_admissible and polar_step, whose
- * operations this repeats per lane): lanes outside the range start and stay
- * at I; a lane stops at its converged iterate. */
+/* bs_polar3 on 4 matrices (bs_polar_avx2). */
 AVX2_FN static void polar3_avx2(const double *restrict F, double *restrict R, int *restrict ok) {
-  const v4 one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
   v4 X[9];
-  for (int i = 0; i < 9; i++) {
-    double b[L];
-    for (int l = 0; l < L; l++) b[l] = F[9 * l + i];
-    X[i] = _mm256_loadu_pd(b);
-  }
-  v4 n2 = zero;
-  for (int i = 0; i < 9; i++) n2 = _mm256_add_pd(n2, _mm256_mul_pd(X[i], X[i]));
-  const v4 det0 = _mm256_add_pd(
-      _mm256_add_pd(_mm256_mul_pd(X[0], _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]))),
-                    _mm256_mul_pd(X[1], _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8])))),
-      _mm256_mul_pd(X[2], _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]))));
-  v4 active = _mm256_and_pd(
-      _mm256_and_pd(_mm256_cmp_pd(n2, _mm256_set1_pd(1e-30), _CMP_GE_OQ),
-                    _mm256_cmp_pd(n2, _mm256_set1_pd(1e30), _CMP_LE_OQ)),
-      _mm256_cmp_pd(det0, _mm256_mul_pd(_mm256_set1_pd(1e-9), _mm256_mul_pd(n2, _mm256_sqrt_pd(n2))), _CMP_GT_OQ));
-  for (int i = 0; i < 9; i++) X[i] = vsel(active, X[i], i % 4 == 0 ? one : zero);
-  v4 done = zero, dd = one; /* dd: each lane's last |X_new - X|^2 */
-  for (int it = 0; it < POLAR_MAX_ITERS && _mm256_movemask_pd(active); it++) {
-    v4 c[9];
-    c[0] = _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]));
-    c[1] = _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8]));
-    c[2] = _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]));
-    c[3] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[7]), _mm256_mul_pd(X[1], X[8]));
-    c[4] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[8]), _mm256_mul_pd(X[2], X[6]));
-    c[5] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[6]), _mm256_mul_pd(X[0], X[7]));
-    c[6] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[5]), _mm256_mul_pd(X[2], X[4]));
-    c[7] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[3]), _mm256_mul_pd(X[0], X[5]));
-    c[8] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[4]), _mm256_mul_pd(X[1], X[3]));
-    const v4 det = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(X[0], c[0]), _mm256_mul_pd(X[1], c[1])),
-                                 _mm256_mul_pd(X[2], c[2]));
-    v4 g = one;
-    const v4 scaled = _mm256_and_pd(active, _mm256_cmp_pd(dd, _mm256_set1_pd(POLAR_SCALE2), _CMP_GT_OQ));
-    if (_mm256_movemask_pd(scaled)) {
-      v4 nx = zero, nc = zero;
-      for (int i = 0; i < 9; i++) {
-        nx = _mm256_add_pd(nx, _mm256_mul_pd(X[i], X[i]));
-        nc = _mm256_add_pd(nc, _mm256_mul_pd(c[i], c[i]));
-      }
-      g = vsel(scaled, _mm256_sqrt_pd(_mm256_sqrt_pd(_mm256_div_pd(nc, _mm256_mul_pd(_mm256_mul_pd(det, det), nx)))),
-               one);
-    }
-    const v4 a = _mm256_mul_pd(half, g), b = _mm256_div_pd(half, _mm256_mul_pd(g, det));
-    v4 d2 = zero;
-    for (int i = 0; i < 9; i++) {
-      const v4 xn = _mm256_add_pd(_mm256_mul_pd(a, X[i]), _mm256_mul_pd(b, c[i]));
-      const v4 d = _mm256_sub_pd(xn, X[i]);
-      d2 = _mm256_add_pd(d2, _mm256_mul_pd(d, d));
-      X[i] = vsel(active, xn, X[i]);
-    }
-    dd = vsel(active, d2, dd);
-    const v4 conv = _mm256_and_pd(active, _mm256_cmp_pd(d2, _mm256_set1_pd(POLAR_TOL2), _CMP_LE_OQ));
-    done = _mm256_or_pd(done, conv);
-    active = _mm256_andnot_pd(conv, active);
-  }
+  for (int i = 0; i < 9; i++) X[i] = _mm256_set_pd(F[27 + i], F[18 + i], F[9 + i], F[i]);
+  const int m = _mm256_movemask_pd(bs_polar_avx2(X));
   double o[9][L];
   for (int i = 0; i < 9; i++) _mm256_storeu_pd(o[i], X[i]);
-  const int m = _mm256_movemask_pd(done);
   for (int l = 0; l < L; l++) {
     ok[l] = (m >> l) & 1;
     if (ok[l])

@@ -132,8 +132,9 @@
 extern "C" {
 #endif
 
-/* One accepted iteration of bs_minimize, handed to bs_objective.trace. The
- * pointers are valid during the callback only. */
+/* One accepted iteration of bs_minimize (or a full step of bs_newton: alpha
+ * 1, no line search, so phi, dphi0 and dphi are NaN), handed to
+ * bs_objective.trace. The pointers are valid during the callback only. */
 typedef struct bs_min_iter {
   int iteration;         /* 0-based index of the iteration that produced this step    */
   int direction;         /* 0 Newton dx, 1 -dx (fallback), 2 -grad E (fallback)      */
@@ -185,7 +186,8 @@ typedef struct bs_objective {
      extras are ignored): symmetric positive definite on the free dofs. Called only when
      a setup is due (see "AMG reuse"). Nonzero: not evaluable (BS_MIN_NONFINITE). */
   int (*precond_matrix)(const double *x, bs_bsr *P, void *ctx);
-  /* Optional (NULL), added: called after every accepted step of bs_minimize. */
+  /* Optional (NULL), added: called after every accepted step of bs_minimize
+     and every step of bs_newton. */
   void (*trace)(const bs_min_iter *it, void *ctx);
   void *ctx;
 } bs_objective;

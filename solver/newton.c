@@ -104,6 +104,21 @@ int bs_newton(bs_minimizer *m, const bs_objective *obj, int k_steps, double *x, 
                      (long long)(bad / 3), (int)(bad % 3), gnorm);
       break;
     }
+    if (obj->trace) { /* the full step: no line search, E(y) not evaluated */
+      bs_min_iter rec;
+      memset(&rec, 0, sizeof rec);
+      rec.iteration = it;
+      rec.lin_iterations = ls.iterations;
+      rec.grad_norm = gnorm;
+      rec.lin_rel_tol = o->newton_rel_tol;
+      rec.alpha = 1.0;
+      rec.phi0 = E;
+      rec.phi = rec.dphi0 = rec.dphi = NAN;
+      rec.x = x;
+      rec.d = m->d;
+      rec.y = m->y;
+      obj->trace(&rec, obj->ctx);
+    }
     memcpy(x, m->y, sizeof(double) * (size_t)N);
     st->iterations++;
     st->alpha_last = st->alpha_min = st->alpha_max = 1.0;
