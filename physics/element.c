@@ -233,15 +233,7 @@ BS_AVX2_FN static int corotated_x4(const bs_material *m, const double *x, const 
     const v4 Jm1 = VADD(VADD(VADD(VADD(G[0], G[4]), G[8]), minors), detG);
     psi = VADD(VMUL(mu, dd), VMUL(VMUL(hla, Jm1), Jm1));
     s = VMUL(la, Jm1);
-    Q[0] = VSUB(VMUL(F[4], F[8]), VMUL(F[5], F[7]));
-    Q[1] = VSUB(VMUL(F[5], F[6]), VMUL(F[3], F[8]));
-    Q[2] = VSUB(VMUL(F[3], F[7]), VMUL(F[4], F[6]));
-    Q[3] = VSUB(VMUL(F[2], F[7]), VMUL(F[1], F[8]));
-    Q[4] = VSUB(VMUL(F[0], F[8]), VMUL(F[2], F[6]));
-    Q[5] = VSUB(VMUL(F[1], F[6]), VMUL(F[0], F[7]));
-    Q[6] = VSUB(VMUL(F[1], F[5]), VMUL(F[2], F[4]));
-    Q[7] = VSUB(VMUL(F[2], F[3]), VMUL(F[0], F[5]));
-    Q[8] = VSUB(VMUL(F[0], F[4]), VMUL(F[1], F[3]));
+    bs_avx2_cof(F, Q);
   }
   _mm256_storeu_pd(o[12], VMUL(V, psi));
   if (g) {

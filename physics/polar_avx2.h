@@ -23,6 +23,19 @@ enum { POLAR_MAX_ITERS = 20 };
 
 BS_AVX2_FN static inline __m256d bs_avx2_sel(__m256d m, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, m); }
 
+/* c = cof(X) (X^-T det X), in bs_polar3's order. */
+BS_AVX2_FN static inline void bs_avx2_cof(const __m256d X[9], __m256d c[9]) {
+  c[0] = _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]));
+  c[1] = _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8]));
+  c[2] = _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]));
+  c[3] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[7]), _mm256_mul_pd(X[1], X[8]));
+  c[4] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[8]), _mm256_mul_pd(X[2], X[6]));
+  c[5] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[6]), _mm256_mul_pd(X[0], X[7]));
+  c[6] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[5]), _mm256_mul_pd(X[2], X[4]));
+  c[7] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[3]), _mm256_mul_pd(X[0], X[5]));
+  c[8] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[4]), _mm256_mul_pd(X[1], X[3]));
+}
+
 /* X: 4 matrices F in lanes (X[i] holds entry i). Lanes in bs_polar3's range
  * end holding R, the others I; returns the mask of the lanes that converged
  * (bs_polar3 returned 1). Call only where the CPU has AVX2. */
@@ -43,15 +56,7 @@ BS_AVX2_FN static inline __m256d bs_polar_avx2(__m256d X[9]) {
   v4 done = zero, dd = one; /* dd: each lane's last |X_new - X|^2 */
   for (int it = 0; it < POLAR_MAX_ITERS && _mm256_movemask_pd(active); it++) {
     v4 c[9];
-    c[0] = _mm256_sub_pd(_mm256_mul_pd(X[4], X[8]), _mm256_mul_pd(X[5], X[7]));
-    c[1] = _mm256_sub_pd(_mm256_mul_pd(X[5], X[6]), _mm256_mul_pd(X[3], X[8]));
-    c[2] = _mm256_sub_pd(_mm256_mul_pd(X[3], X[7]), _mm256_mul_pd(X[4], X[6]));
-    c[3] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[7]), _mm256_mul_pd(X[1], X[8]));
-    c[4] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[8]), _mm256_mul_pd(X[2], X[6]));
-    c[5] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[6]), _mm256_mul_pd(X[0], X[7]));
-    c[6] = _mm256_sub_pd(_mm256_mul_pd(X[1], X[5]), _mm256_mul_pd(X[2], X[4]));
-    c[7] = _mm256_sub_pd(_mm256_mul_pd(X[2], X[3]), _mm256_mul_pd(X[0], X[5]));
-    c[8] = _mm256_sub_pd(_mm256_mul_pd(X[0], X[4]), _mm256_mul_pd(X[1], X[3]));
+    bs_avx2_cof(X, c);
     const v4 det = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(X[0], c[0]), _mm256_mul_pd(X[1], c[1])),
                                  _mm256_mul_pd(X[2], c[2]));
     v4 g = one;
