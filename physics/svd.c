@@ -417,6 +417,7 @@ AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, doub
   }
   avx2_finish(B, W, isc, U, sigma, V);
 }
+
 /* bs_polar3 on 4 matrices (bs_polar_avx2). */
 AVX2_FN static void polar3_avx2(const double *restrict F, double *restrict R, int *restrict ok) {
   v4 X[9];
@@ -448,6 +449,7 @@ void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) 
 #endif
   for (; i < n; i++) bs_svd3(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i);
 }
+
 void bs_polar3_batch(int n, const double *F, double *R, int *ok) {
   int i = 0;
 #ifdef BS_SVD_AVX2
