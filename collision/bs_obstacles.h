@@ -17,8 +17,7 @@
  *        onto the edge, where it stays stuck and the line search fails (the
  *        paper-scale figure 13 failed 6 of its first 9 steps that way, a
  *        constraint box striker 6 of 30). Scripted vertices (mask 0) are
- *        never moved. Each call also records which pairs it projected and
- *        which active pairs it released.
+ *        never moved. Each call also records which pairs it projected.
  *      - register_active(x, g'): at a feasible x, with g' = grad E'(x), the
  *        pair (b, p) is active when it touches, |phi_b(x_p)| <= tol_b, and
  *        g'_p . grad phi_b(x_p) >= 0; every other pair is inactive.
@@ -29,12 +28,13 @@
  *        phi(P(x)) and far below any physical gap. It also forgets the pairs
  *        recorded by the last projection.
  *      - project_gradient(x, g): g <- J_P(x)^T g, with J_P = J_B ... J_1 and
- *        J_b = I - n n^T (n = grad phi_b(x_p)) for the pairs that are active
- *        and not released, or were projected by the last call of project (applied from B down
+ *        J_b = I - n n^T (n = grad phi_b(x_p)) for the pairs that were
+ *        projected by the last call of project (a released pair was not), or,
+ *        right after register_active, the active pairs (applied from B down
  *        to 1, the transpose of the composition). At a registered iterate only
  *        the active pairs count (register_active has just forgotten the
  *        projected ones); at a line-search point y = P(x + a d) the pairs the
- *        projection moved count too, so that the slope grad E(y).d of the
+ *        projection moved count (the active ones among them), so that the slope grad E(y).d of the
  *        curved search path sees the constraint (the curvature term phi Hess
  *        phi of J_P at the unprojected point is dropped there).
  *      - project_hessian(x, g', H): the Hessian of E = E' o P at a feasible x.

@@ -15,9 +15,9 @@ typedef struct obstacle {
   double size;        /* largest shape parameter (for the touching tolerance) */
   bs_term *term;      /* penalty mode                                        */
   uint8_t *active;    /* constraint mode: n_vertices labels                  */
-  uint8_t *projected; /* constraint mode: pairs moved by the last project    */
-  uint8_t *released;  /* constraint mode: active pairs the last project left  */
-                      /* free (moved off an edge or corner, see RELEASE_COS)  */
+  uint8_t *projected; /* constraint mode: the pairs J_P uses: those moved by  */
+                      /* the last project, or the active ones after           */
+                      /* register_active (released pairs are neither)         */
   float *nreg;        /* constraint mode: 3 per vertex, the normal of an      */
                       /* active pair at its registration                      */
 } obstacle;
@@ -92,7 +92,6 @@ void bs_obstacles_destroy(bs_obstacles **po) {
     bs_levelset_destroy(&o->obs[i].ls);
     free(o->obs[i].active);
     free(o->obs[i].projected);
-    free(o->obs[i].released);
     free(o->obs[i].nreg);
   }
   free(o->obs);
@@ -193,17 +192,15 @@ int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, dou
   } else if (mode == BS_COLLIDE_CONSTRAINT) {
     ob.active = calloc(nv ? nv : 1, 1);
     ob.projected = calloc(nv ? nv : 1, 1);
-    ob.released = calloc(nv ? nv : 1, 1);
     ob.nreg = malloc(sizeof(float) * 3 * (nv ? nv : 1));
     if (!o->J) {
       o->J = malloc(sizeof(double) * 9 * (nv ? nv : 1));
       o->C = malloc(sizeof(double) * 9 * (nv ? nv : 1));
       o->vact = calloc(nv ? nv : 1, 1);
     }
-    if (!ob.active || !ob.projected || !ob.released || !ob.nreg || !o->J || !o->C || !o->vact) {
+    if (!ob.active || !ob.projected || !ob.nreg || !o->J || !o->C || !o->vact) {
       free(ob.active);
       free(ob.projected);
-      free(ob.released);
       free(ob.nreg);
       rc = bs_error_set(err, BS_ENOMEM, "obstacle %d (%s): out of memory (%zu vertices)", idx, kind, nv);
       goto fail;
@@ -243,7 +240,6 @@ static void clear_labels(bs_obstacles *o) {
     if (o->obs[b].mode == BS_COLLIDE_CONSTRAINT) {
       memset(o->obs[b].active, 0, (size_t)o->nv);
       memset(o->obs[b].projected, 0, (size_t)o->nv);
-      memset(o->obs[b].released, 0, (size_t)o->nv);
     }
   o->n_active = 0;
 }
@@ -274,15 +270,13 @@ void bs_obstacles_project(double *x, void *ctx) {
 #pragma omp parallel for schedule(static) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
       ob->projected[p] = 0;
-      ob->released[p] = 0;
       if (!o->mask[p]) continue;
       double *xp = x + 3 * (size_t)p, g[3];
       double phi = bs_levelset_eval_frame(ob->ls, &f, xp, g, NULL);
       int proj = phi < 0;
       if (!proj && ob->active[p]) {
         const float *nr = ob->nreg + 3 * (size_t)p;
-        proj = g[0] * nr[0] + g[1] * nr[1] + g[2] * nr[2] >= RELEASE_COS;
-        ob->released[p] = (uint8_t)!proj;
+        proj = g[0] * nr[0] + g[1] * nr[1] + g[2] * nr[2] >= RELEASE_COS; /* else released */
       }
       if (proj) {
         for (int k = 0; k < 3; k++) xp[k] -= phi * g[k];
@@ -307,13 +301,12 @@ void bs_obstacles_register_active(const double *x, const double *g, void *ctx) {
 #pragma omp parallel for schedule(static) reduction(+ : count) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
       ob->projected[p] = 0;
-      ob->released[p] = 0;
       ob->active[p] = 0;
       if (!o->mask[p]) continue;
       double n[3];
       double phi = bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
       if (fabs(phi) <= tol && dot3(g + 3 * (size_t)p, n) >= 0) {
-        ob->active[p] = 1;
+        ob->active[p] = ob->projected[p] = 1;
         for (int k = 0; k < 3; k++) ob->nreg[3 * (size_t)p + k] = (float)n[k];
         count++;
       }
@@ -334,7 +327,7 @@ void bs_obstacles_project_gradient(const double *x, double *g, void *ctx) {
     bs_levelset_frame_at(ob->ls, t, &f);
 #pragma omp parallel for schedule(static) if (nv > 4096)
     for (int32_t p = 0; p < nv; p++) {
-      if (!o->mask[p] || !((ob->active[p] && !ob->released[p]) || ob->projected[p])) continue;
+      if (!o->mask[p] || !ob->projected[p]) continue;
       double n[3], *gp = g + 3 * (size_t)p;
       bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
       double s = dot3(gp, n);
