@@ -3,8 +3,18 @@
  *
  * Detection at a configuration x (every evaluation of the term):
  *  - a surface vertex p (a vertex of a boundary triangle) collides when it
- *    lies in a closed tet that does not have p as a vertex (exact test,
- *    bs_shim_point_in_tet >= 0). Tets are found through a bounding-volume
+ *    lies in a closed tet none of whose vertices is p or an edge neighbour
+ *    of p (exact test, bs_shim_point_in_tet >= 0). The paper (5.3) excludes
+ *    only the tets that have p as a vertex; with that rule E jumps when one
+ *    of p's own tets inverts with p passing through its opposite face: p is
+ *    then in the next tet, about one edge length from every admissible
+ *    triangle, and Phi steps from 0 to ~k h^3. Line searches stall on such a
+ *    jump (paper 3.3); a penalty striker crushing a soft box did exactly
+ *    that (data/scenes/paper/fig14_box_stack.json, frame 9 on 15^3-cell
+ *    boxes). Excluding the neighbours' tets too moves that jump two layers
+ *    of tets deep, where a vertex gets only through a tangle of its own
+ *    body. Contact between parts of a body closer than that (in the mesh)
+ *    is left to the elastic energy. Tets are found through a bounding-volume
  *    hierarchy over tet boxes: its topology is built at creation and rebuilt
  *    at each begin_step (at xⁿ), its boxes are refit at every evaluation;
  *  - the primitive of a colliding p is the feature (triangle interior, edge
@@ -34,8 +44,8 @@
  * the surface it is closest to), because the primitive is the exact closest
  * admissible one (a minimum of continuous distances). It can jump when a
  * vertex enters a tet at a positive distance from the admissible surface
- * (e.g. a tet of its own body through an inversion, or a thin part); this is
- * inherent to the paper's point-in-tet detection. The term is "expensive"
+ * (a tet of its own body two layers deep, through a tangle, or a thin part);
+ * this is inherent to the paper's point-in-tet detection. The term is "expensive"
  * (section 3.3): the line search may skip it when the other terms already
  * exceed E(x_i).
  *

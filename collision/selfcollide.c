@@ -521,8 +521,29 @@ static int surely_outside(const double *p, const double *a, const double *b, con
   return 0;
 }
 
-/* The first tet (in traversal order) not incident to vertex pv whose closed
- * set contains x_pv; -1 if none; -2 on a shim error. */
+/* Whether v is in row r of the pattern P (columns sorted). */
+static int in_row(const bs_bsr *P, int32_t r, int32_t v) {
+  int32_t lo = P->row_ptr[r], hi = P->row_ptr[r + 1] - 1;
+  while (lo <= hi) {
+    int32_t mid = lo + (hi - lo) / 2;
+    if (P->col[mid] == v) return 1;
+    if (P->col[mid] < v) lo = mid + 1;
+    else hi = mid - 1;
+  }
+  return 0;
+}
+
+/* Whether tet tv is in the excluded neighbourhood of vertex pv: one of its
+ * vertices is pv or an edge neighbour of pv (the fem's pattern row of pv,
+ * which holds pv and every vertex sharing a tet with it). See the header. */
+static int near_vertex(const self_data *d, int32_t pv, const int32_t *tv) {
+  const bs_bsr *P = d->fem->pattern;
+  return in_row(P, pv, tv[0]) || in_row(P, pv, tv[1]) || in_row(P, pv, tv[2]) || in_row(P, pv, tv[3]);
+}
+
+/* The first tet (in traversal order) outside the neighbourhood of vertex pv
+ * (near_vertex) whose closed set contains x_pv; -1 if none; -2 on a shim
+ * error. */
 static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
   const double *p = x + 3 * (size_t)pv;
   const int32_t *tets = d->mesh->tets;
@@ -542,7 +563,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
       int32_t t = d->order[j];
       const int32_t *tv = tets + 4 * t;
-      if (tv[0] == pv || tv[1] == pv || tv[2] == pv || tv[3] == pv) continue;
+      if (near_vertex(d, pv, tv)) continue;
       if (surely_outside(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                          x + 3 * (size_t)tv[3]))
         continue;

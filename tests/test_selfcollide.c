@@ -270,28 +270,34 @@ Test(self_detect, pushed_vertex_is_found) {
   world_destroy(&w);
 }
 
-/* An A vertex pushed deep into A (through an inversion of its own body) is
- * flagged too (paper: any tet that does not contain the vertex), but never
- * against the tets it is a vertex of. A surface vertex of A moved within its
- * own incident tets' region stays unflagged. */
-Test(self_detect, own_tets_excluded) {
+/* A surface vertex of A pushed into A through its own tets (inverting them)
+ * is not flagged while it stays within the tets of its edge neighbours: with
+ * the paper's rule (every tet that does not have the vertex) it would be, at
+ * a depth of about one edge from every admissible triangle, a jump of E that
+ * stalls line searches. Pushed past two layers of tets (through a tangle of
+ * its own body) it is flagged. */
+Test(self_detect, own_neighbourhood_excluded) {
   world w;
   world_create(&w, 1e6);
   bs_error err;
-  /* A's vertex (1, 1/3, 1/3) moved slightly inwards: it stays inside its own
-   * incident tets only */
+  /* A's vertex (1, 1/3, 1/3) (cells of 1/3) moved inwards, off the mesh lines */
   int32_t q = -1;
   for (int32_t v = 0; v < w.nA; v++) {
     const double *X = w.mesh->x + 3 * v;
     if (fabs(X[0] - 1) < 1e-12 && fabs(X[1] - 1.0 / 3) < 1e-12 && fabs(X[2] - 1.0 / 3) < 1e-12) q = v;
   }
   cr_assert(q >= 0);
-  w.x[3 * q] -= 0.01;
+  w.x[3 * q + 1] += 0.011;
+  w.x[3 * q + 2] += 0.023;
   int32_t count = -1;
-  cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
-  cr_expect_eq(count, 0, "a vertex inside its own tets was flagged");
-  /* pushed past a whole layer of tets (through its own body): flagged */
-  w.x[3 * q] = 1 - 0.5;
+  for (int i = 0; i <= 100; i++) {
+    w.x[3 * q] = 1 - 0.6 * i / 100.0; /* down to x = 0.4: inside the second layer */
+    cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
+    cr_expect_eq(count, 0, "a vertex inside its neighbours' tets (x = %g) was flagged", w.x[3 * q]);
+    cr_expect_eq(w.self->ops->value(w.self, w.x), 0.0);
+  }
+  /* pushed past two layers of tets (through its own body): flagged */
+  w.x[3 * q] = 0.2;
   cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
   cr_expect_eq(count, 1, "a vertex pushed through its own body: %d flagged", count);
   world_destroy(&w);
