@@ -349,7 +349,7 @@ int bs_cmd_run(int argc, char **argv) {
         bs_sim_penetration(s, &pen, &depth);
         printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d", f, sc->frames, it, cg, gmax, inv);
         if (s->obstacles) printf("  inside obstacles %d (depth %.2e m)", pen, depth);
-        printf("  %.3f s%s\n", secs, fails ? "  FAILED STEPS" : "");
+        printf("  peak %.0f MiB  %.3f s%s\n", bs_peak_rss() / 1048576.0, secs, fails ? "  FAILED STEPS" : "");
         fflush(stdout);
       }
       if (dir && sc->vtu_every > 0 && f % sc->vtu_every == 0 && write_frame(s, dir, f, names, times, &n_out, &err)) {
