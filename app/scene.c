@@ -436,6 +436,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
 
   /* solver */
   bs_integrator_opts_default(&s->solver);
+  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
@@ -469,7 +470,15 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       return st;
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
     if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
-    if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
+    const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
+    if (cJSON_IsString(sg)) {
+      if (strcmp(sg->valuestring, "auto") != 0)
+        return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got \"%s\"", sg->valuestring);
+      s->solver.min.sigma_auto = 1;
+    } else if (sg) {
+      if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
+      s->solver.min.sigma_auto = 0;
+    }
     if (!(s->solver.min.sigma > 0)) return fail(c, "solver.cg_sigma", "must be > 0, got %g", s->solver.min.sigma);
     if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
         (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||

@@ -10,7 +10,8 @@
  * Units: x has whatever unit the objective gives it (metres in bigstep); E and
  * its derivatives are in the objective's units (J, N, N/m). opts.tol is on the
  * masked 2-norm of grad E (N); opts.clamp is on the 2-norm of the step (units
- * of x); opts.sigma has units of grad E^-1/2 (the paper's sigma, usually 1).
+ * of x); opts.sigma has units of grad E^-1/2 (the paper's sigma, usually 1;
+ * opts.sigma_auto takes it from the gradient at the first iterate instead).
  *
  * Each iteration of bs_minimize (paper 3.1, steps 1–9):
  *   1. register_active(x, g') with g' = grad E'(x), the gradient the objective
@@ -196,6 +197,10 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
   int max_iter;        /* Newton iterations cap, default 500 (>= 0)                        */
   double sigma;        /* CG tolerance scale, default 1 (> 0)                              */
+  int sigma_auto;      /* added, default 0. 1: sigma = 1/sqrt(||g_0||), g_0 the gradient   */
+                       /* at the solve's first iterate, so that the tolerance              */
+                       /* min(1/2, sqrt(max(||g||, tol)/||g_0||)) has no units (sigma is   */
+                       /* then ignored)                                                    */
   double kappa;        /* downhill check, default 1e-2 (in [0, 1))                          */
   double clamp;        /* length clamp ell, default 1e3 (> 0)                               */
   double c1, c2;       /* Wolfe constants, default 1e-4 and 0.9 (0 < c1 < c2 < 1)           */

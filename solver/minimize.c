@@ -343,7 +343,8 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
    * for rounding. */
   int64_t auto_it = 2 * free_dofs + 100;
   int max_it = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
-  double rel = fmin(0.5, o->sigma * sqrt(fmax(gnorm, o->tol)));
+  const double sigma = o->sigma_auto ? 1.0 / sqrt(m->g0_norm) : o->sigma;
+  double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, o->tol)));
   rec->lin_rel_tol = rel;
   for (int64_t i = 0; i < m->n3; ++i) m->r[i] = -m->g[i];
   bs_lin_kind kind = o->linear;
@@ -428,6 +429,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     double gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 1);
     st->E = E;
     st->grad_norm = gnorm;
+    if (it == 0) m->g0_norm = gnorm;
     if (gnorm == 0 || (gnorm < o->tol && !(it == 0 && o->naive_guess))) {
       bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, o->tol, it);
       break;

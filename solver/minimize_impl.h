@@ -15,6 +15,7 @@ struct bs_minimizer {
   bs_linsolve *lin[BS_LIN_KINDS]; /* workspaces by bs_lin_kind (CG and MINRES always)    */
   int amg_reset;              /* 1: set up the AMG before the next solve             */
   int amg_calls;              /* bs_minimize calls started since the last setup      */
+  double g0_norm;             /* ||g|| at the first iterate of the current solve (sigma_auto) */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
    * direction, right-hand side, trial point, raw and projected gradient there. */

@@ -431,6 +431,57 @@ Test(minimize, rosenbrock_n_dimensional) {
   bs_bsr_destroy(&P);
 }
 
+/* Rosenbrock in other units: E, grad E and H times 2^20 (exact in binary). */
+static int ev_rosenN_scaled(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const double s = 1048576.0;
+  int rc = ev_rosenN(f, u, E, g, H);
+  *E *= s;
+  if (g)
+    for (int64_t k = 0; k < 3 * (int64_t)f->n; ++k) g[k] *= s;
+  if (H)
+    for (int64_t k = 0; k < 9 * H->nnzb; ++k) H->val[k] *= s;
+  return rc;
+}
+
+/* One solve of the 12-D Rosenbrock from the usual start, E in units scaled by
+ * 2^20 or not (tol scaled alike). */
+static void rosen_units(int scaled, int sigma_auto, double x[12], bs_minimize_stats *st) {
+  bs_bsr *P = pattern_chain(4);
+  fx f;
+  fx_init(&f, 4, scaled ? ev_rosenN_scaled : ev_rosenN);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = scaled ? 1e-8 * 1048576.0 : 1e-8;
+  o.sigma_auto = sigma_auto;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  for (int k = 0; k < 12; ++k) x[k] = k % 2 ? 1.0 : -1.2;
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st->reason, BS_MIN_CONVERGED, "%s", st->reason_text);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* sigma_auto makes the CG tolerance unitless: the same problem in units of E
+ * scaled by a power of two takes the very same iterates. With the paper's
+ * sigma = 1 the tolerance min(1/2, sqrt(||g||)) depends on the units, and the
+ * scaled problem takes more Newton iterations (loose solves for longer). */
+Test(minimize, sigma_auto_is_unitless) {
+  double x1[12], x2[12];
+  bs_minimize_stats a, b;
+  rosen_units(0, 1, x1, &a);
+  rosen_units(1, 1, x2, &b);
+  cr_expect_eq(a.iterations, b.iterations, "Newton iterations %d and %d", a.iterations, b.iterations);
+  cr_expect_eq(a.cg_iterations, b.cg_iterations, "CG iterations %d and %d", a.cg_iterations, b.cg_iterations);
+  for (int k = 0; k < 12; ++k) cr_expect_eq(x1[k], x2[k], "x[%d]: %.17g and %.17g", k, x1[k], x2[k]);
+  rosen_units(0, 0, x1, &a);
+  rosen_units(1, 0, x2, &b);
+  cr_expect_gt(b.iterations, a.iterations, "sigma = 1: %d Newton iterations in scaled units, %d in the others",
+               b.iterations, a.iterations);
+}
+
 Test(minimize, negative_curvature_start) {
   const int32_t n = 2;
   bs_bsr *P = pattern_chain(n);
