@@ -34,9 +34,10 @@
  *        to 1, the transpose of the composition). At a registered iterate only
  *        the active pairs count (register_active has just forgotten the
  *        projected ones); at a line-search point y = P(x + a d) the pairs the
- *        projection moved count (the active ones among them), so that the slope grad E(y).d of the
- *        curved search path sees the constraint (the curvature term phi Hess
- *        phi of J_P at the unprojected point is dropped there).
+ *        projection moved count (active pairs it kept on the surface among
+ *        them), so that the slope grad E(y).d of the curved search path sees
+ *        the constraint (the curvature term phi Hess phi of J_P at the
+ *        unprojected point is dropped there).
  *      - project_hessian(x, g', H): the Hessian of E = E' o P at a feasible x.
  *        For one projection at a touching vertex (phi = 0, so the third
  *        derivatives of phi drop, paper 3.2 "Derivatives"):

@@ -521,24 +521,14 @@ static int surely_outside(const double *p, const double *a, const double *b, con
   return 0;
 }
 
-/* Whether v is in row r of the pattern P (columns sorted). */
-static int in_row(const bs_bsr *P, int32_t r, int32_t v) {
-  int32_t lo = P->row_ptr[r], hi = P->row_ptr[r + 1] - 1;
-  while (lo <= hi) {
-    int32_t mid = lo + (hi - lo) / 2;
-    if (P->col[mid] == v) return 1;
-    if (P->col[mid] < v) lo = mid + 1;
-    else hi = mid - 1;
-  }
-  return 0;
-}
-
 /* Whether tet tv is in the excluded neighbourhood of vertex pv: one of its
  * vertices is pv or an edge neighbour of pv (the fem's pattern row of pv,
  * which holds pv and every vertex sharing a tet with it). See the header. */
 static int near_vertex(const self_data *d, int32_t pv, const int32_t *tv) {
   const bs_bsr *P = d->fem->pattern;
-  return in_row(P, pv, tv[0]) || in_row(P, pv, tv[1]) || in_row(P, pv, tv[2]) || in_row(P, pv, tv[3]);
+  for (int a = 0; a < 4; a++)
+    if (bs_bsr_slot(P, pv, tv[a]) >= 0) return 1;
+  return 0;
 }
 
 /* The first tet (in traversal order) outside the neighbourhood of vertex pv
