@@ -443,7 +443,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
                                      "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma",
-                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", NULL};
+                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", "cg_precision", NULL};
     if ((st = check_keys(c, so, "solver", sk))) return st;
     char buf[64];
     bs_error e2;
@@ -454,6 +454,13 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_str(c, so, "solver", "linear", 0, buf, sizeof buf))) return st;
     if (buf[0] && (bs_lin_kind_parse(buf, &s->solver.min.linear, &e2) || s->solver.min.linear == BS_LIN_MINRES))
       return fail(c, "solver.linear", "must be \"cg\", \"pcg\", \"amg\" or \"cholmod\", got \"%s\"", buf);
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "cg_precision", 0, buf, sizeof buf))) return st;
+    if (buf[0]) {
+      if (!strcmp(buf, "double")) s->solver.min.cg_single = 0;
+      else if (!strcmp(buf, "single")) s->solver.min.cg_single = 1;
+      else return fail(c, "solver.cg_precision", "must be \"double\" or \"single\", got \"%s\"", buf);
+    }
     buf[0] = 0;
     if ((st = get_str(c, so, "solver", "amg_matrix", 0, buf, sizeof buf))) return st;
     if (buf[0]) {

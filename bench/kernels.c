@@ -6,7 +6,8 @@
  * plus M/dt^2 (dt = 1/24 s; 50 iterations, no convergence test met), in ms per
  * iteration; its GB/s column is the product's bytes over that time, so the
  * ratio of STREAM to it is the iteration's time over the product's bandwidth
- * floor.
+ * floor. "PCG iteration (single values)" is the same with solver.cg_precision
+ * "single" (bs_linsolve_set_single), against the same double bytes.
  *
  *   bench_kernels [CELLS] [REPEATS] [ONLY]
  *
@@ -93,7 +94,7 @@ int main(int argc, char **argv) {
          mesh->n_vertices, n3, mesh->n_tets, (long long)H->nnzb, fem->n_colors, reps);
   printf("%-34s %8s %12s %12s %8s\n", "kernel", "threads", "ms", "ns/tet|GB/s", "ratio");
   int threads[2] = {1, maxt};
-  double base[8] = {0};
+  double base[16] = {0};
   const int ti0 = only && maxt > 1 ? 1 : 0; /* ONLY: one run, with maxt threads */
   for (int ti = ti0; ti < (maxt > 1 ? 2 : 1); ti++) {
     omp_set_num_threads(threads[ti]);
@@ -123,7 +124,7 @@ int main(int argc, char **argv) {
          1, 0);
     double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
     TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
-    if (!only || strstr("PCG iteration (block Jacobi)", only)) {
+    if (!only || strstr("PCG iteration (block Jacobi)", only) || strstr("PCG iteration (single values)", only)) {
       /* A = projected Hessian + M/dt^2: SPD, so PCG runs its 50 iterations. */
       bs_bsr_zero(H);
       bs_fem_elastic_hessian(fem, x, 1, 1.0, H);
@@ -139,20 +140,32 @@ int main(int argc, char **argv) {
         return 1;
       }
       for (size_t i = 0; i < n3; i++) g[i] = 1.0;
-      int iters = 50;
-      for (int r = 0; r < reps; r++) {
-        bs_lin_stats st;
-        double t0 = bs_seconds();
-        bs_linsolve_solve(ls, H, NULL, g, 0.0, 50, y, &st, &err);
-        iters = st.iterations > 0 ? st.iterations : 1;
-        t[r] = (bs_seconds() - t0) / iters;
+      /* double values, then single (solver.cg_precision); the GB/s column of both
+         is the double product's bytes over the time, as above */
+      for (int single = 0; single < 2; single++) {
+        const char *label = single ? "PCG iteration (single values)" : "PCG iteration (block Jacobi)";
+        if (only && !strstr(label, only)) continue;
+        if (bs_linsolve_set_single(ls, single, &err)) {
+          fprintf(stderr, "%s\n", err.msg);
+          return 1;
+        }
+        int iters = 50;
+        double rres = 0;
+        for (int r = 0; r < reps; r++) {
+          bs_lin_stats st;
+          double t0 = bs_seconds();
+          bs_linsolve_solve(ls, H, NULL, g, 0.0, 50, y, &st, &err);
+          iters = st.iterations > 0 ? st.iterations : 1;
+          rres = st.rel_residual;
+          t[r] = (bs_seconds() - t0) / iters;
+        }
+        double m = median(t, reps);
+        if (ti == ti0) base[k] = m;
+        printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, threads[ti], 1e3 * m, bytes / m / 1e9, base[k] / m);
+        k++;
+        if (iters != 50) printf("(PCG stopped after %d iterations)\n", iters);
+        if (ti == ti0) printf("(%s: relative residual %.3e after 50 iterations)\n", label, rres);
       }
-      double m = median(t, reps);
-      if (ti == ti0) base[k] = m;
-      printf("%-34s %8d %12.2f %12.1f %8.2f\n", "PCG iteration (block Jacobi)", threads[ti], 1e3 * m, bytes / m / 1e9,
-             base[k] / m);
-      k++;
-      if (iters != 50) printf("(PCG stopped after %d iterations)\n", iters);
       bs_linsolve_destroy(&ls);
     }
     if (!only || strstr("STREAM triad", only)) {

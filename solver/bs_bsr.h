@@ -100,6 +100,19 @@ void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y
  * product's row loop when there are no extra blocks (one pass over y, not two). */
 double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 
+/* Single-precision values for Krylov solvers (bs_linsolve_set_single): val32
+ * holds bs_bsr_val32_count(A) floats (9 per block, in bsr.c's own order, and
+ * padding), owned by the caller. bs_bsr_mul_dot_round32 is bs_bsr_mul_dot (in
+ * double) that also writes each stored value rounded to float into val32
+ * during its pass; bs_bsr_mul_dot32 is bs_bsr_mul_dot with the pattern's
+ * values read from val32 (the extra blocks stay double), accumulated in double
+ * (AVX2 and FMA when the CPU has them). A value beyond FLT_MAX becomes +-inf in
+ * val32, so the next bs_bsr_mul_dot32 returns a non-finite x . y: the caller
+ * can tell and go back to double. */
+int64_t bs_bsr_val32_count(const bs_bsr *A);
+double bs_bsr_mul_dot_round32(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, float *val32);
+double bs_bsr_mul_dot32(const bs_bsr *A, const float *val32, const uint8_t *mask, const double *x, double *y);
+
 /* Checker (an invariant test, not for hot loops): row_ptr monotone, columns in
  * range and strictly increasing within each row, diag[i] pointing at (i,i),
  * pattern symmetric ((i,j) stored iff (j,i) stored), values finite, and values

@@ -93,6 +93,7 @@ typedef struct bs_lin_stats {
   double rel_residual; /* ||b - A x|| / ||b|| at exit (masked norms; 0 when b = 0)          */
   double seconds;      /* wall time of the call                                              */
   int precond_failed;  /* 1: AMG's V-cycle was not positive definite (r.Br <= 0; see above)  */
+  int single_overflow; /* 1: a value overflowed single precision; this solve ran in double   */
 } bs_lin_stats;
 
 typedef struct bs_linsolve bs_linsolve; /* workspace sized once for a pattern */
@@ -109,6 +110,18 @@ void bs_linsolve_destroy(bs_linsolve **ls);
  * exit on the first iteration); MINRES and CHOLMOD recompute ||b - A x||. */
 int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
                       double rel_tol, int max_iter, double *x, bs_lin_stats *st, bs_error *err);
+
+/* CG, PCG and AMG workspaces (BS_EINPUT for another kind when on): on = 1
+ * makes the following solves read A's pattern values in single precision from
+ * their 6th product on. The 5th product, in double, also rounds the values
+ * into a copy of 36 bytes per block that the workspace allocates here
+ * (BS_ENOMEM); the later products read the copy, with vectors, sums, the
+ * preconditioner and the extra blocks in double. So a long solve solves with
+ * A rounded to float (relative change <= 2^-24 per entry; its rel_residual is
+ * the recursive one of that matrix), and a short one is unchanged. A value
+ * beyond single precision's range makes the solve start again in double
+ * (stats.single_overflow = 1). on = 0 frees the copy. */
+int bs_linsolve_set_single(bs_linsolve *ls, int on, bs_error *err);
 
 /* AMG workspaces only (BS_EINPUT otherwise): builds the BoomerAMG hierarchy
  * from P (SPD on the free dofs of mask; P's pattern size must match) and keeps

@@ -264,6 +264,144 @@ double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, dou
   return mul_impl(A, mask, x, y, 1);
 }
 
+/* ---- single-precision values (bs_bsr_mul_dot_round32, bs_bsr_mul_dot32) ----
+ * val32 holds each block column-major: val32[9 s + 3 b + a] = A(3i+a, 3j+b),
+ * so that column b of a block is 3 consecutive floats, and 4 floats of padding
+ * at the end. One product is then, per block, three 4-float loads widened to
+ * double and three fused multiply-adds with x_j's broadcast components (lane
+ * 3 of each load is the next column's first entry, multiplied and dropped).
+ * The OpenMP regions are in separate functions with constant arguments: GCC
+ * outlines a parallel region before it inlines, so a region inside an
+ * always_inline function would test its arguments in the inner loop. */
+
+int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
+
+/* The tail shared with mul_impl: extra blocks, then the dot when it was not fused. */
+static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, double xy) {
+  if (A->n_extra == 0) return xy;
+  mul_extra(A, mask, x, y);
+  const int64_t N = 3 * (int64_t)A->n;
+  xy = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
+  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
+  return xy;
+}
+
+/* The row loop over blocks, masked or not (selects as in mul_impl), with
+ * BLOCK(s, j, t0, t1, t2) computing the block's product into t0..t2. */
+#define BS_ROWS32(BLOCK)                                                                               \
+  const int32_t n = A->n;                                                                              \
+  const int32_t *rp = A->row_ptr, *col = A->col;                                                       \
+  const int fuse = A->n_extra == 0;                                                                    \
+  double xy = 0.0;                                                                                     \
+  _Pragma("omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)")                         \
+  for (int32_t i = 0; i < n; ++i) {                                                                    \
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;                                                               \
+    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {                                                      \
+      const int32_t j = col[s];                                                                        \
+      double t0, t1, t2;                                                                               \
+      BLOCK(s, j, t0, t1, t2);                                                                         \
+      const int f = !mask || mask[j] != 0;                                                             \
+      y0 = f ? y0 + t0 : y0;                                                                           \
+      y1 = f ? y1 + t1 : y1;                                                                           \
+      y2 = f ? y2 + t2 : y2;                                                                           \
+    }                                                                                                  \
+    const int f = !mask || mask[i] != 0;                                                               \
+    y0 = f ? y0 : 0.0;                                                                                 \
+    y1 = f ? y1 : 0.0;                                                                                 \
+    y2 = f ? y2 : 0.0;                                                                                 \
+    y[3 * (int64_t)i] = y0;                                                                            \
+    y[3 * (int64_t)i + 1] = y1;                                                                        \
+    y[3 * (int64_t)i + 2] = y2;                                                                        \
+    if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0; \
+  }                                                                                                    \
+  return mul_tail(A, mask, x, y, xy)
+
+/* double values, rounded into val32 on the way */
+#define BS_BLOCK_ROUND(s, j, t0, t1, t2)                                                               \
+  const double *a = A->val + 9 * (int64_t)(s), *xj = x + 3 * (int64_t)(j);                             \
+  float *c = val32 + 9 * (int64_t)(s);                                                                 \
+  for (int b_ = 0; b_ < 3; ++b_)                                                                       \
+    for (int a_ = 0; a_ < 3; ++a_) c[3 * b_ + a_] = (float)a[3 * a_ + b_];                             \
+  t0 = a[0] * xj[0] + a[1] * xj[1] + a[2] * xj[2];                                                     \
+  t1 = a[3] * xj[0] + a[4] * xj[1] + a[5] * xj[2];                                                     \
+  t2 = a[6] * xj[0] + a[7] * xj[1] + a[8] * xj[2]
+
+/* single values, scalar */
+#define BS_BLOCK_32(s, j, t0, t1, t2)                                                                  \
+  const float *c = val32 + 9 * (int64_t)(s);                                                           \
+  const double *xj = x + 3 * (int64_t)(j);                                                             \
+  const double x0 = xj[0], x1 = xj[1], x2 = xj[2];                                                     \
+  t0 = (double)c[0] * x0 + (double)c[3] * x1 + (double)c[6] * x2;                                      \
+  t1 = (double)c[1] * x0 + (double)c[4] * x1 + (double)c[7] * x2;                                      \
+  t2 = (double)c[2] * x0 + (double)c[5] * x1 + (double)c[8] * x2
+
+double bs_bsr_mul_dot_round32(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, float *val32) {
+  val32[9 * A->nnzb] = val32[9 * A->nnzb + 1] = val32[9 * A->nnzb + 2] = val32[9 * A->nnzb + 3] = 0.0f;
+  BS_ROWS32(BS_BLOCK_ROUND);
+}
+
+static double mul32_scalar(const bs_bsr *A, const float *val32, const uint8_t *mask, const double *x, double *y) {
+  BS_ROWS32(BS_BLOCK_32);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+/* The same with AVX2 and FMA: lanes 0-2 of acc are y_i's three entries. The
+ * mask select is an and with all-ones or all-zeros lanes (a NaN of a
+ * constrained column's block never enters). */
+__attribute__((target("avx2,fma"))) static double mul32_avx2(const bs_bsr *A, const float *val32,
+                                                             const uint8_t *mask, const double *x, double *y) {
+  const int32_t n = A->n;
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const int fuse = A->n_extra == 0;
+  double xy = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
+  for (int32_t i = 0; i < n; ++i) {
+    __m256d acc = _mm256_setzero_pd();
+    if (!mask) {
+      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+        const float *c = val32 + 9 * (int64_t)s;
+        const double *xj = x + 3 * (int64_t)col[s];
+        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj), acc);
+        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), acc);
+        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), acc);
+      }
+    } else {
+      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+        const int32_t j = col[s];
+        const float *c = val32 + 9 * (int64_t)s;
+        const double *xj = x + 3 * (int64_t)j;
+        __m256d t = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj));
+        t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), t);
+        t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), t);
+        const __m256d keep = _mm256_castsi256_pd(_mm256_set1_epi64x(mask[j] ? -1 : 0));
+        acc = _mm256_add_pd(acc, _mm256_and_pd(t, keep));
+      }
+    }
+    double yi[4];
+    _mm256_storeu_pd(yi, acc);
+    const int f = !mask || mask[i] != 0;
+    const double y0 = f ? yi[0] : 0.0, y1 = f ? yi[1] : 0.0, y2 = f ? yi[2] : 0.0;
+    y[3 * (int64_t)i] = y0;
+    y[3 * (int64_t)i + 1] = y1;
+    y[3 * (int64_t)i + 2] = y2;
+    if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
+  }
+  return mul_tail(A, mask, x, y, xy);
+}
+#endif
+
+double bs_bsr_mul_dot32(const bs_bsr *A, const float *val32, const uint8_t *mask, const double *x, double *y) {
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return mul32_avx2(A, val32, mask, x, y);
+#endif
+  return mul32_scalar(A, val32, mask, x, y);
+}
+#undef BS_ROWS32
+#undef BS_BLOCK_ROUND
+#undef BS_BLOCK_32
+
 /* The extra list: indices, finiteness, and symmetry of the summed blocks. */
 static int check_extra(const bs_bsr *A, double tol, double amax, bs_error *err) {
   if (A->n_extra < 0 || A->n_extra > A->cap_extra || (A->n_extra > 0 && (!A->extra_ij || !A->extra_val)))

@@ -23,6 +23,7 @@ struct bs_linsolve {
   double *r, *p, *q, *z;      /* CG / PCG (z: PCG only); q also for residuals */
   double *y, *v, *w, *w1, *w2, *r2; /* MINRES (with r, q)                     */
   double *minv;               /* PCG: 9n, inverse diagonal blocks         */
+  float *val32;               /* CG kinds, single precision: 9 nnzb + 4    */
   bs_amg *amg;                /* AMG-PCG: the BoomerAMG V-cycle            */
   /* CHOLMOD: scalar lower-triangular CSC of the free dofs. */
   cholmod_common cm;
@@ -227,12 +228,21 @@ static double apply_block_jacobi(int32_t n, const double *minv, const double *r,
 
 /* ---- CG / PCG ----------------------------------------------------------- */
 
+/* run_cg's answer when the single-precision values overflowed (a value beyond
+ * FLT_MAX): the caller solves again in double. Positive, so never a bs status. */
+#define BS_RETRY_DOUBLE 1
+/* With single-precision values, the iteration whose product makes the copy:
+ * products before it read the double values. A product in single saves about
+ * a third of one in double on a large matrix and the copying one costs about
+ * one more (bench_kernels), so the copy pays after 3 more iterations. */
+#define SINGLE_FROM 4
+
 /* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally preconditioned
  * (precond 1: block Jacobi; 2: one BoomerAMG V-cycle, set up beforehand). Stops on ||r|| <= rel_tol ||b||, max_iter, or
  * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
  * iteration, is returned with indefinite = 1). */
 static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
-                  double rel_tol, int max_iter, int precond, double *x, bs_lin_stats *st,
+                  double rel_tol, int max_iter, int precond, int single, double *x, bs_lin_stats *st,
                   bs_error *err) {
   const int32_t n = ls->n;
   const int64_t N = ls->N;
@@ -269,8 +279,13 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
   vcopy(N, z, p);
   const double target = rel_tol * bnorm;
   for (int k = 0; k < max_iter; ++k) {
-    const double pq = bs_bsr_mul_dot(A, mask, p, q);
-    if (!isfinite(pq)) return matrix_error(A, mask, name, err);
+    /* single: product SINGLE_FROM, in double, rounds the values into val32 on
+       its way (it costs about two products: a solve that ends before it never
+       pays for it); the later ones read val32 (see bs_linsolve_set_single) */
+    const double pq = !single || k < SINGLE_FROM ? bs_bsr_mul_dot(A, mask, p, q)
+                      : k == SINGLE_FROM         ? bs_bsr_mul_dot_round32(A, mask, p, q, ls->val32)
+                                                 : bs_bsr_mul_dot32(A, ls->val32, mask, p, q);
+    if (!isfinite(pq)) return single && k > SINGLE_FROM ? BS_RETRY_DOUBLE : matrix_error(A, mask, name, err);
     if (pq <= 0.0) {
       st->indefinite = 1;
       if (k == 0) {
@@ -622,6 +637,7 @@ void bs_linsolve_destroy(bs_linsolve **lsp) {
   free(ls->w2);
   free(ls->r2);
   free(ls->minv);
+  free(ls->val32);
   bs_amg_destroy(&ls->amg);
   free(ls->cmask);
   free(ls->fmap);
@@ -712,16 +728,19 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   int rc = BS_OK;
   switch (ls->kind) {
   case BS_LIN_CG:
-    rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 0, x, st, err);
-    break;
   case BS_LIN_PCG:
-    rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 1, x, st, err);
-    break;
-  case BS_LIN_AMG:
+  case BS_LIN_AMG: {
+    const int precond = ls->kind == BS_LIN_CG ? 0 : ls->kind == BS_LIN_PCG ? 1 : 2;
     /* No hierarchy for this mask yet: build it from A itself (A must be SPD). */
-    if (!bs_amg_same_mask(ls->amg, ls->n, mask)) rc = bs_linsolve_amg_setup(ls, A, mask, err);
-    if (rc == BS_OK) rc = run_cg(ls, A, mask, b, rel_tol, max_iter, 2, x, st, err);
+    if (precond == 2 && !bs_amg_same_mask(ls->amg, ls->n, mask)) rc = bs_linsolve_amg_setup(ls, A, mask, err);
+    if (rc == BS_OK) rc = run_cg(ls, A, mask, b, rel_tol, max_iter, precond, ls->val32 != NULL, x, st, err);
+    if (rc == BS_RETRY_DOUBLE) {
+      memset(st, 0, sizeof *st);
+      st->single_overflow = 1;
+      rc = run_cg(ls, A, mask, b, rel_tol, max_iter, precond, 0, x, st, err);
+    }
     break;
+  }
   case BS_LIN_MINRES:
     rc = run_minres(ls, A, mask, b, rel_tol, max_iter, x, st, err);
     break;
@@ -731,6 +750,22 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   }
   st->seconds = bs_seconds() - t0;
   return rc;
+}
+
+int bs_linsolve_set_single(bs_linsolve *ls, int on, bs_error *err) {
+  if (!ls) return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_single: NULL workspace");
+  if (!on) {
+    free(ls->val32);
+    ls->val32 = NULL;
+    return BS_OK;
+  }
+  if (ls->kind != BS_LIN_CG && ls->kind != BS_LIN_PCG && ls->kind != BS_LIN_AMG)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_single: the workspace is for %s, not cg, pcg or amg",
+                        bs_lin_kind_name(ls->kind));
+  if (ls->val32) return BS_OK;
+  ls->val32 = bs_calloc(9 * (size_t)ls->nnzb + 4, sizeof *ls->val32,
+                        "linsolve single-precision values", err);
+  return ls->val32 ? BS_OK : BS_ENOMEM;
 }
 
 int bs_linsolve_amg_setup(bs_linsolve *ls, const bs_bsr *P, const uint8_t *mask, bs_error *err) {

@@ -357,13 +357,19 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   double t = bs_seconds();
   bs_error e2;
   bs_error_clear(&e2);
-  int rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  /* the values' precision (allocates the single copy on first use; the CG of a
+     CHOLMOD fallback gets it there) */
+  int rc = kind == BS_LIN_CG || kind == BS_LIN_PCG || kind == BS_LIN_AMG
+               ? bs_linsolve_set_single(m->lin[kind], o->cg_single, &e2)
+               : 0;
+  if (rc == 0) rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
   if (rc == 0 && kind == BS_LIN_AMG) amg_judge(m, &ls);
   if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd) {
     st->cholmod_fallbacks++;
     rec->cholmod_fallback = 1;
     kind = BS_LIN_CG;
-    rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+    rc = bs_linsolve_set_single(m->lin[kind], o->cg_single, &e2);
+    if (rc == 0) rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
   }
   st->t_linear += bs_seconds() - t;
   if (rc == BS_ENUMERIC) {

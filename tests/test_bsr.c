@@ -362,3 +362,82 @@ Test(bsr, extra_blocks_enter_the_product_and_the_checker) {
   cr_assert_eq(bs_bsr_add_block(A, 1, 4, B), 1, "room is back after zero");
   bs_bsr_destroy(&A);
 }
+
+/* Single-precision values: the rounding product is bs_bsr_mul_dot bit for bit;
+ * the single product equals the product with the values rounded to float
+ * (computed here in double from a rounded copy), to the rounding of the sums;
+ * constrained rows and columns (NaN in their blocks) and the extra blocks as in
+ * bs_bsr_mul_dot; a value beyond FLT_MAX gives a non-finite dot. */
+Test(bsr, single_precision_values) {
+  int32_t *ptr, *adj;
+  const int32_t n = 5000;
+  random_graph(n, 6, &ptr, &adj);
+  bs_bsr *A = NULL, *R = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &R, &err), 0, "%s", err.msg);
+  fill_random(A);
+  for (int64_t k = 0; k < 9 * A->nnzb; ++k) A->val[k] *= 1e6; /* far from 1: an exponent to keep */
+  const int64_t N = 3 * n;
+  double *x = malloc(N * sizeof *x), *y = malloc(N * sizeof *y), *y32 = malloc(N * sizeof *y32);
+  float *v32 = malloc((size_t)bs_bsr_val32_count(A) * sizeof *v32);
+  for (int64_t k = 0; k < N; ++k) x[k] = urand();
+  uint8_t *mask = malloc((size_t)n);
+  for (int32_t i = 0; i < n; ++i) mask[i] = (uint8_t)(i % 5 != 2);
+  double B[9];
+  for (int e = 0; e < 9; ++e) B[e] = 1e6 * urand();
+  for (int extras = 0; extras < 2; ++extras) {
+    if (extras) { /* a block outside the pattern (random graphs of degree 6 miss most pairs) */
+      int32_t i = 0, j = 1;
+      while (bs_bsr_slot(A, i, j) >= 0) ++j;
+      cr_assert_eq(bs_bsr_reserve_extra(A, 1, &err), 0, "%s", err.msg);
+      cr_assert_eq(bs_bsr_reserve_extra(R, 1, &err), 0, "%s", err.msg);
+      cr_assert_eq(bs_bsr_add_block(A, i, j, B), 1);
+      cr_assert_eq(bs_bsr_add_block(R, i, j, B), 1);
+    }
+    for (int masked = 0; masked < 2; ++masked) {
+      const uint8_t *mk = masked ? mask : NULL;
+      if (masked) /* constrained columns' blocks never enter, even as NaN */
+        for (int32_t i = 0; i < n; ++i)
+          for (int32_t s = A->row_ptr[i]; s < A->row_ptr[i + 1]; ++s)
+            if (!mask[A->col[s]]) A->val[9 * s + 4] = NAN;
+      const double ref = bs_bsr_mul_dot(A, mk, x, y);
+      for (int64_t k = 0; k < N; ++k) y32[k] = NAN;
+      const double d = bs_bsr_mul_dot_round32(A, mk, x, y32, v32);
+      cr_assert_eq(memcmp(y, y32, N * sizeof *y), 0, "extras %d masked %d: the rounding product differs", extras,
+                   masked);
+      cr_assert_eq(d, ref);
+      /* R: A's values rounded to float, in double */
+      for (int64_t k = 0; k < 9 * A->nnzb; ++k) R->val[k] = (double)(float)A->val[k];
+      const double rref = bs_bsr_mul_dot(R, mk, x, y);
+      const double d32 = bs_bsr_mul_dot32(A, v32, mk, x, y32);
+      double ymax = 0;
+      for (int64_t k = 0; k < N; ++k) ymax = fmax(ymax, fabs(y[k]));
+      for (int64_t k = 0; k < N; ++k) {
+        cr_assert(isfinite(y32[k]), "extras %d masked %d: entry %lld not finite", extras, masked, (long long)k);
+        cr_assert(fabs(y32[k] - y[k]) <= 1e-13 * ymax, "extras %d masked %d entry %lld: %.17g vs %.17g", extras,
+                  masked, (long long)k, y32[k], y[k]);
+        if (mk && !mk[k / 3]) cr_assert_eq(y32[k], 0.0);
+      }
+      cr_assert(fabs(d32 - rref) <= 1e-12 * fabs(rref), "extras %d masked %d: x.y %.17g vs %.17g", extras, masked,
+                d32, rref);
+      /* and it is not the double product: the values did change */
+      cr_assert(fabs(d32 - ref) > 0.0);
+    }
+    for (int64_t k = 0; k < 9 * A->nnzb; ++k)
+      if (isnan(A->val[k])) A->val[k] = 1e6 * urand();
+  }
+  /* beyond single precision */
+  A->val[9 * A->diag[7] + 4] = 1e39;
+  cr_assert(isfinite(bs_bsr_mul_dot_round32(A, NULL, x, y, v32)));
+  cr_assert(!isfinite(bs_bsr_mul_dot32(A, v32, NULL, x, y)));
+  free(v32);
+  free(mask);
+  free(x);
+  free(y);
+  free(y32);
+  free(ptr);
+  free(adj);
+  bs_bsr_destroy(&A);
+  bs_bsr_destroy(&R);
+}

@@ -482,6 +482,41 @@ Test(minimize, sigma_auto_is_unitless) {
                b.iterations, a.iterations);
 }
 
+/* opts.cg_single: the 60-D Rosenbrock, with CG and with PCG, converges to the
+ * minimizer (all ones) as in double, in as many Newton iterations give or take
+ * one; CG's solves did read the single values (the iterates differ). */
+Test(minimize, cg_single_converges) {
+  for (int pcg = 0; pcg < 2; ++pcg) {
+    double xs[2][60];
+    bs_minimize_stats st[2];
+    for (int single = 0; single < 2; ++single) {
+      bs_bsr *P = pattern_chain(20);
+      fx f;
+      fx_init(&f, 20, ev_rosenN);
+      bs_minimize_opts o;
+      bs_minimize_opts_default(&o);
+      o.tol = 1e-8;
+      o.sigma_auto = 1;
+      o.linear = pcg ? BS_LIN_PCG : BS_LIN_CG;
+      o.cg_single = single;
+      bs_minimizer *m = NULL;
+      bs_error err = {0};
+      cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+      bs_objective obj = make_obj(&f, NULL);
+      for (int k = 0; k < 60; ++k) xs[single][k] = k % 2 ? 1.0 : -1.2;
+      cr_assert_eq(bs_minimize(m, &obj, xs[single], &st[single], &err), 0, "%s", err.msg);
+      cr_assert_eq(st[single].reason, BS_MIN_CONVERGED, "pcg %d single %d: %s", pcg, single, st[single].reason_text);
+      for (int k = 0; k < 60; ++k) cr_assert_float_eq(xs[single][k], 1.0, 1e-6);
+      bs_minimizer_destroy(&m);
+      bs_bsr_destroy(&P);
+    }
+    cr_assert_leq(abs(st[1].iterations - st[0].iterations), 1, "pcg %d: %d Newton iterations in single, %d in double",
+                  pcg, st[1].iterations, st[0].iterations);
+    if (!pcg) /* (PCG's solves here take 4 iterations or fewer: double values only) */
+      cr_assert_neq(memcmp(xs[0], xs[1], sizeof xs[0]), 0, "single values were never read");
+  }
+}
+
 Test(minimize, negative_curvature_start) {
   const int32_t n = 2;
   bs_bsr *P = pattern_chain(n);

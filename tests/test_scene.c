@@ -88,6 +88,8 @@ Test(scene, impossible_values) {
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_sigma\": \"half\"",
                "solver.cg_sigma: must be a number > 0 or \"auto\", got \"half\"");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_sigma\": 0", "solver.cg_sigma: must be > 0");
+  expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_precision\": \"half\"",
+               "solver.cg_precision: must be \"double\" or \"single\", got \"half\"");
   expect_error("\"frames\": 2", "\"frames\": 2.5", "time.frames");
   expect_error("\"cells\": [2, 2, 2]", "\"cells\": [2, 0, 2]", "bodies.0.box");
 }
