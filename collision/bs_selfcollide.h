@@ -11,15 +11,27 @@
  *    triangle, and Phi steps from 0 to ~k h^3. Line searches stall on such a
  *    jump (paper 3.3); a penalty striker crushing a soft box did exactly
  *    that (data/scenes/paper/fig14_box_stack.json, frame 9 on 15^3-cell
- *    boxes). Excluding the neighbours' tets too moves that jump two layers
- *    of tets deep, where a vertex gets only through a tangle of its own
- *    body. Contact between parts of a body closer than that (in the mesh)
- *    is left to the elastic energy. Tets are found through a bounding-volume
+ *    boxes). Excluding the neighbours' tets too keeps a vertex that inverts
+ *    its own tets clear of collisions, and the interface faces (below) make
+ *    leaving that neighbourhood through the body continuous. Contact between
+ *    parts of a body closer than that (in the mesh) is left to the elastic
+ *    energy. Tets are found through a bounding-volume
  *    hierarchy over tet boxes: its topology is built at creation and rebuilt
  *    at each begin_step (at xⁿ), its boxes are refit at every evaluation;
  *  - the primitive of a colliding p is the feature (triangle interior, edge
- *    or vertex) of the closest boundary triangle that does not have p as a
- *    vertex. The search starts from the distance to the triangle p collided
+ *    or vertex) of the closest triangle among the boundary triangles that do
+ *    not have p as a vertex and p's interface faces: the faces of p's
+ *    excluded tets (those holding p or an edge neighbour) that they share
+ *    with a tet outside that set, listed once at creation (about 100 per
+ *    vertex). So the distance is to the boundary of the region where p
+ *    collides, and it is 0 wherever p enters that region: through the
+ *    surface, or through its own excluded neighbourhood (a vertex pushed
+ *    through its own body then meets Phi = 0 at the crossing and is pushed
+ *    back towards its neighbourhood, where without the interface faces Phi
+ *    jumped to k times the cube of its depth below the surface: ~4e4 J in
+ *    test self_detect/leaving_the_neighbourhood_is_continuous). A penetration
+ *    deeper than the neighbourhood's size (about two edges) is then measured
+ *    from the neighbourhood rather than from the surface. The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
  *    and gathers every triangle within that distance from the AABB tree of
@@ -40,12 +52,12 @@
  * Choice within a Newton solve: the colliding set and the primitives are
  * re-detected at every evaluation (value, gradient, Hessian), as in the
  * paper, so E, grad E and H describe one function. That function is
- * continuous wherever the colliding set changes at d = 0 (a vertex crossing
- * the surface it is closest to), because the primitive is the exact closest
- * admissible one (a minimum of continuous distances). It can jump when a
- * vertex enters a tet at a positive distance from the admissible surface
- * (a tet of its own body two layers deep, through a tangle, or a thin part);
- * this is inherent to the paper's point-in-tet detection. The term is "expensive"
+ * continuous wherever the colliding set changes at d = 0, because the
+ * primitive is the exact closest admissible one (a minimum of continuous
+ * distances) and every face through which p can enter a colliding tet from a
+ * non-colliding place is a primitive: a boundary triangle or an interface
+ * face. It can still jump where tets overlap (inverted tets): p leaving a
+ * colliding tet through a face into an inverted one that does not contain it. The term is "expensive"
  * (section 3.3): the line search may skip it when the other terms already
  * exceed E(x_i).
  *

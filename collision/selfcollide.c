@@ -354,6 +354,8 @@ typedef struct self_data {
   /* per surface vertex */
   int32_t *coll_tet;    /* tet it is in, -1 none                             */
   int32_t *hint;        /* last primitive triangle, -1 none                 */
+  int64_t *if_ptr;      /* n_surf + 1: CSR of the interface faces below     */
+  int32_t *if_face;     /* 3 if_ptr[n_surf]: vertices of each interface face */
   contact *con;
   int failed;           /* a shim call failed (non-finite input)            */
   /* the last detection: positions and result, reused when detect is called
@@ -378,6 +380,8 @@ static void self_free(void *p) {
   free(d->cand);
   free(d->coll_tet);
   free(d->hint);
+  free(d->if_ptr);
+  free(d->if_face);
   free(d->con);
   free(d->x_last);
   free(d);
@@ -608,14 +612,35 @@ static int32_t rest_estimate(const self_data *d, const double *x, int32_t pv, in
   return tri;
 }
 
-/* The closest admissible primitive of surface vertex i (index into surf).
- * Returns 0, or -1 on a shim error. c->nv = 0 when none exists. */
+/* c := the contact of vertex pv with the closest feature of triangle f. */
+static void set_contact(contact *c, const double *x, int32_t pv, const int32_t *f) {
+  double w[3], wf[3];
+  int feat, nv, loc[3];
+  c->d = bs_self_closest_triangle(x + 3 * (size_t)pv, x + 3 * (size_t)f[0], x + 3 * (size_t)f[1],
+                                  x + 3 * (size_t)f[2], w, &feat, &nv, loc, wf);
+  c->nv = nv;
+  c->v[0] = pv;
+  c->w[0] = -1;
+  for (int a = 0; a < nv; a++) c->v[1 + a] = f[loc[a]], c->w[1 + a] = wf[a];
+}
+
+/* The closest admissible primitive of surface vertex i (index into surf):
+ * over the boundary triangles without p and p's interface faces (a full scan
+ * of its short list). Returns 0, or -1 on a shim error. c->nv = 0 when none
+ * exists. */
 static int closest_primitive(self_data *d, const double *x, int32_t i, double diag, int32_t *buf) {
   const bs_mesh *m = d->mesh;
   int32_t pv = d->surf[i];
   const double *p = x + 3 * (size_t)pv;
   contact *c = &d->con[i];
   c->nv = 0;
+  double ib = INFINITY;
+  const int32_t *iface = NULL;
+  for (int64_t j = d->if_ptr[i]; j < d->if_ptr[i + 1]; j++) {
+    const int32_t *f = d->if_face + 3 * j;
+    const double dd = tri_dist2(x, f, p);
+    if (dd < ib) ib = dd, iface = f;
+  }
   double r = -1;
   int32_t h = d->hint[i];
   if (h >= 0 && !tri_has(m->faces + 3 * h, pv)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
@@ -624,6 +649,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
     if (e >= 0 && !tri_has(m->faces + 3 * e, pv)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
   }
   if (r < 0) r = d->h_min;
+  if (iface && sqrt(ib) < r) r = sqrt(ib);
   for (;;) {
     double lo[3] = {p[0] - r, p[1] - r, p[2] - r}, hi[3] = {p[0] + r, p[1] + r, p[2] + r};
     int64_t cnt = 0;
@@ -636,17 +662,16 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
       double dd = tri_dist2(x, m->faces + 3 * f, p);
       if (dd < best || (dd == best && f < bt)) best = dd, bt = f;
     }
-    if (bt >= 0 && best <= r * r) {
-      const int32_t *f = m->faces + 3 * bt;
-      double w[3], wf[3];
-      int feat, nv, loc[3];
-      c->d = bs_self_closest_triangle(p, x + 3 * (size_t)f[0], x + 3 * (size_t)f[1], x + 3 * (size_t)f[2], w, &feat,
-                                      &nv, loc, wf);
-      c->nv = nv;
-      c->v[0] = pv;
-      c->w[0] = -1;
-      for (int a = 0; a < nv; a++) c->v[1 + a] = f[loc[a]], c->w[1 + a] = wf[a];
+    /* every boundary triangle within r is among the candidates, so best is
+       their minimum when it is <= r^2; the interface scan is exact */
+    const int surf_ok = bt >= 0 && best <= r * r, if_ok = iface && ib <= r * r;
+    if (surf_ok && (!if_ok || best <= ib)) {
+      set_contact(c, x, pv, m->faces + 3 * bt);
       d->hint[i] = bt;
+      return 0;
+    }
+    if (if_ok) {
+      set_contact(c, x, pv, iface);
       return 0;
     }
     if (r > 2 * diag) return 0; /* every triangle was seen: none admissible */
@@ -817,6 +842,151 @@ static int self_begin_step(bs_term *t, bs_error *err) {
 
 static const bs_term_ops self_ops = {self_value, self_gradient, self_hessian, self_begin_step, self_free};
 
+/* ---- interface faces ---------------------------------------------------
+ * The excluded region of surface vertex p is the union of the tets that hold
+ * p or an edge neighbour of p (near_vertex). Its interface faces are its
+ * faces shared with a tet outside it: where p, moving through its own body,
+ * enters an admissible tet other than through the surface. They are primitives
+ * of p besides the boundary triangles (see the header), which makes the
+ * distance, and Phi, zero wherever p enters the admissible tets. They depend
+ * on the mesh only: listed once, at creation. */
+
+typedef struct tri_key {
+  int32_t v[3]; /* ascending */
+} tri_key;
+
+static int cmp_tri_key(const void *a, const void *b) {
+  const int32_t *p = ((const tri_key *)a)->v, *q = ((const tri_key *)b)->v;
+  for (int k = 0; k < 3; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+  return 0;
+}
+
+static int cmp_i32(const void *a, const void *b) {
+  const int32_t p = *(const int32_t *)a, q = *(const int32_t *)b;
+  return (p > q) - (p < q);
+}
+
+static tri_key make_key(int32_t a, int32_t b, int32_t c) {
+  tri_key k;
+  if (a > b) { int32_t t = a; a = b; b = t; }
+  if (b > c) { int32_t t = b; b = c; c = t; }
+  if (a > b) { int32_t t = a; a = b; b = t; }
+  k.v[0] = a, k.v[1] = b, k.v[2] = c;
+  return k;
+}
+
+/* Scratch of one thread (grown on demand). */
+typedef struct if_scratch {
+  int32_t *tets;
+  size_t cap_tets;
+  tri_key *keys;
+  size_t cap_keys;
+} if_scratch;
+
+/* p grown to hold need elements of size bytes (cap updated); NULL when out of
+ * memory (p is then still valid and owned by the caller). */
+static void *grow(void *p, size_t *cap, size_t need, size_t size) {
+  if (p && need <= *cap) return p;
+  size_t c = *cap ? *cap : 256;
+  while (c < need) c *= 2;
+  void *q = realloc(p, c * size);
+  if (q) *cap = c;
+  return q;
+}
+
+/* The interface faces of vertex pv into sc->keys (count returned; -1: out of
+ * memory). bkeys: the boundary faces, sorted. */
+static int64_t interface_of(const self_data *d, int32_t pv, const tri_key *bkeys, if_scratch *sc) {
+  const bs_mesh *m = d->mesh;
+  const bs_bsr *P = d->fem->pattern;
+  size_t nt = 0;
+  for (int32_t s = P->row_ptr[pv]; s < P->row_ptr[pv + 1]; s++) {
+    const int32_t q = P->col[s];
+    const size_t deg = (size_t)(m->v2t_ptr[q + 1] - m->v2t_ptr[q]);
+    int32_t *t = grow(sc->tets, &sc->cap_tets, nt + deg, sizeof(int32_t));
+    if (!t) return -1;
+    sc->tets = t;
+    memcpy(sc->tets + nt, m->v2t + m->v2t_ptr[q], deg * sizeof(int32_t));
+    nt += deg;
+  }
+  qsort(sc->tets, nt, sizeof(int32_t), cmp_i32);
+  size_t u = 0;
+  for (size_t j = 0; j < nt; j++)
+    if (u == 0 || sc->tets[j] != sc->tets[u - 1]) sc->tets[u++] = sc->tets[j];
+  tri_key *kk = grow(sc->keys, &sc->cap_keys, 4 * u, sizeof(tri_key));
+  if (!kk) return -1;
+  sc->keys = kk;
+  size_t nk = 0;
+  for (size_t j = 0; j < u; j++) {
+    const int32_t *tv = m->tets + 4 * (size_t)sc->tets[j];
+    sc->keys[nk++] = make_key(tv[1], tv[2], tv[3]);
+    sc->keys[nk++] = make_key(tv[0], tv[2], tv[3]);
+    sc->keys[nk++] = make_key(tv[0], tv[1], tv[3]);
+    sc->keys[nk++] = make_key(tv[0], tv[1], tv[2]);
+  }
+  qsort(sc->keys, nk, sizeof(tri_key), cmp_tri_key);
+  /* a face met once bounds the region: the boundary's are already primitives */
+  int64_t n = 0;
+  for (size_t j = 0; j < nk;) {
+    size_t e = j + 1;
+    while (e < nk && cmp_tri_key(&sc->keys[e], &sc->keys[j]) == 0) e++;
+    if (e == j + 1 && !bsearch(&sc->keys[j], bkeys, (size_t)m->n_faces, sizeof(tri_key), cmp_tri_key))
+      sc->keys[n++] = sc->keys[j];
+    j = e;
+  }
+  return n;
+}
+
+static int build_interfaces(self_data *d, bs_error *err) {
+  const bs_mesh *m = d->mesh;
+  const int32_t ns = d->n_surf;
+  tri_key *bkeys = malloc(sizeof(tri_key) * ((size_t)m->n_faces + 1));
+  int32_t **lists = calloc((size_t)ns + 1, sizeof(int32_t *));
+  d->if_ptr = calloc((size_t)ns + 1, sizeof(int64_t));
+  if (!bkeys || !lists || !d->if_ptr) {
+    free(bkeys);
+    free(lists);
+    return bs_error_set(err, BS_ENOMEM, "out of memory listing the self-collision interface faces");
+  }
+  for (int32_t f = 0; f < m->n_faces; f++)
+    bkeys[f] = make_key(m->faces[3 * f], m->faces[3 * f + 1], m->faces[3 * f + 2]);
+  qsort(bkeys, (size_t)m->n_faces, sizeof(tri_key), cmp_tri_key);
+  int failed = 0;
+#pragma omp parallel num_threads(d->nthreads) reduction(| : failed) if (ns >= PAR_MIN)
+  {
+    if_scratch sc = {0};
+#pragma omp for schedule(dynamic, 64)
+    for (int32_t i = 0; i < ns; i++) {
+      if (failed) continue;
+      const int64_t n = interface_of(d, d->surf[i], bkeys, &sc);
+      lists[i] = n >= 0 ? malloc(sizeof(int32_t) * 3 * (size_t)(n > 0 ? n : 1)) : NULL;
+      if (!lists[i]) {
+        failed = 1;
+        continue;
+      }
+      for (int64_t j = 0; j < n; j++) memcpy(lists[i] + 3 * j, sc.keys[j].v, 3 * sizeof(int32_t));
+      d->if_ptr[i + 1] = n;
+    }
+    free(sc.tets);
+    free(sc.keys);
+  }
+  free(bkeys);
+  if (!failed) {
+    for (int32_t i = 0; i < ns; i++) d->if_ptr[i + 1] += d->if_ptr[i];
+    d->if_face = malloc(sizeof(int32_t) * 3 * (size_t)(d->if_ptr[ns] + 1));
+    if (!d->if_face) failed = 1;
+  }
+  for (int32_t i = 0; i < ns; i++) {
+    if (!failed)
+      memcpy(d->if_face + 3 * d->if_ptr[i], lists[i], sizeof(int32_t) * 3 * (size_t)(d->if_ptr[i + 1] - d->if_ptr[i]));
+    free(lists[i]);
+  }
+  free(lists);
+  if (failed) return bs_error_set(err, BS_ENOMEM, "out of memory listing the self-collision interface faces");
+  return 0;
+}
+
 int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err) {
   if (!fem || !out) return bs_error_set(err, BS_EINPUT, "self-collision term: fem and out must be non-NULL");
   *out = NULL;
@@ -872,6 +1042,7 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
   }
   free(is_surf);
   bs_term *t = NULL;
+  if (!st) st = build_interfaces(d, err);
   if (!st) {
     bvh_rebuild(d, m->x);
     t = calloc(1, sizeof *t);

@@ -303,6 +303,69 @@ Test(self_detect, own_neighbourhood_excluded) {
   world_destroy(&w);
 }
 
+/* A vertex pushed through its own body leaves its excluded neighbourhood
+ * through an interface face, its distance to which is then a primitive: Phi
+ * starts from 0 there (continuous), where the distance to the body's surface
+ * alone would make it jump by k (1/3 m)^3 ~ 4e4 J. Further in, the distance
+ * grows smoothly and the vertex is pushed back. */
+Test(self_detect, leaving_the_neighbourhood_is_continuous) {
+  const double k = 1e6;
+  world w;
+  world_create(&w, k);
+  bs_error err;
+  int32_t q = -1;
+  for (int32_t v = 0; v < w.nA; v++) {
+    const double *X = w.mesh->x + 3 * v;
+    if (fabs(X[0] - 1) < 1e-12 && fabs(X[1] - 1.0 / 3) < 1e-12 && fabs(X[2] - 1.0 / 3) < 1e-12) q = v;
+  }
+  cr_assert(q >= 0);
+  w.x[3 * q + 1] += 0.011;
+  w.x[3 * q + 2] += 0.023;
+  const int steps = 1000;
+  const double x0 = 0.45, x1 = 0.05, h = (x0 - x1) / steps;
+  double E_prev = 0, jump = 0, E_end = 0;
+  int first = -1;
+  for (int i = 0; i <= steps; i++) {
+    w.x[3 * q] = x0 - h * i;
+    int32_t count = -1;
+    cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
+    const double E = w.self->ops->value(w.self, w.x);
+    cr_assert(isfinite(E) && E >= 0);
+    if (count > 0 && first < 0) {
+      first = i;
+      cr_expect_leq(E, k * h * h * h, "the first flagged position (x = %g) has Phi = %g", w.x[3 * q], E);
+    }
+    if (i > 0) jump = fmax(jump, fabs(E - E_prev));
+    E_prev = E_end = E;
+  }
+  cr_assert(first > 0, "never flagged");
+  /* Phi ~ k depth^3 with depth growing at most by h per step: |dPhi| <= 3 k depth^2 h */
+  cr_expect_leq(jump, 3 * k * 0.5 * 0.5 * h, "largest change of Phi between neighbouring positions %g", jump);
+  cr_expect_gt(E_end, 0.0);
+  /* there (x = 0.05, an interface face its primitive) the gradient is the
+     value's central difference, on q and on the face's vertices */
+  double *g = calloc(w.n3, sizeof(double));
+  w.self->ops->gradient(w.self, w.x, g);
+  double gmax = 0, emax = 0;
+  int moved = 0;
+  for (size_t i = 0; i < w.n3; i++) {
+    if (g[i] == 0.0) continue;
+    moved += (int)(i / 3 != (size_t)q);
+    const double s0 = w.x[i], hh = 1e-6;
+    w.x[i] = s0 + hh;
+    const double Ep = w.self->ops->value(w.self, w.x);
+    w.x[i] = s0 - hh;
+    const double Em = w.self->ops->value(w.self, w.x);
+    w.x[i] = s0;
+    gmax = fmax(gmax, fabs(g[i]));
+    emax = fmax(emax, fabs((Ep - Em) / (2 * hh) - g[i]));
+  }
+  cr_expect(moved >= 3, "the primitive's vertices get no force");
+  cr_expect(gmax > 0 && emax <= 1e-6 * gmax, "gradient vs central differences: error %g of %g", emax, gmax);
+  free(g);
+  world_destroy(&w);
+}
+
 /* ---- term derivatives ------------------------------------------------- */
 
 static void dense_from_bsr(const bs_bsr *H, double *D, size_t n3) {
