@@ -29,9 +29,11 @@
  *    through its own body then meets Phi = 0 at the crossing and is pushed
  *    back towards its neighbourhood, where without the interface faces Phi
  *    jumped to k times the cube of its depth below the surface: ~4e4 J in
- *    test self_detect/leaving_the_neighbourhood_is_continuous). A penetration
- *    deeper than the neighbourhood's size (about two edges) is then measured
- *    from the neighbourhood rather than from the surface. The search starts from the distance to the triangle p collided
+ *    test self_detect/leaving_the_neighbourhood_is_continuous). Elsewhere
+ *    little changes: p's own body's triangles next to p (about an edge
+ *    away) are primitives as in the paper, and they are usually nearer than
+ *    its interface faces (one to two edges), so a vertex deep in another
+ *    body is mostly measured as before. The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
  *    and gathers every triangle within that distance from the AABB tree of
