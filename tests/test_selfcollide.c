@@ -195,6 +195,20 @@ static void world_destroy(world *w) {
   free(w->x);
 }
 
+/* A's vertex at rest position (1, 1/3, 1/3) (cells of 1/3), moved off the
+ * mesh lines in y and z so that it never lies on a tet face. */
+static int32_t a_vertex_off_the_lines(world *w) {
+  int32_t q = -1;
+  for (int32_t v = 0; v < w->nA; v++) {
+    const double *X = w->mesh->x + 3 * v;
+    if (fabs(X[0] - 1) < 1e-12 && fabs(X[1] - 1.0 / 3) < 1e-12 && fabs(X[2] - 1.0 / 3) < 1e-12) q = v;
+  }
+  cr_assert(q >= 0);
+  w->x[3 * q + 1] += 0.011;
+  w->x[3 * q + 2] += 0.023;
+  return q;
+}
+
 /* The B vertex at rest position (1.5, 0.5, 0.5) (centre of B's xmin face). */
 static int32_t b_face_centre(const world *w) {
   for (int32_t v = w->nA; v < w->mesh->n_vertices; v++) {
@@ -280,15 +294,7 @@ Test(self_detect, own_neighbourhood_excluded) {
   world w;
   world_create(&w, 1e6);
   bs_error err;
-  /* A's vertex (1, 1/3, 1/3) (cells of 1/3) moved inwards, off the mesh lines */
-  int32_t q = -1;
-  for (int32_t v = 0; v < w.nA; v++) {
-    const double *X = w.mesh->x + 3 * v;
-    if (fabs(X[0] - 1) < 1e-12 && fabs(X[1] - 1.0 / 3) < 1e-12 && fabs(X[2] - 1.0 / 3) < 1e-12) q = v;
-  }
-  cr_assert(q >= 0);
-  w.x[3 * q + 1] += 0.011;
-  w.x[3 * q + 2] += 0.023;
+  const int32_t q = a_vertex_off_the_lines(&w);
   int32_t count = -1;
   for (int i = 0; i <= 100; i++) {
     w.x[3 * q] = 1 - 0.6 * i / 100.0; /* down to x = 0.4: inside the second layer */
@@ -313,14 +319,7 @@ Test(self_detect, leaving_the_neighbourhood_is_continuous) {
   world w;
   world_create(&w, k);
   bs_error err;
-  int32_t q = -1;
-  for (int32_t v = 0; v < w.nA; v++) {
-    const double *X = w.mesh->x + 3 * v;
-    if (fabs(X[0] - 1) < 1e-12 && fabs(X[1] - 1.0 / 3) < 1e-12 && fabs(X[2] - 1.0 / 3) < 1e-12) q = v;
-  }
-  cr_assert(q >= 0);
-  w.x[3 * q + 1] += 0.011;
-  w.x[3 * q + 2] += 0.023;
+  const int32_t q = a_vertex_off_the_lines(&w);
   const int steps = 1000;
   const double x0 = 0.45, x1 = 0.05, h = (x0 - x1) / steps;
   double E_prev = 0, jump = 0, E_end = 0;
