@@ -188,6 +188,18 @@ static void mul_extra(const bs_bsr *A, const uint8_t *mask, const double *x, dou
   }
 }
 
+/* The tail of the products with a dot: the extra blocks, then the dot as a
+ * separate pass (y changed after the row loop's fused one). */
+static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, double xy) {
+  if (A->n_extra == 0) return xy;
+  mul_extra(A, mask, x, y);
+  const int64_t N = 3 * (int64_t)A->n;
+  xy = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
+  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
+  return xy;
+}
+
 /* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
  * row is in registers; with extra blocks y changes afterwards, so the dot is
  * then a separate pass). */
@@ -248,14 +260,11 @@ static inline __attribute__((always_inline)) double mul_impl(const bs_bsr *A, co
       if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
     }
   }
-  if (A->n_extra == 0) return xy;
-  mul_extra(A, mask, x, y);
-  if (!dot) return 0.0;
-  const int64_t N = 3 * (int64_t)n;
-  xy = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
-  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
-  return xy;
+  if (!dot) {
+    if (A->n_extra > 0) mul_extra(A, mask, x, y);
+    return 0.0;
+  }
+  return mul_tail(A, mask, x, y, xy);
 }
 
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) { (void)mul_impl(A, mask, x, y, 0); }
@@ -275,17 +284,6 @@ double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, dou
  * always_inline function would test its arguments in the inner loop. */
 
 int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
-
-/* The tail shared with mul_impl: extra blocks, then the dot when it was not fused. */
-static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, double xy) {
-  if (A->n_extra == 0) return xy;
-  mul_extra(A, mask, x, y);
-  const int64_t N = 3 * (int64_t)A->n;
-  xy = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
-  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
-  return xy;
-}
 
 /* The row loop over blocks, masked or not (selects as in mul_impl), with
  * BLOCK(s, j, t0, t1, t2) computing the block's product into t0..t2. */
