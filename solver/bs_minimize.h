@@ -209,7 +209,7 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   bs_lin_kind linear;  /* cg (default), pcg, amg, cholmod (minres accepted too)            */
   int cg_max_iter;     /* Krylov iterations cap per solve; 0 (default): 2 x free dofs + 100 */
   int cg_single;       /* added, default 0. 1: cg, pcg and amg solves read the Hessian's    */
-                       /* values in single precision after their first product             */
+                       /* values in single precision from their 6th product on             */
                        /* (bs_linsolve_set_single): 40 bytes per block, not 76             */
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
   int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */

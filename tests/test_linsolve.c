@@ -521,10 +521,10 @@ Test(linsolve, empty_and_fully_constrained) {
 }
 
 /* Single-precision values (bs_linsolve_set_single): CG and PCG, masked or not,
- * on a badly scaled SPD matrix, converge to 1e-10 of the matrix rounded to
- * float (after 4 products with A itself). Their answer is within the
- * distance between the dense solutions of A and of the rounded matrix of both,
- * and it is not the double solve's. A solve of 4
+ * on an SPD matrix with entries near 1e7 (unevenly scaled), converge to 1e-10
+ * of the matrix rounded to float (after 5 products with A itself). Their
+ * answer is within the distance between the dense solutions of A and of the
+ * rounded matrix of both, and it is not the double solve's. A solve of 4
  * iterations or fewer is the double one bit for bit. A value beyond FLT_MAX
  * makes the solve run in double (single_overflow) and still converge. */
 Test(linsolve, single_precision_values) {
