@@ -73,3 +73,8 @@ void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err) {
   if (!p) bs_error_set(err, BS_ENOMEM, "out of memory allocating %zu x %zu bytes for %s", n, size, what);
   return p;
 }
+
+int bs_cmp_i32(const void *a, const void *b) {
+  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}

@@ -862,11 +862,6 @@ static int cmp_tri_key(const void *a, const void *b) {
   return 0;
 }
 
-static int cmp_i32(const void *a, const void *b) {
-  const int32_t p = *(const int32_t *)a, q = *(const int32_t *)b;
-  return (p > q) - (p < q);
-}
-
 static tri_key make_key(int32_t a, int32_t b, int32_t c) {
   tri_key k;
   if (a > b) { int32_t t = a; a = b; b = t; }
@@ -910,7 +905,7 @@ static int64_t interface_of(const self_data *d, int32_t pv, const tri_key *bkeys
     memcpy(sc->tets + nt, m->v2t + m->v2t_ptr[q], deg * sizeof(int32_t));
     nt += deg;
   }
-  qsort(sc->tets, nt, sizeof(int32_t), cmp_i32);
+  qsort(sc->tets, nt, sizeof(int32_t), bs_cmp_i32);
   size_t u = 0;
   for (size_t j = 0; j < nt; j++)
     if (u == 0 || sc->tets[j] != sc->tets[u - 1]) sc->tets[u++] = sc->tets[j];

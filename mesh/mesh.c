@@ -34,11 +34,6 @@ static void *dup_array(const void *src, size_t n, size_t size, const char *what,
   return d;
 }
 
-static int cmp_i32(const void *a, const void *b) {
-  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
-
 static void sort3(int32_t v[3]) {
   int32_t t;
   if (v[0] > v[1]) { t = v[0]; v[0] = v[1]; v[1] = t; }
@@ -157,7 +152,7 @@ int bs__group_update_vertices(const bs_mesh *m, bs_group *g, bs_error *err) {
       else
         for (int j = 0; j < 4; ++j) list[(size_t)e * 4 + j] = m->tets[4 * (size_t)g->elems[e] + j];
     }
-    qsort(list, k, sizeof *list, cmp_i32);
+    qsort(list, k, sizeof *list, bs_cmp_i32);
     for (size_t i = 0; i < k; ++i)
       if (n == 0 || list[i] != list[n - 1]) list[n++] = list[i];
     int32_t *shrunk = realloc(list, (size_t)n * sizeof *list);
@@ -450,7 +445,7 @@ static int derive_edges(bs_mesh *m, bs_error *err) {
   int32_t ne = 0;
   for (int32_t a = 0; a < nv; ++a) {
     int32_t *r = other + ptr[a], n = ptr[a + 1] - ptr[a];
-    qsort(r, (size_t)n, sizeof *r, cmp_i32);
+    qsort(r, (size_t)n, sizeof *r, bs_cmp_i32);
     for (int32_t i = 0; i < n; ++i) ne += (i == 0 || r[i] != r[i - 1]);
   }
   m->edges = bs_calloc((size_t)ne * 2, sizeof(int32_t), "boundary edges", err);
@@ -944,7 +939,7 @@ static int check_edges(const bs_mesh *m, bs_error *err) {
   int32_t ne = 0;
   for (int32_t a = 0; a < nv; ++a) {
     int32_t *r = other + ptr[a], n = ptr[a + 1] - ptr[a];
-    qsort(r, (size_t)n, sizeof *r, cmp_i32);
+    qsort(r, (size_t)n, sizeof *r, bs_cmp_i32);
     for (int32_t i = 0; i < n;) {
       int32_t b = r[i] / 2, fwd = 0, bwd = 0, j = i;
       for (; j < n && r[j] / 2 == b; ++j) (r[j] & 1) ? ++fwd : ++bwd;
@@ -993,7 +988,7 @@ static int check_groups(const bs_mesh *m, bs_error *err) {
     for (int32_t e = 0; e < g->n_elems; ++e)
       for (int j = 0; j < per; ++j) {
         int32_t v = g->dim < 3 ? g->elems[(size_t)e * per + j] : m->tets[4 * (size_t)g->elems[e] + j];
-        if (!bsearch(&v, g->vertices, (size_t)g->n_vertices, sizeof v, cmp_i32))
+        if (!bsearch(&v, g->vertices, (size_t)g->n_vertices, sizeof v, bs_cmp_i32))
           return bs_error_set(err, BS_EINPUT, "group \"%s\" (dim %d, tag %d): element %d uses vertex %d, missing from its vertex set",
                               g->name, g->dim, g->tag, e, v);
       }

@@ -63,11 +63,6 @@ static int cmp_key_index(const void *a, const void *b) {
   return (x->index > y->index) - (x->index < y->index);
 }
 
-static int cmp_i32(const void *a, const void *b) {
-  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
-
 /* New element and vertex arrays of one group under vertex map iperm
  * (old -> new) and tet map tip (old -> new). */
 static int permute_group(const bs_group *g, const int32_t *iperm, int32_t nv, const int32_t *tip, int32_t nt,
@@ -94,7 +89,7 @@ static int permute_group(const bs_group *g, const int32_t *iperm, int32_t nv, co
       }
       el[i] = tip[t];
     }
-    qsort(el, (size_t)g->n_elems, sizeof(int32_t), cmp_i32);
+    qsort(el, (size_t)g->n_elems, sizeof(int32_t), bs_cmp_i32);
   } else {
     for (int32_t i = 0; i < g->n_elems; i++) {
       int32_t key = INT32_MAX;
@@ -123,7 +118,7 @@ static int permute_group(const bs_group *g, const int32_t *iperm, int32_t nv, co
     }
     vs[i] = iperm[v];
   }
-  qsort(vs, (size_t)g->n_vertices, sizeof(int32_t), cmp_i32);
+  qsort(vs, (size_t)g->n_vertices, sizeof(int32_t), bs_cmp_i32);
   free(ki);
   *elems_out = el;
   *verts_out = vs;

@@ -30,11 +30,6 @@ void bs_fem_destroy(bs_fem **pf) {
 
 enum { EBLOCK = 1024 }; /* tets per partial sum of bs_fem_elastic_energy */
 
-static int cmp_i32(const void *a, const void *b) {
-  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
-
 /* Chunks: from the first tet not yet taken, breadth first through shared
  * vertices over the tets not yet taken, until BS_FEM_CHUNK tets (fewer when
  * the search runs out); then sorted. chunk_of[t] receives t's chunk. */
@@ -64,7 +59,7 @@ static int make_chunks(bs_fem *f, int32_t *chunk_of, bs_error *err) {
           }
         }
     }
-    qsort(out + start, (size_t)(pos - start), sizeof(int32_t), cmp_i32);
+    qsort(out + start, (size_t)(pos - start), sizeof(int32_t), bs_cmp_i32);
     f->chunk_ptr[++k] = pos;
   }
   f->n_chunks = k;

@@ -7,14 +7,10 @@
 
 /* Sorts a short int32 array in place (rows hold tens of entries: insertion
  * sort beats qsort there; long rows fall back to qsort). */
-static int cmp_i32(const void *a, const void *b) {
-  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
 
 static void sort_i32(int32_t *v, int64_t m) {
   if (m > 32) {
-    qsort(v, (size_t)m, sizeof *v, cmp_i32);
+    qsort(v, (size_t)m, sizeof *v, bs_cmp_i32);
     return;
   }
   for (int64_t k = 1; k < m; ++k) {

@@ -189,6 +189,22 @@ static int ensure_solver(bs_minimizer *m, bs_lin_kind k, bs_error *err) {
   return rc;
 }
 
+/* The values' precision of the Krylov workspaces (opts.cg_single): on for the
+ * one the options solve with, and for CG when CHOLMOD falls back to it; off
+ * (freed) otherwise. Allocates the single copy here, once, not in the Newton
+ * loop. */
+static int set_precision(bs_minimizer *m, const bs_minimize_opts *o, bs_error *err) {
+  static const bs_lin_kind krylov[] = {BS_LIN_CG, BS_LIN_PCG, BS_LIN_AMG};
+  for (int i = 0; i < 3; ++i) {
+    const bs_lin_kind k = krylov[i];
+    if (!m->lin[k]) continue;
+    const int on = o->cg_single && (k == o->linear || (k == BS_LIN_CG && o->linear == BS_LIN_CHOLMOD));
+    int rc = bs_linsolve_set_single(m->lin[k], on, err);
+    if (rc) return rc;
+  }
+  return 0;
+}
+
 int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_minimizer **out,
                         bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_minimizer_create: out is NULL");
@@ -235,7 +251,7 @@ int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_
     }
   }
   if ((rc = ensure_solver(m, BS_LIN_CG, err)) || (rc = ensure_solver(m, BS_LIN_MINRES, err)) ||
-      (rc = ensure_solver(m, o.linear, err))) {
+      (rc = ensure_solver(m, o.linear, err)) || (rc = set_precision(m, &o, err))) {
     bs_minimizer_destroy(&m);
     return rc;
   }
@@ -247,7 +263,7 @@ int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_erro
   if (!m) return bs_error_set(err, BS_EINPUT, "bs_minimizer_set_opts: minimizer is NULL");
   int rc = bs__opts_check(opts, err);
   if (rc) return rc;
-  if ((rc = ensure_solver(m, opts->linear, err))) return rc;
+  if ((rc = ensure_solver(m, opts->linear, err)) || (rc = set_precision(m, opts, err))) return rc;
   m->opts = *opts;
   return 0;
 }
@@ -357,19 +373,13 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   double t = bs_seconds();
   bs_error e2;
   bs_error_clear(&e2);
-  /* the values' precision (allocates the single copy on first use; the CG of a
-     CHOLMOD fallback gets it there) */
-  int rc = kind == BS_LIN_CG || kind == BS_LIN_PCG || kind == BS_LIN_AMG
-               ? bs_linsolve_set_single(m->lin[kind], o->cg_single, &e2)
-               : 0;
-  if (rc == 0) rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  int rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
   if (rc == 0 && kind == BS_LIN_AMG) amg_judge(m, &ls);
   if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd) {
     st->cholmod_fallbacks++;
     rec->cholmod_fallback = 1;
     kind = BS_LIN_CG;
-    rc = bs_linsolve_set_single(m->lin[kind], o->cg_single, &e2);
-    if (rc == 0) rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+    rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
   }
   st->t_linear += bs_seconds() - t;
   if (rc == BS_ENUMERIC) {

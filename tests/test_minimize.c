@@ -443,25 +443,34 @@ static int ev_rosenN_scaled(fx *f, const double *u, double *E, double *g, bs_bsr
   return rc;
 }
 
-/* One solve of the 12-D Rosenbrock from the usual start, E in units scaled by
- * 2^20 or not (tol scaled alike). */
-static void rosen_units(int scaled, int sigma_auto, double x[12], bs_minimize_stats *st) {
-  bs_bsr *P = pattern_chain(4);
+/* One solve of the 3n-D Rosenbrock from the usual start, E in units scaled
+ * by 2^20 or not (tol scaled alike), with the given linear solver and values'
+ * precision; asserts convergence. */
+static void rosen_solve(int32_t n, int scaled, int sigma_auto, bs_lin_kind linear, int single, double *x,
+                        bs_minimize_stats *st) {
+  bs_bsr *P = pattern_chain(n);
   fx f;
-  fx_init(&f, 4, scaled ? ev_rosenN_scaled : ev_rosenN);
+  fx_init(&f, n, scaled ? ev_rosenN_scaled : ev_rosenN);
   bs_minimize_opts o;
   bs_minimize_opts_default(&o);
   o.tol = scaled ? 1e-8 * 1048576.0 : 1e-8;
   o.sigma_auto = sigma_auto;
+  o.linear = linear;
+  o.cg_single = single;
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
   bs_objective obj = make_obj(&f, NULL);
-  for (int k = 0; k < 12; ++k) x[k] = k % 2 ? 1.0 : -1.2;
+  for (int k = 0; k < 3 * n; ++k) x[k] = k % 2 ? 1.0 : -1.2;
   cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
   cr_assert_eq(st->reason, BS_MIN_CONVERGED, "%s", st->reason_text);
   bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
+}
+
+/* The 12-D one in plain CG, double values. */
+static void rosen_units(int scaled, int sigma_auto, double x[12], bs_minimize_stats *st) {
+  rosen_solve(4, scaled, sigma_auto, BS_LIN_CG, 0, x, st);
 }
 
 /* sigma_auto makes the CG tolerance unitless: the same problem in units of E
@@ -490,25 +499,8 @@ Test(minimize, cg_single_converges) {
     double xs[2][60];
     bs_minimize_stats st[2];
     for (int single = 0; single < 2; ++single) {
-      bs_bsr *P = pattern_chain(20);
-      fx f;
-      fx_init(&f, 20, ev_rosenN);
-      bs_minimize_opts o;
-      bs_minimize_opts_default(&o);
-      o.tol = 1e-8;
-      o.sigma_auto = 1;
-      o.linear = pcg ? BS_LIN_PCG : BS_LIN_CG;
-      o.cg_single = single;
-      bs_minimizer *m = NULL;
-      bs_error err = {0};
-      cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-      bs_objective obj = make_obj(&f, NULL);
-      for (int k = 0; k < 60; ++k) xs[single][k] = k % 2 ? 1.0 : -1.2;
-      cr_assert_eq(bs_minimize(m, &obj, xs[single], &st[single], &err), 0, "%s", err.msg);
-      cr_assert_eq(st[single].reason, BS_MIN_CONVERGED, "pcg %d single %d: %s", pcg, single, st[single].reason_text);
+      rosen_solve(20, 0, 1, pcg ? BS_LIN_PCG : BS_LIN_CG, single, xs[single], &st[single]);
       for (int k = 0; k < 60; ++k) cr_assert_float_eq(xs[single][k], 1.0, 1e-6);
-      bs_minimizer_destroy(&m);
-      bs_bsr_destroy(&P);
     }
     cr_assert_leq(abs(st[1].iterations - st[0].iterations), 1, "pcg %d: %d Newton iterations in single, %d in double",
                   pcg, st[1].iterations, st[0].iterations);
