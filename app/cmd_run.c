@@ -41,7 +41,7 @@ static int mkdir_p(const char *dir, bs_error *err) {
 }
 
 typedef struct run_totals {
-  long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb;
+  long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill;
   double seconds, max_grad;
 } run_totals;
 
@@ -52,6 +52,7 @@ static void add_stats(run_totals *T, const bs_step_stats *st) {
   T->cg += st->min.cg_iterations;
   T->ls += st->min.ls_evaluations;
   T->indefinite += st->min.indefinite_exits;
+  T->downhill += st->min.downhill_iterates;
   T->fb_dx += st->min.fallback_neg_dx;
   T->fb_grad += st->min.fallback_neg_grad;
   T->clamps += st->min.clamps;
@@ -385,9 +386,10 @@ int bs_cmd_run(int argc, char **argv) {
     }
     snprintf(summary + len, sizeof summary - (size_t)len,
              "solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG "
-             "exits, %ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD fallbacks; peak memory %.1f MiB\n",
-             T.cg, T.iterations ? (double)T.cg / T.iterations : 0.0, T.ls, T.indefinite, T.fb_dx, T.fb_grad, T.clamps,
-             T.chol_fb, bs_peak_rss() / 1048576.0);
+             "exits, %ld earlier CG iterates, %ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD fallbacks; "
+             "peak memory %.1f MiB\n",
+             T.cg, T.iterations ? (double)T.cg / T.iterations : 0.0, T.ls, T.indefinite, T.downhill, T.fb_dx, T.fb_grad,
+             T.clamps, T.chol_fb, bs_peak_rss() / 1048576.0);
     printf("\n%s", summary);
     if (dir) {
       char p[1200];

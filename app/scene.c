@@ -437,13 +437,15 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   /* solver */
   bs_integrator_opts_default(&s->solver);
   s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
+  s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
                                      "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma",
-                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", "cg_precision", NULL};
+                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", "cg_precision",
+                                     "cg_sigma_scale", "cg_downhill", "cg_forcing", NULL};
     if ((st = check_keys(c, so, "solver", sk))) return st;
     char buf[64];
     bs_error e2;
@@ -478,15 +480,32 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
     if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
     const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
+    const int has_scale = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma_scale") != NULL;
     if (cJSON_IsString(sg)) {
       if (strcmp(sg->valuestring, "auto") != 0)
         return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got \"%s\"", sg->valuestring);
       s->solver.min.sigma_auto = 1;
     } else if (sg) {
+      if (has_scale)
+        return fail(c, "solver.cg_sigma_scale", "applies to cg_sigma \"auto\" only (cg_sigma is a number here)");
       if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
+      if (!(s->solver.min.sigma > 0) || !isfinite(s->solver.min.sigma))
+        return fail(c, "solver.cg_sigma", "must be > 0, got %g", s->solver.min.sigma);
       s->solver.min.sigma_auto = 0;
     }
-    if (!(s->solver.min.sigma > 0)) return fail(c, "solver.cg_sigma", "must be > 0, got %g", s->solver.min.sigma);
+    if (has_scale) {
+      if ((st = get_num(c, so, "solver", "cg_sigma_scale", 0, &s->solver.min.sigma))) return st;
+      if (!(s->solver.min.sigma > 0) || !isfinite(s->solver.min.sigma))
+        return fail(c, "solver.cg_sigma_scale", "must be > 0, got %g", s->solver.min.sigma);
+    }
+    if ((st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill))) return st;
+    buf[0] = 0;
+    if ((st = get_str(c, so, "solver", "cg_forcing", 0, buf, sizeof buf))) return st;
+    if (buf[0]) {
+      if (!strcmp(buf, "paper")) s->solver.min.forcing_ew = 0;
+      else if (!strcmp(buf, "eisenstat_walker")) s->solver.min.forcing_ew = 1;
+      else return fail(c, "solver.cg_forcing", "must be \"paper\" or \"eisenstat_walker\", got \"%s\"", buf);
+    }
     if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
         (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||
         (st = get_int(c, so, "solver", "newton_k", 0, 1, 1000000, &s->solver.newton_k)) ||

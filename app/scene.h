@@ -19,6 +19,11 @@
 #include "bs_step.h"
 
 #define BS_MAX_NAME 256
+/* solver.cg_sigma_scale's default: c in the CG tolerance of cg_sigma "auto",
+ * min(1/2, c sqrt(max(||grad E||, tau) / ||grad E_0||)). Smaller values cut
+ * Newton iterations on the paper's scenes but slow the recovery from tangled
+ * states (README, Scenes). */
+#define BS_SCENE_SIGMA_SCALE 1.0
 
 typedef enum { BS_SCRIPT_FIXED = 0, BS_SCRIPT_VELOCITY, BS_SCRIPT_KEYFRAMES } bs_script_kind;
 

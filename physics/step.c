@@ -216,9 +216,12 @@ static void hook_register(const double *x, const double *g, void *ctx) {
 
 static void obj_trace(const bs_min_iter *it, void *ctx) {
   bs_integrator *I = ctx;
-  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s  alpha %.4g (%d trials)%s\n",
+  char kept[32] = "";
+  if (it->lin_downhill_iterate > 0) snprintf(kept, sizeof kept, " (iterate %d)", it->lin_downhill_iterate);
+  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s  alpha %.4g (%d trials)%s\n",
           it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
-          it->alpha, it->ls_evaluations, it->direction ? (it->direction == 1 ? " fallback -dx" : " fallback -g") : "");
+          kept, it->alpha, it->ls_evaluations,
+          it->direction ? (it->direction == 1 ? " fallback -dx" : " fallback -g") : "");
   fflush(I->opts.trace);
 }
 
@@ -386,6 +389,7 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
     st->min.cg_iterations += sub.min.cg_iterations;
     st->min.ls_evaluations += sub.min.ls_evaluations;
     st->min.indefinite_exits += sub.min.indefinite_exits;
+    st->min.downhill_iterates += sub.min.downhill_iterates;
     st->min.reason = sub.min.reason;
     st->min.reason_text = sub.min.reason_text;
     st->min.grad_norm = sub.min.grad_norm;

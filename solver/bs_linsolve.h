@@ -94,6 +94,8 @@ typedef struct bs_lin_stats {
   double seconds;      /* wall time of the call                                              */
   int precond_failed;  /* 1: AMG's V-cycle was not positive definite (r.Br <= 0; see above)  */
   int single_overflow; /* 1: a value overflowed single precision; this solve ran in double   */
+  int downhill_iterate; /* k > 0: the answer is CG's iterate k, the last that passed the       */
+                        /* downhill test (bs_linsolve_set_downhill); 0: the usual answer       */
 } bs_lin_stats;
 
 typedef struct bs_linsolve bs_linsolve; /* workspace sized once for a pattern */
@@ -122,6 +124,22 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
  * beyond single precision's range makes the solve start again in double
  * (stats.single_overflow = 1). on = 0 frees the copy. */
 int bs_linsolve_set_single(bs_linsolve *ls, int on, bs_error *err);
+
+/* CG, PCG and AMG workspaces (BS_EINPUT for another kind when kappa > 0):
+ * kappa in (0, 1) makes the following solves check each iterate x_k against
+ * the downhill test of the minimizer (paper 3.1, step 5), b.x_k >= kappa ||b||
+ * ||x_k|| (b = -grad E), and answer with the last iterate that passed when
+ * the one they would return fails it (stats.downhill_iterate = its k; the
+ * residual reported is that iterate's). Where the paper would replace a
+ * failing answer by -grad E, this keeps the part of the Newton direction CG
+ * had built: a long solve that ends on negative curvature, or in a nearly
+ * singular direction, can return an iterate nearly orthogonal to grad E
+ * after many iterates that were good directions. b.x_k comes from the PCG
+ * identity b.p_k = r_k.z_k and ||x_k|| from the update pass, so the test
+ * costs nothing; the workspace allocates one more vector of 3n here
+ * (BS_ENOMEM) and copies into it only when an iterate that passed is followed
+ * by one that fails. kappa = 0 (the default) turns it off and frees it. */
+int bs_linsolve_set_downhill(bs_linsolve *ls, double kappa, bs_error *err);
 
 /* AMG workspaces only (BS_EINPUT otherwise): builds the BoomerAMG hierarchy
  * from P (SPD on the free dofs of mask; P's pattern size must match) and keeps

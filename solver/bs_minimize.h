@@ -11,7 +11,8 @@
  * its derivatives are in the objective's units (J, N, N/m). opts.tol is on the
  * masked 2-norm of grad E (N); opts.clamp is on the 2-norm of the step (units
  * of x); opts.sigma has units of grad E^-1/2 (the paper's sigma, usually 1;
- * opts.sigma_auto takes it from the gradient at the first iterate instead).
+ * with opts.sigma_auto it is unitless and divided by the square root of the
+ * gradient's norm at the first iterate).
  *
  * Each iteration of bs_minimize (paper 3.1, steps 1–9):
  *   1. register_active(x, g') with g' = grad E'(x), the gradient the objective
@@ -21,7 +22,8 @@
  *      feasible x). Hessian H at x (objective's hessian callback).
  *   3. stop when ||g|| < tol (at least one iteration when opts.naive_guess).
  *   4. solve H dx = -g from a zero guess to relative tolerance
- *      min(1/2, sigma sqrt(max(||g||, tol))) with opts.linear. CG/PCG exit on
+ *      min(1/2, sigma sqrt(max(||g||, tol))) (opts.sigma_auto and
+ *      opts.forcing_ew below change it) with opts.linear. CG/PCG exit on
  *      indefiniteness with their last iterate (the rhs on the first step);
  *      CHOLMOD reporting "not positive definite" falls back to CG for that
  *      iteration (counted in cholmod_fallbacks). opts.linear = amg: the
@@ -31,7 +33,11 @@
  *      from H itself when the callback is NULL (H must then be SPD). The
  *      setup is reused across iterations and calls (see "AMG reuse").
  *   5. downhill: keep dx if dx.g < -kappa ||dx|| ||g||, else -dx if that
- *      passes (fallback_neg_dx), else -g (fallback_neg_grad).
+ *      passes (fallback_neg_dx), else -g (fallback_neg_grad). With
+ *      opts.cg_downhill (the default), a CG/PCG/AMG answer that fails the
+ *      test is first replaced, inside the solve, by the last CG iterate that
+ *      passed it (bs_linsolve_set_downhill; counted in downhill_iterates),
+ *      so -g is used only when no iterate passed.
  *   6. clamp ||dx|| to opts.clamp (clamps).
  *   7. strong Wolfe line search (Nocedal & Wright, Algorithms 3.5 and 3.6) on
  *      phi(a) = E(P(x + a dx)), phi'(a) = grad E(P(x + a dx)).dx, where grad E
@@ -142,6 +148,7 @@ typedef struct bs_min_iter {
   int clamped;           /* 1: ||dx|| was clamped to opts.clamp                      */
   int lin_iterations;    /* Krylov iterations of the Newton solve                     */
   int lin_indefinite;    /* 1: CG/PCG stopped on negative curvature                   */
+  int lin_downhill_iterate; /* k > 0: dx is CG's iterate k (opts.cg_downhill)          */
   int cholmod_fallback;  /* 1: CHOLMOD found H not positive definite, CG was used     */
   int wolfe;             /* 1: the step satisfies the strong Wolfe conditions;        */
                          /* 0: the line search hit its cap (best decreasing point);  */
@@ -197,10 +204,10 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
   int max_iter;        /* Newton iterations cap, default 500 (>= 0)                        */
   double sigma;        /* CG tolerance scale, default 1 (> 0)                              */
-  int sigma_auto;      /* added, default 0. 1: sigma = 1/sqrt(||g_0||), g_0 the gradient   */
-                       /* at the solve's first iterate, so that the tolerance              */
-                       /* min(1/2, sqrt(max(||g||, tol)/||g_0||)) has no units (sigma is   */
-                       /* then ignored)                                                    */
+  int sigma_auto;      /* added, default 0. 1: the tolerance's scale is sigma/sqrt(||g_0||),*/
+                       /* g_0 the gradient at the solve's first iterate, so that          */
+                       /* min(1/2, sigma sqrt(max(||g||, tol)/||g_0||)) has no units       */
+                       /* (sigma is then a pure number: 1 gives 1/2 at the first solve)    */
   double kappa;        /* downhill check, default 1e-2 (in [0, 1))                          */
   double clamp;        /* length clamp ell, default 1e3 (> 0)                               */
   double c1, c2;       /* Wolfe constants, default 1e-4 and 0.9 (0 < c1 < c2 < 1)           */
@@ -211,6 +218,14 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   int cg_single;       /* added, default 0. 1: cg, pcg and amg solves read the Hessian's    */
                        /* values in single precision from their 6th product on             */
                        /* (bs_linsolve_set_single): 40 bytes per block, not 76             */
+  int forcing_ew;      /* added, default 0. 1: from the second iteration on, the CG         */
+                       /* tolerance of step 4 is also capped by Eisenstat & Walker's       */
+                       /* (1996) choice 2, eta_k = 0.9 (||g_k|| / ||g_k-1||)^2, kept >=    */
+                       /* 0.9 eta_k-1^2 when that exceeds 0.1: solves tighten where Newton */
+                       /* converges fast and stay loose where it does not                  */
+  int cg_downhill;      /* added, default 1. 1: a Krylov answer that fails step 5's test     */
+                       /* is replaced by the last CG iterate that passed it (step 5);      */
+                       /* 0: the paper's rule (-g when neither dx nor -dx passes)          */
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
   int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
                        /* step predicts, |g.d|, is below the rounding level of E            */
@@ -251,6 +266,8 @@ typedef struct bs_minimize_stats {
   int ls_failures;                           /* added: steps taken without a Wolfe point  */
   int noise_steps;                           /* added: steps taken by opts.accept_noise   */
   int amg_setups;                            /* added: AMG hierarchies built (linear = amg) */
+  int downhill_iterates;                     /* added: Newton directions that are an earlier */
+                                             /* CG iterate (opts.cg_downhill)              */
   double t_amg_setup;                        /* added: seconds in AMG setups (in t_linear) */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
   double grad_norm, E;                       /* final                                      */

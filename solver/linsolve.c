@@ -24,6 +24,9 @@ struct bs_linsolve {
   double *y, *v, *w, *w1, *w2, *r2; /* MINRES (with r, q)                     */
   double *minv;               /* PCG: 9n, inverse diagonal blocks         */
   float *val32;               /* CG kinds, single precision: 9 nnzb + 4    */
+  double kappa;               /* CG kinds: downhill test (0: off)          */
+  double *xs;                 /* CG kinds with kappa > 0: 3n, the last
+                                 iterate that passed it                    */
   bs_amg *amg;                /* AMG-PCG: the BoomerAMG V-cycle            */
   /* CHOLMOD: scalar lower-triangular CSC of the free dofs. */
   cholmod_common cm;
@@ -240,7 +243,9 @@ static double apply_block_jacobi(int32_t n, const double *minv, const double *r,
 /* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally preconditioned
  * (precond 1: block Jacobi; 2: one BoomerAMG V-cycle, set up beforehand). Stops on ||r|| <= rel_tol ||b||, max_iter, or
  * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
- * iteration, is returned with indefinite = 1). */
+ * iteration, is returned with indefinite = 1). With ls->kappa > 0, an answer
+ * that fails the downhill test b.x >= kappa ||b|| ||x|| is replaced by the
+ * last iterate that passed it (kept in ls->xs; stats.downhill_iterate). */
 static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
                   double rel_tol, int max_iter, int precond, int single, double *x, bs_lin_stats *st,
                   bs_error *err) {
@@ -278,6 +283,13 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
   }
   vcopy(N, z, p);
   const double target = rel_tol * bnorm;
+  /* Downhill bookkeeping: b.x by the PCG identity b.p_k = r_k.z_k (so
+     b.x_{k+1} = b.x_k + alpha_k r_k.z_k), ||x||^2 summed in the update pass;
+     last_ok is the last iterate that passed (0: none), and ls->xs holds it
+     once a later iterate has failed (xs_rr: its ||r||^2). */
+  const double kappa2 = ls->kappa * ls->kappa * rr;
+  double bx = 0.0, xs_rr = rr;
+  int last_ok = 0, xs_holds = 0;
   for (int k = 0; k < max_iter; ++k) {
     /* single: product SINGLE_FROM, in double, rounds the values into val32 on
        its way (it costs about two products: a solve that ends before it never
@@ -300,17 +312,20 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
       break;
     }
     const double alpha = rz / pq;
-    double s = 0.0, rz_new = 0.0;
+    double s = 0.0, rz_new = 0.0, xx = 0.0;
+    const double rr_k = rr;
     if (precond == 1) {
       /* one pass: the updates, ||r||^2, z = M^-1 r and r . z (z is wasted only
          on the last iteration) */
       const double *minv = ls->minv;
-#pragma omp parallel for schedule(static) reduction(+ : s, rz_new) if (n > 4096)
+#pragma omp parallel for schedule(static) reduction(+ : s, rz_new, xx) if (n > 4096)
       for (int32_t i = 0; i < n; ++i) {
         const int64_t m = 3 * (int64_t)i;
-        x[m] += alpha * p[m];
-        x[m + 1] += alpha * p[m + 1];
-        x[m + 2] += alpha * p[m + 2];
+        const double x0 = x[m] + alpha * p[m], x1 = x[m + 1] + alpha * p[m + 1], x2 = x[m + 2] + alpha * p[m + 2];
+        x[m] = x0;
+        x[m + 1] = x1;
+        x[m + 2] = x2;
+        xx += x0 * x0 + x1 * x1 + x2 * x2;
         const double r0 = r[m] - alpha * q[m], r1 = r[m + 1] - alpha * q[m + 1], r2 = r[m + 2] - alpha * q[m + 2];
         r[m] = r0;
         r[m + 1] = r1;
@@ -319,16 +334,29 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
         rz_new += block_jacobi_row(minv + 9 * (int64_t)i, r0, r1, r2, z + m);
       }
     } else {
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
+#pragma omp parallel for schedule(static) reduction(+ : s, xx) if (N > 16384)
       for (int64_t m = 0; m < N; ++m) {
         x[m] += alpha * p[m];
         r[m] -= alpha * q[m];
         s += r[m] * r[m];
+        xx += x[m] * x[m];
       }
     }
     rr = s;
     st->iterations = k + 1;
     if (!isfinite(rr)) return matrix_error(A, mask, name, err);
+    bx += alpha * rz;
+    if (kappa2 > 0.0) {
+      if (bx > 0.0 && bx * bx >= kappa2 * xx) {
+        last_ok = k + 1;
+      } else if (last_ok == k && k > 0) { /* x_k passed, x_{k+1} fails: keep x_k */
+        double *xs = ls->xs;
+#pragma omp parallel for schedule(static) if (N > 16384)
+        for (int64_t m = 0; m < N; ++m) xs[m] = x[m] - alpha * p[m];
+        xs_rr = rr_k;
+        xs_holds = 1;
+      }
+    }
     if (sqrt(rr) <= target) {
       st->converged = 1;
       break;
@@ -345,6 +373,13 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     rz = rz_new;
 #pragma omp parallel for schedule(static) if (N > 16384)
     for (int64_t m = 0; m < N; ++m) p[m] = z[m] + beta * p[m];
+  }
+  /* The answer is x_{iterations} (b itself after an indefinite first
+     iteration, which passes). */
+  if (kappa2 > 0.0 && st->iterations > 0 && last_ok != st->iterations && xs_holds) {
+    vcopy(N, ls->xs, x);
+    rr = xs_rr;
+    st->downhill_iterate = last_ok;
   }
   st->rel_residual = sqrt(rr) / bnorm;
   return BS_OK;
@@ -638,6 +673,7 @@ void bs_linsolve_destroy(bs_linsolve **lsp) {
   free(ls->r2);
   free(ls->minv);
   free(ls->val32);
+  free(ls->xs);
   bs_amg_destroy(&ls->amg);
   free(ls->cmask);
   free(ls->fmap);
@@ -750,6 +786,25 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   }
   st->seconds = bs_seconds() - t0;
   return rc;
+}
+
+int bs_linsolve_set_downhill(bs_linsolve *ls, double kappa, bs_error *err) {
+  if (!ls) return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_downhill: NULL workspace");
+  if (!(kappa >= 0.0 && kappa < 1.0))
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_downhill: kappa must be in [0, 1), got %g", kappa);
+  if (kappa == 0.0) {
+    free(ls->xs);
+    ls->xs = NULL;
+    ls->kappa = 0.0;
+    return BS_OK;
+  }
+  if (ls->kind != BS_LIN_CG && ls->kind != BS_LIN_PCG && ls->kind != BS_LIN_AMG)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_downhill: the workspace is for %s, not cg, pcg or amg",
+                        bs_lin_kind_name(ls->kind));
+  if (!ls->xs && !(ls->xs = bs_calloc((size_t)(ls->N > 0 ? ls->N : 1), sizeof *ls->xs, "linsolve downhill iterate", err)))
+    return BS_ENOMEM;
+  ls->kappa = kappa;
+  return BS_OK;
 }
 
 int bs_linsolve_set_single(bs_linsolve *ls, int on, bs_error *err) {

@@ -122,6 +122,7 @@ void bs_minimize_opts_default(bs_minimize_opts *o) {
   o->naive_guess = 0;
   o->linear = BS_LIN_CG;
   o->cg_max_iter = 0;
+  o->cg_downhill = 1;
   o->newton_rel_tol = 1e-10;
   o->accept_noise = 0;
   o->amg_rebuild_factor = 3.0;
@@ -189,17 +190,18 @@ static int ensure_solver(bs_minimizer *m, bs_lin_kind k, bs_error *err) {
   return rc;
 }
 
-/* The values' precision of the Krylov workspaces (opts.cg_single): on for the
- * one the options solve with, and for CG when CHOLMOD falls back to it; off
- * (freed) otherwise. Allocates the single copy here, once, not in the Newton
- * loop. */
-static int set_precision(bs_minimizer *m, const bs_minimize_opts *o, bs_error *err) {
+/* The Krylov workspaces' options, values' precision (opts.cg_single) and
+ * downhill iterate (opts.cg_downhill): on for the one the options solve with,
+ * and for CG when CHOLMOD falls back to it; off (freed) otherwise. Allocates
+ * here, once, not in the Newton loop. */
+static int set_krylov_opts(bs_minimizer *m, const bs_minimize_opts *o, bs_error *err) {
   static const bs_lin_kind krylov[] = {BS_LIN_CG, BS_LIN_PCG, BS_LIN_AMG};
   for (int i = 0; i < 3; ++i) {
     const bs_lin_kind k = krylov[i];
     if (!m->lin[k]) continue;
-    const int on = o->cg_single && (k == o->linear || (k == BS_LIN_CG && o->linear == BS_LIN_CHOLMOD));
-    int rc = bs_linsolve_set_single(m->lin[k], on, err);
+    const int used = k == o->linear || (k == BS_LIN_CG && o->linear == BS_LIN_CHOLMOD);
+    int rc = bs_linsolve_set_single(m->lin[k], used && o->cg_single, err);
+    if (!rc) rc = bs_linsolve_set_downhill(m->lin[k], used && o->cg_downhill ? o->kappa : 0.0, err);
     if (rc) return rc;
   }
   return 0;
@@ -251,7 +253,7 @@ int bs_minimizer_create(const bs_bsr *pattern, const bs_minimize_opts *opts, bs_
     }
   }
   if ((rc = ensure_solver(m, BS_LIN_CG, err)) || (rc = ensure_solver(m, BS_LIN_MINRES, err)) ||
-      (rc = ensure_solver(m, o.linear, err)) || (rc = set_precision(m, &o, err))) {
+      (rc = ensure_solver(m, o.linear, err)) || (rc = set_krylov_opts(m, &o, err))) {
     bs_minimizer_destroy(&m);
     return rc;
   }
@@ -263,7 +265,7 @@ int bs_minimizer_set_opts(bs_minimizer *m, const bs_minimize_opts *opts, bs_erro
   if (!m) return bs_error_set(err, BS_EINPUT, "bs_minimizer_set_opts: minimizer is NULL");
   int rc = bs__opts_check(opts, err);
   if (rc) return rc;
-  if ((rc = ensure_solver(m, opts->linear, err)) || (rc = set_precision(m, opts, err))) return rc;
+  if ((rc = ensure_solver(m, opts->linear, err)) || (rc = set_krylov_opts(m, opts, err))) return rc;
   m->opts = *opts;
   return 0;
 }
@@ -359,8 +361,16 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
    * for rounding. */
   int64_t auto_it = 2 * free_dofs + 100;
   int max_it = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
-  const double sigma = o->sigma_auto ? 1.0 / sqrt(m->g0_norm) : o->sigma;
+  const double sigma = o->sigma_auto ? o->sigma / sqrt(m->g0_norm) : o->sigma;
   double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, o->tol)));
+  if (o->forcing_ew && it > 0) { /* Eisenstat & Walker (1996), choice 2, gamma 0.9, alpha 2 */
+    const double q = gnorm / m->g_prev, safe = 0.9 * m->eta_prev * m->eta_prev;
+    double e = 0.9 * q * q;
+    if (safe > 0.1) e = fmax(e, safe);
+    rel = fmin(rel, e);
+  }
+  m->g_prev = gnorm;
+  m->eta_prev = rel;
   rec->lin_rel_tol = rel;
   for (int64_t i = 0; i < m->n3; ++i) m->r[i] = -m->g[i];
   bs_lin_kind kind = o->linear;
@@ -393,8 +403,10 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   }
   st->cg_iterations += ls.iterations;
   st->indefinite_exits += ls.indefinite;
+  st->downhill_iterates += ls.downhill_iterate > 0;
   rec->lin_iterations = ls.iterations;
   rec->lin_indefinite = ls.indefinite;
+  rec->lin_downhill_iterate = ls.downhill_iterate;
   return 0;
 }
 

@@ -16,6 +16,8 @@ struct bs_minimizer {
   int amg_reset;              /* 1: set up the AMG before the next solve             */
   int amg_calls;              /* bs_minimize calls started since the last setup      */
   double g0_norm;             /* ||g|| at the first iterate of the current solve (sigma_auto) */
+  double g_prev, eta_prev;    /* ||g|| and the CG tolerance of the previous iteration   */
+                              /* (opts.forcing_ew)                                       */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
    * direction, right-hand side, trial point, raw and projected gradient there. */

@@ -600,3 +600,72 @@ Test(linsolve, single_precision_values) {
   bs_bsr_destroy(&A);
   bs_bsr_destroy(&R);
 }
+
+/* bs_linsolve_set_downhill: a CG answer that fails b.x >= kappa ||b|| ||x||
+ * is replaced by the last iterate that passed. One vertex, A = diag(1, eps,
+ * c), b = (1, 1e-3, bz): the first iterate is nearly parallel to b; the
+ * second goes far along the eps direction (nearly orthogonal to b). With c =
+ * 1 (SPD, bz = 0) the second iterate is the exact solution; with c = -1 the
+ * third direction has negative curvature and CG exits indefinite. */
+Test(linsolve, downhill_iterate) {
+  const int32_t ptr[2] = {0, 0};
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(1, ptr, NULL, &A, &err), 0, "%s", err.msg);
+  const double kappa = 1e-2;
+  for (int c = 0; c < 2; ++c) {
+    double *D = A->val + 9 * A->diag[0];
+    memset(D, 0, 9 * sizeof *D);
+    D[0] = 1.0;
+    D[4] = 1e-6;
+    D[8] = c == 0 ? 1.0 : -1.0;
+    const double b[3] = {1.0, 1e-3, c == 0 ? 0.0 : 1e-7};
+    bs_linsolve *ls = NULL;
+    cr_assert_eq(bs_linsolve_create(A, BS_LIN_CG, &ls, &err), 0, "%s", err.msg);
+    double x[3], x1[3];
+    bs_lin_stats st;
+    /* Off (the default): the answer fails the test. */
+    cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-8, 10, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.iterations, 2, "case %d: %d iterations", c, st.iterations);
+    cr_assert_eq(st.indefinite, c, "case %d", c);
+    cr_assert_eq(st.downhill_iterate, 0);
+    const double bn = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double bx = b[0] * x[0] + b[1] * x[1] + b[2] * x[2], xn = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    cr_assert_lt(bx, kappa * bn * xn, "case %d: the plain answer passes (%g >= %g)", c, bx, kappa * bn * xn);
+    /* The first iterate. */
+    cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-12, 1, x1, &st, &err), 0, "%s", err.msg);
+    /* On: the first iterate comes back, with its residual. */
+    cr_assert_eq(bs_linsolve_set_downhill(ls, kappa, &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-8, 10, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.iterations, 2);
+    cr_assert_eq(st.downhill_iterate, 1, "case %d", c);
+    cr_assert_eq(st.converged, c == 0, "case %d", c); /* the solve's own exit is kept */
+    /* (recovered as x_2 - alpha p: x_2 is ~1e3 along eps, so ~1e-13 off) */
+    for (int e = 0; e < 3; ++e) cr_assert_float_eq(x[e], x1[e], 1e-11, "case %d x[%d]: %g vs %g", c, e, x[e], x1[e]);
+    bx = b[0] * x[0] + b[1] * x[1] + b[2] * x[2];
+    xn = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    cr_assert_geq(bx, kappa * bn * xn);
+    double r2 = 0;
+    for (int e = 0; e < 3; ++e) r2 += (b[e] - D[4 * e] * x[e]) * (b[e] - D[4 * e] * x[e]);
+    cr_assert_float_eq(st.rel_residual, sqrt(r2) / bn, 1e-9, "residual %g vs %g", st.rel_residual, sqrt(r2) / bn);
+    /* A small kappa that the answer passes changes nothing. */
+    cr_assert_eq(bs_linsolve_set_downhill(ls, 1e-9, &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-8, 10, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.downhill_iterate, 0);
+    cr_assert_gt(fabs(x[1]), 100.0);
+    bs_linsolve_destroy(&ls);
+  }
+  /* Errors: kappa out of [0, 1), a workspace that is not CG. */
+  bs_linsolve *ls = NULL;
+  cr_assert_eq(bs_linsolve_create(A, BS_LIN_CG, &ls, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_linsolve_set_downhill(ls, 1.0, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "kappa"), "%s", err.msg);
+  cr_assert_eq(bs_linsolve_set_downhill(ls, NAN, &err), BS_EINPUT);
+  bs_linsolve_destroy(&ls);
+  cr_assert_eq(bs_linsolve_create(A, BS_LIN_MINRES, &ls, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_linsolve_set_downhill(ls, kappa, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "minres"), "%s", err.msg);
+  cr_assert_eq(bs_linsolve_set_downhill(ls, 0.0, &err), 0);
+  bs_linsolve_destroy(&ls);
+  bs_bsr_destroy(&A);
+}

@@ -367,6 +367,51 @@ Test(minimize, quadratic_one_iteration) {
   free(A);
 }
 
+/* opts.cg_downhill on a quadratic with a nearly singular direction: A =
+ * diag(1, 1e-6, 1), b = (1, 1e-3, 0), from 0. The exact Newton step (1, 1e3,
+ * 0) fails step 5's test (b.d / |b||d| = 2e-3 < kappa), so the paper's rule
+ * falls back to -g; with cg_downhill the direction is CG's first iterate
+ * instead. Both then converge to A^-1 b. */
+Test(minimize, cg_downhill_keeps_an_earlier_iterate) {
+  bs_bsr *P = pattern_chain(1);
+  double A[9] = {1, 0, 0, 0, 1e-6, 0, 0, 0, 1}, b[3] = {1, 1e-3, 0};
+  for (int on = 0; on < 2; ++on) {
+    fx f;
+    fx_init(&f, 1, ev_quad);
+    f.A = A;
+    f.b = b;
+    bs_minimize_opts o;
+    bs_minimize_opts_default(&o);
+    cr_assert_eq(o.cg_downhill, 1);
+    o.cg_downhill = on;
+    o.tol = 1e-10;
+    o.sigma = 1e-12; /* exact solves */
+    bs_minimizer *m = NULL;
+    bs_error err = {0};
+    cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+    bs_objective obj = make_obj(&f, NULL);
+    double x[3] = {0, 0, 0};
+    bs_minimize_stats st;
+    cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.reason, BS_MIN_CONVERGED, "on = %d: %s", on, st.reason_text);
+    cr_assert_float_eq(x[0], 1.0, 1e-9);
+    cr_assert_float_eq(x[1], 1e3, 1e-3);
+    cr_assert_eq(f.has_first, 1);
+    if (on) {
+      cr_assert_geq(st.downhill_iterates, 1);
+      cr_assert_eq(st.fallback_neg_grad, 0);
+      cr_assert_eq(f.first.lin_downhill_iterate, 1, "first direction: iterate %d", f.first.lin_downhill_iterate);
+      cr_assert_eq(f.first.direction, 0);
+    } else {
+      cr_assert_eq(st.downhill_iterates, 0);
+      cr_assert_geq(st.fallback_neg_grad, 1);
+      cr_assert_eq(f.first.direction, 2);
+    }
+    bs_minimizer_destroy(&m);
+  }
+  bs_bsr_destroy(&P);
+}
+
 Test(minimize, rosenbrock_embedded) {
   bs_bsr *P = pattern_chain(1);
   fx f;
@@ -446,7 +491,7 @@ static int ev_rosenN_scaled(fx *f, const double *u, double *E, double *g, bs_bsr
 /* One solve of the 3n-D Rosenbrock from the usual start, E in units scaled
  * by 2^20 or not (tol scaled alike), with the given linear solver and values'
  * precision; asserts convergence. */
-static void rosen_solve(int32_t n, int scaled, int sigma_auto, bs_lin_kind linear, int single, double *x,
+static void rosen_solve(int32_t n, int scaled, int sigma_auto, bs_lin_kind linear, int single, int ew, double *x,
                         bs_minimize_stats *st) {
   bs_bsr *P = pattern_chain(n);
   fx f;
@@ -457,6 +502,7 @@ static void rosen_solve(int32_t n, int scaled, int sigma_auto, bs_lin_kind linea
   o.sigma_auto = sigma_auto;
   o.linear = linear;
   o.cg_single = single;
+  o.forcing_ew = ew;
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
@@ -470,7 +516,7 @@ static void rosen_solve(int32_t n, int scaled, int sigma_auto, bs_lin_kind linea
 
 /* The 12-D one in plain CG, double values. */
 static void rosen_units(int scaled, int sigma_auto, double x[12], bs_minimize_stats *st) {
-  rosen_solve(4, scaled, sigma_auto, BS_LIN_CG, 0, x, st);
+  rosen_solve(4, scaled, sigma_auto, BS_LIN_CG, 0, 0, x, st);
 }
 
 /* sigma_auto makes the CG tolerance unitless: the same problem in units of E
@@ -499,7 +545,7 @@ Test(minimize, cg_single_converges) {
     double xs[2][60];
     bs_minimize_stats st[2];
     for (int single = 0; single < 2; ++single) {
-      rosen_solve(20, 0, 1, pcg ? BS_LIN_PCG : BS_LIN_CG, single, xs[single], &st[single]);
+      rosen_solve(20, 0, 1, pcg ? BS_LIN_PCG : BS_LIN_CG, single, 0, xs[single], &st[single]);
       for (int k = 0; k < 60; ++k) cr_assert_float_eq(xs[single][k], 1.0, 1e-6);
     }
     cr_assert_leq(abs(st[1].iterations - st[0].iterations), 1, "pcg %d: %d Newton iterations in single, %d in double",
@@ -1428,4 +1474,70 @@ Test(fixtures, derivatives_match_finite_differences) {
   }
   cr_assert(errs[1] < 1e-6 || errs[1] < 0.02 * errs[0], "sphere tangential Hessian: %g -> %g", errs[0], errs[1]);
   bs_bsr_destroy(&H);
+}
+
+/* A strictly convex chain: sum_k exp(u_k) - 2 u_k + 5 (u_k - u_k+1)^2, its
+ * minimizer u = log 2 (the coupling vanishes there); Newton converges
+ * quadratically near it, and CG needs several iterations per solve. */
+static int ev_exp_chain(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const int64_t N = 3 * (int64_t)f->n;
+  const double w = 5.0;
+  double e = 0;
+  if (g) memset(g, 0, sizeof *g * (size_t)N);
+  for (int64_t k = 0; k < N; ++k) {
+    e += exp(u[k]) - 2 * u[k];
+    if (g) g[k] += exp(u[k]) - 2;
+    if (H) hadd(H, k, k, exp(u[k]));
+    if (k + 1 < N) {
+      const double d = u[k] - u[k + 1];
+      e += w * d * d;
+      if (g) {
+        g[k] += 2 * w * d;
+        g[k + 1] -= 2 * w * d;
+      }
+      if (H) {
+        hadd(H, k, k, 2 * w);
+        hadd(H, k + 1, k + 1, 2 * w);
+        hadd(H, k, k + 1, -2 * w);
+        hadd(H, k + 1, k, -2 * w);
+      }
+    }
+  }
+  *E = e;
+  return 0;
+}
+
+/* opts.forcing_ew on that chain (60 dofs, sigma_auto, CG, from a start far
+ * from the minimizer): both rules converge to log 2; Eisenstat-Walker's cap
+ * tightens the solves once Newton converges fast, and takes fewer Newton
+ * iterations than the paper's rule alone. */
+Test(minimize, forcing_ew) {
+  const int32_t n = 20;
+  bs_bsr *P = pattern_chain(n);
+  int its[2];
+  for (int ew = 0; ew < 2; ++ew) {
+    fx f;
+    fx_init(&f, n, ev_exp_chain);
+    bs_minimize_opts o;
+    bs_minimize_opts_default(&o);
+    cr_assert_eq(o.forcing_ew, 0);
+    o.tol = 1e-7;
+    o.sigma_auto = 1;
+    o.forcing_ew = ew;
+    bs_minimizer *m = NULL;
+    bs_error err = {0};
+    cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+    bs_objective obj = make_obj(&f, NULL);
+    double x[60];
+    for (int k = 0; k < 60; ++k) x[k] = 3.0 + sin(k);
+    bs_minimize_stats st;
+    cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.reason, BS_MIN_CONVERGED, "ew %d: %s", ew, st.reason_text);
+    for (int k = 0; k < 60; ++k) cr_assert_float_eq(x[k], log(2.0), 1e-7, "ew %d: x[%d] = %.17g", ew, k, x[k]);
+    its[ew] = st.iterations;
+    cr_log_info("forcing_ew %d: %d Newton and %d CG iterations", ew, st.iterations, st.cg_iterations);
+    bs_minimizer_destroy(&m);
+  }
+  cr_assert_lt(its[1], its[0], "Eisenstat-Walker %d, paper %d Newton iterations", its[1], its[0]);
+  bs_bsr_destroy(&P);
 }
