@@ -156,6 +156,17 @@ static bs_objective make_obj(fx *f, const uint8_t *mask) {
   return o;
 }
 
+/* One bs_minimize call of a fresh minimizer with options o on f from x
+ * (no mask); asserts that the call ran (status 0) and returns its stats. */
+static void min_run(const bs_bsr *P, const bs_minimize_opts *o, fx *f, double *x, bs_minimize_stats *st) {
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(f, NULL);
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  bs_minimizer_destroy(&m);
+}
+
 /* Quadratic: E = 1/2 x^T A x - b^T x. */
 static int ev_quad(fx *f, const double *x, double *E, double *g, bs_bsr *H) {
   const int64_t N = 3 * (int64_t)f->n;
@@ -386,13 +397,9 @@ Test(minimize, cg_downhill_keeps_an_earlier_iterate) {
     o.cg_downhill = on;
     o.tol = 1e-10;
     o.sigma = 1e-12; /* exact solves */
-    bs_minimizer *m = NULL;
-    bs_error err = {0};
-    cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-    bs_objective obj = make_obj(&f, NULL);
     double x[3] = {0, 0, 0};
     bs_minimize_stats st;
-    cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+    min_run(P, &o, &f, x, &st);
     cr_assert_eq(st.reason, BS_MIN_CONVERGED, "on = %d: %s", on, st.reason_text);
     cr_assert_float_eq(x[0], 1.0, 1e-9);
     cr_assert_float_eq(x[1], 1e3, 1e-3);
@@ -407,7 +414,6 @@ Test(minimize, cg_downhill_keeps_an_earlier_iterate) {
       cr_assert_geq(st.fallback_neg_grad, 1);
       cr_assert_eq(f.first.direction, 2);
     }
-    bs_minimizer_destroy(&m);
   }
   bs_bsr_destroy(&P);
 }
@@ -1524,19 +1530,14 @@ Test(minimize, forcing_ew) {
     o.tol = 1e-7;
     o.sigma_auto = 1;
     o.forcing_ew = ew;
-    bs_minimizer *m = NULL;
-    bs_error err = {0};
-    cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-    bs_objective obj = make_obj(&f, NULL);
     double x[60];
     for (int k = 0; k < 60; ++k) x[k] = 3.0 + sin(k);
     bs_minimize_stats st;
-    cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+    min_run(P, &o, &f, x, &st);
     cr_assert_eq(st.reason, BS_MIN_CONVERGED, "ew %d: %s", ew, st.reason_text);
     for (int k = 0; k < 60; ++k) cr_assert_float_eq(x[k], log(2.0), 1e-7, "ew %d: x[%d] = %.17g", ew, k, x[k]);
     its[ew] = st.iterations;
     cr_log_info("forcing_ew %d: %d Newton and %d CG iterations", ew, st.iterations, st.cg_iterations);
-    bs_minimizer_destroy(&m);
   }
   cr_assert_lt(its[1], its[0], "Eisenstat-Walker %d, paper %d Newton iterations", its[1], its[0]);
   bs_bsr_destroy(&P);
