@@ -365,9 +365,8 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz_new, err))) return rc;
     if (precond == 2 && !(rz_new > 0.0)) { /* B not SPD (built from an indefinite matrix?) */
       if (!isfinite(rz_new)) return matrix_error(A, mask, name, err);
-      st->rel_residual = sqrt(rr) / bnorm;
       st->precond_failed = 1;
-      return BS_OK;
+      break;
     }
     const double beta = rz_new / rz;
     rz = rz_new;
