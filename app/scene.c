@@ -93,6 +93,22 @@ static int get_str(ctx *c, const cJSON *obj, const char *where, const char *key,
   return 0;
 }
 
+/* An optional string key with two allowed values: *out = 0 for a, 1 for b;
+ * untouched when the key is absent. */
+static int get_choice(ctx *c, const cJSON *obj, const char *where, const char *key, const char *a, const char *b,
+                      int *out) {
+  char buf[64] = "", w[512];
+  int st = get_str(c, obj, where, key, 0, buf, sizeof buf);
+  if (st || !buf[0]) return st;
+  if (!strcmp(buf, a)) *out = 0;
+  else if (!strcmp(buf, b)) *out = 1;
+  else {
+    join(w, sizeof w, where, key);
+    return fail(c, w, "must be \"%s\" or \"%s\", got \"%s\"", a, b, buf);
+  }
+  return 0;
+}
+
 static int get_bool(ctx *c, const cJSON *obj, const char *where, const char *key, int *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
   char w[512];
@@ -456,20 +472,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_str(c, so, "solver", "linear", 0, buf, sizeof buf))) return st;
     if (buf[0] && (bs_lin_kind_parse(buf, &s->solver.min.linear, &e2) || s->solver.min.linear == BS_LIN_MINRES))
       return fail(c, "solver.linear", "must be \"cg\", \"pcg\", \"amg\" or \"cholmod\", got \"%s\"", buf);
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "cg_precision", 0, buf, sizeof buf))) return st;
-    if (buf[0]) {
-      if (!strcmp(buf, "double")) s->solver.min.cg_single = 0;
-      else if (!strcmp(buf, "single")) s->solver.min.cg_single = 1;
-      else return fail(c, "solver.cg_precision", "must be \"double\" or \"single\", got \"%s\"", buf);
-    }
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "amg_matrix", 0, buf, sizeof buf))) return st;
-    if (buf[0]) {
-      if (!strcmp(buf, "rest")) s->solver.amg_at_rest = 1;
-      else if (!strcmp(buf, "current")) s->solver.amg_at_rest = 0;
-      else return fail(c, "solver.amg_matrix", "must be \"rest\" or \"current\", got \"%s\"", buf);
-    }
+    int current = !s->solver.amg_at_rest;
+    if ((st = get_choice(c, so, "solver", "cg_precision", "double", "single", &s->solver.min.cg_single)) ||
+        (st = get_choice(c, so, "solver", "amg_matrix", "rest", "current", &current)))
+      return st;
+    s->solver.amg_at_rest = !current;
     if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor))) return st;
     if (!(s->solver.min.amg_rebuild_factor == 0 ||
           (s->solver.min.amg_rebuild_factor >= 1 && isfinite(s->solver.min.amg_rebuild_factor))))
@@ -499,26 +506,17 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
         return fail(c, "solver.cg_sigma_scale", "must be > 0, got %g", s->solver.min.sigma);
     }
     if ((st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill))) return st;
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "cg_forcing", 0, buf, sizeof buf))) return st;
-    if (buf[0]) {
-      if (!strcmp(buf, "paper")) s->solver.min.forcing_ew = 0;
-      else if (!strcmp(buf, "eisenstat_walker")) s->solver.min.forcing_ew = 1;
-      else return fail(c, "solver.cg_forcing", "must be \"paper\" or \"eisenstat_walker\", got \"%s\"", buf);
-    }
+    if ((st = get_choice(c, so, "solver", "cg_forcing", "paper", "eisenstat_walker", &s->solver.min.forcing_ew)))
+      return st;
     if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
         (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||
         (st = get_int(c, so, "solver", "newton_k", 0, 1, 1000000, &s->solver.newton_k)) ||
         (st = get_int(c, so, "solver", "load_steps", 0, 1, 100000, &s->load_steps)) ||
         (st = get_bool(c, so, "solver", "project_hessian", &s->project_hessian)))
       return st;
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "mode", 0, buf, sizeof buf))) return st;
-    if (buf[0]) {
-      if (!strcmp(buf, "dynamic")) s->mode = BS_MODE_DYNAMIC;
-      else if (!strcmp(buf, "static")) s->mode = BS_MODE_STATIC;
-      else return fail(c, "solver.mode", "must be \"dynamic\" or \"static\", got \"%s\"", buf);
-    }
+    int stat = s->mode == BS_MODE_STATIC;
+    if ((st = get_choice(c, so, "solver", "mode", "dynamic", "static", &stat))) return st;
+    s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
   }
 
   s->gravity[0] = 0;
