@@ -25,9 +25,25 @@ int bs_app_parse_double(const char *s, double *out);
 int bs_app_parse_int(const char *s, long lo, long hi, int *out);
 
 /* Loads a mesh from a file (through Gmsh) or from a structured box spec
- * "box:NX[xNYxNZ][:LX[xLYxLZ]]" (cells, then edge lengths in metres; default
- * 1 m), then refines `refine` times. */
+ * "box:NX[xNYxNZ][:LX[xLYxLZ]]" (bs_mesh_load), then refines `refine` times. */
 int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, bs_error *err);
+
+/* A growing list of owned "key=value" strings (the --set list of a run). */
+typedef struct bs_app_sets {
+  int n, cap;
+  char **v;
+} bs_app_sets;
+
+/* Appends key=value (value NULL: key is the whole "key=value"); quote 1 puts
+ * the value in JSON quotes. 0, or -1 out of memory. */
+int bs_app_sets_add(bs_app_sets *s, const char *key, const char *value, int quote);
+void bs_app_sets_free(bs_app_sets *s);
+
+/* The flag at argv[*i] ("--flag value", "--flag=value"; "--set" takes
+ * "--set=k=v" or "--set k=v"): *flag and *value point into argv or into
+ * fbuf; consumes the value argument. -1 when the value is missing (fbuf then
+ * holds the flag). */
+int bs_app_flag_value(int argc, char **argv, int *i, char *fbuf, size_t n, const char **flag, const char **value);
 
 /* Writes a mesh by the extension of path: .msh (Gmsh) or .vtu. */
 int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err);

@@ -37,58 +37,49 @@ int bs_app_parse_int(const char *s, long lo, long hi, int *out) {
   return 0;
 }
 
-/* "box:8", "box:8x4x2", "box:8x4x2:1x0.5x0.25" */
-static int parse_box(const char *spec, int n[3], double len[3], bs_error *err) {
-  const char *p = spec + 4;
-  n[0] = n[1] = n[2] = 0;
-  len[0] = len[1] = len[2] = 1.0;
-  char buf[256];
-  snprintf(buf, sizeof buf, "%s", p);
-  char *cells = buf, *lens = strchr(buf, ':');
-  if (lens) *lens++ = '\0';
-  int k = 0;
-  for (char *tok = strtok(cells, "x"); tok; tok = strtok(NULL, "x")) {
-    if (k >= 3 || bs_app_parse_int(tok, 1, 4096, &n[k]) != 0)
-      return bs_error_set(err, BS_EINPUT, "bad box spec '%s': cells must be NX or NXxNYxNZ, each 1..4096", spec);
-    k++;
+int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, bs_error *err) {
+  bs_mesh_read_opts o = {.size = size, .refine = refine};
+  return bs_mesh_load(spec, &o, out, err);
+}
+
+int bs_app_sets_add(bs_app_sets *s, const char *key, const char *value, int quote) {
+  if (s->n == s->cap) {
+    int cap = s->cap ? 2 * s->cap : 16;
+    char **v = realloc(s->v, sizeof(char *) * (size_t)cap);
+    if (!v) return -1;
+    s->v = v;
+    s->cap = cap;
   }
-  if (k == 1) n[1] = n[2] = n[0];
-  else if (k != 3) return bs_error_set(err, BS_EINPUT, "bad box spec '%s': cells must be NX or NXxNYxNZ", spec);
-  if (lens) {
-    k = 0;
-    for (char *tok = strtok(lens, "x"); tok; tok = strtok(NULL, "x")) {
-      if (k >= 3 || bs_app_parse_double(tok, &len[k]) != 0 || len[k] <= 0)
-        return bs_error_set(err, BS_EINPUT, "bad box spec '%s': lengths must be positive numbers", spec);
-      k++;
-    }
-    if (k == 1) len[1] = len[2] = len[0];
-    else if (k != 3) return bs_error_set(err, BS_EINPUT, "bad box spec '%s': lengths must be L or LXxLYxLZ", spec);
-  }
+  size_t len = strlen(key) + (value ? strlen(value) : 0) + 4;
+  char *e = malloc(len);
+  if (!e) return -1;
+  if (!value) snprintf(e, len, "%s", key);
+  else snprintf(e, len, quote ? "%s=\"%s\"" : "%s=%s", key, value);
+  s->v[s->n++] = e;
   return 0;
 }
 
-int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, bs_error *err) {
-  *out = NULL;
-  if (strncmp(spec, "box:", 4) == 0) {
-    int n[3];
-    double len[3], lo[3] = {0, 0, 0};
-    int st = parse_box(spec, n, len, err);
-    if (st) return st;
-    bs_mesh *m = NULL;
-    st = bs_mesh_create_box(lo, len, n[0], n[1], n[2], &m, err);
-    if (st) return st;
-    for (int i = 0; i < refine; i++) {
-      bs_mesh *f = NULL;
-      st = bs_mesh_refine(m, &f, err);
-      bs_mesh_destroy(&m);
-      if (st) return st;
-      m = f;
-    }
-    *out = m;
-    return 0;
+void bs_app_sets_free(bs_app_sets *s) {
+  for (int i = 0; i < s->n; i++) free(s->v[i]);
+  free(s->v);
+  memset(s, 0, sizeof *s);
+}
+
+int bs_app_flag_value(int argc, char **argv, int *i, char *fbuf, size_t n, const char **flag, const char **value) {
+  const char *a = argv[*i], *eq = strchr(a, '=');
+  *value = NULL;
+  *flag = fbuf;
+  if (!strncmp(a, "--set=", 6)) {
+    snprintf(fbuf, n, "--set");
+    *value = a + 6;
+  } else if (eq && strncmp(a, "--set", 5) != 0) {
+    snprintf(fbuf, n, "%.*s", (int)(eq - a), a);
+    *value = eq + 1;
+  } else {
+    snprintf(fbuf, n, "%s", a);
+    if (*i + 1 < argc) *value = argv[++*i];
   }
-  bs_mesh_read_opts o = {.size = size, .refine = refine};
-  return bs_mesh_read(spec, &o, out, err);
+  return *value ? 0 : -1;
 }
 
 int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err) {

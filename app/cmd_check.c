@@ -30,8 +30,8 @@
 #include "app.h"
 #include "bs_shim.h"
 #include "bs_vtu_read.h"
-#include "scene.h"
-#include "sim.h"
+#include "bs_scene.h"
+#include "bs_sim.h"
 
 static const char *check_help =
     "usage: bigstep check OUTPUT_DIR|FILE.vtu|FILE.pvd [--scene SCENE] [--quiet]\n"

@@ -36,8 +36,9 @@
 #include <unistd.h>
 
 #include "app.h"
-#include "scene.h"
-#include "sim.h"
+#include "bs_runfolder.h"
+#include "bs_scene.h"
+#include "bs_sim.h"
 
 static const char *study_help =
     "usage: bigstep study SCENE --vary KEY=v1,v2,... [--vary ...] [--set key.path=value]...\n"
@@ -618,45 +619,17 @@ static int read_summary(const char *dir, double *spf_s, double *peak) {
   return got;
 }
 
-/* state.bin reader: one frame at a time. */
-typedef struct state_file {
-  FILE *f;
-  int32_t n;
-  long frames;
-  double *buf; /* 1 + 6n */
-} state_file;
+/* state.bin reader: one frame at a time (bs_runfolder.h). */
+typedef bs_state_reader state_file;
 
 static int state_open(const char *dir, state_file *s) {
-  memset(s, 0, sizeof *s);
-  char p[1500];
-  snprintf(p, sizeof p, "%s/state.bin", dir);
-  s->f = fopen(p, "rb");
-  if (!s->f) return -1;
-  char magic[8];
-  int32_t hdr[2];
-  if (fread(magic, 1, 8, s->f) != 8 || memcmp(magic, "BSST1\0\0\0", 8) || fread(hdr, 4, 2, s->f) != 2 || hdr[0] <= 0) {
-    fclose(s->f);
-    s->f = NULL;
-    return -1;
-  }
-  s->n = hdr[0];
-  struct stat st;
-  fstat(fileno(s->f), &st);
-  s->frames = (long)((st.st_size - 16) / (long)(sizeof(double) * (1 + 6 * (size_t)s->n)));
-  s->buf = malloc(sizeof(double) * (1 + 6 * (size_t)s->n));
-  return s->buf ? 0 : -1;
+  bs_error e;
+  return bs_state_open(dir, s, &e) ? -1 : 0;
 }
 
-static int state_next(state_file *s) {
-  size_t m = 1 + 6 * (size_t)s->n;
-  return fread(s->buf, sizeof(double), m, s->f) == m ? 0 : -1;
-}
+static int state_next(state_file *s) { return bs_state_next(s) ? -1 : 0; }
 
-static void state_close(state_file *s) {
-  if (s->f) fclose(s->f);
-  free(s->buf);
-  memset(s, 0, sizeof *s);
-}
+static void state_close(state_file *s) { bs_state_close(s); }
 
 /* Vertex count of body b after r uniform refinements: V' = V + E,
  * E' = 2E + 3F + T, F' = 4F + 8T, T' = 8T (F counts every triangle). */

@@ -5,7 +5,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 
 void bs_error_clear(bs_error *err) {
@@ -77,4 +79,19 @@ void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err) {
 int bs_cmp_i32(const void *a, const void *b) {
   const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
   return (x > y) - (x < y);
+}
+
+int bs_mkdir_p(const char *dir, bs_error *err) {
+  char buf[4096];
+  if (!dir || !*dir) return bs_error_set(err, BS_EINPUT, "cannot create a folder with an empty name");
+  if (snprintf(buf, sizeof buf, "%s", dir) >= (int)sizeof buf)
+    return bs_error_set(err, BS_EINPUT, "folder name too long (%zu characters)", strlen(dir));
+  for (char *p = buf + 1; *p; p++)
+    if (*p == '/') {
+      *p = 0;
+      if (mkdir(buf, 0755) && errno != EEXIST) return bs_error_set(err, BS_EIO, "cannot create folder '%s'", buf);
+      *p = '/';
+    }
+  if (mkdir(buf, 0755) && errno != EEXIST) return bs_error_set(err, BS_EIO, "cannot create folder '%s'", buf);
+  return 0;
 }

@@ -103,6 +103,25 @@ int bs_mesh_create(int32_t n_vertices, const double *x, int32_t n_tets, const in
 int bs_mesh_create_box(const double lo[3], const double hi[3], int nx, int ny, int nz,
                        bs_mesh **out, bs_error *err);
 
+/* The box [0, size] of cells[0] x cells[1] x cells[2] cells (as
+ * bs_mesh_create_box), refined `refine` times (bs_mesh_refine). */
+int bs_mesh_create_box_refined(const double size[3], const int cells[3], int refine, bs_mesh **out,
+                               bs_error *err);
+
+/* Parses a structured-box spec "box:NX[xNYxNZ][:LX[xLYxLZ]]" (cells 1..4096,
+ * then edge lengths in metres, default 1): 0, or BS_EINPUT naming the spec. */
+int bs_mesh_box_spec_parse(const char *spec, int cells[3], double size[3], bs_error *err);
+
+/* A mesh from a file (bs_mesh_read, with opts) or from a box spec "box:..."
+ * (then refined opts->refine times; opts->size is ignored). opts may be NULL. */
+int bs_mesh_load(const char *spec, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
+/* Axis-aligned bounding box of n points (3 doubles each); 0 for n = 0. */
+void bs_bbox(int64_t n, const double *x, double lo[3], double hi[3]);
+
+/* Length of the box's diagonal, |hi - lo|. */
+double bs_bbox_diagonal(const double lo[3], const double hi[3]);
+
 /* Copies a mesh. */
 int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err);
 

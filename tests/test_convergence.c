@@ -14,40 +14,38 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "bs_runfolder.h"
 #include "cli_util.h"
 
 /* Mean y displacement (last frame minus frame 0) of the vertices among the
  * first n_coarse of dir/state.bin whose rest x is the beam's free end x_tip.
  * Returns how many vertices were averaged (0 on a read error). */
 static int tip_deflection(const char *dir, int n_coarse, double x_tip, double *tip) {
-  char p[512];
-  snprintf(p, sizeof p, "%s/state.bin", dir);
-  FILE *f = fopen(p, "rb");
-  if (!f) return 0;
-  char magic[8];
-  int32_t hdr[2];
+  bs_state_reader r;
+  bs_error err;
+  if (bs_state_open(dir, &r, &err)) return 0;
   int found = 0;
-  if (fread(magic, 1, 8, f) == 8 && !memcmp(magic, "BSST1\0\0\0", 8) && fread(hdr, 4, 2, f) == 2 && hdr[0] >= n_coarse) {
-    size_t m = 1 + 6 * (size_t)hdr[0];
-    double *rest = malloc(sizeof(double) * m), *cur = malloc(sizeof(double) * m);
+  if (r.n >= n_coarse) {
+    size_t m = 3 * (size_t)r.n;
+    double *rest = malloc(sizeof(double) * m);
     int frames = 0;
-    if (fread(rest, sizeof(double), m, f) == m) {
+    if (bs_state_next(&r) == 0) {
+      memcpy(rest, r.x, sizeof(double) * m);
       frames = 1;
-      while (fread(cur, sizeof(double), m, f) == m) frames++;
+      while (bs_state_next(&r) == 0) frames++;
     }
-    if (frames >= 2) {
+    if (frames >= 2) { /* r.x still holds the last frame read */
       double s = 0;
       for (int i = 0; i < n_coarse; i++)
-        if (fabs(rest[1 + 3 * i] - x_tip) < 1e-9) {
-          s += cur[1 + 3 * i + 1] - rest[1 + 3 * i + 1];
+        if (fabs(rest[3 * i] - x_tip) < 1e-9) {
+          s += r.x[3 * i + 1] - rest[3 * i + 1];
           found++;
         }
       if (found) *tip = s / found;
     }
     free(rest);
-    free(cur);
   }
-  fclose(f);
+  bs_state_close(&r);
   return found;
 }
 

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_runfolder.h"
 #include "cli_util.h"
 
 typedef struct ext_run {
@@ -134,33 +135,23 @@ static inline void ext_read_frames(const char *dir, ext_run *r) {
   fclose(f);
 }
 
-/* state.bin ("BSST1\0\0\0", int32 n, int32 0, then per frame time, x, v): the last
- * frame's x and v are all finite. */
+/* state.bin (bs_runfolder.h): whole frames only, and the last frame's x and v
+ * are all finite. */
 static inline void ext_check_state(const char *dir) {
-  char path[512], magic[8];
-  snprintf(path, sizeof path, "%s/state.bin", dir);
-  FILE *f = fopen(path, "rb");
-  cr_assert_not_null(f, "%s missing", path);
-  int32_t hdr[2];
-  cr_assert_eq(fread(magic, 1, 8, f), 8);
-  cr_assert(!memcmp(magic, "BSST1", 5), "%s: bad magic", path);
-  cr_assert_eq(fread(hdr, sizeof(int32_t), 2, f), 2);
-  cr_assert(hdr[0] > 0);
-  size_t rec = 1 + 6 * (size_t)hdr[0];
-  cr_assert_eq(fseek(f, 0, SEEK_END), 0);
-  long size = ftell(f);
-  long body = size - 16;
-  cr_assert(body > 0 && body % (long)(rec * sizeof(double)) == 0, "%s: size %ld is not whole frames", path, size);
-  cr_assert_eq(fseek(f, size - (long)(rec * sizeof(double)), SEEK_SET), 0);
-  double *d = malloc(rec * sizeof(double));
-  cr_assert_eq(fread(d, sizeof(double), rec, f), rec);
-  fclose(f);
-  size_t bad = rec;
-  for (size_t i = 0; i < rec && bad == rec; i++)
-    if (!isfinite(d[i])) bad = i;
-  double val = bad < rec ? d[bad] : 0;
-  free(d);
-  cr_assert_eq(bad, rec, "%s: last frame value %zu is %g", path, bad, val);
+  bs_state_reader st;
+  bs_error err;
+  cr_assert_eq(bs_state_open(dir, &st, &err), 0, "%s", err.msg);
+  cr_assert(st.frames > 0, "%s/state.bin: no frame", dir);
+  long n = 0;
+  while (bs_state_next(&st) == 0) n++;
+  cr_assert_eq(n, st.frames, "%s/state.bin: %ld frames read of %ld", dir, n, st.frames);
+  const size_t m = 6 * (size_t)st.n;
+  size_t bad = m;
+  for (size_t i = 0; i < m && bad == m; i++)
+    if (!isfinite(st.buf[1 + i])) bad = i;
+  double val = bad < m ? st.buf[1 + bad] : 0;
+  bs_state_close(&st);
+  cr_assert_eq(bad, m, "%s/state.bin: last frame value %zu is %g", dir, bad, val);
 }
 
 /* The "failed" column of the summary row (method steps s/frame dofs solves failed ...). */

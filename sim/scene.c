@@ -1,4 +1,5 @@
-/* scene.c — strict JSON scene parsing (cJSON). */
+/* scene.c — strict JSON scene parsing (cJSON): keys and types here, values in
+ * scene_check.c (shared with scenes built in C). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -6,8 +7,8 @@
 
 #include <cJSON.h>
 
-#include "app.h"
-#include "scene.h"
+#include "bs_scene.h"
+#include "scene_internal.h"
 
 /* ---- small strict accessors -------------------------------------------- */
 
@@ -151,13 +152,6 @@ static int parse_material(ctx *c, const cJSON *o, const char *where, bs_scene_ma
   if ((st = get_num(c, o, where, "youngs", 1, &m->youngs)) || (st = get_num(c, o, where, "poisson", 1, &m->poisson)) ||
       (st = get_num(c, o, where, "density", 1, &m->density)) || (st = get_num(c, o, where, "rayleigh", 0, &m->rayleigh)))
     return st;
-  bs_material tmp;
-  if (bs_material_init(m->model, m->youngs, m->poisson, m->density, &tmp, &e2)) return fail(c, where, "%s", e2.msg);
-  if (m->rayleigh < 0) {
-    char w[512];
-    join(w, sizeof w, where, "rayleigh");
-    return fail(c, w, "must be >= 0, got %g", m->rayleigh);
-  }
   return 0;
 }
 
@@ -194,7 +188,6 @@ static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_scri
       if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &s->key_t[i])) ||
           (st = get_vec3(c, k, wi, "offset", 1, s->key_offset + 3 * i)))
         return st;
-      if (i > 0 && !(s->key_t[i] > s->key_t[i - 1])) return fail(c, wi, "keyframe times must increase");
     }
   }
   return 0;
@@ -208,8 +201,7 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   if ((st = check_keys(c, o, where, keys))) return st;
   if ((st = get_str(c, o, where, "mesh", 1, b->mesh, sizeof b->mesh))) return st;
   char w[512];
-  b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 4;
-  b->box_size[0] = b->box_size[1] = b->box_size[2] = 1;
+  bs_scene_body_defaults_(b);
   const cJSON *box = cJSON_GetObjectItemCaseSensitive(o, "box");
   join(w, sizeof w, where, "box");
   if (strcmp(b->mesh, "box") == 0) {
@@ -220,18 +212,12 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
     if ((st = get_vec3(c, box, w, "cells", 1, cells)) || (st = get_vec3(c, box, w, "size", 0, b->box_size))) return st;
     for (int k = 0; k < 3; k++) {
       if (cells[k] != floor(cells[k]) || cells[k] < 1 || cells[k] > 4096) return fail(c, w, "cells must be integers in [1, 4096]");
-      if (!(b->box_size[k] > 0)) return fail(c, w, "size must be positive");
       b->box_cells[k] = (int)cells[k];
     }
   } else if (box) {
     return fail(c, w, "only allowed with \"mesh\": \"box\"");
   }
-  b->mesh_size = 0;
   if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size))) return st;
-  if (b->mesh_size < 0) {
-    join(w, sizeof w, where, "mesh_size");
-    return fail(c, w, "must be > 0, got %g", b->mesh_size);
-  }
   if ((st = get_int(c, o, where, "refine", 0, 0, 6, &b->refine))) return st;
   char reorder[32] = "none";
   if ((st = get_str(c, o, where, "reorder", 0, reorder, sizeof reorder))) return st;
@@ -242,15 +228,9 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
     join(w, sizeof w, where, "reorder");
     return fail(c, w, "must be \"none\", \"metis\" or \"rcm\", got \"%s\"", reorder);
   }
-  b->scale[0] = b->scale[1] = b->scale[2] = 1;
   const cJSON *sc = cJSON_GetObjectItemCaseSensitive(o, "scale");
   if (cJSON_IsNumber(sc)) b->scale[0] = b->scale[1] = b->scale[2] = sc->valuedouble;
   else if ((st = get_vec3(c, o, where, "scale", 0, b->scale))) return st;
-  for (int k = 0; k < 3; k++)
-    if (!(b->scale[k] > 0) || !isfinite(b->scale[k])) {
-      join(w, sizeof w, where, "scale");
-      return fail(c, w, "must be positive and finite");
-    }
   if ((st = get_vec3(c, o, where, "translate", 0, b->translate)) || (st = get_vec3(c, o, where, "rotate", 0, b->rotate)) ||
       (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
       (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
@@ -262,6 +242,7 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
   if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
   b->n_materials = nm;
+  for (int i = 0; i < nm; i++) bs_scene_material_defaults_(&b->materials[i]);
   const cJSON *mat = cJSON_GetObjectItemCaseSensitive(o, "material");
   join(w, sizeof w, where, "material");
   if (!mat) return fail(c, w, "missing (an object with model, youngs, poisson, density is required)");
@@ -279,7 +260,6 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   }
 
   const cJSON *is = cJSON_GetObjectItemCaseSensitive(o, "initial_state");
-  b->init = BS_INIT_REST;
   if (is) {
     join(w, sizeof w, where, "initial_state");
     static const char *const ik[] = {"type", "lo", "hi", "point", "seed", NULL};
@@ -293,8 +273,6 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
     else if (!strcmp(type, "random")) {
       b->init = BS_INIT_RANDOM;
       if ((st = get_vec3(c, is, w, "lo", 1, b->init_lo)) || (st = get_vec3(c, is, w, "hi", 1, b->init_hi))) return st;
-      for (int k = 0; k < 3; k++)
-        if (!(b->init_hi[k] >= b->init_lo[k])) return fail(c, w, "hi must be >= lo in every component");
     } else if (!strcmp(type, "point")) {
       b->init = BS_INIT_POINT;
       if ((st = get_vec3(c, is, w, "point", 0, b->init_lo))) return st;
@@ -321,30 +299,69 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   return 0;
 }
 
+/* An optional string key parsed by `parse` into an enum (untouched when absent). */
+static int get_enum(ctx *c, const cJSON *obj, const char *where, const char *key, int required,
+                    int (*parse)(const char *, int *, bs_error *), int *out) {
+  char buf[64] = "", w[512];
+  int st = get_str(c, obj, where, key, required, buf, sizeof buf);
+  if (st || !buf[0]) return st;
+  bs_error e2;
+  if (parse(buf, out, &e2)) {
+    join(w, sizeof w, where, key);
+    return fail(c, w, "%s", e2.msg);
+  }
+  return 0;
+}
+
+static int parse_shape(const char *name, int *out, bs_error *err) {
+  bs_shape s;
+  int st = bs_shape_parse(name, &s, err);
+  *out = (int)s;
+  return st;
+}
+
+static int parse_collide(const char *name, int *out, bs_error *err) {
+  bs_collide_mode m;
+  if (bs_collide_mode_parse(name, &m, err))
+    return bs_error_set(err, BS_EINPUT, "must be constraint, penalty or postprocess, got \"%s\"", name);
+  *out = (int)m;
+  return 0;
+}
+
+static int parse_obstacle_keys(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
+  const cJSON *keysj = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
+  if (!keysj) return 0;
+  char w[512];
+  int st;
+  join(w, sizeof w, where, "keyframes");
+  if (!cJSON_IsArray(keysj) || cJSON_GetArraySize(keysj) < 1) return fail(c, w, "must be a non-empty array");
+  b->n_keys = cJSON_GetArraySize(keysj);
+  b->key_t = calloc((size_t)b->n_keys, sizeof(double));
+  b->key_translate = calloc(3 * (size_t)b->n_keys, sizeof(double));
+  b->key_rotate = calloc(3 * (size_t)b->n_keys, sizeof(double));
+  if (!b->key_t || !b->key_translate || !b->key_rotate) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  for (int i = 0; i < b->n_keys; i++) {
+    char wi[600];
+    snprintf(wi, sizeof wi, "%s.%d", w, i);
+    const cJSON *k = cJSON_GetArrayItem(keysj, i);
+    static const char *const kk[] = {"t", "translate", "rotate", NULL};
+    if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &b->key_t[i])) ||
+        (st = get_vec3(c, k, wi, "translate", 0, b->key_translate + 3 * i)) ||
+        (st = get_vec3(c, k, wi, "rotate", 0, b->key_rotate + 3 * i)))
+      return st;
+  }
+  return 0;
+}
+
 static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
   static const char *const keys[] = {"shape", "normal", "offset", "center", "radius", "half_extents", "axis",
                                      "half_height", "major", "minor", "inside_out", "file", "grid_h", "collision",
                                      "stiffness", "friction", "velocity", "angular_velocity", "keyframes", NULL};
-  int st;
-  char w[512];
+  int st, shape = 0, collision = BS_COLLIDE_CONSTRAINT;
   if ((st = check_keys(c, o, where, keys))) return st;
-  if ((st = get_str(c, o, where, "shape", 1, b->shape, sizeof b->shape))) return st;
-  static const char *const shapes[] = {"plane", "sphere", "box", "cylinder", "torus", "grid", NULL};
-  int known = 0;
-  for (int i = 0; shapes[i]; i++) known |= !strcmp(b->shape, shapes[i]);
-  if (!known) {
-    join(w, sizeof w, where, "shape");
-    return fail(c, w, "must be plane, sphere, box, cylinder, torus or grid, got \"%s\"", b->shape);
-  }
-  b->normal[1] = 1;
-  b->axis[1] = 1;
-  b->radius = 0.5;
-  b->half_extents[0] = b->half_extents[1] = b->half_extents[2] = 0.5;
-  b->half_height = 0.5;
-  b->major = 1;
-  b->minor = 0.25;
-  snprintf(b->collision, sizeof b->collision, "constraint");
-  b->stiffness = 1e6;
+  bs_scene_obstacle_defaults_(b);
+  if ((st = get_enum(c, o, where, "shape", 1, parse_shape, &shape))) return st;
+  b->shape = (bs_shape)shape;
   if ((st = get_vec3(c, o, where, "normal", 0, b->normal)) || (st = get_num(c, o, where, "offset", 0, &b->offset)) ||
       (st = get_vec3(c, o, where, "center", 0, b->center)) || (st = get_num(c, o, where, "radius", 0, &b->radius)) ||
       (st = get_vec3(c, o, where, "half_extents", 0, b->half_extents)) ||
@@ -354,54 +371,14 @@ static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_ob
       (st = get_bool(c, o, where, "inside_out", &b->inside_out)) ||
       (st = get_str(c, o, where, "file", 0, b->grid_file, sizeof b->grid_file)) ||
       (st = get_num(c, o, where, "grid_h", 0, &b->grid_h)) ||
-      (st = get_str(c, o, where, "collision", 0, b->collision, sizeof b->collision)) ||
+      (st = get_enum(c, o, where, "collision", 0, parse_collide, &collision)) ||
       (st = get_num(c, o, where, "stiffness", 0, &b->stiffness)) ||
       (st = get_num(c, o, where, "friction", 0, &b->friction)) ||
       (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
       (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
     return st;
-  if (!strcmp(b->shape, "grid") && !b->grid_file[0]) {
-    join(w, sizeof w, where, "file");
-    return fail(c, w, "missing: shape \"grid\" needs the grid level-set file");
-  }
-  if (strcmp(b->collision, "constraint") && strcmp(b->collision, "penalty") && strcmp(b->collision, "postprocess")) {
-    join(w, sizeof w, where, "collision");
-    return fail(c, w, "must be constraint, penalty or postprocess, got \"%s\"", b->collision);
-  }
-  if (!(b->stiffness > 0)) {
-    join(w, sizeof w, where, "stiffness");
-    return fail(c, w, "must be > 0, got %g", b->stiffness);
-  }
-  if (!(b->friction >= 0)) {
-    join(w, sizeof w, where, "friction");
-    return fail(c, w, "must be >= 0, got %g", b->friction);
-  }
-  if (b->grid_h < 0) {
-    join(w, sizeof w, where, "grid_h");
-    return fail(c, w, "must be > 0, got %g", b->grid_h);
-  }
-  const cJSON *keysj = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
-  if (keysj) {
-    join(w, sizeof w, where, "keyframes");
-    if (!cJSON_IsArray(keysj) || cJSON_GetArraySize(keysj) < 1) return fail(c, w, "must be a non-empty array");
-    b->n_keys = cJSON_GetArraySize(keysj);
-    b->key_t = calloc((size_t)b->n_keys, sizeof(double));
-    b->key_translate = calloc(3 * (size_t)b->n_keys, sizeof(double));
-    b->key_rotate = calloc(3 * (size_t)b->n_keys, sizeof(double));
-    if (!b->key_t || !b->key_translate || !b->key_rotate) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
-    for (int i = 0; i < b->n_keys; i++) {
-      char wi[600];
-      snprintf(wi, sizeof wi, "%s.%d", w, i);
-      const cJSON *k = cJSON_GetArrayItem(keysj, i);
-      static const char *const kk[] = {"t", "translate", "rotate", NULL};
-      if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &b->key_t[i])) ||
-          (st = get_vec3(c, k, wi, "translate", 0, b->key_translate + 3 * i)) ||
-          (st = get_vec3(c, k, wi, "rotate", 0, b->key_rotate + 3 * i)))
-        return st;
-      if (i > 0 && !(b->key_t[i] > b->key_t[i - 1])) return fail(c, wi, "keyframe times must increase");
-    }
-  }
-  return 0;
+  b->collision = (bs_collide_mode)collision;
+  return parse_obstacle_keys(c, o, where, b);
 }
 
 static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
@@ -419,16 +396,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_num(c, sc, "self_collision", "stiffness", 0, &s->self_stiffness)) ||
         (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
       return st;
-    if (!(s->self_stiffness > 0)) return fail(c, "self_collision.stiffness", "must be > 0, got %g", s->self_stiffness);
-    if (!(s->self_friction >= 0)) return fail(c, "self_collision.friction", "must be >= 0, got %g", s->self_friction);
   }
   const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
   if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
 
   /* time */
-  s->fps = 24;
-  s->frames = 24;
-  s->steps_per_frame = 1;
   const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
   if (t) {
     static const char *const tk[] = {"fps", "frames", "steps_per_frame", "dt", NULL};
@@ -451,11 +423,6 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
 
   /* solver */
-  bs_integrator_opts_default(&s->solver);
-  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
-  s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
-  s->mode = BS_MODE_DYNAMIC;
-  s->load_steps = 1;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
@@ -478,14 +445,9 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       return st;
     s->solver.amg_at_rest = !current;
     if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor))) return st;
-    if (!(s->solver.min.amg_rebuild_factor == 0 ||
-          (s->solver.min.amg_rebuild_factor >= 1 && isfinite(s->solver.min.amg_rebuild_factor))))
-      return fail(c, "solver.amg_rebuild_factor", "must be 0 (never) or a finite value >= 1, got %g",
-                  s->solver.min.amg_rebuild_factor);
     if ((st = get_int(c, so, "solver", "amg_rebuild_every", 0, 0, 100000000, &s->solver.min.amg_rebuild_every)))
       return st;
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
-    if (!(s->solver.min.tol > 0)) return fail(c, "solver.tolerance", "must be > 0, got %g", s->solver.min.tol);
     const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
     const int has_scale = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma_scale") != NULL;
     if (cJSON_IsString(sg)) {
@@ -496,14 +458,10 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       if (has_scale)
         return fail(c, "solver.cg_sigma_scale", "applies to cg_sigma \"auto\" only (cg_sigma is a number here)");
       if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
-      if (!(s->solver.min.sigma > 0) || !isfinite(s->solver.min.sigma))
-        return fail(c, "solver.cg_sigma", "must be > 0, got %g", s->solver.min.sigma);
       s->solver.min.sigma_auto = 0;
     }
     if (has_scale) {
       if ((st = get_num(c, so, "solver", "cg_sigma_scale", 0, &s->solver.min.sigma))) return st;
-      if (!(s->solver.min.sigma > 0) || !isfinite(s->solver.min.sigma))
-        return fail(c, "solver.cg_sigma_scale", "must be > 0, got %g", s->solver.min.sigma);
     }
     if ((st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill))) return st;
     if ((st = get_choice(c, so, "solver", "cg_forcing", "paper", "eisenstat_walker", &s->solver.min.forcing_ew)))
@@ -519,13 +477,8 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
   }
 
-  s->gravity[0] = 0;
-  s->gravity[1] = -9.8;
-  s->gravity[2] = 0;
   if ((st = get_vec3(c, root, "", "gravity", 0, s->gravity))) return st;
-  s->drag = 0;
   if ((st = get_num(c, root, "", "drag", 0, &s->drag))) return st;
-  if (s->drag < 0) return fail(c, "drag", "must be >= 0, got %g", s->drag);
 
   const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
   if (!bodies) return fail(c, "bodies", "missing (an array of at least one body is required)");
@@ -552,8 +505,6 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     }
   }
 
-  s->vtu_every = 1;
-  s->stats_csv = 1;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
   if (out) {
     static const char *const ok[] = {"dir", "vtu_every", "stats", "states", NULL};
@@ -620,27 +571,73 @@ static int apply_set(ctx *c, cJSON *root, const char *set) {
 
 /* ---- load ----------------------------------------------------------------- */
 
-void bs_scene_destroy(bs_scene **ps) {
-  if (!ps || !*ps) return;
-  bs_scene *s = *ps;
+/* A relative path that does not open as given is tried against the scene's
+ * folder; 0 when one of them opens (path updated), else -1. */
+static int resolve(const char *scene, char *path, size_t n) {
+  FILE *f = fopen(path, "rb");
+  if (f) {
+    fclose(f);
+    return 0;
+  }
+  const char *slash = strrchr(scene, '/');
+  if (!slash || path[0] == '/') return -1;
+  char alt[2 * BS_MAX_PATH + 2];
+  snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - scene), scene, path);
+  f = fopen(alt, "rb");
+  if (!f || strlen(alt) >= n) {
+    if (f) fclose(f);
+    return -1;
+  }
+  fclose(f);
+  snprintf(path, n, "%s", alt);
+  return 0;
+}
+
+static int resolve_files(bs_scene *s, bs_error *err) {
+  for (int i = 0; i < s->n_obstacles; i++) {
+    bs_scene_obstacle *o = &s->obstacles[i];
+    if (o->grid_file[0] && resolve(s->path, o->grid_file, sizeof o->grid_file))
+      return bs_error_set(err, BS_EIO, "%s: obstacles.%d.file: cannot open grid level-set file '%s'", s->path, i,
+                          o->grid_file);
+  }
   for (int i = 0; i < s->n_bodies; i++) {
     bs_scene_body *b = &s->bodies[i];
-    free(b->materials);
-    for (int k = 0; k < b->n_scripts; k++) {
-      free(b->scripts[k].key_t);
-      free(b->scripts[k].key_offset);
-    }
-    free(b->scripts);
+    if (strcmp(b->mesh, "box") && resolve(s->path, b->mesh, sizeof b->mesh))
+      return bs_error_set(err, BS_EIO, "%s: bodies.%d.mesh: cannot open mesh file '%s'", s->path, i, b->mesh);
   }
-  free(s->bodies);
-  for (int i = 0; i < s->n_obstacles; i++) {
-    free(s->obstacles[i].key_t);
-    free(s->obstacles[i].key_translate);
-    free(s->obstacles[i].key_rotate);
+  return 0;
+}
+
+int bs_scene_parse(const char *text, const char *name, int n_sets, const char *const *sets, bs_scene **out,
+                   bs_error *err) {
+  *out = NULL;
+  if (!name) name = "<scene>";
+  cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
+  if (!root) {
+    const char *at = cJSON_GetErrorPtr();
+    int line = 1;
+    if (at)
+      for (const char *p = text; p < at && *p; p++) line += (*p == '\n');
+    return bs_error_set(err, BS_EINPUT, "%s: line %d: malformed JSON", name, line);
   }
-  free(s->obstacles);
-  free(s);
-  *ps = NULL;
+  ctx c = {name, err};
+  int st = 0;
+  for (int i = 0; i < n_sets && !st; i++) st = apply_set(&c, root, sets[i]);
+  bs_scene *s = NULL;
+  if (!st) st = bs_scene_create(&s, err);
+  if (!st) {
+    snprintf(s->path, sizeof s->path, "%s", name);
+    st = parse_scene(&c, root, s);
+  }
+  cJSON_Delete(root);
+  if (!st) st = bs_scene_check(s, err);
+  if (!st) st = resolve_files(s, err);
+  if (st) {
+    bs_scene_destroy(&s);
+    return st;
+  }
+  *out = s;
+  return 0;
 }
 
 int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scene **out, bs_error *err) {
@@ -662,81 +659,7 @@ int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scen
   size_t got = fread(text, 1, (size_t)n, f);
   fclose(f);
   text[got] = '\0';
-  cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
-  if (!root) {
-    const char *at = cJSON_GetErrorPtr();
-    int line = 1;
-    if (at)
-      for (const char *p = text; p < at && *p; p++) line += (*p == '\n');
-    free(text);
-    return bs_error_set(err, BS_EINPUT, "%s: line %d: malformed JSON", path, line);
-  }
+  int st = bs_scene_parse(text, path, n_sets, sets, out, err);
   free(text);
-  ctx c = {path, err};
-  int st = 0;
-  for (int i = 0; i < n_sets && !st; i++) st = apply_set(&c, root, sets[i]);
-  bs_scene *s = NULL;
-  if (!st) {
-    s = calloc(1, sizeof *s);
-    if (!s) st = bs_error_set(err, BS_ENOMEM, "out of memory");
-  }
-  if (!st) {
-    snprintf(s->path, sizeof s->path, "%s", path);
-    st = parse_scene(&c, root, s);
-  }
-  cJSON_Delete(root);
-  if (st) {
-    bs_scene_destroy(&s);
-    return st;
-  }
-  /* resolve grid files relative to the scene file's folder when not found as given */
-  for (int i = 0; i < s->n_obstacles; i++) {
-    bs_scene_obstacle *o = &s->obstacles[i];
-    if (!o->grid_file[0]) continue;
-    FILE *gf = fopen(o->grid_file, "rb");
-    if (gf) {
-      fclose(gf);
-      continue;
-    }
-    const char *slash = strrchr(path, '/');
-    if (slash && o->grid_file[0] != '/') {
-      char alt[2048];
-      snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - path), path, o->grid_file);
-      gf = fopen(alt, "rb");
-      if (gf) {
-        fclose(gf);
-        snprintf(o->grid_file, sizeof o->grid_file, "%s", alt);
-        continue;
-      }
-    }
-    st = bs_error_set(err, BS_EIO, "%s: obstacles.%d.file: cannot open grid level-set file '%s'", path, i, o->grid_file);
-    bs_scene_destroy(&s);
-    return st;
-  }
-  /* resolve mesh paths relative to the scene file's folder when not found as given */
-  for (int i = 0; i < s->n_bodies; i++) {
-    bs_scene_body *b = &s->bodies[i];
-    if (!strcmp(b->mesh, "box")) continue;
-    FILE *mf = fopen(b->mesh, "rb");
-    if (mf) {
-      fclose(mf);
-      continue;
-    }
-    const char *slash = strrchr(path, '/');
-    if (slash && b->mesh[0] != '/') {
-      char alt[2048];
-      snprintf(alt, sizeof alt, "%.*s/%s", (int)(slash - path), path, b->mesh);
-      mf = fopen(alt, "rb");
-      if (mf) {
-        fclose(mf);
-        snprintf(b->mesh, sizeof b->mesh, "%s", alt);
-        continue;
-      }
-    }
-    st = bs_error_set(err, BS_EIO, "%s: bodies.%d.mesh: cannot open mesh file '%s'", path, i, b->mesh);
-    bs_scene_destroy(&s);
-    return st;
-  }
-  *out = s;
-  return 0;
+  return st;
 }

@@ -1,0 +1,141 @@
+/* bs_runfolder.h — a run's output folder: the one home of each file format,
+ * for writing and for reading back.
+ *
+ * A run folder holds (all optional but frames.csv):
+ *   frames.csv   one row per frame (frame 0 the initial state): time,
+ *                energies (J), inverted tets, min det F, Newton and CG
+ *                iterations, failed steps, solver seconds, vertices inside
+ *                obstacles and their depth, intersecting surface triangle
+ *                pairs (columns: BS_FRAMES_CSV_HEADER);
+ *   stats.csv    one row per time step (BS_STATS_CSV_HEADER);
+ *   state.bin    x and v of every frame, little-endian doubles:
+ *                header "BSST" (4 bytes), uint32 version (2), int32
+ *                n_vertices, int32 0; then per frame: time, x (3n), v (3n).
+ *                Version 1 ("BSST1\0\0\0", int32 n, int32 0) is read too;
+ *   summary.txt  the closing summary in the columns of the paper's Figure 11
+ *                (bs_summary_format), read back by bs_summary_read;
+ *   frame_NNNNN.vtu and frames.pvd  the frames for ParaView (mesh/ writes
+ *                the VTU and PVD files).
+ *
+ * Writing: bs_runfolder_create makes the folder and opens the files the
+ * scene's output section asks for; bs_runfolder_frame (a bs_frame_fn for
+ * bs_sim_run) writes a frame's rows, state and VTU; bs_runfolder_finish
+ * writes frames.pvd and summary.txt; bs_runfolder_destroy closes what is
+ * open (also after an error). Rows are flushed after every frame.
+ *
+ * Ownership: the writer owns its open files; readers return tables and
+ * readers that the caller frees with the matching free/close function.
+ * Status: 0, BS_EIO (a file that cannot be opened, read or written: the
+ * message names it), BS_EINPUT (a file that is not in the format: the
+ * message says what is wrong), BS_ENOMEM.
+ */
+#ifndef BS_RUNFOLDER_H
+#define BS_RUNFOLDER_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "bs_base.h"
+#include "bs_sim.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_FRAMES_CSV_HEADER                                                                            \
+  "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds,penetrating,max_depth," \
+  "self_intersections"
+#define BS_STATS_CSV_HEADER                                                                             \
+  "frame,step,time,guess,iterations,cg_iterations,ls_evaluations,indefinite,fallback_neg_dx,"                \
+  "fallback_neg_grad,clamps,cholmod_fallbacks,alpha_min,alpha_max,grad_norm,E,reason,inverted,"             \
+  "t_eval,t_assembly,t_linear,t_line_search,seconds"
+#define BS_STATE_VERSION 2
+
+/* ---- writing ------------------------------------------------------------ */
+
+typedef struct bs_runfolder bs_runfolder;
+
+/* Makes dir (and its parents) and opens frames.csv, stats.csv (scene
+ * output.stats) and state.bin (output.states) for the simulation s. */
+int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
+
+/* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state
+ * and, every output.vtu_every frames, frame_NNNNN.vtu. ctx is the
+ * bs_runfolder (so that it can be handed to bs_sim_run). */
+int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err);
+
+/* Writes frames.pvd (the VTU frames written) and summary.txt (when summary
+ * is not NULL). */
+int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err);
+
+void bs_runfolder_destroy(bs_runfolder **rf);
+
+/* ---- the summary ---------------------------------------------------------- */
+
+typedef struct bs_summary {
+  char method[32];
+  int steps_per_frame;
+  double s_per_frame;        /* wall seconds per frame                         */
+  long dofs;
+  double solves_per_step;    /* Newton iterations per step                      */
+  long failed;               /* steps that did not converge                     */
+  double max_grad;           /* largest final ||grad E|| (N)                    */
+  int32_t inverted;          /* at the last frame                               */
+  int64_t self_intersections;/* at the last frame (BS_SIM_SELF_CAP: at least)  */
+  int obstacles;             /* 1: the penetration figures apply                */
+  int32_t penetrating;
+  double max_depth;
+  bs_run_totals totals;      /* the solver health counts                        */
+  double peak_mib;           /* peak resident memory (MiB)                      */
+} bs_summary;
+
+/* Fills a summary from a finished run: totals, wall seconds, the sim's last state. */
+void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_seconds, bs_summary *out);
+
+/* The summary as text (four lines, the first a header); returns the length. */
+int bs_summary_format(const bs_summary *sum, char *buf, size_t n);
+
+/* Reads s_per_frame, solves_per_step, failed and peak_mib (NAN when absent)
+ * back from dir/summary.txt. */
+int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
+
+/* ---- reading frames.csv --------------------------------------------------- */
+
+typedef struct bs_frames_table {
+  int n;                     /* rows (frames, frame 0 included)                */
+  double *time, *kinetic, *total, *max_depth; /* per row                       */
+  int has_depth;             /* the file has the max_depth column              */
+  long newton, cg, failed;   /* sums over the rows                             */
+  int inverted_max;
+  double seconds;            /* summed solver seconds                          */
+} bs_frames_table;
+
+int bs_frames_csv_read(const char *dir, bs_frames_table *t, bs_error *err);
+void bs_frames_table_free(bs_frames_table *t);
+
+/* Lines of dir/frames.csv (the header included; a last line without its
+ * newline counts); -1 when the file is missing. */
+int bs_frames_csv_lines(const char *dir);
+
+/* ---- reading state.bin ---------------------------------------------------- */
+
+typedef struct bs_state_reader {
+  FILE *f;
+  int version;
+  int32_t n;                 /* vertices                                       */
+  long frames;               /* whole frame records in the file                */
+  double time;               /* of the current frame                           */
+  double *x, *v;             /* 3n each: the current frame (into buf)          */
+  double *buf;
+} bs_state_reader;
+
+/* Opens dir/state.bin and checks its header and size. */
+int bs_state_open(const char *dir, bs_state_reader *r, bs_error *err);
+/* The next frame into r->time, r->x, r->v: 0, or 1 at the end of the file. */
+int bs_state_next(bs_state_reader *r);
+void bs_state_close(bs_state_reader *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,208 @@
+/* bs_scene.h — a scene: what to simulate (bodies, materials, scripted groups,
+ * obstacles, self-collision), how (time, solver) and what to write.
+ *
+ * Two ways to make one:
+ *  - from JSON (cJSON): bs_scene_load (a file) or bs_scene_parse (text), with
+ *    "key.path=value" overrides applied before validation. Every key is
+ *    checked: an unknown key, a wrong type, a missing mesh or group file, or
+ *    an impossible value is BS_EINPUT (BS_EIO for a missing file) with a
+ *    message naming the file and the key path, e.g.
+ *    "scene.json: bodies.0.material.density: must be > 0, got -1". The schema
+ *    is documented in README.md ("Scenes");
+ *  - in C, without any JSON: bs_scene_create gives a scene holding every
+ *    default of the JSON schema and no body; bs_scene_add_body,
+ *    bs_scene_body_add_script, bs_scene_body_add_material and
+ *    bs_scene_add_obstacle append parts (each with the schema's defaults)
+ *    whose fields the caller then sets; bs_scene_validate checks the values
+ *    with the same messages (key paths without a file name, "<scene>").
+ *    bs_sim_create validates too.
+ *
+ * Units: SI (m, s, kg, Pa, N). Angles in degrees (rotate, keyframe rotate).
+ *
+ * Ownership: a scene is owned by its creator and freed with
+ * bs_scene_destroy; every array and string inside is owned by the scene
+ * (pointers returned by the add functions stay valid until the next add of
+ * the same kind or the scene's destruction). A simulation borrows its scene:
+ * the scene must outlive it and must not change while it runs.
+ *
+ * Example (a clamped beam, no JSON):
+ *     bs_scene *sc; bs_scene_body *b; bs_scene_script *clamp;
+ *     bs_scene_create(&sc, &err);
+ *     bs_scene_add_body(sc, "box", &b, &err);
+ *     b->box_cells[0] = 20; b->box_cells[1] = b->box_cells[2] = 2;
+ *     b->box_size[0] = 1.0; b->box_size[1] = b->box_size[2] = 0.1;
+ *     b->materials[0] = (bs_scene_material){.model = BS_MODEL_FIXED_COROTATED,
+ *         .youngs = 1e7, .poisson = 0.3, .density = 1000};
+ *     bs_scene_body_add_script(b, "xmin", BS_SCRIPT_FIXED, &clamp, &err);
+ *     sc->mode = BS_MODE_STATIC;
+ *     if (bs_scene_validate(sc, &err)) ... err.msg names the key
+ */
+#ifndef BS_SCENE_H
+#define BS_SCENE_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+#include "bs_material.h"
+#include "bs_mesh.h"
+#include "bs_obstacles.h"
+#include "bs_step.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_MAX_NAME 256
+#define BS_MAX_PATH 1024
+/* solver.cg_sigma_scale's default: c in the CG tolerance of cg_sigma "auto",
+ * min(1/2, c sqrt(max(||grad E||, tau) / ||grad E_0||)). Smaller values cut
+ * Newton iterations on the paper's scenes but slow the recovery from tangled
+ * states (README, Scenes). */
+#define BS_SCENE_SIGMA_SCALE 1.0
+
+typedef enum { BS_SCRIPT_FIXED = 0, BS_SCRIPT_VELOCITY, BS_SCRIPT_KEYFRAMES } bs_script_kind;
+
+typedef struct bs_scene_script {
+  char group[BS_MAX_NAME]; /* a physical group of the body's mesh               */
+  bs_script_kind kind;
+  double velocity[3];    /* BS_SCRIPT_VELOCITY: constant velocity (m/s)        */
+  int n_keys;            /* BS_SCRIPT_KEYFRAMES: offsets from rest, linear    */
+  double *key_t;         /* n_keys times (s), increasing                      */
+  double *key_offset;    /* 3 per key (m)                                     */
+} bs_scene_script;
+
+typedef struct bs_scene_material {
+  char group[BS_MAX_NAME]; /* "" for the body's default (materials[0])        */
+  bs_model model;
+  double youngs, poisson, density, rayleigh; /* Pa, 1, kg/m^3, s              */
+} bs_scene_material;
+
+typedef enum { BS_INIT_REST = 0, BS_INIT_RANDOM, BS_INIT_POINT } bs_init_kind;
+
+typedef struct bs_scene_body {
+  char mesh[BS_MAX_PATH];  /* a path (resolved against the scene's folder) or "box" */
+  int box_cells[3];        /* mesh "box": cells [4, 4, 4]                       */
+  double box_size[3];      /* mesh "box": edge lengths (m) [1, 1, 1]            */
+  double mesh_size;        /* <= 0: the file's own                             */
+  int refine;              /* uniform refinements [0], 0..6                     */
+  bs_order reorder;
+  double translate[3], rotate[3] /* axis * angle (degrees) */, scale[3];
+  int n_materials;         /* [0] is the default; others by group name          */
+  bs_scene_material *materials;
+  double velocity[3], angular_velocity[3]; /* initial (m/s, rad/s about the centroid) */
+  bs_init_kind init;
+  double init_lo[3], init_hi[3]; /* random: box; point: init_lo is the point   */
+  unsigned init_seed;
+  int n_scripts;
+  bs_scene_script *scripts;
+} bs_scene_body;
+
+typedef enum {
+  BS_SHAPE_PLANE = 0, /* normal . x >= offset is outside (a half-space floor)     */
+  BS_SHAPE_SPHERE,
+  BS_SHAPE_BOX,
+  BS_SHAPE_CYLINDER,
+  BS_SHAPE_TORUS,
+  BS_SHAPE_GRID       /* a grid level-set file (bigstep levelset)                */
+} bs_shape;
+
+/* "plane", "sphere", "box", "cylinder", "torus", "grid"; parse: BS_EINPUT. */
+const char *bs_shape_name(bs_shape s);
+int bs_shape_parse(const char *name, bs_shape *out, bs_error *err);
+
+/* An obstacle: a level set (analytic shape, optionally sampled onto a grid or
+ * loaded from a grid file), how it collides, and its motion. */
+typedef struct bs_scene_obstacle {
+  bs_shape shape;
+  double normal[3], offset;            /* plane                                */
+  double center[3], radius, half_extents[3], axis[3], half_height, major, minor;
+  int inside_out;
+  char grid_file[BS_MAX_PATH]; /* shape grid: a grid level-set file           */
+  double grid_h;           /* > 0: sample the analytic shape onto a grid (m)  */
+  bs_collide_mode collision; /* constraint [default], penalty, postprocess     */
+  double stiffness, friction;
+  double velocity[3], angular_velocity[3];
+  int n_keys;
+  double *key_t, *key_translate, *key_rotate; /* rotate in degrees (axis-angle) */
+} bs_scene_obstacle;
+
+typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
+
+typedef struct bs_scene {
+  char path[BS_MAX_PATH];  /* the scene file; "<scene>" for one built in C     */
+  double fps;
+  int frames, steps_per_frame;
+  double dt;               /* derived: 1 / (fps * steps_per_frame); the loader and */
+                           /* bs_scene_validate set it                             */
+  bs_integrator_opts solver;
+  bs_scene_mode mode;
+  int load_steps;
+  int project_hessian;     /* PSD-project the elastic Hessian (Newton option)   */
+  double gravity[3];
+  double drag;
+  int n_bodies;
+  bs_scene_body *bodies;
+  int n_obstacles;
+  bs_scene_obstacle *obstacles;
+  int self_collision;      /* penalty self-collisions (section 5.3)             */
+  double self_stiffness, self_friction;
+  char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
+  int vtu_every;           /* frames between VTU files (0: none)               */
+  int stats_csv;
+  int states;              /* write state.bin (x, v every frame)                */
+} bs_scene;
+
+/* Loads and validates a scene file, applying the n_sets overrides
+ * "key.path=value" (value parsed as JSON, else taken as a string) before
+ * validation. Mesh and grid paths are resolved against the file's folder. */
+int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scene **out, bs_error *err);
+
+/* The same from JSON text; `name` stands for the file in messages and is the
+ * folder relative paths are resolved against (NULL: "<scene>", the current
+ * folder). */
+int bs_scene_parse(const char *json, const char *name, int n_sets, const char *const *sets, bs_scene **out,
+                   bs_error *err);
+
+void bs_scene_destroy(bs_scene **s);
+
+/* ---- scenes built in C ------------------------------------------------ */
+
+/* A scene with every default of the schema and no body. */
+int bs_scene_create(bs_scene **out, bs_error *err);
+
+/* Appends a body with the schema's defaults (scale 1, a 4^3-cell unit box
+ * when mesh is "box", one default material of fixed corotated with E, nu and
+ * rho left 0 for the caller to set). mesh: "box" or a path to a mesh. */
+int bs_scene_add_body(bs_scene *s, const char *mesh, bs_scene_body **out, bs_error *err);
+
+/* Appends a material for the 3-D physical group `group` of the body's mesh,
+ * a copy of the body's default material (materials[0]) to edit. */
+int bs_scene_body_add_material(bs_scene_body *b, const char *group, bs_scene_material **out, bs_error *err);
+
+/* Appends a scripted group of kind `kind` (velocity zero, no keyframes: set
+ * them, or call bs_scene_script_set_keyframes). */
+int bs_scene_body_add_script(bs_scene_body *b, const char *group, bs_script_kind kind, bs_scene_script **out,
+                             bs_error *err);
+
+/* Copies n keyframes (times t, offsets 3 per key) into a script, making it
+ * BS_SCRIPT_KEYFRAMES. */
+int bs_scene_script_set_keyframes(bs_scene_script *sc, int n, const double *t, const double *offset, bs_error *err);
+
+/* Appends an obstacle of the given shape with the schema's defaults (plane
+ * normal +y offset 0, radius 0.5, constraint collision, stiffness 1e6, no
+ * friction). */
+int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, bs_error *err);
+
+/* Sets s->dt = 1 / (fps * steps_per_frame), then bs_scene_check. */
+int bs_scene_validate(bs_scene *s, bs_error *err);
+
+/* Checks every value the JSON loader checks (time, solver, materials,
+ * bodies, scripts, obstacles, output), and that dt is the one fps and
+ * steps_per_frame give: 0, or BS_EINPUT naming the key path. Meshes and
+ * groups are checked by bs_sim_create, which calls this first. */
+int bs_scene_check(const bs_scene *s, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,179 @@
+/* bs_sim.h — a scene turned into a simulation, and stepping it.
+ *
+ * bs_sim_create builds, from a scene (bs_scene.h): the merged mesh of all
+ * bodies (transformed, vertex blocks in body order), the fem cache with one
+ * material per scene material, the energy terms the scene asks for
+ * (inertia, gravity, elasticity, damping, drag, penalty obstacles,
+ * self-collision: a term exists only when the scene asks for it), the
+ * scripted vertices, the obstacles' projection and friction hooks, and the
+ * integrator (bs_step.h). Then:
+ *   bs_sim_advance_frame   one frame: steps_per_frame backward Euler steps;
+ *   bs_sim_statics         the static solve (scene mode "static");
+ *   bs_sim_run             every frame of the scene (or the static solve),
+ *                          calling a callback after each for whoever prints
+ *                          or writes (bs_runfolder.h writes run folders).
+ * Time is advanced in one place: a frame ends at exactly frame / fps.
+ *
+ * Units: SI. x, v: 3 doubles per vertex (m, m/s), vertex i of body b at
+ * vertex_offset[b] + i.
+ *
+ * Ownership: the simulation borrows its scene (which must outlive it and not
+ * change) and owns everything else it creates, including terms added with
+ * bs_sim_add_term; free it with bs_sim_destroy. The struct's fields are for
+ * reading; change the state only through the functions below (x and v may be
+ * written between frames, e.g. to restart from a saved state).
+ *
+ * Status: every function returns 0 or a negative BS_E* code with a message
+ * naming the scene key, group or vertex at fault. A step that ran but did not
+ * converge is not an error: it is counted in the statistics (failed), with
+ * the minimizer's reason.
+ *
+ * Threads: the integrator's kernels use OpenMP; call from one thread.
+ *
+ * Example:
+ *     bs_scene *sc; bs_sim *s; bs_frame_stats fs; bs_error err;
+ *     if (bs_scene_load("scene.json", 0, NULL, &sc, &err) || bs_sim_create(sc, &s, &err)) ...
+ *     for (int f = 1; f <= sc->frames; f++) {
+ *       if (bs_sim_advance_frame(s, &fs, &err)) ...        (an error, e.g. NaN in the state)
+ *       printf("t %g: %ld Newton iterations%s\n", s->time, fs.iterations, fs.failed ? " (failed)" : "");
+ *     }
+ *     bs_sim_destroy(&s); bs_scene_destroy(&sc);
+ */
+#ifndef BS_SIM_H
+#define BS_SIM_H
+
+#include <stdint.h>
+
+#include "bs_fem.h"
+#include "bs_mesh.h"
+#include "bs_obstacles.h"
+#include "bs_scene.h"
+#include "bs_step.h"
+#include "bs_terms.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_SIM_MAX_TERMS 64
+
+typedef struct bs_sim_script {
+  const bs_scene_script *script;
+  int32_t n;           /* vertices scripted by it            */
+  int32_t *vertices;
+} bs_sim_script;
+
+/* One time step as the simulation records it. */
+typedef struct bs_sim_step {
+  bs_step_stats st;    /* the integrator's statistics (bs_step.h)          */
+  double time;         /* s, at the end of the step                        */
+  int32_t inverted;    /* tets with det F <= 0 after the step              */
+} bs_sim_step;
+
+/* A frame: its steps and their sums. `steps` points into the simulation
+ * (valid until the next frame). Frame 0 is the initial state (no steps). */
+typedef struct bs_frame_stats {
+  int frame;           /* 0: the initial state; 1..frames; 1 for statics   */
+  double time;         /* s, at the end of the frame                        */
+  int n_steps;
+  const bs_sim_step *steps;
+  long iterations, cg_iterations, failed; /* summed over the frame's steps */
+  double seconds;      /* solver time of the frame's steps                 */
+  double grad_max;     /* largest final ||grad E|| of its steps (N)         */
+} bs_frame_stats;
+
+/* Sums over a whole run, and its first failed step. */
+typedef struct bs_run_totals {
+  long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill;
+  double seconds, max_grad;
+  int first_fail_frame, first_fail_step;
+  char first_fail_reason[256];
+} bs_run_totals;
+
+/* Adds a frame's steps into the totals. */
+void bs_run_totals_add(bs_run_totals *T, const bs_frame_stats *fs);
+
+typedef struct bs_sim {
+  const bs_scene *scene;
+  bs_mesh *mesh;        /* all bodies merged                  */
+  int n_bodies;
+  int32_t *vertex_offset; /* n_bodies + 1: body b's vertices start here */
+  double *x0;           /* 3n: positions at t = 0 (transformed rest) */
+  double size;          /* m: diagonal of the bounding box of x0 */
+  double *x, *v;        /* 3n: current state                   */
+  uint8_t *mask;        /* n: 1 free, 0 scripted               */
+  int32_t n_free;       /* free vertices (dofs = 3 n_free)     */
+  int n_scripts;
+  bs_sim_script *scripts;
+  int n_materials;
+  bs_material *materials;
+  int32_t *tet_material;
+  bs_fem *fem;
+  int n_terms;
+  bs_term *terms[BS_SIM_MAX_TERMS]; /* the scene's terms (penalty terms are the obstacles') */
+  int n_user_terms;        /* the last n_user_terms of terms[]: bs_sim_add_term's */
+  bs_obstacles *obstacles; /* NULL when the scene has none                  */
+  bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
+  bs_step_hooks obstacle_hooks;
+  bs_step_data step;    /* filled by the integrator each step */
+  bs_integrator *integrator;
+  int frame;            /* frames completed                   */
+  double time;          /* s                                  */
+  bs_sim_step *steps;   /* steps_per_frame records of the last frame */
+} bs_sim;
+
+/* Checks the scene (bs_scene_check), reads or builds the meshes, and sets up
+ * everything listed at the top. */
+int bs_sim_create(const bs_scene *scene, bs_sim **out, bs_error *err);
+void bs_sim_destroy(bs_sim **s);
+
+/* Adds an energy term of the caller's (created on s->fem and &s->step, see
+ * bs_terms.h) to the objective; the simulation owns it from then on (also on
+ * error). Call before the first step. */
+int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err);
+
+/* One frame of the dynamic scene: steps_per_frame steps from s->time. */
+int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err);
+
+/* The static solve of a scene in mode "static" (frame 1, at time 0). */
+int bs_sim_statics(bs_sim *s, bs_frame_stats *fs, bs_error *err);
+
+/* Called with frame 0 (the initial state) and after every frame; a nonzero
+ * return stops the run and is returned by bs_sim_run (set err). */
+typedef int (*bs_frame_fn)(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err);
+
+/* Every frame of the scene (or its static solve), with on_frame (may be
+ * NULL) after each; totals (may be NULL) summed over the run. */
+int bs_sim_run(bs_sim *s, bs_frame_fn on_frame, void *ctx, bs_run_totals *totals, bs_error *err);
+
+/* What a frame row records of the current state. */
+typedef struct bs_sim_measures {
+  double kinetic, elastic, gravity, total; /* J: 1/2 sum m|v|^2, Phi_e, -sum m g.x */
+  int32_t inverted;       /* tets with det F <= 0                                  */
+  double min_detF;
+  int32_t penetrating;    /* free vertices inside obstacles deeper than 1e-10 size */
+  double max_depth;       /* m                                                     */
+  int64_t self_intersections; /* intersecting boundary triangle pairs (exact, CGAL), */
+                          /* counted up to BS_SIM_SELF_CAP; -1 if not computed        */
+} bs_sim_measures;
+
+#define BS_SIM_SELF_CAP 100000
+
+/* Measures the current state; intersections only when `intersections`. */
+void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m);
+
+/* Vertices inside obstacles at the current state deeper than 1e-10 of the
+ * bodies' size (the constraint guarantee: a projection lands on phi = 0 up to
+ * rounding), and the largest depth (m, over all vertices). */
+void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
+
+/* Self-colliding vertices at the current state and the largest depth (m). */
+void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth);
+
+/* Free dofs (3 per free vertex). */
+long bs_sim_dofs(const bs_sim *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

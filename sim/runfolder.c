@@ -1,0 +1,144 @@
+/* runfolder.c — writing a run folder: frames.csv, stats.csv, state.bin,
+ * the VTU frames and their PVD collection (formats: bs_runfolder.h). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_runfolder.h"
+
+struct bs_runfolder {
+  char dir[BS_MAX_PATH];
+  FILE *frames, *stats, *state;
+  int vtu_every;
+  int n_vtu, cap_vtu;
+  char **vtu_names;
+  double *vtu_times;
+};
+
+static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
+  char p[BS_MAX_PATH + 64];
+  snprintf(p, sizeof p, "%s/%s", rf->dir, name);
+  *f = fopen(p, mode);
+  return *f ? 0 : bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+}
+
+/* state.bin's header (bs_runfolder.h). */
+static int write_state_header(FILE *f, int32_t n) {
+  uint32_t version = BS_STATE_VERSION;
+  int32_t hdr[2] = {n, 0};
+  return fwrite("BSST", 1, 4, f) == 4 && fwrite(&version, 4, 1, f) == 1 && fwrite(hdr, 4, 2, f) == 2 ? 0 : -1;
+}
+
+int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
+  *out = NULL;
+  const bs_scene *sc = s->scene;
+  if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
+  int st = bs_mkdir_p(dir, err);
+  if (st) return st;
+  bs_runfolder *rf = calloc(1, sizeof *rf);
+  if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  snprintf(rf->dir, sizeof rf->dir, "%s", dir);
+  rf->vtu_every = sc->vtu_every;
+  if (sc->stats_csv && !(st = open_file(rf, "stats.csv", "w", &rf->stats, err))) fprintf(rf->stats, "%s\n", BS_STATS_CSV_HEADER);
+  if (!st && !(st = open_file(rf, "frames.csv", "w", &rf->frames, err))) fprintf(rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
+  if (!st && sc->states && !(st = open_file(rf, "state.bin", "wb", &rf->state, err)) &&
+      write_state_header(rf->state, s->mesh->n_vertices))
+    st = bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", dir);
+  if (st) {
+    bs_runfolder_destroy(&rf);
+    return st;
+  }
+  *out = rf;
+  return 0;
+}
+
+static void write_stats_rows(FILE *f, const bs_frame_stats *fs) {
+  for (int k = 0; k < fs->n_steps; k++) {
+    const bs_step_stats *st = &fs->steps[k].st;
+    fprintf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", fs->frame, k,
+            fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations, st->min.ls_evaluations,
+            st->min.indefinite_exits, st->min.fallback_neg_dx, st->min.fallback_neg_grad, st->min.clamps,
+            st->min.cholmod_fallbacks, st->min.alpha_min, st->min.alpha_max, st->min.grad_norm, st->min.E,
+            st->min.reason_text ? st->min.reason_text : "", fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly,
+            st->min.t_linear, st->min.t_line_search, st->seconds);
+  }
+  fflush(f);
+}
+
+static void write_frame_row(FILE *f, const bs_sim *s, const bs_frame_stats *fs) {
+  bs_sim_measures m;
+  bs_sim_measure(s, 1, &m);
+  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m.kinetic,
+          m.elastic, m.gravity, m.total, m.inverted, m.min_detF, fs->iterations, fs->cg_iterations, fs->failed,
+          fs->seconds, m.penetrating, m.max_depth, (long long)m.self_intersections);
+  fflush(f);
+}
+
+static int write_state(FILE *f, const bs_sim *s) {
+  size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  int ok = fwrite(&s->time, sizeof(double), 1, f) == 1 && fwrite(s->x, sizeof(double), n3, f) == n3 &&
+           fwrite(s->v, sizeof(double), n3, f) == n3;
+  return fflush(f) == 0 && ok ? 0 : -1;
+}
+
+static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
+  if (rf->n_vtu == rf->cap_vtu) {
+    int cap = rf->cap_vtu ? 2 * rf->cap_vtu : 64;
+    char **nn = realloc(rf->vtu_names, sizeof(char *) * (size_t)cap);
+    if (nn) rf->vtu_names = nn;
+    double *tt = nn ? realloc(rf->vtu_times, sizeof(double) * (size_t)cap) : NULL;
+    if (!nn || !tt) return bs_error_set(err, BS_ENOMEM, "out of memory");
+    rf->vtu_times = tt;
+    rf->cap_vtu = cap;
+  }
+  char path[BS_MAX_PATH + 64], name[64];
+  snprintf(name, sizeof name, "frame_%05d.vtu", frame);
+  snprintf(path, sizeof path, "%s/%s", rf->dir, name);
+  bs_vtu_fields f = {.x = s->x, .velocity = s->v, .cell_detF = NULL};
+  int st = bs_mesh_write_vtu(s->mesh, &f, path, err);
+  if (st) return st;
+  if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  rf->vtu_times[rf->n_vtu++] = s->time;
+  return 0;
+}
+
+int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
+  bs_runfolder *rf = ctx;
+  if (rf->stats) write_stats_rows(rf->stats, fs);
+  write_frame_row(rf->frames, s, fs);
+  if (ferror(rf->frames)) return bs_error_set(err, BS_EIO, "cannot write '%s/frames.csv'", rf->dir);
+  if (rf->stats && ferror(rf->stats)) return bs_error_set(err, BS_EIO, "cannot write '%s/stats.csv'", rf->dir);
+  if (rf->state && write_state(rf->state, s)) return bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
+  if (rf->vtu_every > 0 && (fs->frame % rf->vtu_every == 0 || s->scene->mode == BS_MODE_STATIC))
+    return write_vtu(rf, s, fs->frame, err);
+  return 0;
+}
+
+int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {
+  char p[BS_MAX_PATH + 64];
+  if (rf->n_vtu > 0) {
+    snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
+    int st = bs_pvd_write(p, rf->n_vtu, rf->vtu_times, (const char *const *)rf->vtu_names, err);
+    if (st) return st;
+  }
+  if (!summary) return 0;
+  snprintf(p, sizeof p, "%s/summary.txt", rf->dir);
+  FILE *f = fopen(p, "w");
+  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  int ok = fputs(summary, f) >= 0;
+  if (fclose(f) || !ok) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  return 0;
+}
+
+void bs_runfolder_destroy(bs_runfolder **prf) {
+  if (!prf || !*prf) return;
+  bs_runfolder *rf = *prf;
+  if (rf->frames) fclose(rf->frames);
+  if (rf->stats) fclose(rf->stats);
+  if (rf->state) fclose(rf->state);
+  for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
+  free(rf->vtu_names);
+  free(rf->vtu_times);
+  free(rf);
+  *prf = NULL;
+}

@@ -1,0 +1,189 @@
+/* scene_build.c — scenes built in C: the schema's defaults (one home for them:
+ * the JSON loader starts from these too), appending parts, and the value
+ * checks shared by both ways of making a scene. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_scene.h"
+#include "scene_internal.h"
+
+static const char *const shape_names[] = {"plane", "sphere", "box", "cylinder", "torus", "grid"};
+
+const char *bs_shape_name(bs_shape s) {
+  return (unsigned)s < sizeof shape_names / sizeof shape_names[0] ? shape_names[s] : "?";
+}
+
+int bs_shape_parse(const char *name, bs_shape *out, bs_error *err) {
+  for (int i = 0; i < (int)(sizeof shape_names / sizeof shape_names[0]); i++)
+    if (!strcmp(name, shape_names[i])) {
+      *out = (bs_shape)i;
+      return 0;
+    }
+  return bs_error_set(err, BS_EINPUT, "must be plane, sphere, box, cylinder, torus or grid, got \"%s\"", name);
+}
+
+void bs_scene_defaults_(bs_scene *s) {
+  s->fps = 24;
+  s->frames = 24;
+  s->steps_per_frame = 1;
+  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+  bs_integrator_opts_default(&s->solver);
+  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
+  s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
+  s->mode = BS_MODE_DYNAMIC;
+  s->load_steps = 1;
+  s->gravity[0] = 0;
+  s->gravity[1] = -9.8;
+  s->gravity[2] = 0;
+  s->drag = 0;
+  s->vtu_every = 1;
+  s->stats_csv = 1;
+}
+
+void bs_scene_body_defaults_(bs_scene_body *b) {
+  b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 4;
+  b->box_size[0] = b->box_size[1] = b->box_size[2] = 1;
+  b->scale[0] = b->scale[1] = b->scale[2] = 1;
+  b->reorder = BS_ORDER_NONE;
+  b->init = BS_INIT_REST;
+  b->init_seed = 1;
+}
+
+void bs_scene_material_defaults_(bs_scene_material *m) {
+  m->model = BS_MODEL_FIXED_COROTATED;
+  m->rayleigh = 0;
+}
+
+void bs_scene_obstacle_defaults_(bs_scene_obstacle *b) {
+  b->normal[1] = 1;
+  b->axis[1] = 1;
+  b->radius = 0.5;
+  b->half_extents[0] = b->half_extents[1] = b->half_extents[2] = 0.5;
+  b->half_height = 0.5;
+  b->major = 1;
+  b->minor = 0.25;
+  b->collision = BS_COLLIDE_CONSTRAINT;
+  b->stiffness = 1e6;
+}
+
+int bs_scene_create(bs_scene **out, bs_error *err) {
+  *out = calloc(1, sizeof **out);
+  if (!*out) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  snprintf((*out)->path, sizeof (*out)->path, "<scene>");
+  bs_scene_defaults_(*out);
+  return 0;
+}
+
+/* Grows an array of n elements of `size` bytes by one zeroed element. */
+static void *grow(void *p, int n, size_t size, bs_error *err) {
+  char *q = realloc(p, size * (size_t)(n + 1));
+  if (!q) {
+    bs_error_set(err, BS_ENOMEM, "out of memory");
+    return NULL;
+  }
+  memset(q + size * (size_t)n, 0, size);
+  return q;
+}
+
+int bs_scene_add_body(bs_scene *s, const char *mesh, bs_scene_body **out, bs_error *err) {
+  if (!mesh || !*mesh) return bs_error_set(err, BS_EINPUT, "%s: bodies.%d.mesh: empty", s->path, s->n_bodies);
+  if (strlen(mesh) >= BS_MAX_PATH)
+    return bs_error_set(err, BS_EINPUT, "%s: bodies.%d.mesh: path too long", s->path, s->n_bodies);
+  bs_scene_body *b = grow(s->bodies, s->n_bodies, sizeof *b, err);
+  if (!b) return BS_ENOMEM;
+  s->bodies = b;
+  b += s->n_bodies;
+  bs_scene_body_defaults_(b);
+  snprintf(b->mesh, sizeof b->mesh, "%s", mesh);
+  b->materials = calloc(1, sizeof *b->materials);
+  if (!b->materials) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  b->n_materials = 1;
+  bs_scene_material_defaults_(&b->materials[0]);
+  s->n_bodies++;
+  *out = b;
+  return 0;
+}
+
+int bs_scene_body_add_material(bs_scene_body *b, const char *group, bs_scene_material **out, bs_error *err) {
+  if (!group || !*group || strlen(group) >= BS_MAX_NAME)
+    return bs_error_set(err, BS_EINPUT, "materials: a group name of 1 to %d characters is needed", BS_MAX_NAME - 1);
+  bs_scene_material *m = grow(b->materials, b->n_materials, sizeof *m, err);
+  if (!m) return BS_ENOMEM;
+  b->materials = m;
+  m[b->n_materials] = m[0];
+  snprintf(m[b->n_materials].group, sizeof m->group, "%s", group);
+  *out = &m[b->n_materials++];
+  return 0;
+}
+
+int bs_scene_body_add_script(bs_scene_body *b, const char *group, bs_script_kind kind, bs_scene_script **out,
+                             bs_error *err) {
+  if (!group || !*group || strlen(group) >= BS_MAX_NAME)
+    return bs_error_set(err, BS_EINPUT, "scripted: a group name of 1 to %d characters is needed", BS_MAX_NAME - 1);
+  bs_scene_script *sc = grow(b->scripts, b->n_scripts, sizeof *sc, err);
+  if (!sc) return BS_ENOMEM;
+  b->scripts = sc;
+  sc += b->n_scripts++;
+  snprintf(sc->group, sizeof sc->group, "%s", group);
+  sc->kind = kind;
+  *out = sc;
+  return 0;
+}
+
+int bs_scene_script_set_keyframes(bs_scene_script *sc, int n, const double *t, const double *offset, bs_error *err) {
+  if (n < 1) return bs_error_set(err, BS_EINPUT, "keyframes: must be a non-empty array");
+  double *kt = malloc(sizeof(double) * (size_t)n), *ko = malloc(sizeof(double) * 3 * (size_t)n);
+  if (!kt || !ko) {
+    free(kt);
+    free(ko);
+    return bs_error_set(err, BS_ENOMEM, "out of memory");
+  }
+  memcpy(kt, t, sizeof(double) * (size_t)n);
+  memcpy(ko, offset, sizeof(double) * 3 * (size_t)n);
+  free(sc->key_t);
+  free(sc->key_offset);
+  sc->key_t = kt;
+  sc->key_offset = ko;
+  sc->n_keys = n;
+  sc->kind = BS_SCRIPT_KEYFRAMES;
+  return 0;
+}
+
+int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, bs_error *err) {
+  if ((unsigned)shape > BS_SHAPE_GRID)
+    return bs_error_set(err, BS_EINPUT, "%s: obstacles.%d.shape: unknown shape %d", s->path, s->n_obstacles, (int)shape);
+  bs_scene_obstacle *o = grow(s->obstacles, s->n_obstacles, sizeof *o, err);
+  if (!o) return BS_ENOMEM;
+  s->obstacles = o;
+  o += s->n_obstacles++;
+  bs_scene_obstacle_defaults_(o);
+  o->shape = shape;
+  *out = o;
+  return 0;
+}
+
+void bs_scene_destroy(bs_scene **ps) {
+  if (!ps || !*ps) return;
+  bs_scene *s = *ps;
+  for (int i = 0; i < s->n_bodies; i++) {
+    bs_scene_body *b = &s->bodies[i];
+    free(b->materials);
+    for (int k = 0; k < b->n_scripts; k++) {
+      free(b->scripts[k].key_t);
+      free(b->scripts[k].key_offset);
+    }
+    free(b->scripts);
+  }
+  free(s->bodies);
+  for (int i = 0; i < s->n_obstacles; i++) {
+    free(s->obstacles[i].key_t);
+    free(s->obstacles[i].key_translate);
+    free(s->obstacles[i].key_rotate);
+  }
+  free(s->obstacles);
+  free(s);
+  *ps = NULL;
+}

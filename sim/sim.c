@@ -1,0 +1,173 @@
+/* sim.c — from a validated scene to a runnable simulation: create, destroy,
+ * the scene's energy terms, the integrator, and what is measured of a state. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_penalty.h"
+#include "bs_selfcollide.h"
+#include "bs_shim.h"
+#include "sim_internal.h"
+
+void bs_sim_destroy(bs_sim **ps) {
+  if (!ps || !*ps) return;
+  bs_sim *s = *ps;
+  bs_integrator_destroy(&s->integrator);
+  for (int i = 0; i < s->n_terms; i++)
+    if (!bs_term_is_penalty(s->terms[i])) bs_term_destroy(&s->terms[i]);
+  bs_obstacles_destroy(&s->obstacles);
+  bs_fem_destroy(&s->fem);
+  for (int i = 0; i < s->n_scripts; i++) free(s->scripts[i].vertices);
+  free(s->scripts);
+  free(s->materials);
+  free(s->tet_material);
+  free(s->mask);
+  free(s->x0);
+  free(s->x);
+  free(s->v);
+  free(s->vertex_offset);
+  free(s->steps);
+  bs_mesh_destroy(&s->mesh);
+  free(s);
+  *ps = NULL;
+}
+
+/* Rayleigh damping, when a material of a dynamic scene asks for it. */
+static int damping_term(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  double *k = calloc((size_t)s->n_materials, sizeof(double));
+  int any = 0, m = 0;
+  if (!k) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  for (int b = 0; b < sc->n_bodies; b++)
+    for (int i = 0; i < sc->bodies[b].n_materials; i++, m++) {
+      k[m] = sc->bodies[b].materials[i].rayleigh;
+      if (k[m] > 0) any = 1;
+    }
+  int st = 0;
+  if (any && sc->mode == BS_MODE_DYNAMIC) st = bs_term_damping_create(s->fem, &s->step, k, &s->terms[s->n_terms++], err);
+  free(k);
+  return st;
+}
+
+/* The terms the scene asks for, in a fixed order: inertia, gravity,
+ * elasticity, damping, drag, penalty obstacles, self-collision. */
+static int make_terms(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  bs_term **T = s->terms;
+  int dyn = sc->mode == BS_MODE_DYNAMIC, st;
+  if (dyn && (st = bs_term_inertia_create(s->fem, &s->step, &T[s->n_terms++], err))) return st;
+  if ((sc->gravity[0] != 0 || sc->gravity[1] != 0 || sc->gravity[2] != 0) &&
+      (st = bs_term_gravity_create(s->fem, &s->step, sc->gravity, &T[s->n_terms++], err)))
+    return st;
+  if ((st = bs_term_elastic_create(s->fem, sc->project_hessian, &T[s->n_terms++], err))) return st;
+  if ((st = damping_term(s, err))) return st;
+  if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
+  if (sc->n_obstacles > 0 && (st = bs_sim_make_obstacles_(s, err))) return st;
+  if (sc->self_collision) {
+    if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err))) return st;
+    s->terms[s->n_terms++] = s->self;
+  }
+  return 0;
+}
+
+/* The integrator over the current terms, with the hooks. */
+static int make_integrator(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  bs_integrator_destroy(&s->integrator);
+  bs_integrator_opts io = sc->solver;
+  io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
+  int st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
+                                s->n_scripts ? bs_sim_script_positions_ : NULL, s, &io, &s->integrator, err);
+  if (st) return st;
+  bs_step_hooks hooks;
+  bs_sim_hooks_(s, &hooks);
+  bs_integrator_set_hooks(s->integrator, &hooks);
+  return 0;
+}
+
+int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
+  *out = NULL;
+  int st = bs_scene_check(sc, err);
+  if (st) return st;
+  bs_sim *s = calloc(1, sizeof *s);
+  if (!s) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  s->scene = sc;
+  s->steps = calloc((size_t)sc->steps_per_frame, sizeof *s->steps);
+  if (!s->steps) st = bs_error_set(err, BS_ENOMEM, "out of memory (%d steps per frame)", sc->steps_per_frame);
+  if (!st) st = bs_sim_make_bodies_(s, err);
+  if (!st) st = bs_fem_create(s->mesh, s->n_materials, s->materials, s->tet_material, &s->fem, err);
+  if (!st) st = make_terms(s, err);
+  if (!st) st = make_integrator(s, err);
+  if (st) {
+    bs_sim_destroy(&s);
+    return st;
+  }
+  *out = s;
+  return 0;
+}
+
+int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err) {
+  if (!t) return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: no term");
+  if (s->n_terms >= BS_SIM_MAX_TERMS) {
+    bs_term_destroy(&t);
+    return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: at most %d terms", BS_SIM_MAX_TERMS);
+  }
+  if (t->fem != s->fem || (t->step && t->step != &s->step)) {
+    char name[64];
+    snprintf(name, sizeof name, "%s", t->name ? t->name : "?");
+    bs_term_destroy(&t);
+    return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: the term '%s' must be created on the simulation's fem and step data",
+                        name);
+  }
+  s->terms[s->n_terms++] = t;
+  s->n_user_terms++;
+  return make_integrator(s, err);
+}
+
+long bs_sim_dofs(const bs_sim *s) { return 3L * s->n_free; }
+
+void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth) {
+  *count = 0;
+  *max_depth = 0;
+  bs_error err;
+  if (s->self) bs_term_self_detect(s->self, s->x, count, max_depth, &err);
+}
+
+void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth) {
+  *count = 0;
+  *max_depth = 0;
+  if (s->obstacles) bs_obstacles_penetration(s->obstacles, s->time, s->x, 1e-10 * s->size, count, max_depth);
+}
+
+/* Pairs of boundary triangles that intersect at the current state (exact,
+ * CGAL), counted up to BS_SIM_SELF_CAP (a tangled state, e.g. the random
+ * 65^3 cube, has ~1e9 candidate pairs: the count stops there and reads as
+ * "at least"); -1 if the test could not run. */
+static int64_t surface_self_intersections(const bs_sim *s) {
+  int64_t n = 0;
+  int truncated = 0;
+  bs_error err;
+  if (bs_shim_count_self_intersections(s->x, s->mesh->n_vertices, s->mesh->faces, s->mesh->n_faces, BS_SIM_SELF_CAP,
+                                       &n, &truncated, &err))
+    return -1;
+  return n;
+}
+
+void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
+  const bs_fem *fem = s->fem;
+  const double *g = s->scene->gravity;
+  double k = 0, gp = 0;
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    const double *vv = s->v + 3 * v, *xx = s->x + 3 * v;
+    k += 0.5 * fem->mass[v] * (vv[0] * vv[0] + vv[1] * vv[1] + vv[2] * vv[2]);
+    gp -= fem->mass[v] * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
+  }
+  m->kinetic = k;
+  m->gravity = gp;
+  m->elastic = bs_fem_elastic_energy(fem, s->x);
+  m->total = m->kinetic + m->elastic + m->gravity;
+  m->inverted = bs_fem_count_inverted(fem, s->x, &m->min_detF);
+  bs_sim_penetration(s, &m->penetrating, &m->max_depth);
+  m->self_intersections = intersections ? surface_self_intersections(s) : -1;
+}
