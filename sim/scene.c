@@ -193,6 +193,86 @@ static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_scri
   return 0;
 }
 
+/* "material" (the default, required) and "materials": {group: {...}}. */
+static int parse_body_materials(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
+  int st;
+  char w[512];
+  const cJSON *mats = cJSON_GetObjectItemCaseSensitive(o, "materials");
+  int nm = 1 + (mats ? cJSON_GetArraySize(mats) : 0);
+  b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
+  if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  b->n_materials = nm;
+  for (int i = 0; i < nm; i++) bs_scene_material_defaults_(&b->materials[i]);
+  const cJSON *mat = cJSON_GetObjectItemCaseSensitive(o, "material");
+  join(w, sizeof w, where, "material");
+  if (!mat) return fail(c, w, "missing (an object with model, youngs, poisson, density is required)");
+  if ((st = parse_material(c, mat, w, &b->materials[0]))) return st;
+  if (mats) {
+    join(w, sizeof w, where, "materials");
+    if (!cJSON_IsObject(mats)) return fail(c, w, "must be an object {group name: material}");
+    int i = 1;
+    for (const cJSON *it = mats->child; it; it = it->next, i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%s", w, it->string);
+      snprintf(b->materials[i].group, sizeof b->materials[i].group, "%s", it->string);
+      if ((st = parse_material(c, it, wi, &b->materials[i]))) return st;
+    }
+  }
+
+  return 0;
+}
+
+/* "initial_state": rest, random in a box, or a point. */
+static int parse_body_init(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
+  int st;
+  char w[512];
+  const cJSON *is = cJSON_GetObjectItemCaseSensitive(o, "initial_state");
+  if (is) {
+    join(w, sizeof w, where, "initial_state");
+    static const char *const ik[] = {"type", "lo", "hi", "point", "seed", NULL};
+    if ((st = check_keys(c, is, w, ik))) return st;
+    char type[32];
+    if ((st = get_str(c, is, w, "type", 1, type, sizeof type))) return st;
+    int seed = 1;
+    if ((st = get_int(c, is, w, "seed", 0, 0, 2147483647L, &seed))) return st;
+    b->init_seed = (unsigned)seed;
+    if (!strcmp(type, "rest")) b->init = BS_INIT_REST;
+    else if (!strcmp(type, "random")) {
+      b->init = BS_INIT_RANDOM;
+      if ((st = get_vec3(c, is, w, "lo", 1, b->init_lo)) || (st = get_vec3(c, is, w, "hi", 1, b->init_hi))) return st;
+    } else if (!strcmp(type, "point")) {
+      b->init = BS_INIT_POINT;
+      if ((st = get_vec3(c, is, w, "point", 0, b->init_lo))) return st;
+    } else {
+      char wt[600];
+      snprintf(wt, sizeof wt, "%s.type", w);
+      return fail(c, wt, "must be \"rest\", \"random\" or \"point\", got \"%s\"", type);
+    }
+  }
+
+  return 0;
+}
+
+/* "scripted": [{group, velocity | keyframes | fixed}]. */
+static int parse_body_scripts(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
+  int st;
+  char w[512];
+  const cJSON *scr = cJSON_GetObjectItemCaseSensitive(o, "scripted");
+  if (scr) {
+    join(w, sizeof w, where, "scripted");
+    if (!cJSON_IsArray(scr)) return fail(c, w, "must be an array");
+    b->n_scripts = cJSON_GetArraySize(scr);
+    b->scripts = calloc((size_t)(b->n_scripts ? b->n_scripts : 1), sizeof(bs_scene_script));
+    if (!b->scripts) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+    for (int i = 0; i < b->n_scripts; i++) {
+      char wi[600];
+      snprintf(wi, sizeof wi, "%s.%d", w, i);
+      if ((st = parse_script(c, cJSON_GetArrayItem(scr, i), wi, &b->scripts[i]))) return st;
+    }
+  }
+  return 0;
+}
+
 static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
   static const char *const keys[] = {"mesh", "box", "mesh_size", "refine", "reorder", "translate", "rotate", "scale",
                                      "material", "materials", "velocity", "angular_velocity", "initial_state",
@@ -236,67 +316,8 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
       (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
     return st;
 
-  /* materials: "material" (default, required) and "materials": {group: {...}} */
-  const cJSON *mats = cJSON_GetObjectItemCaseSensitive(o, "materials");
-  int nm = 1 + (mats ? cJSON_GetArraySize(mats) : 0);
-  b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
-  if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
-  b->n_materials = nm;
-  for (int i = 0; i < nm; i++) bs_scene_material_defaults_(&b->materials[i]);
-  const cJSON *mat = cJSON_GetObjectItemCaseSensitive(o, "material");
-  join(w, sizeof w, where, "material");
-  if (!mat) return fail(c, w, "missing (an object with model, youngs, poisson, density is required)");
-  if ((st = parse_material(c, mat, w, &b->materials[0]))) return st;
-  if (mats) {
-    join(w, sizeof w, where, "materials");
-    if (!cJSON_IsObject(mats)) return fail(c, w, "must be an object {group name: material}");
-    int i = 1;
-    for (const cJSON *it = mats->child; it; it = it->next, i++) {
-      char wi[600];
-      snprintf(wi, sizeof wi, "%s.%s", w, it->string);
-      snprintf(b->materials[i].group, sizeof b->materials[i].group, "%s", it->string);
-      if ((st = parse_material(c, it, wi, &b->materials[i]))) return st;
-    }
-  }
-
-  const cJSON *is = cJSON_GetObjectItemCaseSensitive(o, "initial_state");
-  if (is) {
-    join(w, sizeof w, where, "initial_state");
-    static const char *const ik[] = {"type", "lo", "hi", "point", "seed", NULL};
-    if ((st = check_keys(c, is, w, ik))) return st;
-    char type[32];
-    if ((st = get_str(c, is, w, "type", 1, type, sizeof type))) return st;
-    int seed = 1;
-    if ((st = get_int(c, is, w, "seed", 0, 0, 2147483647L, &seed))) return st;
-    b->init_seed = (unsigned)seed;
-    if (!strcmp(type, "rest")) b->init = BS_INIT_REST;
-    else if (!strcmp(type, "random")) {
-      b->init = BS_INIT_RANDOM;
-      if ((st = get_vec3(c, is, w, "lo", 1, b->init_lo)) || (st = get_vec3(c, is, w, "hi", 1, b->init_hi))) return st;
-    } else if (!strcmp(type, "point")) {
-      b->init = BS_INIT_POINT;
-      if ((st = get_vec3(c, is, w, "point", 0, b->init_lo))) return st;
-    } else {
-      char wt[600];
-      snprintf(wt, sizeof wt, "%s.type", w);
-      return fail(c, wt, "must be \"rest\", \"random\" or \"point\", got \"%s\"", type);
-    }
-  }
-
-  const cJSON *scr = cJSON_GetObjectItemCaseSensitive(o, "scripted");
-  if (scr) {
-    join(w, sizeof w, where, "scripted");
-    if (!cJSON_IsArray(scr)) return fail(c, w, "must be an array");
-    b->n_scripts = cJSON_GetArraySize(scr);
-    b->scripts = calloc((size_t)(b->n_scripts ? b->n_scripts : 1), sizeof(bs_scene_script));
-    if (!b->scripts) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
-    for (int i = 0; i < b->n_scripts; i++) {
-      char wi[600];
-      snprintf(wi, sizeof wi, "%s.%d", w, i);
-      if ((st = parse_script(c, cJSON_GetArrayItem(scr, i), wi, &b->scripts[i]))) return st;
-    }
-  }
-  return 0;
+  if ((st = parse_body_materials(c, o, where, b)) || (st = parse_body_init(c, o, where, b))) return st;
+  return parse_body_scripts(c, o, where, b);
 }
 
 /* An optional string key parsed by `parse` into an enum (untouched when absent). */
@@ -381,11 +402,8 @@ static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_ob
   return parse_obstacle_keys(c, o, where, b);
 }
 
-static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
-  static const char *const keys[] = {"time", "solver", "gravity", "drag", "bodies", "output", "obstacles",
-                                     "self_collision", "description", NULL};
+static int parse_self_collision(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
-  if ((st = check_keys(c, root, "", keys))) return st;
   const cJSON *sc = cJSON_GetObjectItemCaseSensitive(root, "self_collision");
   if (sc) {
     static const char *const sk[] = {"stiffness", "friction", NULL};
@@ -397,10 +415,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
         (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
       return st;
   }
-  const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
-  if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
+  return 0;
+}
 
-  /* time */
+static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
   const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
   if (t) {
     static const char *const tk[] = {"fps", "frames", "steps_per_frame", "dt", NULL};
@@ -420,9 +439,32 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       s->steps_per_frame = (int)floor(spf + 0.5);
     }
   }
-  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+  return 0;
+}
 
-  /* solver */
+/* solver.cg_sigma ("auto" or a number) and solver.cg_sigma_scale. */
+static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
+  int st;
+  const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
+  const int has_scale = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma_scale") != NULL;
+  if (cJSON_IsString(sg)) {
+    if (strcmp(sg->valuestring, "auto") != 0)
+      return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got \"%s\"", sg->valuestring);
+    s->solver.min.sigma_auto = 1;
+  } else if (sg) {
+    if (has_scale)
+      return fail(c, "solver.cg_sigma_scale", "applies to cg_sigma \"auto\" only (cg_sigma is a number here)");
+    if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
+    s->solver.min.sigma_auto = 0;
+  }
+  if (has_scale) {
+    if ((st = get_num(c, so, "solver", "cg_sigma_scale", 0, &s->solver.min.sigma))) return st;
+  }
+  return 0;
+}
+
+static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (so) {
     static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
@@ -448,21 +490,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_int(c, so, "solver", "amg_rebuild_every", 0, 0, 100000000, &s->solver.min.amg_rebuild_every)))
       return st;
     if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
-    const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
-    const int has_scale = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma_scale") != NULL;
-    if (cJSON_IsString(sg)) {
-      if (strcmp(sg->valuestring, "auto") != 0)
-        return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got \"%s\"", sg->valuestring);
-      s->solver.min.sigma_auto = 1;
-    } else if (sg) {
-      if (has_scale)
-        return fail(c, "solver.cg_sigma_scale", "applies to cg_sigma \"auto\" only (cg_sigma is a number here)");
-      if ((st = get_num(c, so, "solver", "cg_sigma", 0, &s->solver.min.sigma))) return st;
-      s->solver.min.sigma_auto = 0;
-    }
-    if (has_scale) {
-      if ((st = get_num(c, so, "solver", "cg_sigma_scale", 0, &s->solver.min.sigma))) return st;
-    }
+    if ((st = parse_sigma(c, so, s))) return st;
     if ((st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill))) return st;
     if ((st = get_choice(c, so, "solver", "cg_forcing", "paper", "eisenstat_walker", &s->solver.min.forcing_ew)))
       return st;
@@ -477,9 +505,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
   }
 
-  if ((st = get_vec3(c, root, "", "gravity", 0, s->gravity))) return st;
-  if ((st = get_num(c, root, "", "drag", 0, &s->drag))) return st;
+  return 0;
+}
 
+static int parse_bodies(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
   const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
   if (!bodies) return fail(c, "bodies", "missing (an array of at least one body is required)");
   if (!cJSON_IsArray(bodies) || cJSON_GetArraySize(bodies) < 1) return fail(c, "bodies", "must be a non-empty array");
@@ -492,6 +522,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = parse_body(c, cJSON_GetArrayItem(bodies, i), w, &s->bodies[i]))) return st;
   }
 
+  return 0;
+}
+
+static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
   const cJSON *obs = cJSON_GetObjectItemCaseSensitive(root, "obstacles");
   if (obs) {
     if (!cJSON_IsArray(obs)) return fail(c, "obstacles", "must be an array");
@@ -505,6 +540,11 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     }
   }
 
+  return 0;
+}
+
+static int parse_output(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
   if (out) {
     static const char *const ok[] = {"dir", "vtu_every", "stats", "states", NULL};
@@ -515,6 +555,23 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
       return st;
   }
   return 0;
+}
+
+static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
+  static const char *const keys[] = {"time", "solver", "gravity", "drag", "bodies", "output", "obstacles",
+                                     "self_collision", "description", NULL};
+  int st;
+  if ((st = check_keys(c, root, "", keys)) || (st = parse_self_collision(c, root, s))) return st;
+  const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
+  if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
+
+  if ((st = parse_time(c, root, s))) return st;
+  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+  if ((st = parse_solver(c, root, s)) || (st = get_vec3(c, root, "", "gravity", 0, s->gravity)) ||
+      (st = get_num(c, root, "", "drag", 0, &s->drag)) || (st = parse_bodies(c, root, s)) ||
+      (st = parse_obstacles(c, root, s)))
+    return st;
+  return parse_output(c, root, s);
 }
 
 /* ---- --set overrides ------------------------------------------------------ */
