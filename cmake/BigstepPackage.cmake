@@ -131,8 +131,11 @@ set_target_properties(bigstep_shared PROPERTIES OUTPUT_NAME bigstep EXPORT_NAME 
                       LIBRARY_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/lib
                       VERSION ${PROJECT_VERSION} SOVERSION ${_bs_soversion}
                       LINKER_LANGUAGE CXX INSTALL_RPATH_USE_LINK_PATH ON)
-# The shared library resolves every symbol it uses at its own link.
+# The shared library resolves every symbol it uses at its own link, and
+# exports only bs_* (bigstep.map).
 target_link_libraries(bigstep_shared PRIVATE ${_bs_link_items} ${_bs_link_openmp})
+target_link_options(bigstep_shared PRIVATE -Wl,--version-script=${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
+set_property(TARGET bigstep_shared APPEND PROPERTY LINK_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
 if(NOT BS_SANITIZE)
   target_link_options(bigstep_shared PRIVATE -Wl,--no-undefined)
 endif()
