@@ -753,10 +753,12 @@ static void gather(const double *x, const contact *c, double *y) {
     for (int k = 0; k < 3; k++) y[3 * a + k] = x[3 * (size_t)c->v[a] + k];
 }
 
-static double self_eval(const bs_term *t, const double *x, double *g) {
+/* Not evaluable where detection cannot run (a non-finite x, or a failed
+ * geometric query): then neither *Eout nor g is touched. */
+static int self_eval(const bs_term *t, const double *x, double *Eout, double *g) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
-  if (cnt < 0) return NAN;
+  if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
   double E = 0;
   for (int32_t i = 0; i < d->n_surf && cnt > 0; i++) {
     const contact *c = &d->con[i];
@@ -768,11 +770,12 @@ static double self_eval(const bs_term *t, const double *x, double *g) {
       for (int a = 0; a <= c->nv; a++)
         for (int k = 0; k < 3; k++) g[3 * (size_t)c->v[a] + k] += gl[3 * a + k];
   }
-  return E;
+  *Eout = E;
+  return BS_TERM_OK;
 }
 
-static double self_value(const bs_term *t, const double *x) { return self_eval(t, x, NULL); }
-static double self_gradient(const bs_term *t, const double *x, double *g) { return self_eval(t, x, g); }
+static int self_value(const bs_term *t, const double *x, double *E) { return self_eval(t, x, E, NULL); }
+static int self_gradient(const bs_term *t, const double *x, double *E, double *g) { return self_eval(t, x, E, g); }
 
 /* Adds the Hessian at x (after detect) into H, or, with H NULL, visits the
  * blocks off the fem pattern. Returns the blocks that found no place (H: no
@@ -805,15 +808,13 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
   return missing;
 }
 
-static void self_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+/* Not evaluable as self_eval (H untouched). */
+static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
-  if (cnt < 0) {
-    /* non-finite x: poison the diagonal so the minimizer sees it */
-    for (int32_t i = 0; i < d->n_surf; i++) H->val[9 * (size_t)H->diag[d->surf[i]]] = NAN;
-    return;
-  }
+  if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
   d->stats.missing_blocks = cnt ? assemble(d, x, H, NULL, NULL) : 0;
+  return BS_TERM_OK;
 }
 
 static int self_begin_step(bs_term *t, bs_error *err) {

@@ -109,7 +109,14 @@ void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks);
 
 /* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
  * Returns 0 when the step ran (st->failed says whether it converged), a
- * negative code on errors (NaN in the state: refused before the solve). */
+ * negative code on errors (NaN in the state: refused before the solve;
+ * BS_ENUMERIC naming the term when one is not evaluable, bs_terms.h, at xⁿ,
+ * or at the step's answer when post-solve hooks need the gradient there). A
+ * term not evaluable at a trial point or an iterate is the minimizer's to
+ * handle: the line search shrinks the step, an iterate ends the solve
+ * (BS_MIN_NONFINITE). An initial guess where a term is not evaluable counts
+ * as E = +Inf: it is taken only when no guess is evaluable, and the solve then
+ * stops at once (BS_MIN_NONFINITE). */
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
                        bs_error *err);
 
@@ -118,7 +125,8 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
                          bs_error *err);
 
-/* The objective value E at x for the current step data (for tests/diagnostics). */
+/* The objective value E at x for the current step data (for tests/diagnostics);
+ * NaN when a term is not evaluable at x. */
 double bs_integrator_energy(bs_integrator *I, const double *x);
 
 #ifdef __cplusplus
