@@ -272,7 +272,7 @@ static void obj_trace(const bs_min_iter *it, void *ctx) {
   fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s  alpha %.4g (%d trials)%s\n",
           it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
           kept, it->alpha, it->ls_evaluations,
-          it->direction ? (it->direction == 1 ? " fallback -dx" : " fallback -g") : "");
+          it->direction != BS_DIR_NEWTON ? (it->direction == BS_DIR_NEG_DX ? " fallback -dx" : " fallback -g") : "");
   fflush(I->opts.trace);
 }
 
