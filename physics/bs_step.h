@@ -90,9 +90,20 @@ typedef struct bs_step_hooks {
   void *ctx;
 } bs_step_hooks;
 
+/* The initial guess a step's solve started from (step 3 above). The numbers
+ * are the ones the app writes (stats.csv, column guess). */
+typedef enum {
+  BS_GUESS_XHAT = 0,     /* x̂ = xⁿ + Δt vⁿ                                        */
+  BS_GUESS_EXPLICIT = 1, /* x̂ + Δt² M⁻¹ f(xⁿ) (an explicit step)                  */
+  BS_GUESS_XN = 2        /* xⁿ (opts.guess_xn)                                    */
+} bs_guess;
+
+/* "x_hat", "explicit", "x_n"; "?" for a value outside the enum. */
+const char *bs_guess_name(bs_guess g);
+
 typedef struct bs_step_stats {
   bs_minimize_stats min;  /* of the solve                                        */
-  int guess;              /* 0: xⁿ + Δt vⁿ, 1: with Δt² M⁻¹ f(xⁿ), 2: xⁿ           */
+  bs_guess guess;         /* the initial guess taken (statics: BS_GUESS_XHAT)    */
   int failed;             /* the solve did not converge (reason in min)          */
   double seconds;         /* the whole step                                      */
 } bs_step_stats;

@@ -36,6 +36,10 @@ int bs_method_parse(const char *name, bs_method *out, bs_error *err) {
 
 const char *bs_method_name(bs_method m) { return (unsigned)m < 3 ? method_names[m] : "?"; }
 
+static const char *guess_names[] = {"x_hat", "explicit", "x_n"};
+
+const char *bs_guess_name(bs_guess g) { return (unsigned)g < 3 ? guess_names[g] : "?"; }
+
 void bs_integrator_opts_default(bs_integrator_opts *o) {
   memset(o, 0, sizeof *o);
   o->method = BS_METHOD_OPTIMIZATION;
@@ -398,7 +402,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   int naive = 1;
   if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
     memcpy(x, I->g2, sizeof(double) * n3);
-    st->guess = 1;
+    st->guess = BS_GUESS_EXPLICIT;
     naive = 0;
   } else {
     memcpy(x, I->g1, sizeof(double) * n3);
@@ -409,11 +413,11 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     memcpy(I->g1, I->x_n, sizeof(double) * n3);
     if (I->script) I->script(t + dt, I->g1, I->script_ctx);
     if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-    const double Eb = st->guess ? E2 : E1;
+    const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
     const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, 0), isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
       memcpy(x, I->g1, sizeof(double) * n3);
-      st->guess = 2;
+      st->guess = BS_GUESS_XN;
       naive = 1;
     }
   }

@@ -77,7 +77,11 @@ Test(step, free_fall_is_exact) {
   bs_error err;
   cr_assert_eq(bs_integrator_step(s.I, 0, dt, x, v, &st, &err), 0, "%s", err.msg);
   cr_expect_eq(st.failed, 0);
-  cr_expect_eq(st.guess, 1, "the second initial guess should be chosen");
+  cr_expect_eq(st.guess, BS_GUESS_EXPLICIT, "the second initial guess should be chosen");
+  cr_expect_str_eq(bs_guess_name(st.guess), "explicit");
+  cr_expect_str_eq(bs_guess_name(BS_GUESS_XHAT), "x_hat");
+  cr_expect_str_eq(bs_guess_name(BS_GUESS_XN), "x_n");
+  cr_expect_str_eq(bs_guess_name((bs_guess)3), "?");
   cr_expect_eq(st.min.iterations, 0, "free fall took %d Newton iterations", st.min.iterations);
   double v0[3] = {0.3, 2.0, -0.1};
   for (size_t i = 0; i < n3; i++) {
@@ -279,7 +283,7 @@ Test(step, a_term_not_evaluable_in_the_line_search_shrinks_the_step) {
   floor_step(&fd, &st, &ymin, reason);
   cr_assert_eq(st.failed, 0, "%s", reason);
   cr_expect_eq(st.min.reason, BS_MIN_CONVERGED, "%s", reason);
-  cr_expect_eq(st.guess, 0, "the free-fall guess is below the floor: it cannot be chosen");
+  cr_expect_eq(st.guess, BS_GUESS_XHAT, "the free-fall guess is below the floor: it cannot be chosen");
   cr_expect_gt(fd.refused_value, 0, "the free-fall guess was not refused");
   /* line-search trial points of the first phase call gradient(): a refusal
      there is a trial point below the floor, which must shrink the step */
