@@ -798,7 +798,7 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
         for (int r = 0; r < 3; r++)
           for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
         if (H) { /* its slot, else H's extra list */
-          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) < 0;
+          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) == BS_BSR_DROPPED;
         } else if (a != b && bs_bsr_slot(P, c->v[a], c->v[b]) < 0) {
           missing++;
           if (fn) fn(c->v[a], c->v[b], B, ctx);
