@@ -100,7 +100,10 @@
  *
  * Status: 0; BS_EINPUT for bad arguments (named: k, margin, mu, dt, a term
  * that is not a self-collision term, a mesh with no boundary); BS_ENUMERIC for
- * a non-finite coordinate (names the vertex); BS_ENOMEM.
+ * a non-finite coordinate (names the vertex); BS_ENOMEM. The term's value,
+ * gradient and hessian return BS_TERM_NOT_EVALUABLE (bs_terms.h), leaving
+ * their outputs untouched, where detection cannot run: a non-finite x, or a
+ * geometric query of the shim that failed.
  */
 #ifndef BS_SELFCOLLIDE_H
 #define BS_SELFCOLLIDE_H

@@ -22,6 +22,7 @@
 #include <string.h>
 
 #include "bs_levelset.h"
+#include "bs_vec3.h"
 
 /* Distances below this are treated as zero where a derivative divides by
  * them (the undefined-derivative fallback documented in the header). */
@@ -39,12 +40,6 @@ static void matmul(const double A[9], const double B[9], double C[9]) {
   for (int i = 0; i < 3; i++)
     for (int j = 0; j < 3; j++) C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
 }
-static void cross(const double a[3], const double b[3], double c[3]) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double norm3(const double a[3]) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 static void identity(double A[9]) {
   memset(A, 0, 9 * sizeof(double));
   A[0] = A[4] = A[8] = 1;
@@ -52,7 +47,7 @@ static void identity(double A[9]) {
 
 /* Unit quaternion (w, x, y, z) of the axis-angle vector r (angle |r|). */
 static void quat_from_aa(const double r[3], double q[4]) {
-  double th = norm3(r);
+  double th = bs_norm3(r);
   if (th < TINY) {
     q[0] = 1, q[1] = q[2] = q[3] = 0;
     return;
@@ -119,7 +114,7 @@ static int check_pos(const char *name, double v, bs_error *err) {
 static int check_axis(const char *name, const double a[3], double unit[3], bs_error *err) {
   int st = check_vec(name, a, err);
   if (st) return st;
-  double n = norm3(a);
+  double n = bs_norm3(a);
   if (!(n > 0))
     return bs_error_set(err, BS_EINPUT, "%s = (%g, %g, %g): must be nonzero", name, a[0], a[1], a[2]);
   for (int k = 0; k < 3; k++) unit[k] = a[k] / n;
@@ -144,7 +139,7 @@ int bs_levelset_create_halfspace(const double normal[3], double offset, bs_level
   int st = check_axis("normal", normal, n, err);
   if (st) return st;
   if (!isfinite(offset)) return bs_error_set(err, BS_EINPUT, "offset = %g: must be finite (m)", offset);
-  double c = offset / norm3(normal), c0[3] = {c * n[0], c * n[1], c * n[2]};
+  double c = offset / bs_norm3(normal), c0[3] = {c * n[0], c * n[1], c * n[2]};
   if ((st = new_levelset(BS_LS_HALFSPACE, c0, out, err))) return st;
   rot_z_to(n, (*out)->Q0);
   return 0;
@@ -347,7 +342,7 @@ void bs_levelset_frame_at(const bs_levelset *ls, double t, bs_levelset_frame *f)
 /* need: 0 phi only, 1 also g, 2 also H (g and H are always valid arrays). */
 
 static double sdf_sphere(double r, const double y[3], int need, double g[3], double H[9]) {
-  double d = norm3(y);
+  double d = bs_norm3(y);
   if (need) {
     if (d > TINY) {
       for (int k = 0; k < 3; k++) g[k] = y[k] / d;
@@ -371,7 +366,7 @@ static double sdf_box(const double b[3], const double y[3], int need, double g[3
     if (q[k] > 0) outside = 1;
   }
   if (outside) { /* distance to the nearest box point; r = y - nearest */
-    double d = norm3(r);
+    double d = bs_norm3(r);
     if (need) {
       for (int k = 0; k < 3; k++) g[k] = r[k] / d;
       if (need > 1)
@@ -505,7 +500,7 @@ void bs_levelset_velocity(const bs_levelset *ls, double t, const double x[3], do
   bs_levelset_frame f;
   bs_levelset_frame_at(ls, t, &f);
   double r[3] = {x[0] - f.c[0], x[1] - f.c[1], x[2] - f.c[2]}, wr[3];
-  cross(f.w, r, wr);
+  bs_cross3(f.w, r, wr);
   for (int k = 0; k < 3; k++) v[k] = f.v[k] + wr[k];
 }
 

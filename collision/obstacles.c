@@ -7,6 +7,7 @@
 
 #include "bs_obstacles.h"
 #include "bs_penalty.h"
+#include "bs_vec3.h"
 
 typedef struct obstacle {
   bs_levelset *ls;
@@ -64,8 +65,6 @@ int bs_collide_mode_parse(const char *name, bs_collide_mode *out, bs_error *err)
 const char *bs_collide_mode_name(bs_collide_mode mode) { return (unsigned)mode < 3 ? mode_names[mode] : "?"; }
 
 /* ---- small vector helpers ------------------------------------------------ */
-
-static inline double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 static inline void mat3_mul(const double *A, const double *B, double *AB) {
   double R[9];
@@ -254,7 +253,7 @@ static void sync_time(bs_obstacles *o) {
 }
 
 static double touch_tol(const bs_obstacles *o, const obstacle *ob, const bs_levelset_frame *f) {
-  return 1e-12 * (o->scale + sqrt(dot3(f->c, f->c)) + ob->size);
+  return 1e-12 * (o->scale + sqrt(bs_dot3(f->c, f->c)) + ob->size);
 }
 
 void bs_obstacles_project(double *x, void *ctx) {
@@ -305,7 +304,7 @@ void bs_obstacles_register_active(const double *x, const double *g, void *ctx) {
       if (!o->mask[p]) continue;
       double n[3];
       double phi = bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
-      if (fabs(phi) <= tol && dot3(g + 3 * (size_t)p, n) >= 0) {
+      if (fabs(phi) <= tol && bs_dot3(g + 3 * (size_t)p, n) >= 0) {
         ob->active[p] = ob->projected[p] = 1;
         for (int k = 0; k < 3; k++) ob->nreg[3 * (size_t)p + k] = (float)n[k];
         count++;
@@ -330,7 +329,7 @@ void bs_obstacles_project_gradient(const double *x, double *g, void *ctx) {
       if (!o->mask[p] || !ob->projected[p]) continue;
       double n[3], *gp = g + 3 * (size_t)p;
       bs_levelset_eval_frame(ob->ls, &f, x + 3 * (size_t)p, n, NULL);
-      double s = dot3(gp, n);
+      double s = bs_dot3(gp, n);
       for (int k = 0; k < 3; k++) gp[k] -= s * n[k];
     }
   }
@@ -366,8 +365,8 @@ void bs_obstacles_project_hessian(const double *x, const double *g, bs_bsr *H, v
       bs_levelset_eval_frame(ob->ls, f, xp, n, A);
       for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) Jb[3 * i + j] = (i == j) - n[i] * n[j];
-      for (int i = 0; i < 3; i++) Ag[i] = dot3(A + 3 * i, gg);
-      double gn = dot3(gg, n);
+      for (int i = 0; i < 3; i++) Ag[i] = bs_dot3(A + 3 * i, gg);
+      double gn = bs_dot3(gg, n);
       for (int j = 0; j < 3; j++)
         for (int k = 0; k < 3; k++) Cb[3 * j + k] = -(gn * A[3 * j + k] + n[j] * Ag[k] + Ag[j] * n[k]);
       /* C <- J_b C J_b + C_b(g_b); g <- J_b g; J <- J J_b */
@@ -419,9 +418,9 @@ static void apply_friction(const obstacle *ob, double t, const double *xp, const
   double vo[3], vr[3];
   bs_levelset_velocity(ob->ls, t, xp, vo);
   for (int k = 0; k < 3; k++) vr[k] = vp[k] - vo[k];
-  double vn = dot3(vr, n), vt[3];
+  double vn = bs_dot3(vr, n), vt[3];
   for (int k = 0; k < 3; k++) vt[k] = vr[k] - vn * n[k];
-  double st = sqrt(dot3(vt, vt));
+  double st = sqrt(bs_dot3(vt, vt));
   if (!(st > 0)) return;
   double s = dv >= st ? 1.0 : dv / st;
   for (int k = 0; k < 3; k++) vp[k] -= s * vt[k];
@@ -448,7 +447,7 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
       double phi = bs_levelset_eval_frame(ob->ls, &f, xp, n, NULL);
       if (ob->mode == BS_COLLIDE_CONSTRAINT) {
         /* active at x^{n+1}: collision force n (g'.n), g'.n >= 0 */
-        double gn = dot3(g + 3 * (size_t)p, n);
+        double gn = bs_dot3(g + 3 * (size_t)p, n);
         if (fabs(phi) <= tol && gn >= 0 && m > 0) apply_friction(ob, t, xp, n, ob->mu * gn * dt / m, vp);
       } else if (ob->mode == BS_COLLIDE_PENALTY) {
         if (phi < 0 && m > 0) {
@@ -461,7 +460,7 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
         double vo[3], vr[3];
         bs_levelset_velocity(ob->ls, t, xp, vo);
         for (int k = 0; k < 3; k++) vr[k] = vp[k] - vo[k];
-        double vn = dot3(vr, n);
+        double vn = bs_dot3(vr, n);
         if (vn < 0)
           for (int k = 0; k < 3; k++) vp[k] -= vn * n[k];
         /* mu |f| dt / m with |f| = m d / dt^2 */

@@ -54,10 +54,18 @@ static double penalty_eval(const bs_term *t, const double *x, double *g) {
   return E;
 }
 
-static double penalty_value(const bs_term *t, const double *x) { return penalty_eval(t, x, NULL); }
-static double penalty_gradient(const bs_term *t, const double *x, double *g) { return penalty_eval(t, x, g); }
+/* Defined for every x: a vertex where phi is NaN (a NaN position) adds
+ * nothing, one at phi = -Inf adds +Inf; always BS_TERM_OK. */
+static int penalty_value(const bs_term *t, const double *x, double *E) {
+  *E = penalty_eval(t, x, NULL);
+  return BS_TERM_OK;
+}
+static int penalty_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  *E = penalty_eval(t, x, g);
+  return BS_TERM_OK;
+}
 
-static void penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+static int penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   const penalty_data *d = t->data;
   bs_levelset_frame f;
   bs_levelset_frame_at(d->ls, step_time(t), &f);
@@ -73,6 +81,7 @@ static void penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
       for (int b = 0; b < 3; b++)
         blk[3 * a + b] += -6 * k * phi * grad[a] * grad[b] - 3 * k * phi * phi * hess[3 * a + b];
   }
+  return BS_TERM_OK;
 }
 
 static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free};

@@ -30,6 +30,7 @@
 
 #include "bs_selfcollide.h"
 #include "bs_shim.h"
+#include "bs_vec3.h"
 
 /* LEAF: tets per hierarchy leaf; STACK: traversal depth bound (a median
  * split has depth log2(n_tets / LEAF) + 1); PAR_MIN: surface vertices below
@@ -37,17 +38,6 @@
 enum { LEAF = 4, STACK = 128, PAR_MIN = 2048 };
 
 /* ---- small vector helpers -------------------------------------------- */
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void sub3(const double *a, const double *b, double *o) {
-  o[0] = a[0] - b[0];
-  o[1] = a[1] - b[1];
-  o[2] = a[2] - b[2];
-}
-static void cross3(const double *a, const double *b, double *o) {
-  o[0] = a[1] * b[2] - a[2] * b[1];
-  o[1] = a[2] * b[0] - a[0] * b[2];
-  o[2] = a[0] * b[1] - a[1] * b[0];
-}
 /* [a]x, the matrix of b -> a x b. */
 static void skew(const double *a, double *M) {
   M[0] = 0, M[1] = -a[2], M[2] = a[1];
@@ -67,14 +57,14 @@ static void mul33tn(const double *A, const double *B, double *C) {
 /* ---- closest point on a triangle (Ericson, Real-Time Collision Detection 5.1.5) */
 static double seg_closest(const double *p, const double *a, const double *b, double *t) {
   double e[3], u[3];
-  sub3(b, a, e);
-  sub3(p, a, u);
-  double q = dot3(e, e), s = q > 0 ? dot3(u, e) / q : 0;
+  bs_sub3(b, a, e);
+  bs_sub3(p, a, u);
+  double q = bs_dot3(e, e), s = q > 0 ? bs_dot3(u, e) / q : 0;
   if (s < 0) s = 0;
   if (s > 1) s = 1;
   *t = s;
   double r[3] = {u[0] - s * e[0], u[1] - s * e[1], u[2] - s * e[2]};
-  return dot3(r, r);
+  return bs_dot3(r, r);
 }
 
 static void set_feature(const double w[3], int *feature, int *nv, int loc[3], double wf[3]) {
@@ -89,10 +79,10 @@ static void set_feature(const double w[3], int *feature, int *nv, int loc[3], do
 double bs_self_closest_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
                                 double w[3], int *feature, int *nv, int loc[3], double wf[3]) {
   double ab[3], ac[3], ap[3], bp[3], cp[3], n[3];
-  sub3(b, a, ab);
-  sub3(c, a, ac);
-  cross3(ab, ac, n);
-  double nn = dot3(n, n), scale = dot3(ab, ab) * dot3(ac, ac);
+  bs_sub3(b, a, ab);
+  bs_sub3(c, a, ac);
+  bs_cross3(ab, ac, n);
+  double nn = bs_dot3(n, n), scale = bs_dot3(ab, ab) * bs_dot3(ac, ac);
   w[0] = w[1] = w[2] = 0;
   if (!(nn > 1e-24 * scale) || !(scale > 0)) {
     /* degenerate: the closest of the three edges */
@@ -110,14 +100,14 @@ double bs_self_closest_triangle(const double p[3], const double a[3], const doub
     set_feature(w, feature, nv, loc, wf);
     return best;
   }
-  sub3(p, a, ap);
-  double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  bs_sub3(p, a, ap);
+  double d1 = bs_dot3(ab, ap), d2 = bs_dot3(ac, ap);
   if (d1 <= 0 && d2 <= 0) {
     w[0] = 1;
     goto done;
   }
-  sub3(p, b, bp);
-  double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  bs_sub3(p, b, bp);
+  double d3 = bs_dot3(ab, bp), d4 = bs_dot3(ac, bp);
   if (d3 >= 0 && d4 <= d3) {
     w[1] = 1;
     goto done;
@@ -128,8 +118,8 @@ double bs_self_closest_triangle(const double p[3], const double a[3], const doub
     w[0] = 1 - v, w[1] = v;
     goto done;
   }
-  sub3(p, c, cp);
-  double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  bs_sub3(p, c, cp);
+  double d5 = bs_dot3(ab, cp), d6 = bs_dot3(ac, cp);
   if (d6 >= 0 && d5 <= d6) {
     w[2] = 1;
     goto done;
@@ -154,7 +144,7 @@ done:
   set_feature(w, feature, nv, loc, wf);
   double q[3];
   for (int k = 0; k < 3; k++) q[k] = p[k] - (w[0] * a[k] + w[1] * b[k] + w[2] * c[k]);
-  return dot3(q, q);
+  return bs_dot3(q, q);
 }
 
 /* ---- squared distance in a region, with derivatives ------------------- */
@@ -197,21 +187,21 @@ static void map_derivs(int nz, int ny, const double *A, const double *gz, const 
 double bs_self_sqdist(int nv, const double *y, double *g, double *H) {
   const double *p = y, *a = y + 3;
   double u[3];
-  sub3(p, a, u);
+  bs_sub3(p, a, u);
   if (nv == 1) {
     static const double A[2] = {1, -1};
     double gz[3], Hz[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
     for (int k = 0; k < 3; k++) gz[k] = 2 * u[k];
     map_derivs(1, 2, A, gz, Hz, g, H);
-    return dot3(u, u);
+    return bs_dot3(u, u);
   }
   if (nv == 2) {
     static const double A[2 * 3] = {1, -1, 0, /* u = p - a */
                                     0, -1, 1 /* e = b - a */};
     double e[3];
-    sub3(y + 6, a, e);
-    double s = dot3(u, e), q = dot3(e, e);
-    double d = dot3(u, u) - s * s / q;
+    bs_sub3(y + 6, a, e);
+    double s = bs_dot3(u, e), q = bs_dot3(e, e);
+    double d = bs_dot3(u, u) - s * s / q;
     if (!g && !H) return d;
     double gz[6], Hz[36];
     for (int k = 0; k < 3; k++) {
@@ -242,10 +232,10 @@ double bs_self_sqdist(int nv, const double *y, double *g, double *H) {
                                   0, -1, 1, 0, /* e1 = b - a */
                                   0, -1, 0, 1 /* e2 = c - a */};
   double e1[3], e2[3], n[3];
-  sub3(y + 6, a, e1);
-  sub3(y + 9, a, e2);
-  cross3(e1, e2, n);
-  double r = dot3(u, n), N = dot3(n, n);
+  bs_sub3(y + 6, a, e1);
+  bs_sub3(y + 9, a, e2);
+  bs_cross3(e1, e2, n);
+  double r = bs_dot3(u, n), N = bs_dot3(n, n);
   double d = r * r / N;
   if (!g && !H) return d;
   double fu[3], fn[3], Fuu[9], Fun[9], Fnn[9];
@@ -493,14 +483,14 @@ static void bvh_refit(self_data *d, const double *x) {
  * (far above the true one, about 1e-15 of the product of the lengths). */
 static double orient_bound(const double *a, const double *b, const double *c, const double *d, double *bound) {
   double u[3], v[3], w[3], n[3];
-  sub3(b, a, u);
-  sub3(c, a, v);
-  sub3(d, a, w);
-  cross3(u, v, n);
+  bs_sub3(b, a, u);
+  bs_sub3(c, a, v);
+  bs_sub3(d, a, w);
+  bs_cross3(u, v, n);
   double lu = fabs(u[0]) + fabs(u[1]) + fabs(u[2]), lv = fabs(v[0]) + fabs(v[1]) + fabs(v[2]);
   double lw = fabs(w[0]) + fabs(w[1]) + fabs(w[2]);
   *bound = 1e-12 * lu * lv * lw;
-  return dot3(n, w);
+  return bs_dot3(n, w);
 }
 
 /* A floating-point filter in front of the exact test: 1 when p is certainly
@@ -588,7 +578,7 @@ static int32_t rest_estimate(const self_data *d, const double *x, int32_t pv, in
   double Ds[9], r[3];
   for (int c = 0; c < 3; c++)
     for (int k = 0; k < 3; k++) Ds[3 * k + c] = x[3 * tv[c + 1] + k] - x[3 * tv[0] + k];
-  sub3(x + 3 * (size_t)pv, x + 3 * (size_t)tv[0], r);
+  bs_sub3(x + 3 * (size_t)pv, x + 3 * (size_t)tv[0], r);
   double det = Ds[0] * (Ds[4] * Ds[8] - Ds[5] * Ds[7]) - Ds[1] * (Ds[3] * Ds[8] - Ds[5] * Ds[6]) +
                Ds[2] * (Ds[3] * Ds[7] - Ds[4] * Ds[6]);
   if (!(fabs(det) > 0) || !isfinite(det)) return -1;
@@ -763,10 +753,12 @@ static void gather(const double *x, const contact *c, double *y) {
     for (int k = 0; k < 3; k++) y[3 * a + k] = x[3 * (size_t)c->v[a] + k];
 }
 
-static double self_eval(const bs_term *t, const double *x, double *g) {
+/* Not evaluable where detection cannot run (a non-finite x, or a failed
+ * geometric query): then neither *Eout nor g is touched. */
+static int self_eval(const bs_term *t, const double *x, double *Eout, double *g) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
-  if (cnt < 0) return NAN;
+  if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
   double E = 0;
   for (int32_t i = 0; i < d->n_surf && cnt > 0; i++) {
     const contact *c = &d->con[i];
@@ -778,11 +770,12 @@ static double self_eval(const bs_term *t, const double *x, double *g) {
       for (int a = 0; a <= c->nv; a++)
         for (int k = 0; k < 3; k++) g[3 * (size_t)c->v[a] + k] += gl[3 * a + k];
   }
-  return E;
+  *Eout = E;
+  return BS_TERM_OK;
 }
 
-static double self_value(const bs_term *t, const double *x) { return self_eval(t, x, NULL); }
-static double self_gradient(const bs_term *t, const double *x, double *g) { return self_eval(t, x, g); }
+static int self_value(const bs_term *t, const double *x, double *E) { return self_eval(t, x, E, NULL); }
+static int self_gradient(const bs_term *t, const double *x, double *E, double *g) { return self_eval(t, x, E, g); }
 
 /* Adds the Hessian at x (after detect) into H, or, with H NULL, visits the
  * blocks off the fem pattern. Returns the blocks that found no place (H: no
@@ -805,7 +798,7 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
         for (int r = 0; r < 3; r++)
           for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
         if (H) { /* its slot, else H's extra list */
-          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) < 0;
+          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) == BS_BSR_DROPPED;
         } else if (a != b && bs_bsr_slot(P, c->v[a], c->v[b]) < 0) {
           missing++;
           if (fn) fn(c->v[a], c->v[b], B, ctx);
@@ -815,15 +808,13 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
   return missing;
 }
 
-static void self_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+/* Not evaluable as self_eval (H untouched). */
+static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
-  if (cnt < 0) {
-    /* non-finite x: poison the diagonal so the minimizer sees it */
-    for (int32_t i = 0; i < d->n_surf; i++) H->val[9 * (size_t)H->diag[d->surf[i]]] = NAN;
-    return;
-  }
+  if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
   d->stats.missing_blocks = cnt ? assemble(d, x, H, NULL, NULL) : 0;
+  return BS_TERM_OK;
 }
 
 static int self_begin_step(bs_term *t, bs_error *err) {
@@ -1027,8 +1018,8 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     double len = 0;
     for (int32_t e = 0; e < m->n_edges; e++) {
       double u[3];
-      sub3(m->x + 3 * (size_t)m->edges[2 * e], m->x + 3 * (size_t)m->edges[2 * e + 1], u);
-      len += sqrt(dot3(u, u));
+      bs_sub3(m->x + 3 * (size_t)m->edges[2 * e], m->x + 3 * (size_t)m->edges[2 * e + 1], u);
+      len += sqrt(bs_dot3(u, u));
     }
     d->h_min = m->n_edges ? 0.5 * len / m->n_edges : 1e-3;
     if (!(d->h_min > 0)) d->h_min = 1e-3;
@@ -1153,7 +1144,7 @@ int bs_self_friction(bs_term *t, const double *x, double mu, double dt, const ui
     double y[12], g[12];
     gather(x, c, y);
     bs_self_pair_energy(c->nv, y, d->k, g, NULL);
-    double f[3] = {-g[0], -g[1], -g[2]}, fn = sqrt(dot3(f, f));
+    double f[3] = {-g[0], -g[1], -g[2]}, fn = sqrt(bs_dot3(f, f));
     if (!(fn > 0)) continue;
     double n[3] = {f[0] / fn, f[1] / fn, f[2] / fn};
     double vbar[3] = {0, 0, 0}, minv_bar = 0, minv[4];
@@ -1164,9 +1155,9 @@ int bs_self_friction(bs_term *t, const double *x, double mu, double dt, const ui
       for (int k = 0; k < 3; k++) vbar[k] += c->w[a] * v[3 * (size_t)vv + k];
     }
     if (!(minv_bar > 0)) continue;
-    double vn = dot3(vbar, n), j[3];
+    double vn = bs_dot3(vbar, n), j[3];
     for (int k = 0; k < 3; k++) j[k] = -(vbar[k] - vn * n[k]) / minv_bar;
-    double jn = sqrt(dot3(j, j)), lim = mu * fn * dt;
+    double jn = sqrt(bs_dot3(j, j)), lim = mu * fn * dt;
     if (!(jn > 0)) continue;
     double s = jn > lim ? lim / jn : 1;
     for (int a = 0; a <= c->nv; a++)

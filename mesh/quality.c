@@ -13,17 +13,10 @@
  * OpenMP, and the cost is small beside anything that uses the result.
  */
 #include "bs_mesh.h"
+#include "bs_vec3.h"
 
 #include <float.h>
 #include <math.h>
-
-static void cross(const double u[3], const double v[3], double w[3]) {
-  w[0] = u[1] * v[2] - u[2] * v[1];
-  w[1] = u[2] * v[0] - u[0] * v[2];
-  w[2] = u[0] * v[1] - u[1] * v[0];
-}
-
-static double dot(const double u[3], const double v[3]) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; }
 
 void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality *q) {
   const double rad2deg = 180.0 / acos(-1.0);
@@ -46,18 +39,18 @@ void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality 
       b[k] = p[2][k] - p[0][k];
       c[k] = p[3][k] - p[0][k];
     }
-    cross(b, c, bc);
-    cross(c, a, ca);
-    cross(a, b, ab);
-    double vol = dot(a, bc) / 6.0;
+    bs_cross3(b, c, bc);
+    bs_cross3(c, a, ca);
+    bs_cross3(a, b, ab);
+    double vol = bs_dot3(a, bc) / 6.0;
 
     double n[4][3], area[4], s = 0.0;
     for (int f = 0; f < 4; ++f) {
       const double *o = p[bs_tet_face[f][0]], *u = p[bs_tet_face[f][1]], *w = p[bs_tet_face[f][2]];
       double e1[3] = {u[0] - o[0], u[1] - o[1], u[2] - o[2]}, e2[3] = {w[0] - o[0], w[1] - o[1], w[2] - o[2]};
-      cross(e1, e2, n[f]);
+      bs_cross3(e1, e2, n[f]);
       for (int k = 0; k < 3; ++k) n[f][k] *= 0.5;
-      area[f] = sqrt(dot(n[f], n[f]));
+      area[f] = sqrt(bs_dot3(n[f], n[f]));
       s += area[f];
     }
     /* Edge (i, j) lies on the two faces opposite the other two vertices;
@@ -73,7 +66,7 @@ void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality 
           }
         double cs = 1.0; /* a zero-area face: angle 0 */
         if (area[k] > 0 && area[l] > 0) {
-          cs = -dot(n[k], n[l]) / (area[k] * area[l]);
+          cs = -bs_dot3(n[k], n[l]) / (area[k] * area[l]);
           cs = cs > 1.0 ? 1.0 : (cs < -1.0 ? -1.0 : cs);
         }
         if (cs < cmin) cmin = cs;
@@ -82,9 +75,9 @@ void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality 
     double dmin = acos(cmax) * rad2deg, dmax = acos(cmin) * rad2deg;
 
     double num[3];
-    double la = dot(a, a), lb = dot(b, b), lc = dot(c, c);
+    double la = bs_dot3(a, a), lb = bs_dot3(b, b), lc = bs_dot3(c, c);
     for (int k = 0; k < 3; ++k) num[k] = la * bc[k] + lb * ca[k] + lc * ab[k];
-    double nn = sqrt(dot(num, num));
+    double nn = sqrt(bs_dot3(num, num));
     double ratio = (vol != 0.0 && nn > 0.0 && s > 0.0) ? 108.0 * vol * vol / (s * nn) : 0.0;
     if (vol < 0) ratio = -ratio;
 

@@ -90,9 +90,20 @@ typedef struct bs_step_hooks {
   void *ctx;
 } bs_step_hooks;
 
+/* The initial guess a step's solve started from (step 3 above). The numbers
+ * are the ones the app writes (stats.csv, column guess). */
+typedef enum {
+  BS_GUESS_XHAT = 0,     /* x̂ = xⁿ + Δt vⁿ                                        */
+  BS_GUESS_EXPLICIT = 1, /* x̂ + Δt² M⁻¹ f(xⁿ) (an explicit step)                  */
+  BS_GUESS_XN = 2        /* xⁿ (opts.guess_xn)                                    */
+} bs_guess;
+
+/* "x_hat", "explicit", "x_n"; "?" for a value outside the enum. */
+const char *bs_guess_name(bs_guess g);
+
 typedef struct bs_step_stats {
   bs_minimize_stats min;  /* of the solve                                        */
-  int guess;              /* 0: xⁿ + Δt vⁿ, 1: with Δt² M⁻¹ f(xⁿ), 2: xⁿ           */
+  bs_guess guess;         /* the initial guess taken (statics: BS_GUESS_XHAT)    */
   int failed;             /* the solve did not converge (reason in min)          */
   double seconds;         /* the whole step                                      */
 } bs_step_stats;
@@ -109,7 +120,14 @@ void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks);
 
 /* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
  * Returns 0 when the step ran (st->failed says whether it converged), a
- * negative code on errors (NaN in the state: refused before the solve). */
+ * negative code on errors (NaN in the state: refused before the solve;
+ * BS_ENUMERIC naming the term when one is not evaluable, bs_terms.h, at xⁿ,
+ * or at the step's answer when post-solve hooks need the gradient there). A
+ * term not evaluable at a trial point or an iterate is the minimizer's to
+ * handle: the line search shrinks the step, an iterate ends the solve
+ * (BS_MIN_NONFINITE). An initial guess where a term is not evaluable counts
+ * as E = +Inf: it is taken only when no guess is evaluable, and the solve then
+ * stops at once (BS_MIN_NONFINITE). */
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
                        bs_error *err);
 
@@ -118,7 +136,8 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
                          bs_error *err);
 
-/* The objective value E at x for the current step data (for tests/diagnostics). */
+/* The objective value E at x for the current step data (for tests/diagnostics);
+ * NaN when a term is not evaluable at x. */
 double bs_integrator_energy(bs_integrator *I, const double *x);
 
 #ifdef __cplusplus

@@ -2,11 +2,22 @@
  *
  * A scene becomes a list of terms; a term exists only when the scene asks for
  * it. Each term offers, at a configuration x (3 doubles per vertex, metres):
- *   value(x)                  its energy (J);
- *   gradient(x, g)            its energy, and its gradient ADDED into g;
+ *   value(x, &E)              its energy (J) into E;
+ *   gradient(x, &E, g)        its energy into E, and its gradient ADDED into g;
  *   hessian(x, H)             its Hessian ADDED into the block matrix H (the
  *                             fem pattern);
  *   begin_step(step)          optional: refresh what it lags on (xⁿ, Δt).
+ * value, gradient and hessian return a bs_term_status (as libCEED's
+ * QFunctions return int): BS_TERM_OK, or BS_TERM_NOT_EVALUABLE when x lies
+ * outside the term's domain, so that it has no value there: a non-finite x,
+ * or a self-collision detection that could not run. After NOT_EVALUABLE the
+ * outputs (E, g, H) are unspecified (partly written, or not at all) and must
+ * not be used. A term never signals "cannot evaluate" by a NaN in E, g or H;
+ * a non-finite result computed from an x inside the domain (an overflow) is
+ * returned with BS_TERM_OK as it came out. The integrator (bs_step.h) passes
+ * NOT_EVALUABLE to the minimizer as an objective that is not evaluable: a
+ * line search counts the point as E = +Inf and shrinks the step; at an
+ * iterate the solve stops with BS_MIN_NONFINITE.
  * Terms read the step data (Δt, x̂, xⁿ) through the bs_step_data pointer
  * given at creation, which the integrator owns and updates each step.
  *
@@ -45,10 +56,19 @@ typedef struct bs_step_data {
 
 typedef struct bs_term bs_term;
 
+/* What value, gradient and hessian return (see the top of this header). */
+typedef enum {
+  BS_TERM_OK = 0,           /* evaluated: the outputs hold the term's value(s)           */
+  BS_TERM_NOT_EVALUABLE = 1 /* x is outside the term's domain: the outputs are unspecified */
+} bs_term_status;
+
+/* "ok", "not_evaluable"; "?" for a value outside the enum. */
+const char *bs_term_status_name(bs_term_status s);
+
 typedef struct bs_term_ops {
-  double (*value)(const bs_term *t, const double *x);
-  double (*gradient)(const bs_term *t, const double *x, double *g);
-  void (*hessian)(const bs_term *t, const double *x, bs_bsr *H);
+  int (*value)(const bs_term *t, const double *x, double *E);              /* E out           */
+  int (*gradient)(const bs_term *t, const double *x, double *E, double *g); /* E out, g added */
+  int (*hessian)(const bs_term *t, const double *x, bs_bsr *H);             /* H added        */
   int (*begin_step)(bs_term *t, bs_error *err); /* may be NULL */
   void (*destroy_data)(void *data);             /* may be NULL */
 } bs_term_ops;

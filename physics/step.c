@@ -36,6 +36,10 @@ int bs_method_parse(const char *name, bs_method *out, bs_error *err) {
 
 const char *bs_method_name(bs_method m) { return (unsigned)m < 3 ? method_names[m] : "?"; }
 
+static const char *guess_names[] = {"x_hat", "explicit", "x_n"};
+
+const char *bs_guess_name(bs_guess g) { return (unsigned)g < 3 ? guess_names[g] : "?"; }
+
 void bs_integrator_opts_default(bs_integrator_opts *o) {
   memset(o, 0, sizeof *o);
   o->method = BS_METHOD_OPTIMIZATION;
@@ -121,27 +125,51 @@ void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks) {
 static int term_active(const bs_integrator *I, const bs_term *t) { return !(I->static_mode && t->dynamic_only); }
 
 /* ---- the objective handed to the minimizer ----------------------------- */
+/* A term's BS_TERM_NOT_EVALUABLE (bs_terms.h) is returned as it is: a nonzero
+ * status, which the minimizer reads as "x is not evaluable" (E is then NaN). */
 static int obj_value(const double *x, double *E, void *ctx) {
   bs_integrator *I = ctx;
   double s = 0;
   for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) s += I->terms[i]->ops->value(I->terms[i], x);
+    if (term_active(I, I->terms[i])) {
+      double e;
+      int rc = I->terms[i]->ops->value(I->terms[i], x, &e);
+      if (rc) {
+        *E = NAN;
+        return rc;
+      }
+      s += e;
+    }
   *E = s;
   return isfinite(s) ? 0 : 1;
 }
 
-/* The terms of E at x: the cheap ones (every term but the expensive ones, i.e.
- * self-collision) or the expensive ones, which are >= 0 (section 3.3). */
-static double terms_energy(bs_integrator *I, const double *x, int expensive) {
+/* The terms of E at x into *E: the cheap ones (every term but the expensive
+ * ones, i.e. self-collision) or the expensive ones, which are >= 0 (section
+ * 3.3). Nonzero (a term's status) when one is not evaluable. */
+static int terms_energy(bs_integrator *I, const double *x, int expensive, double *E) {
   double s = 0;
   for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive == !expensive)
-      s += I->terms[i]->ops->value(I->terms[i], x);
-  return s;
+    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive == !expensive) {
+      double e;
+      int rc = I->terms[i]->ops->value(I->terms[i], x, &e);
+      if (rc) return rc;
+      s += e;
+    }
+  *E = s;
+  return 0;
+}
+
+/* terms_energy for the initial guesses: +Inf where a term is not evaluable
+ * (a candidate that is never chosen). */
+static double guess_part(bs_integrator *I, const double *x, int expensive) {
+  double E;
+  return terms_energy(I, x, expensive, &E) ? INFINITY : E;
 }
 
 static int obj_lower_bound(const double *x, double *E, void *ctx) {
-  *E = terms_energy(ctx, x, 0);
+  int rc = terms_energy(ctx, x, 0, E);
+  if (rc) return rc;
   return isfinite(*E) ? 0 : 1;
 }
 
@@ -150,30 +178,57 @@ static int obj_lower_bound(const double *x, double *E, void *ctx) {
  * the expensive terms, >= 0, are skipped, as in section 3.3). */
 static double guess_energy(bs_integrator *I, const double *x, double cheap, double best) {
   if (!isfinite(cheap) || cheap >= best) return cheap;
-  return cheap + terms_energy(I, x, 1);
+  return cheap + guess_part(I, x, 1);
 }
 
-static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
-  bs_integrator *I = ctx;
+/* grad E' at x, over the active terms, into g (zeroed first); the energy is
+ * summed into *E in term order. Nonzero (a term's status) when a term is not
+ * evaluable; *bad (may be NULL) is then its name. */
+static int terms_gradient(bs_integrator *I, const double *x, double *E, double *g, const char **bad) {
   memset(g, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
   double s = 0;
   for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) s += I->terms[i]->ops->gradient(I->terms[i], x, g);
+    if (term_active(I, I->terms[i])) {
+      double e;
+      int rc = I->terms[i]->ops->gradient(I->terms[i], x, &e, g);
+      if (rc) {
+        if (bad) *bad = I->terms[i]->name;
+        return rc;
+      }
+      s += e;
+    }
   *E = s;
-  return isfinite(s) ? 0 : 1;
+  return 0;
+}
+
+static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
+  int rc = terms_gradient(ctx, x, E, g, NULL);
+  if (rc) {
+    *E = NAN;
+    return rc;
+  }
+  return isfinite(*E) ? 0 : 1;
+}
+
+/* The active terms' Hessians added into H (a term's status when one is not
+ * evaluable); dynamic_only: only the terms marked so. */
+static int terms_hessian(bs_integrator *I, const double *x, int dynamic_only, bs_bsr *H) {
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && (!dynamic_only || I->terms[i]->dynamic_only)) {
+      int rc = I->terms[i]->ops->hessian(I->terms[i], x, H);
+      if (rc) return rc;
+    }
+  return 0;
 }
 
 static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   bs_integrator *I = ctx;
   bs_bsr_zero(H);
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) I->terms[i]->ops->hessian(I->terms[i], x, H);
+  int rc = terms_hessian(I, x, 0, H);
+  if (rc) return rc;
   if (I->hooks.project_hessian) {
     double E;
-    memset(I->gh, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
-    for (int i = 0; i < I->n_terms; i++)
-      if (term_active(I, I->terms[i])) E = I->terms[i]->ops->gradient(I->terms[i], x, I->gh);
-    (void)E;
+    if ((rc = terms_gradient(I, x, &E, I->gh, NULL))) return rc;
     I->hooks.project_hessian(x, I->gh, H, I->hooks.ctx);
   }
   return 0;
@@ -183,8 +238,8 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
 static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
   bs_integrator *I = ctx;
   bs_bsr_zero(H);
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) I->terms[i]->ops->hessian(I->terms[i], x, H);
+  int rc = terms_hessian(I, x, 0, H);
+  if (rc) return rc;
   I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
   return 0;
 }
@@ -193,8 +248,8 @@ static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *
  * Hessians plus the PSD-projected elastic Hessian at rest or at x. */
 static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
   bs_integrator *I = ctx;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && I->terms[i]->dynamic_only) I->terms[i]->ops->hessian(I->terms[i], x, P);
+  int rc = terms_hessian(I, x, 1, P);
+  if (rc) return rc;
   bs_fem_elastic_hessian(I->fem, I->opts.amg_at_rest ? I->fem->mesh->x : x, 1, 1.0, P);
   return 0;
 }
@@ -221,7 +276,7 @@ static void obj_trace(const bs_min_iter *it, void *ctx) {
   fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s  alpha %.4g (%d trials)%s\n",
           it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
           kept, it->alpha, it->ls_evaluations,
-          it->direction ? (it->direction == 1 ? " fallback -dx" : " fallback -g") : "");
+          it->direction != BS_DIR_NEWTON ? (it->direction == BS_DIR_NEG_DX ? " fallback -dx" : " fallback -g") : "");
   fflush(I->opts.trace);
 }
 
@@ -246,6 +301,20 @@ double bs_integrator_energy(bs_integrator *I, const double *x) {
   double E;
   obj_value(x, &E, I);
   return E;
+}
+
+/* ∇Φ(xⁿ) = −f(xⁿ) into I->grad: every term but inertia. BS_ENUMERIC, naming
+ * the term, when one is not evaluable at xⁿ. */
+static int potential_gradient(bs_integrator *I, bs_error *err) {
+  memset(I->grad, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
+  for (int i = 0; i < I->n_terms; i++) {
+    double e;
+    const bs_term *t = I->terms[i];
+    if (strcmp(t->name, "inertia") != 0 && t->ops->gradient(t, I->x_n, &e, I->grad))
+      return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the positions of the step's start",
+                          t->name);
+  }
+  return 0;
 }
 
 static int check_finite(const double *a, size_t n, const char *what, bs_error *err) {
@@ -297,9 +366,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     if (I->terms[i]->ops->begin_step && (rc = I->terms[i]->ops->begin_step(I->terms[i], err))) return rc;
 
   /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
-  memset(I->grad, 0, sizeof(double) * n3);
-  for (int i = 0; i < I->n_terms; i++)
-    if (strcmp(I->terms[i]->name, "inertia") != 0) I->terms[i]->ops->gradient(I->terms[i], I->x_n, I->grad);
+  if ((rc = potential_gradient(I, err))) return rc;
   memcpy(I->g1, I->x_hat, sizeof(double) * n3);
   for (size_t vtx = 0; vtx < nv; vtx++) {
     double c = fem->mass[vtx] > 0 ? dt * dt / fem->mass[vtx] : 0;
@@ -323,7 +390,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   /* the candidate with the smaller cheap part first: the other's expensive
      terms are then often skipped (and the detection left for the solve is the
      chosen guess's) */
-  const double c1 = terms_energy(I, I->g1, 0), c2 = terms_energy(I, I->g2, 0);
+  const double c1 = guess_part(I, I->g1, 0), c2 = guess_part(I, I->g2, 0);
   double E1, E2;
   if (c2 < c1) {
     E2 = guess_energy(I, I->g2, c2, INFINITY);
@@ -335,7 +402,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   int naive = 1;
   if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
     memcpy(x, I->g2, sizeof(double) * n3);
-    st->guess = 1;
+    st->guess = BS_GUESS_EXPLICIT;
     naive = 0;
   } else {
     memcpy(x, I->g1, sizeof(double) * n3);
@@ -346,11 +413,11 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     memcpy(I->g1, I->x_n, sizeof(double) * n3);
     if (I->script) I->script(t + dt, I->g1, I->script_ctx);
     if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-    const double Eb = st->guess ? E2 : E1;
-    const double E0 = guess_energy(I, I->g1, terms_energy(I, I->g1, 0), isfinite(Eb) ? Eb : INFINITY);
+    const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
+    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, 0), isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
       memcpy(x, I->g1, sizeof(double) * n3);
-      st->guess = 2;
+      st->guess = BS_GUESS_XN;
       naive = 1;
     }
   }
@@ -358,9 +425,9 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
   if (I->hooks.post_solve) {
     double E;
-    memset(I->gh, 0, sizeof(double) * n3);
-    for (int i = 0; i < I->n_terms; i++) E = I->terms[i]->ops->gradient(I->terms[i], x, I->gh);
-    (void)E;
+    const char *bad = "?";
+    if (terms_gradient(I, x, &E, I->gh, &bad))
+      return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the solution (post-solve hooks)", bad);
     if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
   }
   st->seconds = bs_seconds() - t0;

@@ -1,4 +1,8 @@
-/* terms.c — inertia, gravity, elasticity, lagged Rayleigh damping, drag. */
+/* terms.c — inertia, gravity, elasticity, lagged Rayleigh damping, drag.
+ *
+ * Each is defined for every x: its callbacks always return BS_TERM_OK, and a
+ * non-finite x (or an overflow) gives whatever NaN/Inf the arithmetic makes.
+ * The elastic models are finite for every finite F (bs_material.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +24,10 @@ static int term_new(const char *name, const bs_term_ops *ops, const bs_fem *fem,
   t->data = data;
   *out = t;
   return 0;
+}
+
+const char *bs_term_status_name(bs_term_status s) {
+  return s == BS_TERM_OK ? "ok" : s == BS_TERM_NOT_EVALUABLE ? "not_evaluable" : "?";
 }
 
 void bs_term_destroy(bs_term **pt) {
@@ -58,17 +66,20 @@ static double mass_quadratic(const bs_fem *fem, double c, const double *x, const
 }
 
 /* ---- inertia ---------------------------------------------------------- */
-static double inertia_value(const bs_term *t, const double *x) {
+static int inertia_value(const bs_term *t, const double *x, double *E) {
   double dt = t->step->dt;
-  return mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, NULL);
+  *E = mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, NULL);
+  return BS_TERM_OK;
 }
-static double inertia_gradient(const bs_term *t, const double *x, double *g) {
+static int inertia_gradient(const bs_term *t, const double *x, double *E, double *g) {
   double dt = t->step->dt;
-  return mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, g);
+  *E = mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, g);
+  return BS_TERM_OK;
 }
-static void inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+static int inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   double dt = t->step->dt;
   add_mass_diagonal(t->fem, 1.0 / (dt * dt), H);
+  return BS_TERM_OK;
 }
 static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL};
 
@@ -80,7 +91,7 @@ int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term 
 
 /* ---- gravity ---------------------------------------------------------- */
 static double gravity_load(const bs_term *t) { return t->step ? t->step->load : 1.0; }
-static double gravity_value(const bs_term *t, const double *x) {
+static int gravity_value(const bs_term *t, const double *x, double *Eout) {
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
@@ -88,18 +99,19 @@ static double gravity_value(const bs_term *t, const double *x) {
 #pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++)
     E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
-  return E;
+  *Eout = E;
+  return BS_TERM_OK;
 }
-static double gravity_gradient(const bs_term *t, const double *x, double *grad) {
+static int gravity_gradient(const bs_term *t, const double *x, double *E, double *grad) {
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
 #pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++)
     for (int k = 0; k < 3; k++) grad[3 * v + k] -= fem->mass[v] * g[k];
-  return gravity_value(t, x);
+  return gravity_value(t, x, E);
 }
-static void gravity_hessian(const bs_term *t, const double *x, bs_bsr *H) {}
+static int gravity_hessian(const bs_term *t, const double *x, bs_bsr *H) { return BS_TERM_OK; }
 static const bs_term_ops gravity_ops = {gravity_value, gravity_gradient, gravity_hessian, NULL, free};
 
 int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const double g[3], bs_term **out,
@@ -113,12 +125,17 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
 }
 
 /* ---- elasticity ------------------------------------------------------- */
-static double elastic_value(const bs_term *t, const double *x) { return bs_fem_elastic_energy(t->fem, x); }
-static double elastic_gradient(const bs_term *t, const double *x, double *g) {
-  return bs_fem_elastic_gradient(t->fem, x, g);
+static int elastic_value(const bs_term *t, const double *x, double *E) {
+  *E = bs_fem_elastic_energy(t->fem, x);
+  return BS_TERM_OK;
 }
-static void elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+static int elastic_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  *E = bs_fem_elastic_gradient(t->fem, x, g);
+  return BS_TERM_OK;
+}
+static int elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   bs_fem_elastic_hessian(t->fem, x, *(const int *)t->data, 1.0, H);
+  return BS_TERM_OK;
 }
 static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, free};
 
@@ -165,20 +182,24 @@ static double damping_eval(const bs_term *t, const double *x) {
   for (size_t i = 0; i < n3; i++) E += dd->d[i] * dd->work[i];
   return E / (2.0 * t->step->dt);
 }
-static double damping_value(const bs_term *t, const double *x) { return damping_eval(t, x); }
-static double damping_gradient(const bs_term *t, const double *x, double *g) {
+static int damping_value(const bs_term *t, const double *x, double *E) {
+  *E = damping_eval(t, x);
+  return BS_TERM_OK;
+}
+static int damping_gradient(const bs_term *t, const double *x, double *E, double *g) {
   damping_data *dd = t->data;
-  double E = damping_eval(t, x);
+  *E = damping_eval(t, x);
   size_t n3 = 3 * (size_t)t->fem->n_vertices;
   double c = 1.0 / t->step->dt;
   for (size_t i = 0; i < n3; i++) g[i] += c * dd->work[i];
-  return E;
+  return BS_TERM_OK;
 }
-static void damping_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+static int damping_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   damping_data *dd = t->data;
   double c = 1.0 / t->step->dt;
   size_t nv = 9 * (size_t)H->nnzb;
   for (size_t i = 0; i < nv; i++) H->val[i] += c * dd->D->val[i];
+  return BS_TERM_OK;
 }
 static const bs_term_ops damping_ops = {damping_value, damping_gradient, damping_hessian, damping_begin,
                                         damping_free};
@@ -209,17 +230,20 @@ int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const do
 }
 
 /* ---- drag --------------------------------------------------------------- */
-static double drag_value(const bs_term *t, const double *x) {
+static int drag_value(const bs_term *t, const double *x, double *E) {
   double k = *(const double *)t->data;
-  return mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, NULL);
+  *E = mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, NULL);
+  return BS_TERM_OK;
 }
-static double drag_gradient(const bs_term *t, const double *x, double *g) {
+static int drag_gradient(const bs_term *t, const double *x, double *E, double *g) {
   double k = *(const double *)t->data;
-  return mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, g);
+  *E = mass_quadratic(t->fem, k / t->step->dt, x, t->step->x_n, g);
+  return BS_TERM_OK;
 }
-static void drag_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+static int drag_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   double k = *(const double *)t->data;
   add_mass_diagonal(t->fem, k / t->step->dt, H);
+  return BS_TERM_OK;
 }
 static const bs_term_ops drag_ops = {drag_value, drag_gradient, drag_hessian, NULL, free};
 

@@ -83,11 +83,20 @@ void bs_bsr_zero(bs_bsr *A);
  * and its blocks). BS_EINPUT for a negative cap, BS_ENOMEM. */
 int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err);
 
+/* Where bs_bsr_add_block put a block. */
+typedef enum {
+  BS_BSR_DROPPED = -1, /* nowhere: no slot and the extra list is full, or i, j out of range */
+  BS_BSR_SLOT = 0,     /* added into the pattern's slot of (i, j)                          */
+  BS_BSR_EXTRA = 1     /* appended to the extra list                                       */
+} bs_bsr_placement;
+
+/* "dropped", "slot", "extra"; "?" for a value outside the enum. */
+const char *bs_bsr_placement_name(bs_bsr_placement p);
+
 /* A_ij += B (row-major 3x3): into the slot of (i,j) when the pattern has it,
- * else appended to the extra list. Returns 0 (slot), 1 (extra list) or -1
- * (dropped: no slot and the list is full, or i, j out of range). Sequential:
- * one thread at a time per matrix. */
-int bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]);
+ * else appended to the extra list; returns which (or BS_BSR_DROPPED).
+ * Sequential: one thread at a time per matrix. */
+bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]);
 
 /* y = A x. With mask (n bytes, 1 = free, 0 = constrained; NULL = all free):
  * y_i = sum over free j of A_ij x_j for free i, and y_i = 0 for constrained i.

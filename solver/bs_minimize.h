@@ -139,20 +139,42 @@
 extern "C" {
 #endif
 
+/* The search direction of an iteration (step 5 above). */
+typedef enum {
+  BS_DIR_NEWTON = 0,  /* the Newton direction dx (the downhill check passed)      */
+  BS_DIR_NEG_DX = 1,  /* -dx (fallback_neg_dx)                                      */
+  BS_DIR_NEG_GRAD = 2 /* -grad E (fallback_neg_grad)                                */
+} bs_direction;
+
+/* "newton", "neg_dx", "neg_grad"; "unknown" for a value outside the enum. */
+const char *bs_direction_name(bs_direction d);
+
+/* How a line search (step 7 above) ended. Every value but NO_DECREASE takes
+ * a step. ("ls" is the line search here, as in ls_evaluations.) */
+typedef enum {
+  BS_LSEARCH_NO_DECREASE = -1, /* no trial point decreased E: no step (BS_MIN_LINE_SEARCH) */
+  BS_LSEARCH_CAPPED = 0,       /* no Wolfe point within max_ls: the lowest trial point     */
+                               /* below phi(0) (ls_failures)                              */
+  BS_LSEARCH_WOLFE = 1,        /* a point that satisfies the strong Wolfe conditions       */
+  BS_LSEARCH_NOISE = 2         /* a rounding-level step of opts.accept_noise (noise_steps) */
+} bs_lsearch_status;
+
+/* "no_decrease", "capped", "wolfe", "noise"; "unknown" for a value outside the enum. */
+const char *bs_lsearch_status_name(bs_lsearch_status s);
+
 /* One accepted iteration of bs_minimize (or a full step of bs_newton: alpha
  * 1, no line search, so phi, dphi0 and dphi are NaN), handed to
  * bs_objective.trace. The pointers are valid during the callback only. */
 typedef struct bs_min_iter {
   int iteration;         /* 0-based index of the iteration that produced this step    */
-  int direction;         /* 0 Newton dx, 1 -dx (fallback), 2 -grad E (fallback)      */
+  bs_direction direction; /* Newton dx, or a fallback (-dx, -grad E)                  */
   int clamped;           /* 1: ||dx|| was clamped to opts.clamp                      */
   int lin_iterations;    /* Krylov iterations of the Newton solve                     */
   int lin_indefinite;    /* 1: CG/PCG stopped on negative curvature                   */
   int lin_downhill_iterate; /* k > 0: dx is CG's iterate k (opts.cg_downhill)          */
   int cholmod_fallback;  /* 1: CHOLMOD found H not positive definite, CG was used     */
-  int wolfe;             /* 1: the step satisfies the strong Wolfe conditions;        */
-                         /* 0: the line search hit its cap (best decreasing point);  */
-                         /* 2: a rounding-level step of opts.accept_noise            */
+  bs_lsearch_status ls_status; /* WOLFE, CAPPED (best decreasing point) or NOISE     */
+                         /* (bs_newton has no line search and leaves it 0)           */
   int ls_evaluations;    /* trial points of this line search                          */
   double grad_norm;      /* ||grad E(x)|| before the step                             */
   double lin_rel_tol;    /* relative tolerance asked of the linear solver            */

@@ -156,19 +156,23 @@ int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err) {
   return BS_OK;
 }
 
-int bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]) {
+const char *bs_bsr_placement_name(bs_bsr_placement p) {
+  return p == BS_BSR_SLOT ? "slot" : p == BS_BSR_EXTRA ? "extra" : p == BS_BSR_DROPPED ? "dropped" : "?";
+}
+
+bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]) {
   const int32_t s = i == j && i >= 0 && i < A->n ? A->diag[i] : bs_bsr_slot(A, i, j);
   if (s >= 0) {
     double *a = A->val + 9 * (int64_t)s;
     for (int e = 0; e < 9; ++e) a[e] += B[e];
-    return 0;
+    return BS_BSR_SLOT;
   }
-  if (i < 0 || i >= A->n || j < 0 || j >= A->n || A->n_extra >= A->cap_extra) return -1;
+  if (i < 0 || i >= A->n || j < 0 || j >= A->n || A->n_extra >= A->cap_extra) return BS_BSR_DROPPED;
   const int64_t e = A->n_extra++;
   A->extra_ij[2 * e] = i;
   A->extra_ij[2 * e + 1] = j;
   memcpy(A->extra_val + 9 * e, B, 9 * sizeof *B);
-  return 1;
+  return BS_BSR_EXTRA;
 }
 
 /* y += extra blocks x (sequential, list order), honouring the mask. */

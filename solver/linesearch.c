@@ -129,7 +129,7 @@ static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__l
     } else if (dphi < down) {
       lo = a, dlo = dphi;
     } else {
-      res->status = 2;
+      res->status = BS_LSEARCH_NOISE;
       res->alpha = a;
       res->phi = phi;
       res->dphi = dphi;
@@ -160,7 +160,7 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
   double hi = 0, phi_hi = 0, dphi_hi = 0;
   int hi_d = 0;
   memset(res, 0, sizeof *res);
-  res->status = -1;
+  res->status = BS_LSEARCH_NO_DECREASE;
 
 #define NOTE_BEST(a_, phi_)                                                                                           \
   do {                                                                                                                \
@@ -265,14 +265,14 @@ capped:
   } else {
     res->dphi = bs__dot(m->n3, m->gy, m->d);
   }
-  res->status = 0;
+  res->status = BS_LSEARCH_CAPPED;
   res->alpha = best_a;
   res->phi = best_phi;
   return;
 
 accept:
   res->evals = evals;
-  res->status = 1;
+  res->status = BS_LSEARCH_WOLFE;
   res->alpha = acc_a;
   res->phi = acc_phi;
   res->dphi = acc_dphi;

@@ -136,10 +136,13 @@ static int matrix_error(const bs_bsr *A, const uint8_t *mask, const char *what, 
 
 /* ---- block Jacobi ------------------------------------------------------- */
 
+/* What block_inverse made of a block. */
+typedef enum { BJ_INVERSE = 0, BJ_DIAGONAL = 1, BJ_IDENTITY = 2 } bj_kind;
+
 /* Inverse of the symmetric part S of a 3x3 block D if S is positive definite
  * (Cholesky pivots above 1e-14 * max diagonal); else the inverse of the
- * diagonal if all of it is positive; else the identity. Returns which (0, 1, 2). */
-static int block_inverse(const double *D, double *Mi) {
+ * diagonal if all of it is positive; else the identity. Returns which. */
+static bj_kind block_inverse(const double *D, double *Mi) {
   double S[9];
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) S[3 * a + b] = 0.5 * (D[3 * a + b] + D[3 * b + a]);
@@ -182,17 +185,17 @@ static int block_inverse(const double *D, double *Mi) {
     Mi[3] = Mi[1];
     Mi[6] = Mi[2];
     Mi[7] = Mi[5];
-    return 0;
+    return BJ_INVERSE;
   }
   memset(Mi, 0, 9 * sizeof *Mi);
   if (S[0] > 0 && S[4] > 0 && S[8] > 0 && isfinite(dmax)) {
     Mi[0] = 1.0 / S[0];
     Mi[4] = 1.0 / S[4];
     Mi[8] = 1.0 / S[8];
-    return 1;
+    return BJ_DIAGONAL;
   }
   Mi[0] = Mi[4] = Mi[8] = 1.0;
-  return 2;
+  return BJ_IDENTITY;
 }
 
 static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *minv) {
@@ -240,18 +243,25 @@ static double apply_block_jacobi(int32_t n, const double *minv, const double *r,
  * one more (bench_kernels), so the copy pays after 3 more iterations. */
 #define SINGLE_FROM 4
 
+/* run_cg's preconditioner (by bs_lin_kind: cg, pcg, amg). */
+typedef enum {
+  PC_NONE = 0,         /* plain CG                                     */
+  PC_BLOCK_JACOBI = 1, /* the 3x3 block Jacobi of block_inverse (pcg)  */
+  PC_AMG = 2           /* one BoomerAMG V-cycle, set up beforehand    */
+} pc_kind;
+
 /* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally preconditioned
- * (precond 1: block Jacobi; 2: one BoomerAMG V-cycle, set up beforehand). Stops on ||r|| <= rel_tol ||b||, max_iter, or
+ * (pc_kind). Stops on ||r|| <= rel_tol ||b||, max_iter, or
  * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
  * iteration, is returned with indefinite = 1). With ls->kappa > 0, an answer
  * that fails the downhill test b.x >= kappa ||b|| ||x|| is replaced by the
  * last iterate that passed it (kept in ls->xs; stats.downhill_iterate). */
 static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
-                  double rel_tol, int max_iter, int precond, int single, double *x, bs_lin_stats *st,
+                  double rel_tol, int max_iter, pc_kind precond, int single, double *x, bs_lin_stats *st,
                   bs_error *err) {
   const int32_t n = ls->n;
   const int64_t N = ls->N;
-  double *r = ls->r, *p = ls->p, *q = ls->q, *z = precond ? ls->z : ls->r;
+  double *r = ls->r, *p = ls->p, *q = ls->q, *z = precond != PC_NONE ? ls->z : ls->r;
   int64_t bad = 0;
   double rr = load_rhs(n, mask, b, r, &bad);
   if (bad) return rhs_error(n, mask, b, err);
@@ -263,14 +273,14 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
   }
   double rz = rr;
   int rc;
-  if (precond == 1) {
+  if (precond == PC_BLOCK_JACOBI) {
     build_block_jacobi(A, mask, ls->minv);
     rz = apply_block_jacobi(n, ls->minv, r, z);
-  } else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz, err))) {
+  } else if (precond == PC_AMG && (rc = bs_amg_apply(ls->amg, r, z, &rz, err))) {
     return rc;
   }
-  const char *name = precond == 2 ? "amg-pcg" : precond ? "pcg" : "cg";
-  if (precond == 2 && !(rz > 0.0)) { /* B not SPD: return the right-hand side */
+  const char *name = precond == PC_AMG ? "amg-pcg" : precond == PC_BLOCK_JACOBI ? "pcg" : "cg";
+  if (precond == PC_AMG && !(rz > 0.0)) { /* B not SPD: return the right-hand side */
     if (!isfinite(rz)) return matrix_error(A, mask, name, err);
     st->precond_failed = 1;
     vcopy(N, r, x);
@@ -314,7 +324,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     const double alpha = rz / pq;
     double s = 0.0, rz_new = 0.0, xx = 0.0;
     const double rr_k = rr;
-    if (precond == 1) {
+    if (precond == PC_BLOCK_JACOBI) {
       /* one pass: the updates, ||r||^2, z = M^-1 r and r . z (z is wasted only
          on the last iteration) */
       const double *minv = ls->minv;
@@ -361,9 +371,9 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
       st->converged = 1;
       break;
     }
-    if (precond == 0) rz_new = rr;
-    else if (precond == 2 && (rc = bs_amg_apply(ls->amg, r, z, &rz_new, err))) return rc;
-    if (precond == 2 && !(rz_new > 0.0)) { /* B not SPD (built from an indefinite matrix?) */
+    if (precond == PC_NONE) rz_new = rr;
+    else if (precond == PC_AMG && (rc = bs_amg_apply(ls->amg, r, z, &rz_new, err))) return rc;
+    if (precond == PC_AMG && !(rz_new > 0.0)) { /* B not SPD (built from an indefinite matrix?) */
       if (!isfinite(rz_new)) return matrix_error(A, mask, name, err);
       st->precond_failed = 1;
       break;
@@ -765,9 +775,9 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   case BS_LIN_CG:
   case BS_LIN_PCG:
   case BS_LIN_AMG: {
-    const int precond = ls->kind == BS_LIN_CG ? 0 : ls->kind == BS_LIN_PCG ? 1 : 2;
+    const pc_kind precond = ls->kind == BS_LIN_CG ? PC_NONE : ls->kind == BS_LIN_PCG ? PC_BLOCK_JACOBI : PC_AMG;
     /* No hierarchy for this mask yet: build it from A itself (A must be SPD). */
-    if (precond == 2 && !bs_amg_same_mask(ls->amg, ls->n, mask)) rc = bs_linsolve_amg_setup(ls, A, mask, err);
+    if (precond == PC_AMG && !bs_amg_same_mask(ls->amg, ls->n, mask)) rc = bs_linsolve_amg_setup(ls, A, mask, err);
     if (rc == BS_OK) rc = run_cg(ls, A, mask, b, rel_tol, max_iter, precond, ls->val32 != NULL, x, st, err);
     if (rc == BS_RETRY_DOUBLE) {
       memset(st, 0, sizeof *st);

@@ -107,6 +107,25 @@ const char *bs_min_reason_name(bs_min_reason r) {
   return "unknown";
 }
 
+const char *bs_direction_name(bs_direction d) {
+  switch (d) {
+  case BS_DIR_NEWTON: return "newton";
+  case BS_DIR_NEG_DX: return "neg_dx";
+  case BS_DIR_NEG_GRAD: return "neg_grad";
+  }
+  return "unknown";
+}
+
+const char *bs_lsearch_status_name(bs_lsearch_status s) {
+  switch (s) {
+  case BS_LSEARCH_NO_DECREASE: return "no_decrease";
+  case BS_LSEARCH_CAPPED: return "capped";
+  case BS_LSEARCH_WOLFE: return "wolfe";
+  case BS_LSEARCH_NOISE: return "noise";
+  }
+  return "unknown";
+}
+
 /* ---- options, create, destroy --------------------------------------------- */
 
 void bs_minimize_opts_default(bs_minimize_opts *o) {
@@ -493,15 +512,15 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     /* Step 5: downhill check. */
     double dn = sqrt(bs__dot(N, m->d, m->d)), dg = bs__dot(N, m->d, m->g);
     if (isfinite(dn) && isfinite(dg) && dn > 0 && dg < -o->kappa * dn * gnorm) {
-      rec.direction = 0;
+      rec.direction = BS_DIR_NEWTON;
     } else if (isfinite(dn) && isfinite(dg) && dn > 0 && -dg < -o->kappa * dn * gnorm) {
       for (int64_t i = 0; i < N; ++i) m->d[i] = -m->d[i];
-      rec.direction = 1;
+      rec.direction = BS_DIR_NEG_DX;
       st->fallback_neg_dx++;
     } else {
       for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
       dn = gnorm;
-      rec.direction = 2;
+      rec.direction = BS_DIR_NEG_GRAD;
       st->fallback_neg_grad++;
     }
     /* Step 6: length clamp. */
@@ -519,7 +538,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     bs__line_search(m, obj, x, E, dphi0, st, &ls);
     st->t_line_search += bs_seconds() - t;
     st->ls_evaluations += ls.evals;
-    if (ls.status < 0) {
+    if (ls.status == BS_LSEARCH_NO_DECREASE) {
       /* Paper 3.3: below some |grad E| the decrease a step can make, about
        * |g.d|/2, is lost in the rounding of E itself. Say so when it is. */
       const double noise = bs__noise_level(E);
@@ -536,15 +555,15 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
                        ls.evals, it, gnorm, E, dphi0);
       break;
     }
-    if (ls.status == 0) st->ls_failures++;
-    if (ls.status == 2) st->noise_steps++;
+    if (ls.status == BS_LSEARCH_CAPPED) st->ls_failures++;
+    if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
     int moved = 0;
     for (int32_t v = 0; v < n && !moved; ++v)
       if (!obj->mask || obj->mask[v])
         for (int k = 0; k < 3; ++k)
           if (m->y[3 * (int64_t)v + k] != x[3 * (int64_t)v + k]) moved = 1;
 
-    rec.wolfe = ls.status == 1 ? 1 : ls.status == 2 ? 2 : 0;
+    rec.ls_status = ls.status;
     rec.ls_evaluations = ls.evals;
     rec.alpha = ls.alpha;
     rec.phi0 = E;

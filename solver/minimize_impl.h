@@ -62,7 +62,7 @@ double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const 
 
 /* Line search result. */
 typedef struct bs__ls_result {
-  int status;     /* 1 strong Wolfe point, 0 best decreasing point (cap), 2 noise step, -1 no decrease */
+  bs_lsearch_status status; /* how it ended (bs_minimize.h)                               */
   int evals;      /* trial points                                                        */
   double alpha, phi, dphi;
 } bs__ls_result;
@@ -71,8 +71,9 @@ typedef struct bs__ls_result {
 double bs__noise_level(double E);
 
 /* Strong Wolfe line search along m->d from x (phi0 = E(x), dphi0 = g.d < 0).
- * On status >= 0: m->y = P(x + alpha d), m->gy_raw its raw gradient, m->gy the
- * masked projected gradient, phi and dphi their values. */
+ * On any status but BS_LSEARCH_NO_DECREASE: m->y = P(x + alpha d), m->gy_raw
+ * its raw gradient, m->gy the masked projected gradient, phi and dphi their
+ * values. */
 void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0,
                      double dphi0, bs_minimize_stats *st, bs__ls_result *res);
 

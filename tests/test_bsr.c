@@ -314,22 +314,22 @@ Test(bsr, extra_blocks_enter_the_product_and_the_checker) {
       for (int e = 0; e < 9; ++e) D[3 * i + e / 3][3 * A->col[s] + e % 3] = A->val[9 * s + e];
   double B[9];
   for (int e = 0; e < 9; ++e) B[e] = urand();
-  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), -1, "no room reserved: the block must be dropped");
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), BS_BSR_DROPPED, "no room reserved: the block must be dropped");
   cr_assert_eq(bs_bsr_reserve_extra(A, 3, &err), 0, "%s", err.msg);
   cr_assert_eq(bs_bsr_reserve_extra(A, -1, &err), BS_EINPUT);
-  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), 1);
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), BS_BSR_EXTRA);
   double Bt[9];
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) Bt[3 * a + b] = B[3 * b + a];
   /* the checker sees (0,5) without its transpose */
   cr_assert_eq(bs_bsr_check(A, 1e-12, &err), BS_EINPUT);
   cr_assert(strstr(err.msg, "extra blocks (0,5)"), "%s", err.msg);
-  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), 1);
+  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), BS_BSR_EXTRA);
   cr_assert_eq(bs_bsr_check(A, 1e-12, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_bsr_add_block(A, 1, 2, B), 0, "(1,2) is in the pattern: into its slot");
-  cr_assert_eq(bs_bsr_add_block(A, 2, 1, Bt), 0);
-  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), 1, "duplicates add up in the list");
-  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), -1, "the list is full");
+  cr_assert_eq(bs_bsr_add_block(A, 1, 2, B), BS_BSR_SLOT, "(1,2) is in the pattern: into its slot");
+  cr_assert_eq(bs_bsr_add_block(A, 2, 1, Bt), BS_BSR_SLOT);
+  cr_assert_eq(bs_bsr_add_block(A, 0, 5, B), BS_BSR_EXTRA, "duplicates add up in the list");
+  cr_assert_eq(bs_bsr_add_block(A, 5, 0, Bt), BS_BSR_DROPPED, "the list is full");
   for (int e = 0; e < 9; ++e) {
     D[e / 3][15 + e % 3] += 2 * B[e];
     D[15 + e / 3][e % 3] += Bt[e];
@@ -359,7 +359,10 @@ Test(bsr, extra_blocks_enter_the_product_and_the_checker) {
   }
   bs_bsr_zero(A);
   cr_assert_eq(A->n_extra, 0);
-  cr_assert_eq(bs_bsr_add_block(A, 1, 4, B), 1, "room is back after zero");
+  cr_assert_eq(bs_bsr_add_block(A, 1, 4, B), BS_BSR_EXTRA, "room is back after zero");
+  cr_assert_str_eq(bs_bsr_placement_name(BS_BSR_DROPPED), "dropped");
+  cr_assert_str_eq(bs_bsr_placement_name(BS_BSR_SLOT), "slot");
+  cr_assert_str_eq(bs_bsr_placement_name(BS_BSR_EXTRA), "extra");
   bs_bsr_destroy(&A);
 }
 
@@ -392,8 +395,8 @@ Test(bsr, single_precision_values) {
       while (bs_bsr_slot(A, i, j) >= 0) ++j;
       cr_assert_eq(bs_bsr_reserve_extra(A, 1, &err), 0, "%s", err.msg);
       cr_assert_eq(bs_bsr_reserve_extra(R, 1, &err), 0, "%s", err.msg);
-      cr_assert_eq(bs_bsr_add_block(A, i, j, B), 1);
-      cr_assert_eq(bs_bsr_add_block(R, i, j, B), 1);
+      cr_assert_eq(bs_bsr_add_block(A, i, j, B), BS_BSR_EXTRA);
+      cr_assert_eq(bs_bsr_add_block(R, i, j, B), BS_BSR_EXTRA);
     }
     for (int masked = 0; masked < 2; ++masked) {
       const uint8_t *mk = masked ? mask : NULL;

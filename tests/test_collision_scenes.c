@@ -106,9 +106,10 @@ Test(collision_scenes, torus_drop_ends_clean, .timeout = 600) {
 
 /* Two balls meeting at speed (data/scenes/two_spheres.json, self-collision at
  * one step per 24 Hz frame): no tet inverts in any frame and the balls end
- * apart, because on the impact steps the integrator starts from xⁿ (guess 2 in
- * stats.csv, which must be taken): from xⁿ + Δt vⁿ a vertex could start past
- * the middle of the other ball and be pushed out on its far side. */
+ * apart, because on the impact steps the integrator starts from xⁿ
+ * (BS_GUESS_XN, guess 2 in stats.csv, which must be taken): from xⁿ + Δt vⁿ a
+ * vertex could start past the middle of the other ball and be pushed out on
+ * its far side. */
 Test(collision_scenes, two_spheres_impact_does_not_tangle, .timeout = 600) {
   char *out = NULL;
   int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR

@@ -62,6 +62,7 @@ struct fx {
   /* trace checks */
   double c1, c2;
   int n_rec, bad_wolfe, bad_point, bad_decrease, rec_indef_descent;
+  int n_noise_rec; /* records with ls_status BS_LSEARCH_NOISE (cb_trace_noise) */
   bs_min_iter first;
   int has_first;
   /* Newton iterates (first dof) */
@@ -130,11 +131,11 @@ static void cb_trace_wolfe(const bs_min_iter *it, void *ctx) {
   if (!(E1 <= E0 + f->c1 * it->alpha * d0 + tiny) || !(fabs(d1) <= f->c2 * fabs(d0) * (1 + 1e-12))) f->bad_wolfe++;
   if (!(d0 < 0)) f->bad_wolfe++;
   if (fabs(E0 - it->phi0) > tiny || fabs(E1 - it->phi) > tiny) f->bad_wolfe++;
-  if (!it->wolfe) f->bad_wolfe++;
+  if (it->ls_status == BS_LSEARCH_CAPPED) f->bad_wolfe++;
   if (!(E1 <= E0)) f->bad_decrease++;
   for (int64_t i = 0; i < N; ++i)
     if (fabs(it->y[i] - (it->x[i] + it->alpha * it->d[i])) > 1e-12 * (1 + fabs(it->y[i]))) f->bad_point++;
-  if (it->lin_indefinite && it->direction == 0 && d0 < 0) f->rec_indef_descent++;
+  if (it->lin_indefinite && it->direction == BS_DIR_NEWTON && d0 < 0) f->rec_indef_descent++;
   if (!f->has_first) {
     f->first = *it;
     f->first.x = f->first.d = f->first.y = NULL;
@@ -331,6 +332,15 @@ Test(minimize, defaults_and_reason_names) {
   cr_assert_str_eq(bs_min_reason_name(BS_MIN_CONVERGED), "converged");
   cr_assert_str_eq(bs_min_reason_name(BS_MIN_LINE_SEARCH), "line_search");
   cr_assert_str_eq(bs_min_reason_name(BS_MIN_STEPS_DONE), "steps_done");
+  cr_assert_str_eq(bs_direction_name(BS_DIR_NEWTON), "newton");
+  cr_assert_str_eq(bs_direction_name(BS_DIR_NEG_DX), "neg_dx");
+  cr_assert_str_eq(bs_direction_name(BS_DIR_NEG_GRAD), "neg_grad");
+  cr_assert_str_eq(bs_direction_name((bs_direction)7), "unknown");
+  cr_assert_str_eq(bs_lsearch_status_name(BS_LSEARCH_NO_DECREASE), "no_decrease");
+  cr_assert_str_eq(bs_lsearch_status_name(BS_LSEARCH_CAPPED), "capped");
+  cr_assert_str_eq(bs_lsearch_status_name(BS_LSEARCH_WOLFE), "wolfe");
+  cr_assert_str_eq(bs_lsearch_status_name(BS_LSEARCH_NOISE), "noise");
+  cr_assert_str_eq(bs_lsearch_status_name((bs_lsearch_status)7), "unknown");
 }
 
 Test(minimize, quadratic_one_iteration) {
@@ -408,11 +418,11 @@ Test(minimize, cg_downhill_keeps_an_earlier_iterate) {
       cr_assert_geq(st.downhill_iterates, 1);
       cr_assert_eq(st.fallback_neg_grad, 0);
       cr_assert_eq(f.first.lin_downhill_iterate, 1, "first direction: iterate %d", f.first.lin_downhill_iterate);
-      cr_assert_eq(f.first.direction, 0);
+      cr_assert_eq(f.first.direction, BS_DIR_NEWTON);
     } else {
       cr_assert_eq(st.downhill_iterates, 0);
       cr_assert_geq(st.fallback_neg_grad, 1);
-      cr_assert_eq(f.first.direction, 2);
+      cr_assert_eq(f.first.direction, BS_DIR_NEG_GRAD);
     }
   }
   bs_bsr_destroy(&P);
@@ -584,7 +594,7 @@ Test(minimize, negative_curvature_start) {
    * -grad E: a descent direction, kept by the downhill check. */
   cr_assert(f.has_first);
   cr_assert_eq(f.first.lin_indefinite, 1);
-  cr_assert_eq(f.first.direction, 0);
+  cr_assert_eq(f.first.direction, BS_DIR_NEWTON);
   cr_assert_lt(f.first.dphi0, 0);
   cr_assert_gt(f.rec_indef_descent, 0);
   cr_assert_eq(st.fallback_neg_dx, 0, "CG never needs -dx (paper 3.1)");
@@ -665,7 +675,7 @@ Test(minimize, length_clamp) {
 static void cap_trace(const bs_min_iter *it, void *ctx) {
   fx *f = ctx;
   if (!(it->phi < it->phi0)) f->bad_decrease++;
-  if (!it->wolfe) f->bad_wolfe++; /* here: counts steps taken without a Wolfe point */
+  if (it->ls_status == BS_LSEARCH_CAPPED) f->bad_wolfe++; /* here: counts steps taken without a Wolfe point */
   f->n_rec++;
 }
 
@@ -1227,6 +1237,10 @@ static int noisy_gradient(const double *x, double *E, double *g, void *ctx) {
   return 0;
 }
 
+static void cb_trace_noise(const bs_min_iter *it, void *ctx) {
+  ((fx *)ctx)->n_noise_rec += it->ls_status == BS_LSEARCH_NOISE;
+}
+
 Test(minimize, tolerance_below_the_rounding_of_E) {
   bs_bsr *P = pattern_chain(1);
   fx f;
@@ -1255,9 +1269,11 @@ Test(minimize, tolerance_below_the_rounding_of_E) {
   cr_assert_eq(bs_minimizer_set_opts(m, &o, &err), 0, "%s", err.msg);
   f.noise_on = 0;
   double y[3] = {1.0, 1.2, 0.9};
+  obj.trace = cb_trace_noise;
   cr_assert_eq(bs_minimize(m, &obj, y, &st, &err), 0, "%s", err.msg);
   cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
   cr_assert_gt(st.noise_steps, 0);
+  cr_assert_eq(f.n_noise_rec, st.noise_steps, "the trace saw %d noise steps", f.n_noise_rec);
   for (int k = 0; k < 3; ++k) cr_assert_float_eq(y[k], log(2.0), 1e-12);
   bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);

@@ -14,6 +14,7 @@
 #include "bs_levelset.h"
 #include "bs_penalty.h"
 #include "bs_terms.h"
+#include "test_term_eval.h"
 
 static uint64_t rng = 0x2545F4914F6CDD1Dull;
 static double urand(void) {
@@ -124,15 +125,15 @@ static void check_term_fd(const fixture *f, const bs_term *t, const double *x, c
   bs_error err;
   cr_assert_eq(bs_fem_matrix(f->fem, &H, &err), 0, "%s", err.msg);
   bs_bsr_zero(H);
-  t->ops->hessian(t, x, H);
+  term_hessian(t, x, H);
   cr_assert_eq(bs_bsr_check(H, 1e-12, &err), 0, "%s: %s", what, err.msg);
   /* only diagonal blocks */
   for (int32_t i = 0; i < H->n; i++)
     for (int32_t s = H->row_ptr[i]; s < H->row_ptr[i + 1]; s++)
       if (H->col[s] != i)
         for (int e = 0; e < 9; e++) cr_assert(H->val[9 * (size_t)s + e] == 0, "%s: off-diagonal block", what);
-  double E = t->ops->gradient(t, x, g);
-  cr_assert(E == t->ops->value(t, x), "%s: gradient's energy differs from value", what);
+  double E = term_gradient(t, x, g);
+  cr_assert(E == term_value(t, x), "%s: gradient's energy differs from value", what);
   double eg[N_H] = {0}, eH[N_H] = {0}, gscale = 0, Hscale = 0;
   for (int dir = 0; dir < 4; dir++) {
     for (size_t i = 0; i < n3; i++) d[i] = 2 * urand() - 1;
@@ -143,12 +144,12 @@ static void check_term_fd(const fixture *f, const bs_term *t, const double *x, c
     for (int s = 0; s < N_H; s++) {
       double h = hs[s];
       for (size_t i = 0; i < n3; i++) xp[i] = x[i] + h * d[i], xm[i] = x[i] - h * d[i];
-      double fd = (t->ops->value(t, xp) - t->ops->value(t, xm)) / (2 * h);
+      double fd = (term_value(t, xp) - term_value(t, xm)) / (2 * h);
       eg[s] += fabs(fd - gd);
       memset(gp, 0, n3 * sizeof(double));
       memset(gm, 0, n3 * sizeof(double));
-      t->ops->gradient(t, xp, gp);
-      t->ops->gradient(t, xm, gm);
+      term_gradient(t, xp, gp);
+      term_gradient(t, xm, gm);
       double e2 = 0;
       for (size_t i = 0; i < n3; i++) {
         double r = (gp[i] - gm[i]) / (2 * h) - Hd[i];
@@ -193,11 +194,11 @@ static void check_obstacle(fixture *f, bs_levelset *ls, double t, const double s
          *fv = malloc(f->n3 * sizeof(double));
   config(f, ls, t, shift, 0.15, gap, 5, x);
   check_term_fd(f, term, x, what);
-  double E = term->ops->value(term, x), Ed = direct_energy(f, ls, k, t, x);
+  double E = term_value(term, x), Ed = direct_energy(f, ls, k, t, x);
   cr_assert(E > 0, "%s: energy %g", what, E);
   cr_assert(fabs(E - Ed) <= 1e-13 * Ed, "%s: energy %.17g, direct sum %.17g", what, E, Ed);
   /* forces are -gradient, point out of the obstacle, and match the point force */
-  term->ops->gradient(term, x, g);
+  term_gradient(term, x, g);
   cr_assert_eq(bs_term_penalty_forces(term, x, fv, &err), 0, "%s", err.msg);
   int32_t count = 0, cd = 0;
   double depth = -1, dd = 0;
@@ -297,12 +298,12 @@ Test(penalty, zero_when_nothing_penetrates) {
   double *x = malloc(f.n3 * sizeof(double)), *g = calloc(f.n3, sizeof(double));
   for (size_t i = 0; i < f.n3; i++) x[i] = f.mesh->x[i] + 0.1 * (urand() - 0.5);
   for (size_t i = 0; i < f.n3; i++) g[i] = (double)i; /* the gradient adds into g */
-  cr_assert_eq(t->ops->value(t, x), 0.0);
-  cr_assert_eq(t->ops->gradient(t, x, g), 0.0);
+  cr_assert_eq(term_value(t, x), 0.0);
+  cr_assert_eq(term_gradient(t, x, g), 0.0);
   for (size_t i = 0; i < f.n3; i++) cr_assert_eq(g[i], (double)i);
   bs_bsr *H = NULL;
   cr_assert_eq(bs_fem_matrix(f.fem, &H, &err), 0, "%s", err.msg);
-  t->ops->hessian(t, x, H);
+  term_hessian(t, x, H);
   for (int64_t s = 0; s < 9 * H->nnzb; s++) cr_assert_eq(H->val[s], 0.0);
   int32_t count = -1;
   double depth = -1;
@@ -360,9 +361,9 @@ Test(penalty, vertex_subset) {
     if (phi < 0) Es += 1e5 * pow(-phi, 3);
   }
   cr_assert(Es > 0);
-  cr_assert(fabs(sub->ops->value(sub, x) - Es) <= 1e-13 * Es);
-  cr_assert(sub->ops->value(sub, x) <= all->ops->value(all, x));
-  sub->ops->gradient(sub, x, g);
+  cr_assert(fabs(term_value(sub, x) - Es) <= 1e-13 * Es);
+  cr_assert(term_value(sub, x) <= term_value(all, x));
+  term_gradient(sub, x, g);
   cr_assert_eq(bs_term_penalty_forces(sub, x, fv, &err), 0, "%s", err.msg);
   for (int32_t v = 0; v < f.mesh->n_vertices; v++)
     if (!in[v])
@@ -401,11 +402,11 @@ Test(penalty, thread_count_independent) {
   cr_assert_eq(bs_fem_matrix(fem, &H2, &err), 0, "%s", err.msg);
   int saved = omp_get_max_threads();
   omp_set_num_threads(1);
-  double E1 = t->ops->gradient(t, x, g1);
-  t->ops->hessian(t, x, H1);
+  double E1 = term_gradient(t, x, g1);
+  term_hessian(t, x, H1);
   omp_set_num_threads(2);
-  double E2 = t->ops->gradient(t, x, g2);
-  t->ops->hessian(t, x, H2);
+  double E2 = term_gradient(t, x, g2);
+  term_hessian(t, x, H2);
   omp_set_num_threads(saved);
   cr_assert(E1 > 0);
   cr_assert(E1 == E2, "energy %.17g (1 thread) vs %.17g (2 threads)", E1, E2);
@@ -454,7 +455,7 @@ Test(penalty, argument_errors) {
   /* an empty subset is a valid (zero) term */
   cr_assert_eq(bs_term_penalty_create_subset(f.fem, NULL, ls, 1, 0, bad, &t, &err), 0, "%s", err.msg);
   for (size_t i = 0; i < f.n3; i++) x[i] = f.mesh->x[i];
-  cr_assert_eq(t->ops->value(t, x), 0.0);
+  cr_assert_eq(term_value(t, x), 0.0);
   bs_term_destroy(&t);
   bs_term_destroy(&t);
   free(x), free(fv);

@@ -14,6 +14,7 @@
 #include "bs_selfcollide.h"
 #include "bs_step.h"
 #include "bs_terms.h"
+#include "test_term_eval.h"
 
 /* ---- kernels ---------------------------------------------------------- */
 
@@ -231,14 +232,14 @@ Test(self_detect, nothing_overlaps_energy_zero) {
   cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, &depth, &err), 0, "%s", err.msg);
   cr_expect_eq(count, 0, "%d vertices flagged at rest", count);
   cr_expect_eq(depth, 0.0);
-  cr_expect_eq(w.self->ops->value(w.self, w.x), 0.0);
+  cr_expect_eq(term_value(w.self, w.x), 0.0);
   /* small random motion that inverts nothing: still no collision */
   unsigned s = 7;
   for (size_t i = 0; i < w.n3; i++) w.x[i] += 0.02 * rnd(&s);
   cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, &depth, &err), 0, "%s", err.msg);
   cr_expect_eq(count, 0, "%d vertices flagged after a small perturbation", count);
   double *g = calloc(w.n3, sizeof(double));
-  cr_expect_eq(w.self->ops->gradient(w.self, w.x, g), 0.0);
+  cr_expect_eq(term_gradient(w.self, w.x, g), 0.0);
   for (size_t i = 0; i < w.n3; i++) cr_expect_eq(g[i], 0.0);
   free(g);
   world_destroy(&w);
@@ -257,11 +258,11 @@ Test(self_detect, pushed_vertex_is_found) {
   cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, &depth, &err), 0, "%s", err.msg);
   cr_expect_eq(count, 1, "%d vertices flagged, expected the pushed one", count);
   cr_expect(fabs(depth - 0.1) < 1e-12, "depth %.17g, expected 0.1", depth);
-  double E = w.self->ops->value(w.self, w.x);
+  double E = term_value(w.self, w.x);
   cr_expect(fabs(E - 1e6 * 0.01 * sqrt(0.01 + BS_SELF_EPS)) < 1e-9, "E = %.17g", E);
   /* the force on the pushed vertex points out of A (+x), reactions on A's face */
   double *g = calloc(w.n3, sizeof(double));
-  w.self->ops->gradient(w.self, w.x, g);
+  term_gradient(w.self, w.x, g);
   cr_expect(g[3 * p] < 0 && fabs(g[3 * p + 1]) < 1e-9 * fabs(g[3 * p]), "grad at p (%g, %g, %g)", g[3 * p],
             g[3 * p + 1], g[3 * p + 2]);
   double sum[3] = {0, 0, 0};
@@ -300,7 +301,7 @@ Test(self_detect, own_neighbourhood_excluded) {
     w.x[3 * q] = 1 - 0.6 * i / 100.0; /* down to x = 0.4: inside the second layer */
     cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
     cr_expect_eq(count, 0, "a vertex inside its neighbours' tets (x = %g) was flagged", w.x[3 * q]);
-    cr_expect_eq(w.self->ops->value(w.self, w.x), 0.0);
+    cr_expect_eq(term_value(w.self, w.x), 0.0);
   }
   /* pushed past two layers of tets (through its own body): flagged */
   w.x[3 * q] = 0.2;
@@ -328,7 +329,7 @@ Test(self_detect, leaving_the_neighbourhood_is_continuous) {
     w.x[3 * q] = x0 - h * i;
     int32_t count = -1;
     cr_assert_eq(bs_term_self_detect(w.self, w.x, &count, NULL, &err), 0, "%s", err.msg);
-    const double E = w.self->ops->value(w.self, w.x);
+    const double E = term_value(w.self, w.x);
     cr_assert(isfinite(E) && E >= 0);
     if (count > 0 && first < 0) {
       first = i;
@@ -344,7 +345,7 @@ Test(self_detect, leaving_the_neighbourhood_is_continuous) {
   /* there (x = 0.05, an interface face its primitive) the gradient is the
      value's central difference, on q and on the face's vertices */
   double *g = calloc(w.n3, sizeof(double));
-  w.self->ops->gradient(w.self, w.x, g);
+  term_gradient(w.self, w.x, g);
   double gmax = 0, emax = 0;
   int moved = 0;
   for (size_t i = 0; i < w.n3; i++) {
@@ -352,9 +353,9 @@ Test(self_detect, leaving_the_neighbourhood_is_continuous) {
     moved += (int)(i / 3 != (size_t)q);
     const double s0 = w.x[i], hh = 1e-6;
     w.x[i] = s0 + hh;
-    const double Ep = w.self->ops->value(w.self, w.x);
+    const double Ep = term_value(w.self, w.x);
     w.x[i] = s0 - hh;
-    const double Em = w.self->ops->value(w.self, w.x);
+    const double Em = term_value(w.self, w.x);
     w.x[i] = s0;
     gmax = fmax(gmax, fabs(g[i]));
     emax = fmax(emax, fabs((Ep - Em) / (2 * hh) - g[i]));
@@ -385,10 +386,10 @@ Test(self_term, gradient_and_hessian_match_fd) {
   size_t n3 = w.n3;
   double *g = calloc(n3, sizeof(double)), *gp = calloc(n3, sizeof(double)), *gm = calloc(n3, sizeof(double));
   double *D = malloc(sizeof(double) * n3 * n3);
-  w.self->ops->gradient(w.self, w.x, g);
+  term_gradient(w.self, w.x, g);
   bs_bsr *H;
   cr_assert_eq(bs_fem_matrix(w.fem, &H, &err), 0, "%s", err.msg);
-  w.self->ops->hessian(w.self, w.x, H);
+  term_hessian(w.self, w.x, H);
   cr_assert_eq(bs_bsr_check(H, 1e-12, &err), 0, "%s", err.msg);
   dense_from_bsr(H, D, n3);
   int64_t cnt = 0;
@@ -428,10 +429,10 @@ Test(self_term, gradient_and_hessian_match_fd) {
       double s0 = w.x[i];
       w.x[i] = s0 + h;
       memset(gp, 0, sizeof(double) * n3);
-      double Ep = w.self->ops->gradient(w.self, w.x, gp);
+      double Ep = term_gradient(w.self, w.x, gp);
       w.x[i] = s0 - h;
       memset(gm, 0, sizeof(double) * n3);
-      double Em = w.self->ops->gradient(w.self, w.x, gm);
+      double Em = term_gradient(w.self, w.x, gm);
       w.x[i] = s0;
       double e = fabs((Ep - Em) / (2 * h) - g[i]);
       if (e > errg[r]) errg[r] = e;
@@ -595,7 +596,8 @@ Test(self_errors, culprits_named) {
   w.x[3 * 5 + 1] = NAN;
   cr_expect_eq(bs_term_self_detect(w.self, w.x, NULL, NULL, &err), BS_ENUMERIC);
   cr_expect(strstr(err.msg, "vertex 5") != NULL, "%s", err.msg);
-  cr_expect(isnan(w.self->ops->value(w.self, w.x)), "a non-finite x must give a non-finite energy");
+  double E;
+  cr_expect_eq(w.self->ops->value(w.self, w.x, &E), BS_TERM_NOT_EVALUABLE, "a non-finite x must not be evaluable");
   int32_t *pairs;
   int64_t n;
   cr_expect_eq(bs_self_coupling_pairs(w.fem, NULL, -1, &pairs, &n, &err), BS_EINPUT);
@@ -603,6 +605,36 @@ Test(self_errors, culprits_named) {
   bs_term_destroy(&grav);
   bs_term_destroy(&grav); /* NULL is fine */
   free(v);
+  world_destroy(&w);
+}
+
+/* A non-finite x is outside the term's domain: value, gradient and hessian
+ * say so by their status (never by a NaN) and leave their outputs alone. */
+Test(self_errors, non_finite_x_is_not_evaluable) {
+  world w;
+  world_create(&w, 1e6);
+  bs_error err;
+  double E = 12.5, *g = calloc(w.n3, sizeof(double));
+  bs_bsr *H = NULL;
+  cr_assert_eq(bs_fem_matrix(w.fem, &H, &err), 0, "%s", err.msg);
+  bs_bsr_zero(H);
+  for (int pass = 0; pass < 2; pass++) { /* NaN, then +Inf */
+    w.x[3 * 5 + 1] = pass ? INFINITY : NAN;
+    cr_expect_eq(w.self->ops->value(w.self, w.x, &E), BS_TERM_NOT_EVALUABLE);
+    cr_expect_eq(w.self->ops->gradient(w.self, w.x, &E, g), BS_TERM_NOT_EVALUABLE);
+    cr_expect_eq(w.self->ops->hessian(w.self, w.x, H), BS_TERM_NOT_EVALUABLE);
+  }
+  cr_expect_eq(E, 12.5, "E was written: %g", E);
+  for (size_t i = 0; i < w.n3; i++) cr_expect_eq(g[i], 0.0, "g[%zu] was written: %g", i, g[i]);
+  for (int64_t i = 0; i < 9 * H->nnzb; i++) cr_expect_eq(H->val[i], 0.0, "H was written (value %lld)", (long long)i);
+  /* back at a finite x: evaluable again, E = 0 at rest */
+  memcpy(w.x, w.mesh->x, sizeof(double) * w.n3);
+  cr_expect_eq(w.self->ops->value(w.self, w.x, &E), BS_TERM_OK);
+  cr_expect_eq(E, 0.0);
+  cr_expect_str_eq(bs_term_status_name(BS_TERM_NOT_EVALUABLE), "not_evaluable");
+  cr_expect_str_eq(bs_term_status_name(BS_TERM_OK), "ok");
+  bs_bsr_destroy(&H);
+  free(g);
   world_destroy(&w);
 }
 

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "bs_shim.h"
+#include "bs_vec3.h"
 
 /* ------------------------------------------------------------------------ */
 /* Helpers */
@@ -22,10 +23,9 @@ static double urand(void) { /* xorshift64*, uniform in [0, 1) */
 }
 static double urange(double lo, double hi) { return lo + (hi - lo) * urand(); }
 
-static double dot(const double *u, const double *v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; }
 static double dist(const double *u, const double *v) {
   double e[3] = {u[0] - v[0], u[1] - v[1], u[2] - v[2]};
-  return sqrt(dot(e, e));
+  return sqrt(bs_dot3(e, e));
 }
 
 /* Distance from p to triangle (a, b, c) by Ericson's Voronoi-region method
@@ -36,7 +36,7 @@ static double tri_dist(const double *p, const double *a, const double *b, const 
   for (int k = 0; k < 3; k++) {
     ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k], bp[k] = p[k] - b[k], cp[k] = p[k] - c[k];
   }
-  double d1 = dot(ab, ap), d2 = dot(ac, ap), d3 = dot(ab, bp), d4 = dot(ac, bp), d5 = dot(ab, cp), d6 = dot(ac, cp);
+  double d1 = bs_dot3(ab, ap), d2 = bs_dot3(ac, ap), d3 = bs_dot3(ab, bp), d4 = bs_dot3(ac, bp), d5 = bs_dot3(ab, cp), d6 = bs_dot3(ac, cp);
   double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4, s = 0, t = 0;
   if (d1 <= 0 && d2 <= 0) s = 0, t = 0;
   else if (d3 >= 0 && d4 <= d3) s = 1, t = 0;
@@ -105,7 +105,7 @@ static soup make_icosphere(int level) {
   int64_t np_final = 10 * (1LL << (2 * level)) + 2, nt_final = 20 * (1LL << (2 * level));
   soup s = {12, 20, malloc(3 * np_final * sizeof(double)), malloc(3 * nt_final * sizeof(int32_t))};
   for (int i = 0; i < 12; i++) {
-    double n = sqrt(dot(v0[i], v0[i]));
+    double n = sqrt(bs_dot3(v0[i], v0[i]));
     for (int d = 0; d < 3; d++) s.x[3 * i + d] = v0[i][d] / n;
   }
   memcpy(s.t, f0, sizeof f0);
@@ -121,7 +121,7 @@ static soup make_icosphere(int level) {
         if (*slot < 0) {
           double p[3], n;
           for (int d = 0; d < 3; d++) p[d] = 0.5 * (s.x[3 * a + d] + s.x[3 * b + d]);
-          n = sqrt(dot(p, p));
+          n = sqrt(bs_dot3(p, p));
           for (int d = 0; d < 3; d++) s.x[3 * s.np + d] = p[d] / n;
           *slot = (int32_t)s.np++;
         }
@@ -654,8 +654,8 @@ Test(shim_sdf, icosphere_and_two_cubes_against_brute_force) {
       double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
       double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
       double r[3] = {q[3 * i] - a[0], q[3 * i + 1] - a[1], q[3 * i + 2] - a[2]};
-      cr_assert_gt(dot(nrm, a), 0.0, "face %lld is not outward", (long long)f);
-      if (dot(nrm, r) > 0) inside = 0;
+      cr_assert_gt(bs_dot3(nrm, a), 0.0, "face %lld is not outward", (long long)f);
+      if (bs_dot3(nrm, r) > 0) inside = 0;
     }
     n_in += inside;
     cr_assert_eq(out[i] < 0, inside, "point %d: %.17g but inside = %d", i, out[i], inside);

@@ -77,7 +77,11 @@ Test(step, free_fall_is_exact) {
   bs_error err;
   cr_assert_eq(bs_integrator_step(s.I, 0, dt, x, v, &st, &err), 0, "%s", err.msg);
   cr_expect_eq(st.failed, 0);
-  cr_expect_eq(st.guess, 1, "the second initial guess should be chosen");
+  cr_expect_eq(st.guess, BS_GUESS_EXPLICIT, "the second initial guess should be chosen");
+  cr_expect_str_eq(bs_guess_name(st.guess), "explicit");
+  cr_expect_str_eq(bs_guess_name(BS_GUESS_XHAT), "x_hat");
+  cr_expect_str_eq(bs_guess_name(BS_GUESS_XN), "x_n");
+  cr_expect_str_eq(bs_guess_name((bs_guess)3), "?");
   cr_expect_eq(st.min.iterations, 0, "free fall took %d Newton iterations", st.min.iterations);
   double v0[3] = {0.3, 2.0, -0.1};
   for (size_t i = 0; i < n3; i++) {
@@ -193,4 +197,113 @@ Test(step, refuses_nan_state) {
   free(x);
   free(v);
   sys_destroy(&s);
+}
+
+/* ---- a term that is not evaluable everywhere ---------------------------- */
+
+/* A floor barrier -k Σ m_v ln(y_v - y0): defined only above the floor y0 (as
+ * self-collision is only where its detection runs); below it every callback
+ * returns BS_TERM_NOT_EVALUABLE (after writing part of g: the caller must not
+ * use it). refuse_hessian makes the Hessian not evaluable everywhere. */
+typedef struct floor_data {
+  double y0, k;
+  int refuse_hessian;
+  int refused_value, refused_gradient, refused_hessian; /* counts */
+} floor_data;
+
+static int floor_eval(const bs_term *t, const double *x, double *E, double *g, int *refused) {
+  const floor_data *f = t->data;
+  double s = 0;
+  for (int32_t v = 0; v < t->fem->n_vertices; v++) {
+    const double d = x[3 * v + 1] - f->y0, km = f->k * t->fem->mass[v];
+    if (!(d > 0) || !isfinite(d)) {
+      ++*refused;
+      return BS_TERM_NOT_EVALUABLE;
+    }
+    s -= km * log(d);
+    if (g) g[3 * v + 1] -= km / d;
+  }
+  *E = s;
+  return BS_TERM_OK;
+}
+static int floor_value(const bs_term *t, const double *x, double *E) {
+  return floor_eval(t, x, E, NULL, &((floor_data *)t->data)->refused_value);
+}
+static int floor_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  return floor_eval(t, x, E, g, &((floor_data *)t->data)->refused_gradient);
+}
+static int floor_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  floor_data *f = t->data;
+  for (int32_t v = 0; v < t->fem->n_vertices; v++) {
+    const double d = x[3 * v + 1] - f->y0;
+    if (f->refuse_hessian || !(d > 0) || !isfinite(d)) {
+      f->refused_hessian++;
+      return BS_TERM_NOT_EVALUABLE;
+    }
+    H->val[9 * (size_t)H->diag[v] + 4] += f->k * t->fem->mass[v] / (d * d);
+  }
+  return BS_TERM_OK;
+}
+static const bs_term_ops floor_ops = {floor_value, floor_gradient, floor_hessian, NULL, NULL};
+
+/* One step of a box at rest 1 cm above the floor under gravity (inertia,
+ * gravity, elasticity and the floor). The free-fall guess and the first
+ * Newton step, about 1.5 cm down, both lie below the floor. st->min.reason_text
+ * is copied to reason (the minimizer is gone on return). */
+static void floor_step(floor_data *fd, bs_step_stats *st, double *ymin, char reason[512]) {
+  sys s;
+  double hi[3] = {1, 0.5, 0.5}, g[3] = {0, -9.8, 0};
+  sys_create(&s, hi, 3, 2, 2, 0, 1e5, g, 1, NULL, 1e-6);
+  bs_term floor = {.name = "floor", .ops = &floor_ops, .fem = s.fem, .step = &s.step, .data = fd};
+  bs_term *terms[4] = {s.terms[0], s.terms[1], s.terms[2], &floor};
+  bs_integrator_destroy(&s.I);
+  bs_integrator_opts o;
+  bs_integrator_opts_default(&o);
+  o.min.tol = 1e-6;
+  bs_error err;
+  cr_assert_eq(bs_integrator_create(s.fem, &s.step, 4, terms, s.mask, NULL, NULL, &o, &s.I, &err), 0, "%s", err.msg);
+  size_t n3 = 3 * (size_t)s.mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3), *v = calloc(n3, sizeof(double));
+  memcpy(x, s.mesh->x, sizeof(double) * n3);
+  cr_assert_eq(bs_integrator_step(s.I, 0, 1.0 / 24, x, v, st, &err), 0, "%s", err.msg);
+  *ymin = INFINITY;
+  for (size_t i = 1; i < n3; i += 3) *ymin = fmin(*ymin, x[i]);
+  snprintf(reason, 512, "%s", st->min.reason_text ? st->min.reason_text : "");
+  st->min.reason_text = NULL;
+  free(x);
+  free(v);
+  sys_destroy(&s);
+}
+
+Test(step, a_term_not_evaluable_in_the_line_search_shrinks_the_step) {
+  floor_data fd = {.y0 = -0.01, .k = 0.01};
+  bs_step_stats st;
+  double ymin;
+  char reason[512];
+  floor_step(&fd, &st, &ymin, reason);
+  cr_assert_eq(st.failed, 0, "%s", reason);
+  cr_expect_eq(st.min.reason, BS_MIN_CONVERGED, "%s", reason);
+  cr_expect_eq(st.guess, BS_GUESS_XHAT, "the free-fall guess is below the floor: it cannot be chosen");
+  cr_expect_gt(fd.refused_value, 0, "the free-fall guess was not refused");
+  /* line-search trial points of the first phase call gradient(): a refusal
+     there is a trial point below the floor, which must shrink the step */
+  cr_expect_gt(fd.refused_gradient, 0, "no line-search trial point fell below the floor");
+  cr_expect_lt(st.min.alpha_min, 1.0, "the step below the floor was not shrunk");
+  cr_expect_eq(fd.refused_hessian, 0, "a Hessian was asked for at a point that is not evaluable");
+  cr_expect_gt(ymin, fd.y0, "the solution is below the floor: y = %g", ymin);
+  cr_log_info("refused: %d values, %d gradients; alpha_min %g, %d iterations, %d trial points, ymin %g\n",
+              fd.refused_value, fd.refused_gradient, st.min.alpha_min, st.min.iterations, st.min.ls_evaluations, ymin);
+}
+
+Test(step, a_term_whose_hessian_is_not_evaluable_stops_the_solve) {
+  floor_data fd = {.y0 = -0.01, .k = 0.01, .refuse_hessian = 1};
+  bs_step_stats st;
+  double ymin;
+  char reason[512];
+  floor_step(&fd, &st, &ymin, reason);
+  cr_expect_eq(st.failed, 1);
+  cr_expect_eq(st.min.reason, BS_MIN_NONFINITE, "%s", reason);
+  cr_expect(strstr(reason, "Hessian not evaluable at iteration 0") != NULL, "%s", reason);
+  cr_expect_eq(fd.refused_hessian, 1);
+  cr_expect_eq(st.min.iterations, 0);
 }

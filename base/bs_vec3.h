@@ -1,0 +1,46 @@
+/* bs_vec3.h — the small 3-vector helpers every C module shares: dot, difference,
+ * cross product and length of double[3] (geometry in metres, but nothing here
+ * has units).
+ *
+ * Conventions: vectors are plain double[3]; outputs come last and may alias
+ * the inputs only where noted. Each helper is one fixed expression, written
+ * out term by term in the order below, so that every caller rounds the same
+ * way (the results are bit-for-bit those of the open-coded arithmetic they
+ * replace). Nothing allocates, prints or fails.
+ *
+ * The C++ shim (shim/) keeps its own copies: it is built as C++ against CGAL
+ * and does not include this header.
+ */
+#ifndef BS_VEC3_H
+#define BS_VEC3_H
+
+#include <math.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* a . b = a0 b0 + a1 b1 + a2 b2 (summed left to right). */
+static inline double bs_dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* o = a - b (o may alias a or b). */
+static inline void bs_sub3(const double *a, const double *b, double *o) {
+  o[0] = a[0] - b[0];
+  o[1] = a[1] - b[1];
+  o[2] = a[2] - b[2];
+}
+
+/* o = a x b (o must not alias a or b). */
+static inline void bs_cross3(const double *a, const double *b, double *o) {
+  o[0] = a[1] * b[2] - a[2] * b[1];
+  o[1] = a[2] * b[0] - a[0] * b[2];
+  o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* |a| = sqrt(a . a), no scaling against overflow (as bs_dot3). */
+static inline double bs_norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+#ifdef __cplusplus
+}
+#endif
+#endif
