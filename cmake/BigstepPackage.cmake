@@ -134,6 +134,7 @@ set_target_properties(bigstep_shared PROPERTIES OUTPUT_NAME bigstep EXPORT_NAME 
 # The shared library resolves every symbol it uses at its own link, and
 # exports only bs_* (bigstep.map).
 target_link_libraries(bigstep_shared PRIVATE ${_bs_link_items} ${_bs_link_openmp})
+target_link_libraries(bigstep_shared INTERFACE m) # the public headers have inline math (bs_vec3.h)
 target_link_options(bigstep_shared PRIVATE -Wl,--version-script=${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
 set_property(TARGET bigstep_shared APPEND PROPERTY LINK_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
 if(NOT BS_SANITIZE)
@@ -196,7 +197,7 @@ foreach(_it IN LISTS _bs_link_items)
 endforeach()
 string(APPEND _bs_pc_private " ${_bs_pc_openmp}")
 string(STRIP "${_bs_pc_private}" BS_PC_LIBS_PRIVATE)
-set(BS_PC_LIBS "-L\${libdir} -lbigstep")
+set(BS_PC_LIBS "-L\${libdir} -lbigstep -lm") # -lm: the public headers have inline math (bs_vec3.h)
 if(BS_SANITIZE)
   string(APPEND BS_PC_LIBS " -fsanitize=address,undefined")
 endif()

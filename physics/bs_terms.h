@@ -96,6 +96,17 @@ int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const do
                            bs_error *err);
 int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err);
 
+/* A term of the caller's: `name` (kept as a pointer: a string literal or one
+ * that outlives the term), the callbacks `ops` (value, gradient and hessian
+ * required; kept as a pointer too), the fem cache and step data it reads, and
+ * its data (freed by ops->destroy_data when the term is destroyed, and also
+ * when this fails). dynamic_only, expensive and hessian_extra start at 0: set
+ * them on the term before it is used. The Hessian callback adds into the
+ * fem's pattern (bs_fem_scatter_hessian, or H->diag[v] for a vertex's own
+ * block). Example: examples/02_spring. */
+int bs_term_create(const char *name, const bs_term_ops *ops, const bs_fem *fem, const bs_step_data *step, void *data,
+                   bs_term **out, bs_error *err);
+
 void bs_term_destroy(bs_term **t);
 
 #ifdef __cplusplus

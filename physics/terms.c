@@ -10,8 +10,14 @@
 #include "bs_element.h"
 #include "bs_terms.h"
 
-static int term_new(const char *name, const bs_term_ops *ops, const bs_fem *fem, const bs_step_data *step,
-                    void *data, bs_term **out, bs_error *err) {
+int bs_term_create(const char *name, const bs_term_ops *ops, const bs_fem *fem, const bs_step_data *step, void *data,
+                   bs_term **out, bs_error *err) {
+  *out = NULL;
+  if (!ops || !ops->value || !ops->gradient || !ops->hessian || !fem) {
+    if (data && ops && ops->destroy_data) ops->destroy_data(data);
+    return bs_error_set(err, BS_EINPUT, "the %s term needs a fem cache and value, gradient and hessian callbacks",
+                        name ? name : "new");
+  }
   bs_term *t = calloc(1, sizeof *t);
   if (!t) {
     if (data && ops->destroy_data) ops->destroy_data(data);
@@ -84,7 +90,7 @@ static int inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
 static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL};
 
 int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err) {
-  int st = term_new("inertia", &inertia_ops, fem, step, NULL, out, err);
+  int st = bs_term_create("inertia", &inertia_ops, fem, step, NULL, out, err);
   if (!st) (*out)->dynamic_only = 1;
   return st;
 }
@@ -121,7 +127,7 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
   double *gc = malloc(3 * sizeof(double));
   if (!gc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the gravity term");
   memcpy(gc, g, 3 * sizeof(double));
-  return term_new("gravity", &gravity_ops, fem, step, gc, out, err);
+  return bs_term_create("gravity", &gravity_ops, fem, step, gc, out, err);
 }
 
 /* ---- elasticity ------------------------------------------------------- */
@@ -143,7 +149,7 @@ int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs
   int *p = malloc(sizeof(int));
   if (!p) return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
   *p = project_psd ? 1 : 0;
-  return term_new("elasticity", &elastic_ops, fem, NULL, p, out, err);
+  return bs_term_create("elasticity", &elastic_ops, fem, NULL, p, out, err);
 }
 
 /* ---- lagged Rayleigh damping ------------------------------------------ */
@@ -224,7 +230,7 @@ int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const do
     return st;
   }
   memcpy(dd->k, k, sizeof(double) * (size_t)fem->n_materials);
-  st = term_new("damping", &damping_ops, fem, step, dd, out, err);
+  st = bs_term_create("damping", &damping_ops, fem, step, dd, out, err);
   if (!st) (*out)->dynamic_only = 1;
   return st;
 }
@@ -252,7 +258,7 @@ int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, b
   double *kc = malloc(sizeof(double));
   if (!kc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the drag term");
   *kc = k;
-  int st = term_new("drag", &drag_ops, fem, step, kc, out, err);
+  int st = bs_term_create("drag", &drag_ops, fem, step, kc, out, err);
   if (!st) (*out)->dynamic_only = 1;
   return st;
 }

@@ -66,6 +66,7 @@ static int spring_gradient(const bs_term *t, const double *x, double *E, double 
 }
 
 static int spring_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  (void)x; /* the springs' Hessian is constant */
   const spring *s = t->data;
   for (int32_t i = 0; i < s->n; i++) {
     double *B = H->val + 9 * (size_t)H->diag[s->v[i]]; /* the (v, v) block, row-major */
