@@ -9,15 +9,17 @@
  *   begin_step(step)          optional: refresh what it lags on (xⁿ, Δt).
  * value, gradient and hessian return a bs_term_status (as libCEED's
  * QFunctions return int): BS_TERM_OK, or BS_TERM_NOT_EVALUABLE when x lies
- * outside the term's domain, so that it has no value there: a non-finite x,
- * or a self-collision detection that could not run. After NOT_EVALUABLE the
+ * outside the term's domain, so that it has no value there (self-collision:
+ * a non-finite x, or a detection that could not run). After NOT_EVALUABLE the
  * outputs (E, g, H) are unspecified (partly written, or not at all) and must
  * not be used. A term never signals "cannot evaluate" by a NaN in E, g or H;
- * a non-finite result computed from an x inside the domain (an overflow) is
- * returned with BS_TERM_OK as it came out. The integrator (bs_step.h) passes
- * NOT_EVALUABLE to the minimizer as an objective that is not evaluable: a
- * line search counts the point as E = +Inf and shrinks the step; at an
- * iterate the solve stops with BS_MIN_NONFINITE.
+ * a non-finite result that its arithmetic produces is returned with
+ * BS_TERM_OK as it came out (the terms of this module and the penalty term
+ * are defined for every x: a non-finite x, or an overflow, gives NaN/Inf).
+ * The integrator (bs_step.h) passes NOT_EVALUABLE to the minimizer as an
+ * objective that is not evaluable: a line search counts the point as
+ * E = +Inf and shrinks the step; at an iterate the solve stops with
+ * BS_MIN_NONFINITE (as it does for a non-finite E).
  * Terms read the step data (Δt, x̂, xⁿ) through the bs_step_data pointer
  * given at creation, which the integrator owns and updates each step.
  *
