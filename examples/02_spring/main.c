@@ -91,20 +91,21 @@ static void fd_check(const bs_term *t, int32_t nv, const double *x0, double *gra
     x[i] = x0[i] + 0.1 * frand(&seed);
     p[i] = frand(&seed);
   }
-  t->ops->gradient(t, x, &E, g);
+  /* Each callback returns a status: check it, as the minimizer does. */
+  if (t->ops->gradient(t, x, &E, g) != BS_TERM_OK) exit(1);
   const double h = 1e-5;
   double gdotp = 0;
   for (size_t i = 0; i < n; i++) gdotp += g[i] * p[i];
   for (size_t i = 0; i < n; i++) x[i] += h * p[i];
-  t->ops->gradient(t, x, &Ep, gp);
+  if (t->ops->gradient(t, x, &Ep, gp) != BS_TERM_OK) exit(1);
   for (size_t i = 0; i < n; i++) x[i] -= 2 * h * p[i];
-  t->ops->gradient(t, x, &Em, gm);
+  if (t->ops->gradient(t, x, &Em, gm) != BS_TERM_OK) exit(1);
   for (size_t i = 0; i < n; i++) x[i] += h * p[i];
   *grad_err = fabs((Ep - Em) / (2 * h) - gdotp) / fabs(gdotp);
   bs_bsr *H = NULL;
   bs_error err;
   CHECK(bs_fem_matrix(t->fem, &H, &err));
-  t->ops->hessian(t, x, H);
+  if (t->ops->hessian(t, x, H) != BS_TERM_OK) exit(1);
   double *Hp = calloc(n, sizeof *Hp), num = 0, den = 0;
   bs_bsr_mul(H, NULL, p, Hp);
   for (size_t i = 0; i < n; i++) {
