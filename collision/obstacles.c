@@ -121,17 +121,10 @@ int bs_obstacles_create(const bs_fem *fem, const bs_step_data *step, const uint8
   if (mask) memcpy(o->mask, mask, nv);
   else memset(o->mask, 1, nv);
   /* Scene size: bounding-box diagonal plus the largest coordinate of the rest mesh. */
-  const double *X = fem->mesh->x;
-  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, big = 0;
-  for (size_t v = 0; v < nv; v++)
-    for (int k = 0; k < 3; k++) {
-      double c = X[3 * v + k];
-      if (v == 0 || c < lo[k]) lo[k] = c;
-      if (v == 0 || c > hi[k]) hi[k] = c;
-      if (fabs(c) > big) big = fabs(c);
-    }
-  o->scale = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                  (hi[2] - lo[2]) * (hi[2] - lo[2])) + big;
+  double lo[3], hi[3], big = 0;
+  bs_bbox((int64_t)nv, fem->mesh->x, lo, hi);
+  for (int k = 0; k < 3; k++) big = fmax(big, fmax(fabs(lo[k]), fabs(hi[k])));
+  o->scale = bs_bbox_diagonal(lo, hi) + big;
   *out = o;
   return 0;
 }

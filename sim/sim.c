@@ -109,6 +109,10 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
 
 int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err) {
   if (!t) return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: no term");
+  if (s->frame > 0) {
+    bs_term_destroy(&t);
+    return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: terms are added before the first frame (%d done)", s->frame);
+  }
   if (s->n_terms >= BS_SIM_MAX_TERMS) {
     bs_term_destroy(&t);
     return bs_error_set(err, BS_EINPUT, "bs_sim_add_term: at most %d terms", BS_SIM_MAX_TERMS);
