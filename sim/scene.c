@@ -218,7 +218,6 @@ static int parse_body_materials(ctx *c, const cJSON *o, const char *where, bs_sc
       if ((st = parse_material(c, it, wi, &b->materials[i]))) return st;
     }
   }
-
   return 0;
 }
 
@@ -249,7 +248,6 @@ static int parse_body_init(ctx *c, const cJSON *o, const char *where, bs_scene_b
       return fail(c, wt, "must be \"rest\", \"random\" or \"point\", got \"%s\"", type);
     }
   }
-
   return 0;
 }
 
@@ -504,7 +502,6 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
     if ((st = get_choice(c, so, "solver", "mode", "dynamic", "static", &stat))) return st;
     s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
   }
-
   return 0;
 }
 
@@ -521,7 +518,6 @@ static int parse_bodies(ctx *c, const cJSON *root, bs_scene *s) {
     snprintf(w, sizeof w, "bodies.%d", i);
     if ((st = parse_body(c, cJSON_GetArrayItem(bodies, i), w, &s->bodies[i]))) return st;
   }
-
   return 0;
 }
 
@@ -539,7 +535,6 @@ static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
       if ((st = parse_obstacle(c, cJSON_GetArrayItem(obs, i), w, &s->obstacles[i]))) return st;
     }
   }
-
   return 0;
 }
 
