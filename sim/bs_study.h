@@ -1,0 +1,286 @@
+/* bs_study.h — the study engine: speed against accuracy, measured.
+ *
+ * A study runs the cross product of varied settings ("knobs") of one scene,
+ * each run in its own folder, compares every run with a reference run at
+ * common frame times and reports study.csv, gnuplot data and a summary.
+ * This library plans, measures and reports; running the runs (as processes,
+ * threads or in-process) and running gnuplot is the caller's (`bigstep
+ * study` forks `bigstep run` children).
+ *
+ *   plan      bs_study_knob_parse   "KEY=v1,v2,..." into a knob (kind, scene
+ *                                   key path, values, the finest value);
+ *             bs_study_create       the scene, the user's settings, the knobs;
+ *             bs_study_plan         the runs: cross product (last knob fastest),
+ *                                   names, folders, --set lists, each validated
+ *                                   through bs_scene_load, the reference;
+ *             bs_study_measure_bodies  body size L and per-body mesh counts.
+ *   results   bs_study_evaluate     after the runs: costs (frames.csv,
+ *                                   summary.txt), errors against the
+ *                                   reference (state.bin), the Pareto front.
+ *   report    bs_study_csv_write, bs_study_plots_write (data files and
+ *             plots.gp), bs_study_summary_write (into the caller's FILE *).
+ *   metrics   pure functions on arrays (no files): the order fits, the
+ *             Pareto front, the cheapest run within a threshold, energy drift.
+ *
+ * Errors against the reference (x_ref, v_ref), over the compared vertices C
+ * (refinement appends edge midpoints, so the first vertices of each body are
+ * the vertices of its coarsest mesh in the study; those are compared):
+ *   position e_x(t) = sqrt(sum_{i in C} |x_i - x_ref,i|^2 / |C|) / L,
+ *            L = the diagonal of the bounding box of all bodies at rest;
+ *   velocity e_v(t) = sqrt(sum_{i in C} |v_i - v_ref,i|^2 / |C|) / V,
+ *            V = the reference's largest vertex speed over all frames, or 1 m/s;
+ * each the max over common frames and at the last common frame.
+ * Energy drift = max_t |total(t) - total(0)| / max(|total(0)|, max_t kinetic(t))
+ * (1 J if both are 0). Orders: least-squares slope of log(error) against
+ * log(h), h = 2^-refine (space) or dt (time), over the runs whose other knobs
+ * are at the reference; and from successive levels (bs_study_successive_fit).
+ *
+ * Units: SI; errors are relative (dimensionless); costs in seconds per frame.
+ * Ownership: a study owns its knobs (copied), runs, --set strings and
+ * counts; free it with bs_study_destroy. A knob from bs_study_knob_parse is
+ * the caller's, freed with bs_study_knob_free. The run fields exit_code,
+ * maxrss_kib and wall are the caller's to fill once it has run a run.
+ * Status: 0, or BS_EINPUT (a bad knob spec or a run's settings: the message
+ * names the spec, key or run), BS_EIO (a file that cannot be written),
+ * BS_ENOMEM, or the scene loader's and mesh reader's codes.
+ * Nothing prints (the summary goes to the FILE * the caller passes).
+ *
+ * Example:
+ *     bs_study_knob k; bs_study *S; bs_error err;
+ *     bs_study_knob_parse("steps_per_frame=1,2,4", &k, &err);
+ *     bs_study_opts o = {.scene = "beam.json", .n_knobs = 1, .knobs = &k};
+ *     if (bs_study_create(&o, &S, &err) || bs_study_plan(S, &err) || bs_study_measure_bodies(S, &err)) ...
+ *     bs_study_knob_free(&k);
+ *     for (int i = 0; i < S->n_runs; i++) ... run `bigstep run scene --set S->runs[i].sets[...]`,
+ *                                             set S->runs[i].exit_code
+ *     int n_bad = bs_study_evaluate(S);
+ *     bs_study_csv_write(S, &err); bs_study_summary_write(S, stdout);
+ *     bs_study_destroy(&S);
+ */
+#ifndef BS_STUDY_H
+#define BS_STUDY_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "bs_base.h"
+#include "bs_runfolder.h"
+#include "bs_scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_STUDY_MAX_KNOBS 16
+#define BS_STUDY_MAX_BODIES 64
+#define BS_STUDY_MAX_RUNS 100000
+
+/* ---- knobs ----------------------------------------------------------------- */
+
+typedef enum {
+  BS_KNOB_STEPS_PER_FRAME = 0, /* time.steps_per_frame: finest the largest     */
+  BS_KNOB_TOLERANCE,           /* solver.tolerance: finest the smallest         */
+  BS_KNOB_REFINE,              /* bodies.*.refine or bodies.N.refine: largest   */
+  BS_KNOB_METHOD,              /* solver.method: "optimization", else the first */
+  BS_KNOB_DT,                  /* time.dt: smallest                              */
+  BS_KNOB_FPS,                 /* time.fps: largest                              */
+  BS_KNOB_OTHER                /* any other key path: the last listed value      */
+} bs_knob_kind;
+
+typedef struct bs_study_knob {
+  char key[256];   /* as given (the study.csv column)                          */
+  char path[256];  /* scene key path; "" for refine over every body            */
+  bs_knob_kind kind;
+  int body;        /* BS_KNOB_REFINE through bodies.N.refine: N; -1 every body */
+  int n;           /* values                                                   */
+  char **vals;     /* owned                                                    */
+  double *num;     /* the values as numbers (NAN for method and other knobs)   */
+  int finest;      /* index of the finest value                                */
+} bs_study_knob;
+
+/* Parses "KEY=v1,v2,..." (KEY a key path or a shorthand: steps_per_frame,
+ * tolerance, method, refine). BS_EINPUT with a message "'SPEC': problem"
+ * (no key, not a key path, an empty or repeated value, a non-number for a
+ * numeric knob). */
+int bs_study_knob_parse(const char *spec, bs_study_knob *k, bs_error *err);
+void bs_study_knob_free(bs_study_knob *k);
+/* 1 when b varies the same scene key as a (the same path; refine of the
+ * same body or of every body). */
+int bs_study_knob_same(const bs_study_knob *a, const bs_study_knob *b);
+/* 1 for the knobs that set dt (steps_per_frame, dt, fps). */
+int bs_study_knob_is_time(const bs_study_knob *k);
+
+/* ---- the study -------------------------------------------------------------- */
+
+typedef struct bs_study_run {
+  int idx[BS_STUDY_MAX_KNOBS]; /* value index of each knob                  */
+  char name[512], dir[1400];   /* "key=value,key=value", OUT/name           */
+  int n_sets;
+  char **sets;                 /* owned "key=value": defaults, the user's, the knobs', output.* */
+  /* from the run's scene */
+  int frames, spf, is_static;
+  double fps;
+  char method[32];
+  int *body_refine;            /* n_bodies                                  */
+  /* the process: the caller's to fill */
+  int exit_code;               /* 0 ok; anything else: failed               */
+  long maxrss_kib;             /* peak memory of the process (0: unknown)    */
+  double wall;                 /* s                                          */
+  /* results (bs_study_evaluate) */
+  int complete, is_ref, pareto, n_rows, inv_max;
+  long newton, cg, failed_steps;
+  double s_per_frame, newton_per_step, cg_per_step, peak_mib;
+  double pos_max, pos_last, vel_max, vel_last, drift, pen_max;
+} bs_study_run;
+
+typedef struct bs_study_opts {
+  const char *scene;            /* the scene file                              */
+  int n_sets;                   /* the user's "key.path=value" settings        */
+  const char *const *sets;
+  int n_knobs;
+  const bs_study_knob *knobs;   /* copied                                      */
+  const char *reference;        /* a run folder; NULL: the finest run (auto)   */
+  const char *out;              /* the study folder; NULL: out/study/<scene name> */
+} bs_study_opts;
+
+typedef struct bs_study {
+  char scene_path[BS_MAX_PATH], name[256], out[1200];
+  char ref_dir[1200];           /* "" : the reference is runs[ref]             */
+  int n_user;
+  char **user_sets;
+  int n_knobs;
+  bs_study_knob knobs[BS_STUDY_MAX_KNOBS];
+  int n_bodies;
+  int n_runs;
+  bs_study_run *runs;
+  int ref;                      /* the reference run, -1 for a given folder    */
+  double size;                  /* body size L (m)                             */
+  int64_t (*counts)[4];         /* per body V, E, F, T at refine 0             */
+  int64_t cmp[BS_STUDY_MAX_BODIES]; /* compared vertices per body              */
+  double vscale;                /* velocity scale V (m/s)                      */
+  int direct;                   /* whole states compared (no refinement relation) */
+} bs_study;
+
+/* Copies the options and loads the scene with the user's settings (its
+ * body count; at most BS_STUDY_MAX_BODIES). */
+int bs_study_create(const bs_study_opts *o, bs_study **out, bs_error *err);
+void bs_study_destroy(bs_study **S);
+
+/* Every bodies.N.refine knob names a body of the scene: else BS_EINPUT
+ * "'KEY': the scene has N bodies". */
+int bs_study_check_bodies(const bs_study *S, bs_error *err);
+
+/* The runs (see the top). Each run's settings go through bs_scene_load:
+ * "run NAME: message". Refinement knobs need bodies.*.reorder none. */
+int bs_study_plan(bs_study *S, bs_error *err);
+
+/* Body size L and the per-body counts of the unrefined meshes. */
+int bs_study_measure_bodies(bs_study *S, bs_error *err);
+
+/* Rows of a complete frames.csv of run r (header excluded), and whether
+ * r->dir holds that many. */
+int bs_study_run_rows(const bs_study_run *r);
+int bs_study_run_complete(const bs_study_run *r);
+
+/* ---- results ---------------------------------------------------------------- */
+
+/* Reads the costs of every run, compares every run with the reference and
+ * marks the Pareto front; returns the number of runs that could not be
+ * compared (their errors are NAN, or untouched when a state file is missing). */
+int bs_study_evaluate(bs_study *S);
+void bs_study_read_costs(bs_study *S);
+int bs_study_compare(bs_study *S);
+void bs_study_mark_pareto(bs_study *S);
+
+/* Vertex count of a body with counts c (V, E, F, T) after r uniform
+ * refinements; the offsets of each body's block in a run with the given
+ * refinement per body (returns the total vertex count). */
+int64_t bs_study_body_vertices(const int64_t c[4], int r);
+int64_t bs_study_offsets(const bs_study *S, const int *refine, int64_t *off);
+
+/* Errors of one state file against another at common frame times (|t_a -
+ * t_b| <= 1e-9 (1 + |t_b|)), over n_blocks blocks: count[q] vertices from
+ * off_a[q] in a and off_b[q] in b. Reads both readers to their end. The
+ * errors are NAN first; 0 when at least one frame was common, else -1 (also
+ * when a block lies outside a reader). */
+typedef struct bs_study_errors {
+  double pos_max, pos_last, vel_max, vel_last;
+  int n_common;
+} bs_study_errors;
+
+int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
+                            const int64_t *off_b, const int64_t *count, double size, double vscale,
+                            bs_study_errors *e);
+
+/* Errors of run r against the run folder ref_dir whose body blocks start at
+ * off_ref, into r's error fields (left as they are when a state file cannot
+ * be opened, NAN when the vertices do not match); 0, or -1 when not compared. */
+int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref);
+
+/* Largest vertex speed over all frames of dir/state.bin (m/s); 0 if unreadable. */
+double bs_study_max_speed(const char *dir);
+
+/* ---- orders ----------------------------------------------------------------- */
+
+typedef struct bs_study_order {
+  double p, logc;
+  int used;
+} bs_study_order;
+
+/* The runs of method with every knob but k (and the method) at its finest
+ * value, into out (n_runs entries); returns how many. */
+int bs_study_group(const bs_study *S, int k, const char *method, int *out);
+/* h of run r for knob k: 2^-refine (space) or dt (time). */
+double bs_study_knob_h(const bs_study *S, const bs_study_run *r, int k);
+/* Whether run r of a knob-k group enters the fit against the reference. */
+int bs_study_fit_point(const bs_study *S, const bs_study_run *r, int k);
+/* The order of knob k for method against the reference. */
+bs_study_order bs_study_order_fit(const bs_study *S, int k, const char *method);
+/* The order of knob k from successive levels (each run of the group against
+ * the next finer one; reads their state files). pts (may be NULL) gets a
+ * line "LEVEL ERROR" per pair. NAN when fewer than two pairs. */
+double bs_study_order_successive(const bs_study *S, int k, const char *method, int *used, FILE *pts);
+/* The distinct methods of the runs, in run order (pointers into the runs). */
+int bs_study_methods(const bs_study *S, const char **names, int max);
+
+/* ---- metrics: pure functions ------------------------------------------------ */
+
+/* Least-squares slope p of log err against log h over the points with h > 0,
+ * err > 0 and err finite (used: how many), and logc (err ~ exp(logc) h^p).
+ * NAN (both) when fewer than 2 points or all h equal. */
+double bs_study_fit_order(int n, const double *h, const double *err, double *logc, int *used);
+
+/* The order from successive levels: d[j] the error of level j (step h[j])
+ * against level j + 1, rho[j] = h[j+1] / h[j] < 1. Then
+ * d_j ~ C h_j^p (1 - rho_j^p), fitted in log-log with the bracket solved for
+ * by fixed-point iteration (to 1e-10, at most 100 rounds) from the plain fit.
+ * Unlike the fit against a reference one level finer (which reports
+ * log2(2^p + 1) from two halvings), this is unbiased. */
+double bs_study_successive_fit(int n, const double *h, const double *d, const double *rho, int *used);
+
+/* The Pareto front over points (cost, error) that are ok and finite in both:
+ * front[i] = 1 when no other such point is no worse in both and better in
+ * one; 0 for the others and for the points not ok. */
+void bs_study_pareto(int n, const double *cost, const double *error, const int *ok, int *front);
+
+/* The index of the cheapest point (the first of equal costs) among those
+ * that are ok, have error <= threshold and a finite cost; -1 if none. */
+int bs_study_cheapest_within(int n, const double *cost, const double *error, const int *ok, double threshold);
+
+/* Energy drift of a frames table (formula at the top); NAN for no rows. */
+double bs_study_energy_drift(const bs_frames_table *t);
+
+/* ---- report ----------------------------------------------------------------- */
+
+/* OUT/study.csv: one row per run (BS_EIO "cannot write 'OUT/study.csv'"). */
+int bs_study_csv_write(const bs_study *S, bs_error *err);
+/* OUT/plots.gp and its data files (plot_*.dat); run "gnuplot plots.gp" in OUT. */
+int bs_study_plots_write(const bs_study *S, bs_error *err);
+/* The summary: the cheapest setting per method within 1%, 0.1%, 0.01%, and
+ * the observed orders. */
+void bs_study_summary_write(const bs_study *S, FILE *f);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,259 @@
+/* study_report.c — a study's report: study.csv, the gnuplot data files and
+ * plots.gp, and the summary text (bs_study.h). Running gnuplot and choosing
+ * where the summary goes is the caller's. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_study.h"
+
+#define MAX_METHODS 256
+
+int bs_study_csv_write(const bs_study *S, bs_error *err) {
+  char p[1400];
+  snprintf(p, sizeof p, "%s/study.csv", S->out);
+  FILE *f = fopen(p, "w");
+  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  fprintf(f, "run");
+  /* the shorthand "method" would repeat the method column's name: its path instead */
+  for (int k = 0; k < S->n_knobs; k++)
+    fprintf(f, ",%s", !strcmp(S->knobs[k].key, "method") ? S->knobs[k].path : S->knobs[k].key);
+  fprintf(f, ",method,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,pos_err_max,"
+             "pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,pareto\n");
+  for (int i = 0; i < S->n_runs; i++) {
+    const bs_study_run *r = &S->runs[i];
+    fprintf(f, "%s", r->name);
+    for (int k = 0; k < S->n_knobs; k++) fprintf(f, ",%s", S->knobs[k].vals[r->idx[k]]);
+    fprintf(f, ",%s,%d,%d,%ld,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.6g,%d,%d\n", r->method, r->exit_code,
+            r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
+            r->cg_per_step, r->peak_mib, r->pos_max, r->pos_last, r->vel_max, r->vel_last, r->drift, r->inv_max,
+            r->pen_max, r->is_ref, r->pareto);
+  }
+  if (fclose(f)) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  return 0;
+}
+
+/* ---- plots ------------------------------------------------------------------ */
+
+/* plot_pareto.dat: the front (error > 0) sorted by cost. */
+static void pareto_data(const bs_study *S) {
+  char p[1400];
+  snprintf(p, sizeof p, "%s/plot_pareto.dat", S->out);
+  FILE *d = fopen(p, "w");
+  if (!d) return;
+  fprintf(d, "# Pareto front (error > 0): s_per_frame pos_err_max\n");
+  int *ord = malloc(sizeof(int) * ((size_t)S->n_runs + 1)), no = 0;
+  for (int i = 0; ord && i < S->n_runs; i++)
+    if (S->runs[i].pareto && S->runs[i].pos_max > 0) ord[no++] = i;
+  for (int i = 1; i < no; i++)
+    for (int j = i; j > 0 && S->runs[ord[j]].s_per_frame < S->runs[ord[j - 1]].s_per_frame; j--) {
+      int t = ord[j];
+      ord[j] = ord[j - 1];
+      ord[j - 1] = t;
+    }
+  for (int i = 0; i < no; i++) fprintf(d, "%.9g %.9g\n", S->runs[ord[i]].s_per_frame, S->runs[ord[i]].pos_max);
+  if (no == 0) fprintf(d, "nan nan\n");
+  free(ord);
+  fclose(d);
+}
+
+/* 1. error against cost, the Pareto front marked. */
+static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+  char p[1400];
+  snprintf(p, sizeof p, "%s/plot_cost.dat", S->out);
+  FILE *d = fopen(p, "w");
+  for (int m = 0; d && m < nm; m++) {
+    fprintf(d, "# method %s: s_per_frame pos_err_max\n", methods[m]);
+    for (int i = 0; i < S->n_runs; i++) {
+      const bs_study_run *r = &S->runs[i];
+      if (!strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) && r->s_per_frame > 0)
+        fprintf(d, "%.9g %.9g\n", r->s_per_frame, r->pos_max);
+    }
+    fprintf(d, "\n\n");
+  }
+  if (d) fclose(d);
+  pareto_data(S);
+  fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'seconds per frame'\n"
+              "set ylabel 'position error (max over frames, / body size)'\n"
+              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\nplot ",
+          S->name);
+  for (int m = 0; m < nm; m++)
+    fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', ", m, methods[m]);
+  fprintf(gp, "'plot_pareto.dat' using 1:2 with linespoints lw 2 lc rgb 'black' pt 6 ps 2.2 title 'Pareto front'\n"
+              "unset logscale\n");
+}
+
+/* One method's curves of the refinement plot of knob k. */
+static void plot_refine_method(const bs_study *S, int k, int m, const char *method, int *grp, FILE *d, FILE *ds,
+                               FILE *gp) {
+  bs_study_order o = bs_study_order_fit(S, k, method);
+  int ng = bs_study_group(S, k, method, grp);
+  if (d) {
+    fprintf(d, "# method %s: level pos_err_max\n", method);
+    for (int i = 0; i < ng; i++) {
+      const bs_study_run *r = &S->runs[grp[i]];
+      if (bs_study_fit_point(S, r, k) && r->pos_max > 0) fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
+    }
+    fprintf(d, "\n\n");
+  }
+  fprintf(gp, "'plot_refine_%d.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s: against the reference', ", k,
+          m, method);
+  if (isfinite(o.p))
+    fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f', ", o.logc, o.p, method, o.p);
+  int used = 0;
+  if (ds) fprintf(ds, "# method %s: level, position error against the next finer level\n", method);
+  double ps = bs_study_order_successive(S, k, method, &used, ds);
+  if (ds) fprintf(ds, "\n\n");
+  if (ds && used > 0) {
+    char ord[64] = "";
+    if (isfinite(ps)) snprintf(ord, sizeof ord, " (order %.2f)", ps);
+    fprintf(gp, "'plot_refine_successive_%d.dat' index %d using 1:2 with linespoints pt 5 ps 1.1 title "
+                "'%s: against the next finer level%s', ",
+            k, m, method, ord);
+  }
+}
+
+/* 2. error against refinement level, with the fitted order. */
+static void plot_refine(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
+  char p[1400];
+  snprintf(p, sizeof p, "%s/plot_refine_%d.dat", S->out, k);
+  FILE *d = fopen(p, "w");
+  snprintf(p, sizeof p, "%s/plot_refine_successive_%d.dat", S->out, k);
+  FILE *ds = fopen(p, "w");
+  fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
+              "set xlabel '%s (h ~ 2^-level)'\n"
+              "set ylabel 'position error (max over frames, / body size)'\n"
+              "set title 'Error against refinement (other knobs at the reference)'\nplot ",
+          k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  for (int m = 0; m < nm; m++) plot_refine_method(S, k, m, methods[m], grp, d, ds, gp);
+  fprintf(gp, "1/0 notitle\nunset logscale\nset key outside right\nset xtics autofreq\n");
+  if (d) fclose(d);
+  if (ds) fclose(ds);
+}
+
+/* 3. iterations per step against steps per frame (knob k). */
+static void plot_iterations(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
+  char p[1400];
+  snprintf(p, sizeof p, "%s/plot_iterations.dat", S->out);
+  FILE *d = fopen(p, "w");
+  for (int m = 0; d && m < nm; m++) {
+    int ng = bs_study_group(S, k, methods[m], grp);
+    fprintf(d, "# method %s: steps_per_frame newton_per_step cg_per_step\n", methods[m]);
+    for (int i = 0; i < ng; i++) {
+      const bs_study_run *r = &S->runs[grp[i]];
+      fprintf(d, "%d %.9g %.9g\n", r->spf, r->newton_per_step, r->cg_per_step);
+    }
+    fprintf(d, "\n\n");
+  }
+  if (d) fclose(d);
+  fprintf(gp, "set output 'iterations_vs_steps.png'\nset format y '%%g'\nset logscale x 2\nset xlabel 'steps per frame'\n"
+              "set ylabel 'Newton iterations per step'\nset y2label 'CG iterations per step'\n"
+              "set ytics nomirror\nset y2tics\nset logscale y2\nset format y2 '%%g'\n"
+              "set title 'Iterations per step (other knobs at the reference)'\nplot ");
+  for (int m = 0; m < nm; m++)
+    fprintf(gp, "'plot_iterations.dat' index %d using 1:2 with linespoints pt 7 lw 2 title '%s Newton', "
+                "'plot_iterations.dat' index %d using 1:3 axes x1y2 with linespoints pt 6 dt 2 title '%s CG', ",
+            m, methods[m], m, methods[m]);
+  fprintf(gp, "1/0 notitle\nunset logscale\nunset y2tics\nunset y2label\n");
+}
+
+int bs_study_plots_write(const bs_study *S, bs_error *err) {
+  const char *methods[MAX_METHODS];
+  int nm = bs_study_methods(S, methods, MAX_METHODS);
+  char p[1400];
+  snprintf(p, sizeof p, "%s/plots.gp", S->out);
+  int *grp = malloc(sizeof(int) * ((size_t)S->n_runs + 1));
+  if (!grp) return bs_error_set(err, BS_ENOMEM, "out of memory (study plots)");
+  FILE *gp = fopen(p, "w");
+  if (!gp) {
+    free(grp);
+    return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  }
+  fprintf(gp, "# written by bigstep study; run with: gnuplot plots.gp (in this folder)\n"
+              "if (strstrt(GPVAL_TERMINALS, 'pngcairo') > 0) { set terminal pngcairo size 900,600 } "
+              "else { set terminal png size 900,600 }\n"
+              "set termoption noenhanced\n"
+              "set grid\nset key outside right\nset format y '%%.0e'\n");
+  plot_cost(S, methods, nm, gp);
+  for (int k = 0; k < S->n_knobs; k++)
+    if (S->knobs[k].kind == BS_KNOB_REFINE) plot_refine(S, k, methods, nm, grp, gp);
+  for (int k = 0; k < S->n_knobs; k++)
+    if (S->knobs[k].kind == BS_KNOB_STEPS_PER_FRAME) {
+      plot_iterations(S, k, methods, nm, grp, gp);
+      break;
+    }
+  free(grp);
+  if (fclose(gp)) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
+  return 0;
+}
+
+/* ---- the summary ------------------------------------------------------------ */
+
+/* For each method, the cheapest run within 1%, 0.1% and 0.01%. */
+static void summary_cheapest(const bs_study *S, const char **methods, int nm, FILE *f) {
+  static const double thr[3] = {1e-2, 1e-3, 1e-4};
+  static const char *thr_name[3] = {"1%", "0.1%", "0.01%"};
+  int n = S->n_runs;
+  double *cost = malloc(sizeof(double) * ((size_t)n + 1)), *error = malloc(sizeof(double) * ((size_t)n + 1));
+  int *ok = malloc(sizeof(int) * ((size_t)n + 1));
+  for (int i = 0; cost && error && i < n; i++) {
+    cost[i] = S->runs[i].s_per_frame;
+    error[i] = S->runs[i].pos_max;
+  }
+  fprintf(f, "cheapest setting (by s/frame) within a position error (max over frames, / body size) of:\n");
+  for (int m = 0; cost && error && ok && m < nm; m++) {
+    fprintf(f, "  method %s\n", methods[m]);
+    for (int i = 0; i < n; i++) ok[i] = !strcmp(S->runs[i].method, methods[m]) && S->runs[i].exit_code == 0;
+    for (int t = 0; t < 3; t++) {
+      int best = bs_study_cheapest_within(n, cost, error, ok, thr[t]);
+      if (best < 0) fprintf(f, "    %-6s none\n", thr_name[t]);
+      else
+        fprintf(f, "    %-6s %s  (%.4g s/frame, error %.3g%%)\n", thr_name[t], S->runs[best].name,
+                S->runs[best].s_per_frame, 100 * S->runs[best].pos_max);
+    }
+  }
+  free(cost);
+  free(error);
+  free(ok);
+}
+
+/* The orders of knob k for one method: against the reference, and from successive levels. */
+static void summary_order(const bs_study *S, int k, const char *method, FILE *f) {
+  const bs_study_knob *v = &S->knobs[k];
+  int is_t = bs_study_knob_is_time(v);
+  bs_study_order o = bs_study_order_fit(S, k, method);
+  if (isfinite(o.p))
+    fprintf(f, "order in %s (error ~ %s^p, vs %s): method %s p = %.3f over %d runs\n", is_t ? "time" : "space",
+            is_t ? "dt" : "h", v->key, method, o.p, o.used);
+  else
+    fprintf(f, "order in %s (vs %s): method %s: not measurable (fewer than 2 runs with a positive error)\n",
+            is_t ? "time" : "space", v->key, method);
+  int used = 0;
+  double ps = bs_study_order_successive(S, k, method, &used, NULL);
+  if (isfinite(ps))
+    fprintf(f, "  from successive levels (each run against the next finer): p = %.3f over %d pairs\n", ps, used);
+}
+
+void bs_study_summary_write(const bs_study *S, FILE *f) {
+  const char *methods[MAX_METHODS];
+  int nm = bs_study_methods(S, methods, MAX_METHODS);
+  int n_failed = 0;
+  for (int i = 0; i < S->n_runs; i++) n_failed += S->runs[i].exit_code != 0;
+  char ref_desc[1600];
+  if (S->ref_dir[0]) snprintf(ref_desc, sizeof ref_desc, "the run in %s", S->ref_dir);
+  else snprintf(ref_desc, sizeof ref_desc, "%s", S->ref >= 0 ? S->runs[S->ref].name : "?");
+  fprintf(f, "\nstudy %s: %d runs (%d failed), body size %.4g m; reference: %s\n", S->name, S->n_runs, n_failed,
+          S->size, ref_desc);
+  summary_cheapest(S, methods, nm, f);
+  int any_t = 0, any_s = 0;
+  for (int k = 0; k < S->n_knobs; k++) {
+    int is_t = bs_study_knob_is_time(&S->knobs[k]), is_s = S->knobs[k].kind == BS_KNOB_REFINE;
+    if (!is_t && !is_s) continue;
+    any_t |= is_t;
+    any_s |= is_s;
+    for (int m = 0; m < nm; m++) summary_order(S, k, methods[m], f);
+  }
+  if (!any_t) fprintf(f, "order in time: steps_per_frame not varied\n");
+  if (!any_s) fprintf(f, "order in space: refine not varied\n");
+}

@@ -1,0 +1,101 @@
+/* study_results.c — a study's results once its runs have run: each run's
+ * costs from its folder (frames.csv, summary.txt), the errors against the
+ * reference (study_compare.c) and the Pareto front (bs_study.h). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_study.h"
+
+/* s/frame from summary.txt's second line (method, steps, s/frame, ...) and
+ * the peak memory (MiB); 0 when the s/frame figure was read. */
+static int read_summary(const char *dir, double *spf_s, double *peak) {
+  char p[1500];
+  snprintf(p, sizeof p, "%s/summary.txt", dir);
+  FILE *f = fopen(p, "r");
+  if (!f) return -1;
+  char line[4096];
+  int got = -1, ln = 0;
+  while (fgets(line, sizeof line, f)) {
+    ln++;
+    char m[64];
+    int steps;
+    double s;
+    if (ln == 2 && sscanf(line, "%63s %d %lf", m, &steps, &s) == 3) {
+      *spf_s = s;
+      got = 0;
+    }
+    const char *pk = strstr(line, "peak memory ");
+    if (pk) *peak = atof(pk + 12);
+  }
+  fclose(f);
+  return got;
+}
+
+/* Cost and energy columns of a finished run. */
+static void read_costs(bs_study_run *r) {
+  bs_frames_table F;
+  bs_error err;
+  r->s_per_frame = r->newton_per_step = r->cg_per_step = r->drift = r->pen_max = NAN;
+  r->peak_mib = r->maxrss_kib > 0 ? r->maxrss_kib / 1024.0 : NAN;
+  r->complete = bs_study_run_complete(r);
+  if (bs_frames_csv_read(r->dir, &F, &err)) return;
+  r->n_rows = F.n;
+  r->newton = F.newton;
+  r->cg = F.cg;
+  r->failed_steps = F.failed;
+  r->inv_max = F.inverted_max;
+  int fr = F.n - 1;
+  long steps = r->is_static ? (fr > 0 ? 1 : 0) : (long)fr * r->spf;
+  double sum_s, peak = NAN;
+  /* s/frame: the solver's time per frame (frames.csv, microsecond resolution);
+     summary.txt's wall-clock figure when frames.csv has no timing */
+  int have_sum = read_summary(r->dir, &sum_s, &peak) == 0;
+  if (fr > 0 && F.seconds > 0) r->s_per_frame = F.seconds / fr;
+  else if (have_sum) r->s_per_frame = sum_s;
+  if (!isfinite(r->peak_mib) && isfinite(peak)) r->peak_mib = peak;
+  if (steps > 0) {
+    r->newton_per_step = (double)F.newton / steps;
+    r->cg_per_step = (double)F.cg / steps;
+  }
+  if (F.n > 0) {
+    r->drift = bs_study_energy_drift(&F);
+    if (F.has_depth) {
+      r->pen_max = 0;
+      for (int i = 0; i < F.n; i++)
+        if (F.max_depth[i] > r->pen_max) r->pen_max = F.max_depth[i];
+    }
+  }
+  bs_frames_table_free(&F);
+}
+
+void bs_study_read_costs(bs_study *S) {
+  for (int i = 0; i < S->n_runs; i++) read_costs(&S->runs[i]);
+}
+
+void bs_study_mark_pareto(bs_study *S) {
+  int n = S->n_runs;
+  double *cost = calloc((size_t)n + 1, sizeof(double)), *error = calloc((size_t)n + 1, sizeof(double));
+  int *ok = calloc((size_t)n + 1, sizeof(int)), *front = calloc((size_t)n + 1, sizeof(int));
+  if (cost && error && ok && front) {
+    for (int i = 0; i < n; i++) {
+      cost[i] = S->runs[i].s_per_frame;
+      error[i] = S->runs[i].pos_max;
+      ok[i] = S->runs[i].exit_code == 0;
+    }
+    bs_study_pareto(n, cost, error, ok, front);
+    for (int i = 0; i < n; i++) S->runs[i].pareto = front[i];
+  }
+  free(cost);
+  free(error);
+  free(ok);
+  free(front);
+}
+
+int bs_study_evaluate(bs_study *S) {
+  bs_study_read_costs(S);
+  int n_bad = bs_study_compare(S);
+  bs_study_mark_pareto(S);
+  return n_bad;
+}
