@@ -95,8 +95,9 @@ void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_second
 /* The summary as text (four lines, the first a header); returns the length. */
 int bs_summary_format(const bs_summary *sum, char *buf, size_t n);
 
-/* Reads s_per_frame, solves_per_step, failed and peak_mib (NAN when absent)
- * back from dir/summary.txt. */
+/* Reads the summary row (method, steps_per_frame, s_per_frame and, when
+ * present, dofs, solves_per_step, failed) and peak_mib (NAN when absent) back
+ * from dir/summary.txt. BS_EINPUT when the row has not its first three. */
 int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
 
 /* ---- reading frames.csv --------------------------------------------------- */

@@ -8,29 +8,14 @@
 
 #include "bs_study.h"
 
-/* s/frame from summary.txt's second line (method, steps, s/frame, ...) and
- * the peak memory (MiB); 0 when the s/frame figure was read. */
+/* s/frame from summary.txt's row and the peak memory (MiB). */
 static int read_summary(const char *dir, double *spf_s, double *peak) {
-  char p[1500];
-  snprintf(p, sizeof p, "%s/summary.txt", dir);
-  FILE *f = fopen(p, "r");
-  if (!f) return -1;
-  char line[4096];
-  int got = -1, ln = 0;
-  while (fgets(line, sizeof line, f)) {
-    ln++;
-    char m[64];
-    int steps;
-    double s;
-    if (ln == 2 && sscanf(line, "%63s %d %lf", m, &steps, &s) == 3) {
-      *spf_s = s;
-      got = 0;
-    }
-    const char *pk = strstr(line, "peak memory ");
-    if (pk) *peak = atof(pk + 12);
-  }
-  fclose(f);
-  return got;
+  bs_summary u;
+  bs_error err;
+  if (bs_summary_read(dir, &u, &err)) return -1;
+  *spf_s = u.s_per_frame;
+  if (isfinite(u.peak_mib)) *peak = u.peak_mib;
+  return 0;
 }
 
 /* Cost and energy columns of a finished run. */
