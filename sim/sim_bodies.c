@@ -33,8 +33,7 @@ static double rnd(uint64_t *s) {
   return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
 }
 
-/* Body b's mesh: read (or built), reordered, scaled, rotated, translated. */
-static int body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
+int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
   const bs_scene_body *bd = &sc->bodies[b];
   int st;
   if (!strcmp(bd->mesh, "box")) st = bs_mesh_create_box_refined(bd->box_size, bd->box_cells, bd->refine, out, err);
@@ -201,7 +200,7 @@ int bs_sim_make_bodies_(bs_sim *s, bs_error *err) {
   s->vertex_offset = calloc((size_t)nb + 1, sizeof(int32_t));
   if (!meshes || !toff || !moff || !s->vertex_offset) st = bs_error_set(err, BS_ENOMEM, "out of memory");
   for (int b = 0; !st && b < nb; b++) {
-    if ((st = body_mesh(sc, b, &meshes[b], err))) break;
+    if ((st = bs_sim_body_mesh(sc, b, &meshes[b], err))) break;
     s->vertex_offset[b + 1] = s->vertex_offset[b] + meshes[b]->n_vertices;
     toff[b + 1] = toff[b] + meshes[b]->n_tets;
     moff[b + 1] = moff[b] + sc->bodies[b].n_materials;

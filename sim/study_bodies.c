@@ -34,29 +34,12 @@ int64_t bs_study_offsets(const bs_study *S, const int *refine, int64_t *off) {
 }
 
 /* The diagonal of the bounding box of the simulation's rest positions (1 if 0). */
-static double rest_size(const bs_sim *sim) {
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int32_t v = 0; v < sim->mesh->n_vertices; v++)
-    for (int k = 0; k < 3; k++) {
-      lo[k] = fmin(lo[k], sim->x0[3 * v + k]);
-      hi[k] = fmax(hi[k], sim->x0[3 * v + k]);
-    }
-  double L = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                  (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  return L > 0 ? L : 1.0;
-}
+static double rest_size(const bs_sim *sim) { return sim->size > 0 ? sim->size : 1.0; }
 
-/* V, E, F, T of body bd's unrefined mesh. */
-static int body_counts(const bs_scene_body *bd, int64_t c[4], bs_error *err) {
+/* V, E, F, T of body b's mesh (the scene has every body at refine 0). */
+static int body_counts(const bs_scene *sc, int b, int64_t c[4], bs_error *err) {
   bs_mesh *m = NULL;
-  int st;
-  if (!strcmp(bd->mesh, "box")) {
-    double o[3] = {0, 0, 0};
-    st = bs_mesh_create_box(o, bd->box_size, bd->box_cells[0], bd->box_cells[1], bd->box_cells[2], &m, err);
-  } else {
-    bs_mesh_read_opts o = {.size = bd->mesh_size, .refine = 0};
-    st = bs_mesh_read(bd->mesh, &o, &m, err);
-  }
+  int st = bs_sim_body_mesh(sc, b, &m, err);
   int32_t *ptr = NULL, *adj = NULL;
   if (!st) st = bs_mesh_vertex_graph(m, &ptr, &adj, err);
   if (!st) {
@@ -88,7 +71,7 @@ int bs_study_measure_bodies(bs_study *S, bs_error *err) {
   if (!st) st = bs_scene_load(S->scene_path, n, sets, &sc, err);
   if (!st) st = bs_sim_create(sc, &sim, err);
   if (!st) S->size = rest_size(sim);
-  for (int b = 0; !st && b < S->n_bodies; b++) st = body_counts(&sc->bodies[b], S->counts[b], err);
+  for (int b = 0; !st && b < S->n_bodies; b++) st = body_counts(sc, b, S->counts[b], err);
   bs_sim_destroy(&sim);
   bs_scene_destroy(&sc);
   free(own);
