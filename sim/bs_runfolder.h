@@ -130,7 +130,10 @@ typedef struct bs_state_reader {
   double *buf;
 } bs_state_reader;
 
-/* Opens dir/state.bin and checks its header and size. */
+/* Opens dir/state.bin and checks its header and size. r->frames counts the
+ * whole frame records: a run interrupted during a write leaves a partial last
+ * record, which is not read; a file with a header and no frame (a run that
+ * wrote none) has 0 frames. */
 int bs_state_open(const char *dir, bs_state_reader *r, bs_error *err);
 /* The next frame into r->time, r->x, r->v: 0, or 1 at the end of the file. */
 int bs_state_next(bs_state_reader *r);

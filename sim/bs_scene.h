@@ -7,7 +7,7 @@
  *    checked: an unknown key, a wrong type, a missing mesh or group file, or
  *    an impossible value is BS_EINPUT (BS_EIO for a missing file) with a
  *    message naming the file and the key path, e.g.
- *    "scene.json: bodies.0.material.density: must be > 0, got -1". The schema
+ *    "scene.json: obstacles.0.friction: must be >= 0, got -0.5". The schema
  *    is documented in README.md ("Scenes");
  *  - in C, without any JSON: bs_scene_create gives a scene holding every
  *    default of the JSON schema and no body; bs_scene_add_body,

@@ -65,9 +65,11 @@ typedef struct bs_sim_script {
 
 /* One time step as the simulation records it. */
 typedef struct bs_sim_step {
-  bs_step_stats st;    /* the integrator's statistics (bs_step.h)          */
+  bs_step_stats st;    /* the integrator's statistics (bs_step.h); st.min.reason_text */
+                       /* points at `reason` below                                     */
   double time;         /* s, at the end of the step                        */
   int32_t inverted;    /* tets with det F <= 0 after the step              */
+  char reason[256];    /* the minimizer's reason_text of this step, copied  */
 } bs_sim_step;
 
 /* A frame: its steps and their sums. `steps` points into the simulation

@@ -24,6 +24,15 @@ static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) {
   }
 }
 
+/* The step's record: its time, inverted tets and its own copy of the reason
+ * (the minimizer's text is overwritten by the next solve). */
+static void record(const bs_sim *s, bs_sim_step *rec) {
+  rec->time = s->time;
+  rec->inverted = bs_fem_count_inverted(s->fem, s->x, NULL);
+  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
+  rec->st.min.reason_text = rec->reason;
+}
+
 int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
   const bs_scene *sc = s->scene;
   const int f = s->frame + 1;
@@ -36,8 +45,7 @@ int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
       return st;
     }
     s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-    rec->time = s->time;
-    rec->inverted = bs_fem_count_inverted(s->fem, s->x, NULL);
+    record(s, rec);
   }
   s->time = f / sc->fps;
   s->frame = f;
@@ -53,8 +61,7 @@ int bs_sim_statics(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
     bs_error_prefix(err, "static solve");
     return st;
   }
-  rec->time = s->time;
-  rec->inverted = bs_fem_count_inverted(s->fem, s->x, NULL);
+  record(s, rec);
   s->frame = 1;
   frame_sums(s, 1, fs);
   return 0;

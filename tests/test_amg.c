@@ -15,7 +15,7 @@
 #include "bs_material.h"
 #include "bs_mesh.h"
 #include "bs_minimize.h"
-#include "cli_util.h"
+#include "sim_util.h"
 
 /* A box of c^3 cells (unit cube, fixed_corotated E = 1e5, nu = 0.3, rho = 1000):
  * A = rest stiffness + M/dt^2 (dt = 1/24), mask fixing the x = 0 face. */
@@ -346,41 +346,31 @@ Test(amg, minimizer_reuses_the_setup) {
   elast_free(&e);
 }
 
-/* ---- the command line --------------------------------------------------- */
-
-static void summary_row(const char *out, long *failed, double *solves) {
-  cr_assert_eq(bs_test_summary_row(out, solves, failed), 0, "no summary row in:\n%s", out);
-  cr_assert_not_null(strstr(out, "\noptimization "), "no optimization row in:\n%s", out);
-}
+/* ---- a scene (through the library) --------------------------------------- */
 
 Test(amg, cube_stretch_with_amg_converges, .timeout = 600) {
-  char *out = NULL;
-  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR "/data/scenes/cube_stretch.json --frames 4 "
-                       "--set output.dir= --set bodies.0.box.cells=[8,8,8] --set solver.linear=amg",
-                       &out);
-  long failed = -1;
-  double solves = 0;
-  summary_row(out, &failed, &solves);
-  cr_assert_eq(rc, 0, "exit %d:\n%s", rc, out);
-  cr_assert_eq(failed, 0, "failed steps:\n%s", out);
-  cr_assert_gt(solves, 0.0);
-  cr_assert_not_null(strstr(out, "linear amg"), "%s", out);
-  free(out);
+  const char *scene = BS_SOURCE_DIR "/data/scenes/cube_stretch.json";
+  sim_rec rec;
+  bs_run_totals T;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_run_scene(scene, "time.frames=4 bodies.0.box.cells=[8,8,8] solver.linear=amg", NULL, &rec, &T, 1,
+                            &sc);
+  cr_assert_eq(sc->solver.min.linear, BS_LIN_AMG, "the scene's linear solver is not amg");
+  cr_assert_eq(T.failed, 0, "failed steps: %s", T.first_fail_reason);
+  cr_assert_eq(T.steps, 4);
+  cr_assert_gt((double)T.iterations / (double)T.steps, 0.0);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
   /* "current": the PSD-projected Hessian at the iterate (the default, "rest", is
    * the rest-state stiffness). */
-  rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR "/data/scenes/cube_stretch.json --quiet --frames 3 "
-                   "--set output.dir= --set bodies.0.box.cells=[6,6,6] --set solver.linear=amg "
-                   "--set solver.amg_matrix=current --set solver.amg_rebuild_every=2",
-                   &out);
-  summary_row(out, &failed, &solves);
-  cr_assert_eq(rc, 0, "exit %d:\n%s", rc, out);
-  cr_assert_eq(failed, 0, "failed steps:\n%s", out);
-  free(out);
+  sim_run_scene(scene,
+                "time.frames=3 bodies.0.box.cells=[6,6,6] solver.linear=amg solver.amg_matrix=current "
+                "solver.amg_rebuild_every=2",
+                NULL, &rec, &T, 0, NULL);
+  cr_assert_eq(T.failed, 0, "failed steps: %s", T.first_fail_reason);
   /* Bad values are named. */
-  rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR "/data/scenes/cube_stretch.json --quiet --frames 1 "
-                   "--set output.dir= --set solver.linear=amg --set solver.amg_matrix=later",
-                   &out);
-  cr_assert_neq(rc, 0);
-  cr_assert_not_null(strstr(out, "amg_matrix"), "%s", out);
-  free(out);
+  const char *bad[] = {"solver.linear=amg", "solver.amg_matrix=later"};
+  bs_error err;
+  cr_assert_neq(sim_load_error(scene, bad, 2, &err), 0);
+  cr_assert_not_null(strstr(err.msg, "amg_matrix"), "%s", err.msg);
 }

@@ -1,4 +1,4 @@
-/* Collision scenes through `bigstep run` (paper figure 10): a ball dropped hard
+/* Collision scenes through the library (paper figure 10): a ball dropped hard
  * on the ground at one step per 24 Hz frame. With constraint collisions no
  * vertex is ever inside the ground and no tet inverts; with penalties no tet
  * inverts; the post-process baseline is run and its inversions reported. */
@@ -9,97 +9,80 @@
 #include <string.h>
 
 #include "cli_util.h"
+#include "sim_util.h"
 
-typedef struct frame_max {
-  int inverted, penetrating, frames;
-  double depth;
-} frame_max;
+#define SCENES BS_SOURCE_DIR "/data/scenes/"
 
-static frame_max read_frames(const char *dir) {
-  frame_max m = {0, 0, 0, 0};
-  char path[512], line[1024];
-  snprintf(path, sizeof path, "%s/frames.csv", dir);
-  FILE *f = fopen(path, "r");
-  cr_assert_not_null(f, "%s missing", path);
-  cr_assert_not_null(fgets(line, sizeof line, f));
-  cr_assert(strstr(line, "penetrating,max_depth") != NULL, "%s", line);
-  while (fgets(line, sizeof line, f)) {
-    /* frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds,penetrating,max_depth,
-       self_intersections */
-    char *tok = strtok(line, ",");
-    double v[16];
-    int n = 0;
-    while (tok && n < 16) {
-      v[n++] = atof(tok);
-      tok = strtok(NULL, ",");
-    }
-    cr_assert(n >= 14, "frames.csv row with %d columns", n);
-    if ((int)v[6] > m.inverted) m.inverted = (int)v[6];
-    if ((int)v[12] > m.penetrating) m.penetrating = (int)v[12];
-    if (v[13] > m.depth) m.depth = v[13];
-    m.frames++;
-  }
-  fclose(f);
-  return m;
+/* The ball of sphere_drop (mesh size 0.15 m, 24 frames) with the ground's
+ * collision `way`: the run's record and totals. */
+static sim_rec drop(const char *way, bs_run_totals *T) {
+  char sets[256];
+  snprintf(sets, sizeof sets, "time.frames=24 bodies.0.mesh_size=0.15 obstacles.0.collision=%s", way);
+  sim_rec r;
+  sim_run_scene(SCENES "sphere_drop.json", sets, NULL, &r, T, 0, NULL);
+  cr_assert(!r.nonfinite, "%s", r.nonfinite_msg);
+  cr_assert(!r.bad_reason, "%s", r.bad_reason_msg);
+  cr_log_info("sphere_drop %s: %ld failed steps, max inverted %d, max penetrating %d (depth %.3e m)\n", way, T->failed,
+              r.max_inverted, r.max_penetrating, r.max_depth);
+  return r;
 }
 
-static frame_max drop(const char *way, int *rc) {
-  char cmd[1024], dir[256], *out = NULL;
-  snprintf(dir, sizeof dir, "/tmp/bs_test_sphere_drop_%s", way);
-  snprintf(cmd, sizeof cmd,
-           "%s run " BS_SOURCE_DIR "/data/scenes/sphere_drop.json --quiet --frames 24 --set bodies.0.mesh_size=0.15 "
-           "--set obstacles.0.collision=%s --set output.dir=%s --set output.vtu_every=0",
-           BS_BIGSTEP_EXE, way, dir);
-  *rc = bs_test_run(cmd, &out);
-  frame_max m = read_frames(dir);
-  cr_log_info("sphere_drop %s: exit %d, max inverted %d, max penetrating %d (depth %.3e m)\n%s", way, *rc, m.inverted,
-              m.penetrating, m.depth, out);
-  free(out);
-  return m;
+/* Runs a scene keeping the simulation, and measures its last frame (with
+ * the surface self-intersections). */
+static void run_and_measure(const char *scene, const char *sets, const char *dir, sim_rec *r, bs_run_totals *T,
+                            bs_sim_measures *m) {
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_run_scene(scene, sets, dir, r, T, 1, &sc);
+  cr_assert(!r->nonfinite, "%s", r->nonfinite_msg);
+  cr_assert(!r->bad_reason, "%s", r->bad_reason_msg);
+  bs_sim_measure(s, 1, m);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
 }
 
 Test(collision_scenes, sphere_drop_constraint_never_penetrates, .timeout = 600) {
-  int rc;
-  frame_max m = drop("constraint", &rc);
-  cr_expect_eq(rc, 0);
-  cr_expect_eq(m.frames, 25);
-  cr_expect_eq(m.penetrating, 0, "vertices inside the ground: %d (depth %g)", m.penetrating, m.depth);
-  cr_expect_eq(m.inverted, 0, "inverted tets: %d", m.inverted);
+  bs_run_totals T;
+  sim_rec m = drop("constraint", &T);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  cr_expect_eq(m.frames, 24);
+  cr_expect_eq(m.max_penetrating, 0, "vertices inside the ground: %d (depth %g)", m.max_penetrating, m.max_depth);
+  cr_expect_eq(m.max_inverted, 0, "inverted tets: %d", m.max_inverted);
 }
 
 Test(collision_scenes, sphere_drop_penalty_does_not_invert, .timeout = 600) {
-  int rc;
-  frame_max m = drop("penalty", &rc);
-  cr_expect_eq(rc, 0);
-  cr_expect_eq(m.inverted, 0, "inverted tets: %d", m.inverted);
-  cr_expect(m.depth < 0.05, "penalty penetration %g m is not small", m.depth);
+  bs_run_totals T;
+  sim_rec m = drop("penalty", &T);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  cr_expect_eq(m.max_inverted, 0, "inverted tets: %d", m.max_inverted);
+  cr_expect(m.max_depth < 0.05, "penalty penetration %g m is not small", m.max_depth);
 }
 
 /* The figure-10 baseline: reported, not asserted to invert. */
 Test(collision_scenes, sphere_drop_postprocess_runs, .timeout = 600) {
-  int rc;
-  frame_max m = drop("postprocess", &rc);
-  cr_expect_eq(m.frames, 25);
-  cr_log_info("postprocess baseline: max %d inverted tets over the run\n", m.inverted);
+  bs_run_totals T;
+  sim_rec m = drop("postprocess", &T);
+  cr_expect_eq(m.frames, 24);
+  cr_log_info("postprocess baseline: max %d inverted tets over the run\n", m.max_inverted);
 }
 
 /* Figure 6: the torus drop (ground constraint plus self-collision) ends with
  * no surface self-intersection, no inverted tet and nothing inside the ground. */
 Test(collision_scenes, torus_drop_ends_clean, .timeout = 600) {
-  char *out = NULL;
-  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR
-                       "/data/scenes/torus_drop.json --quiet --frames 8 --set output.dir=/tmp/bs_test_torus_drop "
-                       "--set output.vtu_every=8",
-                       &out);
-  cr_expect_eq(rc, 0, "%s", out);
-  cr_expect(strstr(out, "at the last frame: 0 inverted tets, 0 intersecting surface triangle pairs, 0 vertices "
-                        "inside obstacles") != NULL,
-            "%s", out);
-  free(out);
+  sim_rec r;
+  bs_run_totals T;
+  bs_sim_measures m;
+  cr_assert_eq(system("rm -rf /tmp/bs_test_torus_drop"), 0);
+  run_and_measure(SCENES "torus_drop.json", "time.frames=8 output.vtu_every=8", "/tmp/bs_test_torus_drop", &r, &T, &m);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  cr_expect_eq(m.inverted, 0, "at the last frame: %d inverted tets", m.inverted);
+  cr_expect_eq(m.self_intersections, 0, "at the last frame: %lld intersecting surface triangle pairs",
+               (long long)m.self_intersections);
+  cr_expect_eq(m.penetrating, 0, "at the last frame: %d vertices inside obstacles", m.penetrating);
   /* the same verdict from `bigstep check` on the last frame's file, with the scene's ground */
-  rc = bs_test_run(BS_BIGSTEP_EXE " check /tmp/bs_test_torus_drop/frame_00008.vtu --scene " BS_SOURCE_DIR
-                   "/data/scenes/torus_drop.json",
-                   &out);
+  char *out = NULL;
+  int rc = bs_test_run(BS_BIGSTEP_EXE " check /tmp/bs_test_torus_drop/frame_00008.vtu --scene " BS_SOURCE_DIR
+                       "/data/scenes/torus_drop.json",
+                       &out);
   cr_expect_eq(rc, 0, "bigstep check found something:\n%s", out);
   free(out);
 }
@@ -111,32 +94,18 @@ Test(collision_scenes, torus_drop_ends_clean, .timeout = 600) {
  * vertex could start past the middle of the other ball and be pushed out on
  * its far side. */
 Test(collision_scenes, two_spheres_impact_does_not_tangle, .timeout = 600) {
-  char *out = NULL;
-  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR
-                       "/data/scenes/two_spheres.json --quiet --set output.dir=/tmp/bs_test_two_spheres "
-                       "--set output.vtu_every=0",
-                       &out);
-  cr_expect_eq(rc, 0, "%s", out);
-  cr_expect(strstr(out, "at the last frame: 0 inverted tets, 0 intersecting surface triangle pairs") != NULL, "%s",
-            out);
-  free(out);
-  frame_max m = read_frames("/tmp/bs_test_two_spheres");
-  cr_expect_eq(m.frames, 49);
-  cr_expect_eq(m.inverted, 0, "a frame with %d inverted tets", m.inverted);
-  FILE *f = fopen("/tmp/bs_test_two_spheres/stats.csv", "r");
-  cr_assert_not_null(f);
-  char line[2048];
-  cr_assert_not_null(fgets(line, sizeof line, f));
-  cr_assert(strncmp(line, "frame,step,time,guess,", 22) == 0, "%s", line);
-  int from_xn = 0;
-  while (fgets(line, sizeof line, f)) {
-    char *tok = strtok(line, ",");
-    for (int k = 0; k < 3 && tok; k++) tok = strtok(NULL, ",");
-    if (tok && atoi(tok) == 2) from_xn++;
-  }
-  fclose(f);
-  cr_expect(from_xn > 0, "no step started from x^n");
-  cr_log_info("two_spheres: %d steps started from x^n\n", from_xn);
+  sim_rec r;
+  bs_run_totals T;
+  bs_sim_measures m;
+  run_and_measure(SCENES "two_spheres.json", NULL, NULL, &r, &T, &m);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  cr_expect_eq(m.inverted, 0, "at the last frame: %d inverted tets", m.inverted);
+  cr_expect_eq(m.self_intersections, 0, "at the last frame: %lld intersecting surface triangle pairs",
+               (long long)m.self_intersections);
+  cr_expect_eq(r.frames, 48);
+  cr_expect_eq(r.max_inverted, 0, "a frame with %d inverted tets", r.max_inverted);
+  cr_expect(r.from_xn > 0, "no step started from x^n");
+  cr_log_info("two_spheres: %ld steps started from x^n\n", r.from_xn);
 }
 
 /* A moving box as a constraint obstacle (box_stack_strike's striker set to
@@ -144,13 +113,11 @@ Test(collision_scenes, two_spheres_impact_does_not_tangle, .timeout = 600) {
  * slide off its edges (bs_obstacles.c, RELEASE_COS); before, 6 of the steps
  * failed in the line search once the striker reached the wall. */
 Test(collision_scenes, constraint_box_striker_converges, .timeout = 600) {
-  char *out = NULL;
-  int rc = bs_test_run(BS_BIGSTEP_EXE " run " BS_SOURCE_DIR
-                       "/data/scenes/box_stack_strike.json --quiet --set obstacles.1.collision=constraint "
-                       "--set output.dir=/tmp/bs_test_striker --set output.vtu_every=0",
-                       &out);
-  cr_expect_eq(rc, 0, "a step failed:\n%s", out);
-  cr_expect(strstr(out, "at the last frame: 0 inverted tets") != NULL, "%s", out);
-  cr_expect(strstr(out, "0 vertices inside obstacles") != NULL, "%s", out);
-  free(out);
+  sim_rec r;
+  bs_run_totals T;
+  bs_sim_measures m;
+  run_and_measure(SCENES "box_stack_strike.json", "obstacles.1.collision=constraint", NULL, &r, &T, &m);
+  cr_expect_eq(T.failed, 0, "a step failed: %s", T.first_fail_reason);
+  cr_expect_eq(m.inverted, 0, "at the last frame: %d inverted tets", m.inverted);
+  cr_expect_eq(m.penetrating, 0, "at the last frame: %d vertices inside obstacles", m.penetrating);
 }

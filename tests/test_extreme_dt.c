@@ -21,19 +21,19 @@ enum { N_DT = sizeof dts / sizeof dts[0] };
 #define BALL BS_SOURCE_DIR "/data/scenes/sphere_drop.json"
 
 static ext_run run_dt(const char *scene, const char *extra, const char *method, int i, const char *name) {
-  char args[512], tag[96];
+  char sets[512], tag[96];
   /* The baseline is capped at 30 Newton iterations a step: where it fails at
    * large dt it does so within them and the run stays short. */
-  snprintf(args, sizeof args,
-           "%s --method %s --frames %d --set time.fps=%s --set time.steps_per_frame=1 --set solver.max_iterations=%d",
-           extra, method, dts[i].frames, dts[i].fps, strcmp(method, "newton") ? 200 : 30);
+  snprintf(sets, sizeof sets,
+           "%s solver.method=%s time.frames=%d time.fps=%s time.steps_per_frame=1 solver.max_iterations=%d", extra,
+           method, dts[i].frames, dts[i].fps, strcmp(method, "newton") ? 200 : 30);
   snprintf(tag, sizeof tag, "%s_%s_dt1_%s", name, method, dts[i].fps);
-  return ext_run_scene(scene, args, tag);
+  return ext_run_scene(scene, sets, tag);
 }
 
 Test(extreme_dt, cube_stretch_optimization_converges, .timeout = 600) {
   for (int i = 0; i < N_DT; i++) {
-    ext_run r = run_dt(CUBE, "--set bodies.0.box.cells=[4,4,4]", "optimization", i, "cube_stretch");
+    ext_run r = run_dt(CUBE, "bodies.0.box.cells=[4,4,4]", "optimization", i, "cube_stretch");
     cr_expect_eq(r.failed, 0, "cube_stretch dt=1/%s s: %ld failed steps [%s]", dts[i].fps, r.failed, r.reason);
     cr_expect_eq(r.last_inverted, 0, "cube_stretch dt=1/%s s: %d inverted tets", dts[i].fps, r.last_inverted);
     ext_run_free(&r);
@@ -42,14 +42,14 @@ Test(extreme_dt, cube_stretch_optimization_converges, .timeout = 600) {
 
 Test(extreme_dt, cube_stretch_newton_reports, .timeout = 600) {
   for (int i = 0; i < N_DT; i++) {
-    ext_run r = run_dt(CUBE, "--set bodies.0.box.cells=[4,4,4]", "newton", i, "cube_stretch");
+    ext_run r = run_dt(CUBE, "bodies.0.box.cells=[4,4,4]", "newton", i, "cube_stretch");
     ext_run_free(&r);
   }
 }
 
 Test(extreme_dt, sphere_drop_optimization_converges_without_penetration, .timeout = 600) {
   for (int i = 0; i < N_DT; i++) {
-    ext_run r = run_dt(BALL, "--set bodies.0.mesh_size=0.2", "optimization", i, "sphere_drop");
+    ext_run r = run_dt(BALL, "bodies.0.mesh_size=0.2", "optimization", i, "sphere_drop");
     cr_expect_eq(r.failed, 0, "sphere_drop dt=1/%s s: %ld failed steps [%s]", dts[i].fps, r.failed, r.reason);
     cr_expect_eq(r.max_penetrating, 0, "sphere_drop dt=1/%s s: %d vertices inside the ground", dts[i].fps,
                  r.max_penetrating);
@@ -59,7 +59,7 @@ Test(extreme_dt, sphere_drop_optimization_converges_without_penetration, .timeou
 
 Test(extreme_dt, sphere_drop_newton_reports, .timeout = 600) {
   for (int i = 0; i < N_DT; i++) {
-    ext_run r = run_dt(BALL, "--set bodies.0.mesh_size=0.2", "newton", i, "sphere_drop");
+    ext_run r = run_dt(BALL, "bodies.0.mesh_size=0.2", "newton", i, "sphere_drop");
     cr_expect_eq(r.max_penetrating, 0, "sphere_drop newton dt=1/%s s: %d vertices inside the ground", dts[i].fps,
                  r.max_penetrating);
     ext_run_free(&r);

@@ -1,37 +1,29 @@
 /* Stability at the extremes (issue 6):
- *  - NaN or Inf injected into a state or a parameter (a scene key through --set,
- *    or a mesh vertex) is refused with an error naming it before any step runs;
+ *  - NaN or Inf injected into a state or a parameter (a scene key through an
+ *    override, or a mesh vertex) is refused by bs_scene_load / bs_sim_create
+ *    with an error naming it;
  *  - a ball hitting the ground at 1e3 m/s with constraint collisions: no vertex
  *    inside the ground after any step;
  *  - a Gmsh mesh with sliver tets (data/geo/sliver.geo, dihedral angles below
- *    1 degree): `bigstep mesh info` counts them and warns, and a scene on it runs
- *    (the contract of test_extreme_util.h). */
+ *    1 degree): `bigstep mesh info` counts them and warns (the one command line
+ *    use here), and a scene on it runs (the contract of test_extreme_util.h). */
 #define _POSIX_C_SOURCE 200809L
+#include "cli_util.h"
 #include "test_extreme_util.h"
 
 #define CUBE BS_SOURCE_DIR "/data/scenes/cube_stretch.json"
 #define BALL BS_SOURCE_DIR "/data/scenes/sphere_drop.json"
 
-/* Runs SCENE (without --quiet, so a step would print "frame 1/") with one --set
- * and expects a refusal naming KEY and containing WHAT, with no step run and no
- * output written. */
+/* Loads SCENE with one override (then creates the simulation) and expects a
+ * refusal (BS_EINPUT) whose message names KEY and contains WHAT: the message
+ * `bigstep run` prints after "bigstep run: ". Nothing can have run. */
 static void refused(const char *scene, const char *set, const char *key, const char *what) {
-  char cmd[1024], *out = NULL;
-  const char *dir = "/tmp/bs_extreme_refused";
-  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-  cr_assert_eq(system(cmd), 0);
-  snprintf(cmd, sizeof cmd, "%s%s run %s --frames 1 --set output.dir=%s --set '%s'", ext_env(), BS_BIGSTEP_EXE,
-           scene, dir, set);
-  int rc = bs_test_run(cmd, &out);
-  cr_log_info("--set %s: exit %d: %s", set, rc, out);
-  cr_expect_eq(rc, 1, "--set %s: exit %d:\n%s", set, rc, out);
-  cr_expect(strstr(out, key) != NULL, "--set %s: the error does not name '%s':\n%s", set, key, out);
-  cr_expect(strstr(out, what) != NULL, "--set %s: the error does not say '%s':\n%s", set, what, out);
-  cr_expect(strstr(out, "frame 1") == NULL, "--set %s: a step ran:\n%s", set, out);
-  FILE *f = fopen("/tmp/bs_extreme_refused/frames.csv", "r");
-  cr_expect_null(f, "--set %s: frames.csv was written", set);
-  if (f) fclose(f);
-  free(out);
+  bs_error err;
+  int rc = sim_load_error(scene, &set, 1, &err);
+  cr_log_info("set %s: %d: %s", set, rc, err.msg);
+  cr_expect_eq(rc, BS_EINPUT, "set %s: status %d: %s", set, rc, err.msg);
+  cr_expect(strstr(err.msg, key) != NULL, "set %s: the error does not name '%s': %s", set, key, err.msg);
+  cr_expect(strstr(err.msg, what) != NULL, "set %s: the error does not say '%s': %s", set, what, err.msg);
 }
 
 Test(extreme_input, inf_in_state_refused) {
@@ -67,13 +59,14 @@ Test(extreme_input, inf_in_parameter_refused) {
 
 /* A mesh file whose vertex 7 (of box:1) has a NaN or Inf coordinate. */
 static void bad_vertex(const char *token) {
-  char cmd[1024], *out = NULL, msh[128], json[128], path[256];
+  char msh[128], json[128], path[256];
   snprintf(msh, sizeof msh, "/tmp/bs_extreme_%s.msh", token);
   snprintf(json, sizeof json, "/tmp/bs_extreme_%s.json", token);
-  snprintf(cmd, sizeof cmd, "%s%s mesh convert box:1 %s", ext_env(), BS_BIGSTEP_EXE, msh);
-  int rc = bs_test_run(cmd, &out);
-  cr_assert_eq(rc, 0, "%s", out);
-  free(out);
+  bs_mesh *box = NULL;
+  bs_error err;
+  cr_assert_eq(bs_mesh_load("box:1", NULL, &box, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_mesh_write_msh(box, NULL, msh, &err), 0, "%s", err.msg);
+  bs_mesh_destroy(&box);
   /* The last node line "1 1 1" (vertex 8 in the file, 7 counted from 0) becomes "1 TOKEN 1". */
   FILE *f = fopen(msh, "r");
   cr_assert_not_null(f);
@@ -95,15 +88,12 @@ static void bad_vertex(const char *token) {
              "   \"material\": {\"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n",
           msh);
   fclose(f);
-  snprintf(cmd, sizeof cmd, "%s%s run %s", ext_env(), BS_BIGSTEP_EXE, json);
-  rc = bs_test_run(cmd, &out);
+  int rc = sim_load_error(json, NULL, 0, &err);
   snprintf(path, sizeof path, "vertex 7 has a non-finite coordinate (1, %s, 1)", token);
-  cr_log_info("mesh vertex %s: exit %d: %s", token, rc, out);
-  cr_expect_eq(rc, 1, "%s", out);
-  cr_expect(strstr(out, msh) != NULL, "the error does not name %s:\n%s", msh, out);
-  cr_expect(strstr(out, path) != NULL, "the error does not say '%s':\n%s", path, out);
-  cr_expect(strstr(out, "frame 1") == NULL, "a step ran:\n%s", out);
-  free(out);
+  cr_log_info("mesh vertex %s: %d: %s", token, rc, err.msg);
+  cr_expect_eq(rc, BS_ENUMERIC, "status %d: %s", rc, err.msg);
+  cr_expect(strstr(err.msg, msh) != NULL, "the error does not name %s: %s", msh, err.msg);
+  cr_expect(strstr(err.msg, path) != NULL, "the error does not say '%s': %s", path, err.msg);
 }
 
 Test(extreme_input, nan_and_inf_mesh_vertex_refused) {
@@ -115,13 +105,13 @@ Test(extreme_input, nan_and_inf_mesh_vertex_refused) {
  * step it would travel 42 m, so the constraint holds every vertex on the ground
  * (the body flattens: all its tets degenerate) and it must recover. */
 static ext_run impact(const char *method, const char *fps, int frames) {
-  char args[512], tag[96];
-  snprintf(args, sizeof args,
-           "--set bodies.0.mesh_size=0.2 --set bodies.0.velocity=[0,-1000,0] --method %s --frames %d "
-           "--set time.fps=%s --set solver.max_iterations=%d",
+  char sets[512], tag[96];
+  snprintf(sets, sizeof sets,
+           "bodies.0.mesh_size=0.2 bodies.0.velocity=[0,-1000,0] solver.method=%s time.frames=%d time.fps=%s "
+           "solver.max_iterations=%d",
            method, frames, fps, strcmp(method, "newton") ? 200 : 30);
   snprintf(tag, sizeof tag, "impact_%s_fps%s", method, fps);
-  ext_run r = ext_run_scene(BALL, args, tag);
+  ext_run r = ext_run_scene(BALL, sets, tag);
   cr_expect_eq(r.max_penetrating, 0, "%s at %s fps: %d vertices inside the ground", method, fps, r.max_penetrating);
   return r;
 }
@@ -142,7 +132,8 @@ Test(extreme_input, impact_1e3_m_per_s_constraint_no_penetration, .timeout = 600
 
 Test(extreme_input, sliver_mesh_warns_and_runs, .timeout = 600) {
   char *out = NULL, cmd[1024];
-  snprintf(cmd, sizeof cmd, "%s%s mesh info %s/data/geo/sliver.geo", ext_env(), BS_BIGSTEP_EXE, BS_SOURCE_DIR);
+  snprintf(cmd, sizeof cmd, "LSAN_OPTIONS=suppressions=%s/tests/lsan.supp:print_suppressions=0 %s mesh info "
+           "%s/data/geo/sliver.geo", BS_SOURCE_DIR, BS_BIGSTEP_EXE, BS_SOURCE_DIR);
   int rc = bs_test_run(cmd, &out);
   cr_log_info("%s", out);
   cr_assert_eq(rc, 0, "%s", out);
@@ -166,10 +157,10 @@ Test(extreme_input, sliver_mesh_warns_and_runs, .timeout = 600) {
              "   \"scripted\": [{\"group\": \"left\", \"fixed\": true}]}]}\n",
           BS_SOURCE_DIR);
   fclose(f);
-  ext_run r = ext_run_scene("/tmp/bs_extreme_sliver.json", "--method optimization", "sliver_optimization");
+  ext_run r = ext_run_scene("/tmp/bs_extreme_sliver.json", "solver.method=optimization", "sliver_optimization");
   cr_expect_eq(r.failed, 0, "%ld failed steps [%s]", r.failed, r.reason);
   cr_expect_eq(r.last_inverted, 0, "%d inverted tets", r.last_inverted);
   ext_run_free(&r);
-  r = ext_run_scene("/tmp/bs_extreme_sliver.json", "--method newton --set solver.max_iterations=30", "sliver_newton");
+  r = ext_run_scene("/tmp/bs_extreme_sliver.json", "solver.method=newton solver.max_iterations=30", "sliver_newton");
   ext_run_free(&r);
 }

@@ -15,13 +15,13 @@ static const char *const poisson[] = {"0.45", "0.49", "0.499"};
 static const char *const poisson_youngs[] = {"1e5", "1e9"};
 
 static ext_run run_material(const char *method, const char *E, const char *nu) {
-  char args[512], tag[96];
-  snprintf(args, sizeof args,
-           "--set bodies.0.box.cells=[4,4,4] --method %s --frames 3 --set bodies.0.material.youngs=%s "
-           "--set bodies.0.material.poisson=%s --set solver.max_iterations=%d",
+  char sets[512], tag[96];
+  snprintf(sets, sizeof sets,
+           "bodies.0.box.cells=[4,4,4] solver.method=%s time.frames=3 bodies.0.material.youngs=%s "
+           "bodies.0.material.poisson=%s solver.max_iterations=%d",
            method, E, nu, strcmp(method, "newton") ? 200 : 30);
   snprintf(tag, sizeof tag, "cube_stretch_%s_E%s_nu%s", method, E, nu);
-  return ext_run_scene(CUBE, args, tag);
+  return ext_run_scene(CUBE, sets, tag);
 }
 
 Test(extreme_material, youngs_optimization_converges, .timeout = 600) {

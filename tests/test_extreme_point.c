@@ -1,7 +1,7 @@
 /* Stability at the extremes (issue 6): the point initial state (the paper's
  * figure 9: every free vertex at the cube's centre) at three stiffnesses, for
- * every model but `linear`; all tets uninverted at the end (frames.csv, last
- * row).
+ * every model but `linear`; all tets uninverted at the end (the last
+ * frame).
  *
  * Known failure, kept visible rather than weakened: for neo_hookean and
  * stable_neo_hookean the collapsed state F = 0 is a stationary point of the

@@ -1,6 +1,6 @@
 /* Stability at the extremes (issue 6): the random initial state (the paper's
  * figure 8: free vertices uniform in the cube) at three stiffnesses, for every
- * model but `linear`; all tets uninverted at the end (frames.csv, last row). */
+ * model but `linear`; all tets uninverted at the end (the last frame). */
 #define _POSIX_C_SOURCE 200809L
 #include "test_extreme_util.h"
 

@@ -1,6 +1,8 @@
-/* Scenes and `bigstep run`: every bad input is refused before any step runs,
- * with a message naming the file and the key; --set reaches any key and is
- * validated like the file; a good run writes its outputs and its summary. */
+/* Scenes through the library (bs_scene_load, bs_sim_create): every bad input
+ * is refused before any simulation exists, with a message naming the file and
+ * the key (the message `bigstep run` prints); overrides reach any key and are
+ * validated like the file; a good run writes its outputs and its summary.
+ * The command line's own flags: test_cli_run.c. */
 #define _POSIX_C_SOURCE 200809L
 #include <criterion/criterion.h>
 #include <stdio.h>
@@ -8,7 +10,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "cli_util.h"
+#include "sim_util.h"
 
 static const char *good =
     "{\"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 1},\n"
@@ -18,17 +20,16 @@ static const char *good =
     "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000},\n"
     "   \"scripted\": [{\"group\": \"ymin\", \"fixed\": true}]}]}\n";
 
-/* Writes text to a fresh scene file and runs `bigstep run` on it with extra args. */
-static int run_scene(const char *text, const char *args, char **out) {
+/* Writes text to a fresh scene file and loads it with the overrides, then
+ * creates the simulation: the status, the message in *err. */
+static int load_scene(const char *text, int n_sets, const char *const *sets, bs_error *err) {
   char path[] = "/tmp/bs_scene_XXXXXX";
   int fd = mkstemp(path);
   cr_assert(fd >= 0);
   FILE *f = fdopen(fd, "w");
   fputs(text, f);
   fclose(f);
-  char cmd[2048];
-  snprintf(cmd, sizeof cmd, "%s run %s --quiet %s", BS_BIGSTEP_EXE, path, args ? args : "");
-  int rc = bs_test_run(cmd, out);
+  int rc = sim_load_error(path, sets, n_sets, err);
   unlink(path);
   return rc;
 }
@@ -43,24 +44,43 @@ static char *edit(const char *from, const char *to) {
   return s;
 }
 
+/* The scene with `from` replaced by `to` is refused (BS_EINPUT, or BS_EIO for
+ * a missing file) with a message holding `needle`. */
 static void expect_error(const char *from, const char *to, const char *needle) {
-  char *scene = edit(from, to), *out = NULL;
-  int rc = run_scene(scene, NULL, &out);
-  cr_expect_eq(rc, 1, "scene with '%s' -> '%s' exited %d:\n%s", from, to, rc, out);
-  cr_expect(strstr(out, needle) != NULL, "message for '%s' should name '%s':\n%s", to, needle, out);
-  cr_expect(strstr(out, "frame 1") == NULL, "a step ran before the error:\n%s", out);
+  char *scene = edit(from, to);
+  bs_error err;
+  int rc = load_scene(scene, 0, NULL, &err);
+  cr_expect(rc == BS_EINPUT || rc == BS_EIO, "scene with '%s' -> '%s': status %d: %s", from, to, rc, err.msg);
+  cr_expect(strstr(err.msg, needle) != NULL, "message for '%s' should name '%s': %s", to, needle, err.msg);
   free(scene);
-  free(out);
 }
 
+/* The good scene with one override is refused with a message holding needle. */
+static void expect_set_error(const char *set, const char *needle) {
+  bs_error err;
+  int rc = load_scene(good, 1, &set, &err);
+  cr_expect_eq(rc, BS_EINPUT, "set %s: status %d: %s", set, rc, err.msg);
+  cr_expect(strstr(err.msg, needle) != NULL, "set %s: message should hold '%s': %s", set, needle, err.msg);
+}
+
+/* The good scene through the library, into a run folder: two converged steps,
+ * stats.csv with a row each, frames.pvd and the last frame's VTU. */
 Test(scene, good_scene_runs) {
-  char *out = NULL;
-  int rc = run_scene(good, "--set output.dir=/tmp/bs_scene_out", &out);
-  cr_expect_eq(rc, 0, "%s", out);
-  cr_expect(strstr(out, "optimization") != NULL, "%s", out);
-  cr_expect(strstr(out, "solves/step") != NULL, "%s", out);
-  free(out);
-  FILE *f = fopen("/tmp/bs_scene_out/stats.csv", "r");
+  char path[] = "/tmp/bs_scene_XXXXXX";
+  int fd = mkstemp(path);
+  cr_assert(fd >= 0);
+  FILE *f = fdopen(fd, "w");
+  fputs(good, f);
+  fclose(f);
+  cr_assert_eq(system("rm -rf /tmp/bs_scene_out"), 0);
+  sim_rec rec;
+  bs_run_totals T;
+  sim_run_scene(path, "output.dir=/tmp/bs_scene_out", "/tmp/bs_scene_out", &rec, &T, 0, NULL);
+  unlink(path);
+  cr_expect_eq(T.steps, 2);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  cr_expect_eq(rec.failed, 0, "%s", rec.reason);
+  f = fopen("/tmp/bs_scene_out/stats.csv", "r");
   cr_assert_not_null(f, "stats.csv missing");
   char line[4096];
   int lines = 0;
@@ -69,6 +89,11 @@ Test(scene, good_scene_runs) {
   cr_expect_eq(lines, 3, "stats.csv: header and 2 steps, got %d lines", lines);
   cr_expect_eq(access("/tmp/bs_scene_out/frames.pvd", R_OK), 0);
   cr_expect_eq(access("/tmp/bs_scene_out/frame_00002.vtu", R_OK), 0);
+  bs_summary u;
+  bs_error err;
+  cr_assert_eq(bs_summary_read("/tmp/bs_scene_out", &u, &err), 0, "%s", err.msg);
+  cr_expect_str_eq(u.method, "optimization");
+  cr_expect_eq(u.failed, 0);
 }
 
 Test(scene, unknown_keys_and_types) {
@@ -111,45 +136,36 @@ Test(scene, missing_mesh_and_group) {
 }
 
 Test(scene, malformed_json_and_missing_file) {
-  char *out = NULL;
-  int rc = run_scene("{\"time\": {\"fps\": 24,,}", NULL, &out);
-  cr_expect_eq(rc, 1);
-  cr_expect(strstr(out, "malformed JSON") != NULL, "%s", out);
-  free(out);
-  rc = bs_test_run(BS_BIGSTEP_EXE " run /no/such/scene.json", &out);
-  cr_expect_eq(rc, 1);
-  cr_expect(strstr(out, "/no/such/scene.json") != NULL, "%s", out);
-  free(out);
+  bs_error err;
+  int rc = load_scene("{\"time\": {\"fps\": 24,,}", 0, NULL, &err);
+  cr_expect_eq(rc, BS_EINPUT, "%d: %s", rc, err.msg);
+  cr_expect(strstr(err.msg, "malformed JSON") != NULL, "%s", err.msg);
+  rc = sim_load_error("/no/such/scene.json", NULL, 0, &err);
+  cr_expect_eq(rc, BS_EIO, "%d: %s", rc, err.msg);
+  cr_expect(strstr(err.msg, "/no/such/scene.json") != NULL, "%s", err.msg);
 }
 
 Test(scene, set_overrides_are_validated) {
-  char *out = NULL;
-  int rc = run_scene(good, "--set bodies.0.material.youngs=-5", &out);
-  cr_expect_eq(rc, 1);
-  cr_expect(strstr(out, "youngs") != NULL, "%s", out);
-  free(out);
-  rc = run_scene(good, "--set bodies.3.material.youngs=1e6", &out);
-  cr_expect_eq(rc, 1);
-  cr_expect(strstr(out, "'3' is not an index") != NULL, "%s", out);
-  free(out);
-  rc = run_scene(good, "--set solver.colour=blue", &out);
-  cr_expect_eq(rc, 1);
-  cr_expect(strstr(out, "solver.colour: unknown key") != NULL, "%s", out);
-  free(out);
-  rc = run_scene(good, "--set bodies.0.velocity=[0,nan,0]", &out);
-  cr_expect_eq(rc, 1, "%s", out);
-  cr_expect(strstr(out, "bodies.0.velocity") != NULL, "%s", out);
-  free(out);
-  /* a valid override takes effect: the summary reports 2 steps per frame */
-  rc = run_scene(good, "--set time.steps_per_frame=2", &out);
-  cr_expect_eq(rc, 0, "%s", out);
-  cr_expect(strstr(out, "optimization       2") != NULL, "%s", out);
-  free(out);
-  rc = run_scene(good, "--steps-per-frame zero", &out);
-  cr_expect_eq(rc, 2, "%s", out);
-  free(out);
-  rc = run_scene(good, "--frobnicate 1", &out);
-  cr_expect_eq(rc, 2, "%s", out);
-  cr_expect(strstr(out, "--frobnicate") != NULL, "%s", out);
-  free(out);
+  expect_set_error("bodies.0.material.youngs=-5", "youngs");
+  expect_set_error("bodies.3.material.youngs=1e6", "'3' is not an index");
+  expect_set_error("solver.colour=blue", "solver.colour: unknown key");
+  expect_set_error("bodies.0.velocity=[0,nan,0]", "bodies.0.velocity");
+  /* a valid override takes effect: 2 steps per frame, 4 steps in the 2 frames */
+  char path[] = "/tmp/bs_scene_XXXXXX";
+  int fd = mkstemp(path);
+  cr_assert(fd >= 0);
+  FILE *f = fdopen(fd, "w");
+  fputs(good, f);
+  fclose(f);
+  sim_rec rec;
+  bs_run_totals T;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_run_scene(path, "time.steps_per_frame=2", NULL, &rec, &T, 1, &sc);
+  unlink(path);
+  cr_expect_eq(sc->steps_per_frame, 2);
+  cr_expect_float_eq(sc->dt, 1.0 / 48, 1e-15);
+  cr_expect_eq(T.steps, 4, "%ld steps", T.steps);
+  cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
 }
