@@ -64,8 +64,8 @@ typedef struct bs_integrator_opts {
      (data/scenes/paper/fig7_two_spheres.json, 48 frames, amg): 25.6 -> 15.5 solves per
      step, the last frame 77 -> 0 inverted tets and ~1400 -> 0 intersecting surface
      triangle pairs. Not for scenes without contact: on the random-state cube
-     (neo_hookean) it leads into a local minimum that keeps one tet inverted. The app
-     sets it for the optimization integrator when the scene has self_collision. */
+     (neo_hookean) it leads into a local minimum that keeps one tet inverted. bs_sim_create
+     (sim/) sets it for the optimization integrator when the scene has self_collision. */
   int guess_xn;
 } bs_integrator_opts;
 
@@ -91,7 +91,7 @@ typedef struct bs_step_hooks {
 } bs_step_hooks;
 
 /* The initial guess a step's solve started from (step 3 above). The numbers
- * are the ones the app writes (stats.csv, column guess). */
+ * are the ones the run folder writes (stats.csv, column guess; bs_runfolder.h). */
 typedef enum {
   BS_GUESS_XHAT = 0,     /* x̂ = xⁿ + Δt vⁿ                                        */
   BS_GUESS_EXPLICIT = 1, /* x̂ + Δt² M⁻¹ f(xⁿ) (an explicit step)                  */
