@@ -344,66 +344,72 @@ static int audit_frame(const char *path, double t, bs_sim *sim, mesh_cache *c, d
 
 /* ---- command --------------------------------------------------------------- */
 
-int bs_cmd_check(int argc, char **argv) {
-  /* argv[0] = "check" */
-  const char *target = NULL, *scene = NULL;
-  int quiet = 0;
+typedef struct check_args {
+  const char *target, *scene;
+  int quiet;
+} check_args;
+
+/* 0, the usage status, or -1 when --help was printed. */
+static int parse_args(int argc, char **argv, check_args *ca) {
+  *ca = (check_args){NULL, NULL, 0};
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       fputs(check_help, stdout);
-      return 0;
+      return -1;
     }
     if (!strcmp(a, "--quiet")) {
-      quiet = 1;
+      ca->quiet = 1;
     } else if (!strncmp(a, "--scene", 7) && (a[7] == '\0' || a[7] == '=')) {
-      const char *val = a[7] == '=' ? a + 8 : (i + 1 < argc ? argv[++i] : NULL);
-      if (!val || !*val) return bs_app_usage_error("check", "flag --scene needs a value");
-      scene = val;
+      char fbuf[16];
+      const char *flag, *val;
+      if (bs_app_flag_value(argc, argv, &i, fbuf, sizeof fbuf, &flag, &val) || !*val)
+        return bs_app_usage_error("check", "flag --scene needs a value");
+      ca->scene = val;
     } else if (!strncmp(a, "--", 2)) {
       return bs_app_usage_error("check", "unknown flag '%s'", a);
     } else {
-      if (target) return bs_app_usage_error("check", "unexpected argument '%s' (one folder or file)", a);
-      target = a;
+      if (ca->target) return bs_app_usage_error("check", "unexpected argument '%s' (one folder or file)", a);
+      ca->target = a;
     }
   }
-  if (!target) return bs_app_usage_error("check", "missing OUTPUT_DIR or FILE.vtu");
+  if (!ca->target) return bs_app_usage_error("check", "missing OUTPUT_DIR or FILE.vtu");
+  return 0;
+}
 
-  bs_error err;
-  bs_error_clear(&err);
-  frame_list L = {0};
-  if (list_frames(target, &L, &err)) {
-    fprintf(stderr, "bigstep check: %s\n", err.msg);
-    list_free(&L);
-    return BS_EXIT_FAIL;
-  }
-  bs_scene *sc = NULL;
-  bs_sim *sim = NULL;
-  if (scene && (bs_scene_load(scene, 0, NULL, &sc, &err) || bs_sim_create(sc, &sim, &err))) {
-    fprintf(stderr, "bigstep check: %s\n", err.msg);
-    bs_scene_destroy(&sc);
-    list_free(&L);
-    return BS_EXIT_FAIL;
-  }
-  char obst[160];
-  if (!sim) snprintf(obst, sizeof obst, "obstacles not checked (no --scene)");
-  else if (!sim->obstacles) snprintf(obst, sizeof obst, "the scene has no obstacles");
-  else snprintf(obst, sizeof obst, "%d obstacle%s of the scene", bs_obstacles_count(sim->obstacles),
-                bs_obstacles_count(sim->obstacles) == 1 ? "" : "s");
+/* What the audit finds over all frames. */
+typedef struct totals {
+  long long inverted, pairs, penetrating;
+  double max_depth;
+  int bad_frames, unreadable;
+} totals;
 
-  if (!quiet) {
-    printf("bigstep check %s: %d frame%s (%s); %s\n", target, L.n, L.n == 1 ? "" : "s", L.origin, obst);
-    printf("%7s %12s %10s %10s %12s %12s %10s  %s\n", "frame", "time", "tets", "inverted", "self_pairs",
-           "penetrating", "max_depth", "file");
+static const char *base_name(const char *path) {
+  const char *base = strrchr(path, '/');
+  return base ? base + 1 : path;
+}
+
+static void print_frame_row(const frame_src *f, const audit *a, const bs_sim *sim) {
+  char tbuf[32];
+  if (f->has_time) snprintf(tbuf, sizeof tbuf, "%.6g", f->time);
+  else snprintf(tbuf, sizeof tbuf, "-");
+  char pbuf[32] = "-", dbuf[32] = "-";
+  if (sim) {
+    snprintf(pbuf, sizeof pbuf, "%d", a->penetrating);
+    snprintf(dbuf, sizeof dbuf, "%.3g", a->max_depth);
   }
+  printf("%7d %12s %10d %10d %12lld %12s %10s  %s\n", f->number, tbuf, a->n_tets, a->inverted,
+         (long long)a->self_pairs, pbuf, dbuf, base_name(f->path));
+}
+
+/* Audits every frame of L, a line each unless quiet; sums into T. */
+static void audit_frames(const frame_list *L, const bs_scene *sc, bs_sim *sim, int quiet, totals *T) {
   mesh_cache cache = {0};
   double *xc = NULL;
   size_t xc_cap = 0;
-  long long tot_inv = 0, tot_pairs = 0, tot_pen = 0;
-  double max_depth = 0;
-  int bad_frames = 0, unreadable = 0;
-  for (int i = 0; i < L.n; i++) {
-    const frame_src *f = &L.f[i];
+  bs_error err;
+  for (int i = 0; i < L->n; i++) {
+    const frame_src *f = &L->f[i];
     audit a = {0};
     bs_error_clear(&err);
     /* the frame's time: the PVD's, else frame N of `bigstep run` at N / fps */
@@ -412,48 +418,74 @@ int bs_cmd_check(int argc, char **argv) {
       fflush(stdout);
       fprintf(stderr, "bigstep check: %s\n", err.msg);
       fflush(stderr);
-      unreadable++;
-      if (!quiet) {
-        const char *base = strrchr(f->path, '/');
+      T->unreadable++;
+      if (!quiet)
         printf("%7d %12s %10s %10s %12s %12s %10s  %s (unreadable)\n", f->number, "-", "-", "-", "-", "-", "-",
-               base ? base + 1 : f->path);
-      }
+               base_name(f->path));
       continue;
     }
-    tot_inv += a.inverted;
-    tot_pairs += a.self_pairs;
-    tot_pen += a.penetrating;
-    if (a.max_depth > max_depth) max_depth = a.max_depth;
-    bad_frames += a.inverted > 0 || a.self_pairs > 0 || a.penetrating > 0;
-    if (!quiet) {
-      char tbuf[32];
-      if (f->has_time) snprintf(tbuf, sizeof tbuf, "%.6g", f->time);
-      else snprintf(tbuf, sizeof tbuf, "-");
-      char pbuf[32] = "-", dbuf[32] = "-";
-      if (sim) {
-        snprintf(pbuf, sizeof pbuf, "%d", a.penetrating);
-        snprintf(dbuf, sizeof dbuf, "%.3g", a.max_depth);
-      }
-      const char *base = strrchr(f->path, '/');
-      printf("%7d %12s %10d %10d %12lld %12s %10s  %s\n", f->number, tbuf, a.n_tets, a.inverted,
-             (long long)a.self_pairs, pbuf, dbuf, base ? base + 1 : f->path);
-    }
+    T->inverted += a.inverted;
+    T->pairs += a.self_pairs;
+    T->penetrating += a.penetrating;
+    if (a.max_depth > T->max_depth) T->max_depth = a.max_depth;
+    T->bad_frames += a.inverted > 0 || a.self_pairs > 0 || a.penetrating > 0;
+    if (!quiet) print_frame_row(f, &a, sim);
   }
   cache_free(&cache);
   free(xc);
-  int found = tot_inv > 0 || tot_pairs > 0 || tot_pen > 0;
+}
+
+/* The total line; returns the exit status. */
+static int print_total(int n_frames, const totals *T, const bs_sim *sim) {
+  int found = T->inverted > 0 || T->pairs > 0 || T->penetrating > 0;
   char pbuf[32] = "-", dbuf[32] = "-";
   if (sim) {
-    snprintf(pbuf, sizeof pbuf, "%lld", tot_pen);
-    snprintf(dbuf, sizeof dbuf, "%.3g m", max_depth);
+    snprintf(pbuf, sizeof pbuf, "%lld", T->penetrating);
+    snprintf(dbuf, sizeof dbuf, "%.3g m", T->max_depth);
   }
   printf("total: %d frames, inverted %lld, self-intersecting pairs %lld, penetrating %s, max depth %s, unreadable %d: ",
-         L.n, tot_inv, tot_pairs, pbuf, dbuf, unreadable);
-  if (found) printf("problems in %d frame%s\n", bad_frames, bad_frames == 1 ? "" : "s");
-  else if (unreadable) printf("%d file%s could not be audited\n", unreadable, unreadable == 1 ? "" : "s");
+         n_frames, T->inverted, T->pairs, pbuf, dbuf, T->unreadable);
+  if (found) printf("problems in %d frame%s\n", T->bad_frames, T->bad_frames == 1 ? "" : "s");
+  else if (T->unreadable) printf("%d file%s could not be audited\n", T->unreadable, T->unreadable == 1 ? "" : "s");
   else printf("clean\n");
+  return found || T->unreadable ? BS_EXIT_FAIL : 0;
+}
+
+/* The header: the target, its frames and what is known of obstacles. */
+static void print_header(const char *target, const frame_list *L, const bs_sim *sim) {
+  char obst[160];
+  if (!sim) snprintf(obst, sizeof obst, "obstacles not checked (no --scene)");
+  else if (!sim->obstacles) snprintf(obst, sizeof obst, "the scene has no obstacles");
+  else snprintf(obst, sizeof obst, "%d obstacle%s of the scene", bs_obstacles_count(sim->obstacles),
+                bs_obstacles_count(sim->obstacles) == 1 ? "" : "s");
+  printf("bigstep check %s: %d frame%s (%s); %s\n", target, L->n, L->n == 1 ? "" : "s", L->origin, obst);
+  printf("%7s %12s %10s %10s %12s %12s %10s  %s\n", "frame", "time", "tets", "inverted", "self_pairs",
+         "penetrating", "max_depth", "file");
+}
+
+int bs_cmd_check(int argc, char **argv) {
+  /* argv[0] = "check" */
+  check_args ca;
+  int rc = parse_args(argc, argv, &ca);
+  if (rc) return rc < 0 ? 0 : rc;
+  bs_error err;
+  bs_error_clear(&err);
+  frame_list L = {0};
+  bs_scene *sc = NULL;
+  bs_sim *sim = NULL;
+  if (list_frames(ca.target, &L, &err) ||
+      (ca.scene && (bs_scene_load(ca.scene, 0, NULL, &sc, &err) || bs_sim_create(sc, &sim, &err)))) {
+    fprintf(stderr, "bigstep check: %s\n", err.msg);
+    bs_scene_destroy(&sc);
+    list_free(&L);
+    return BS_EXIT_FAIL;
+  }
+  if (!ca.quiet) print_header(ca.target, &L, sim);
+  totals T = {0};
+  audit_frames(&L, sc, sim, ca.quiet, &T);
+  rc = print_total(L.n, &T, sim);
   list_free(&L);
   bs_sim_destroy(&sim);
   bs_scene_destroy(&sc);
-  return found || unreadable ? BS_EXIT_FAIL : 0;
+  return rc;
 }

@@ -204,111 +204,109 @@ static int sample(const bs_shim_tree *tree, const double origin[3], double h, co
   return st;
 }
 
-int bs_cmd_levelset(int argc, char **argv) {
-  /* argv[0] = "levelset" */
-  const char *in = NULL, *out = NULL;
-  double h = 0, margin = -1, size = 0;
-  for (int i = 1; i < argc; i++) {
-    const char *a = argv[i];
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(levelset_help, stdout);
-      return 0;
-    }
-    if (!strcmp(a, "--h") || !strcmp(a, "--margin") || !strcmp(a, "--size")) {
-      if (i + 1 >= argc) return bs_app_usage_error("levelset", "%s needs a value", a);
-      double v;
-      if (bs_app_parse_double(argv[i + 1], &v))
-        return bs_app_usage_error("levelset", "%s '%s': not a number", a, argv[i + 1]);
-      if (!strcmp(a, "--margin")) {
-        if (v < 0) return bs_app_usage_error("levelset", "--margin %s: must be >= 0 (m)", argv[i + 1]);
-        margin = v;
-      } else {
-        if (!(v > 0)) return bs_app_usage_error("levelset", "%s %s: must be > 0 (m)", a, argv[i + 1]);
-        if (!strcmp(a, "--h")) h = v;
-        else size = v;
-      }
-      i++;
-    } else if (a[0] == '-' && a[1] == '-') {
-      return bs_app_usage_error("levelset", "unknown option '%s' (see 'bigstep levelset --help')", a);
-    } else if (!in) {
-      in = a;
-    } else if (!out) {
-      out = a;
-    } else {
-      return bs_app_usage_error("levelset", "unexpected argument '%s'", a);
-    }
-  }
-  if (!in || !out) return bs_app_usage_error("levelset", "expected SURFACE and OUT (see 'bigstep levelset --help')");
+typedef struct levelset_args {
+  const char *in, *out;
+  double h, margin, size; /* h, size 0 and margin < 0: the defaults */
+} levelset_args;
 
-  bs_error err;
-  err.msg[0] = 0;
-  double t0 = bs_seconds();
-  surface s;
-  int st = read_surface(in, size, &s, &err);
-  double t_read = bs_seconds();
-  bs_shim_tree *tree = NULL;
-  bs_levelset *ls = NULL;
-  double *values = NULL;
-  int32_t n[3] = {0, 0, 0};
-  double origin[3] = {0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-  double t_tree = t_read, t_sample = t_read;
-  if (st) goto fail;
-  if (s.nt < 1) {
-    st = bs_error_set(&err, BS_EINPUT, "'%s': no triangles", in);
-    goto fail;
+/* The value of --h, --margin or --size. 0, or the usage status. */
+static int parse_length(const char *flag, const char *val, levelset_args *a) {
+  double v;
+  if (bs_app_parse_double(val, &v)) return bs_app_usage_error("levelset", "%s '%s': not a number", flag, val);
+  if (!strcmp(flag, "--margin")) {
+    if (v < 0) return bs_app_usage_error("levelset", "--margin %s: must be >= 0 (m)", val);
+    a->margin = v;
+  } else {
+    if (!(v > 0)) return bs_app_usage_error("levelset", "%s %s: must be > 0 (m)", flag, val);
+    if (!strcmp(flag, "--h")) a->h = v;
+    else a->size = v;
   }
-  if ((st = check_closed(in, s.pts, s.np, s.tris, s.nt, &err))) goto fail;
+  return 0;
+}
+
+/* 0, the usage status, or -1 when --help was printed. */
+static int parse_args(int argc, char **argv, levelset_args *a) {
+  *a = (levelset_args){NULL, NULL, 0, -1, 0};
+  for (int i = 1; i < argc; i++) {
+    const char *arg = argv[i];
+    if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
+      fputs(levelset_help, stdout);
+      return -1;
+    }
+    if (!strcmp(arg, "--h") || !strcmp(arg, "--margin") || !strcmp(arg, "--size")) {
+      if (i + 1 >= argc) return bs_app_usage_error("levelset", "%s needs a value", arg);
+      int rc = parse_length(arg, argv[i + 1], a);
+      if (rc) return rc;
+      i++;
+    } else if (arg[0] == '-' && arg[1] == '-') {
+      return bs_app_usage_error("levelset", "unknown option '%s' (see 'bigstep levelset --help')", arg);
+    } else if (!a->in) {
+      a->in = arg;
+    } else if (!a->out) {
+      a->out = arg;
+    } else {
+      return bs_app_usage_error("levelset", "unexpected argument '%s'", arg);
+    }
+  }
+  if (!a->in || !a->out)
+    return bs_app_usage_error("levelset", "expected SURFACE and OUT (see 'bigstep levelset --help')");
+  return 0;
+}
+
+typedef struct grid {
+  double lo[3], hi[3]; /* the surface's box */
+  double origin[3], h, margin;
+  int32_t n[3];
+  int64_t total;
+} grid;
+
+/* The box of the points triangles use (a soup may carry unused points). */
+static void surface_box(const surface *s, double lo[3], double hi[3]) {
   for (int k = 0; k < 3; k++) {
     lo[k] = 1e300;
     hi[k] = -1e300;
   }
-  /* the box of the points triangles use (a soup may carry unused points) */
-  for (int64_t t = 0; t < 3 * s.nt; t++)
+  for (int64_t t = 0; t < 3 * s->nt; t++)
     for (int k = 0; k < 3; k++) {
-      double c = s.pts[3 * (int64_t)s.tris[t] + k];
+      double c = s->pts[3 * (int64_t)s->tris[t] + k];
       lo[k] = fmin(lo[k], c);
       hi[k] = fmax(hi[k], c);
     }
-  double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
-  if (!(ext > 0)) {
-    st = bs_error_set(&err, BS_EINPUT, "'%s': the surface has no extent", in);
-    goto fail;
-  }
-  if (h <= 0) h = ext / 40;
-  if (margin < 0) margin = fmax(0.1 * ext, 2 * h);
-  int64_t total = 1;
-  for (int k = 0; k < 3; k++) {
-    origin[k] = lo[k] - margin;
-    double cells = ceil((hi[k] - lo[k] + 2 * margin) / h);
-    if (cells < 1) cells = 1;
-    if (cells + 1 > 1e9) {
-      st = bs_error_set(&err, BS_EINPUT, "--h %g: too many grid nodes along axis %d", h, k);
-      goto fail;
-    }
-    n[k] = (int32_t)cells + 1;
-    total *= n[k];
-    if (total > INT32_MAX) {
-      st = bs_error_set(&err, BS_EINPUT, "--h %g: the grid would have more than 2^31 - 1 nodes", h);
-      goto fail;
-    }
-  }
-  if ((st = bs_shim_tree_create(s.pts, s.np, s.tris, s.nt, &tree, &err))) goto fail;
-  t_tree = bs_seconds();
-  values = malloc(sizeof(double) * (size_t)total);
-  if (!values) {
-    st = bs_error_set(&err, BS_ENOMEM, "out of memory: a grid of %lld nodes", (long long)total);
-    goto fail;
-  }
-  if ((st = sample(tree, origin, h, n, values, &err))) goto fail;
-  t_sample = bs_seconds();
-  if ((st = bs_levelset_grid_from_values(origin, h, n, values, &ls, &err)) ||
-      (st = bs_levelset_grid_save(ls, out, &err)))
-    goto fail;
-  double t_end = bs_seconds();
+}
 
+/* The grid over the surface's box grown by the margin (defaults from the
+ * box's largest edge when a->h, a->margin are unset). */
+static int plan_grid(const char *in, const surface *s, const levelset_args *a, grid *g, bs_error *err) {
+  surface_box(s, g->lo, g->hi);
+  const double *lo = g->lo, *hi = g->hi;
+  double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+  if (!(ext > 0)) return bs_error_set(err, BS_EINPUT, "'%s': the surface has no extent", in);
+  g->h = a->h > 0 ? a->h : ext / 40;
+  g->margin = a->margin >= 0 ? a->margin : fmax(0.1 * ext, 2 * g->h);
+  g->total = 1;
+  for (int k = 0; k < 3; k++) {
+    g->origin[k] = lo[k] - g->margin;
+    double cells = ceil((hi[k] - lo[k] + 2 * g->margin) / g->h);
+    if (cells < 1) cells = 1;
+    if (cells + 1 > 1e9) return bs_error_set(err, BS_EINPUT, "--h %g: too many grid nodes along axis %d", g->h, k);
+    g->n[k] = (int32_t)cells + 1;
+    g->total *= g->n[k];
+    if (g->total > INT32_MAX)
+      return bs_error_set(err, BS_EINPUT, "--h %g: the grid would have more than 2^31 - 1 nodes", g->h);
+  }
+  return 0;
+}
+
+/* bs_seconds() at the start and after each stage. */
+typedef struct stage_times {
+  double t0, read, tree, sample, end;
+} stage_times;
+
+static void print_summary(const levelset_args *a, const surface *s, const grid *g, const double *values,
+                          const stage_times *t) {
   double vmin = values[0], vmax = values[0];
   int64_t n_inside = 0;
-  for (int64_t i = 0; i < total; i++) {
+  for (int64_t i = 0; i < g->total; i++) {
     vmin = fmin(vmin, values[i]);
     vmax = fmax(vmax, values[i]);
     n_inside += values[i] < 0;
@@ -317,27 +315,68 @@ int bs_cmd_levelset(int argc, char **argv) {
 #ifdef _OPENMP
   threads = omp_get_max_threads();
 #endif
-  printf("levelset %s -> %s\n", in, out);
-  printf("  surface: %lld points, %lld triangles, box [%g, %g] x [%g, %g] x [%g, %g]\n", (long long)s.np,
-         (long long)s.nt, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
-  printf("  grid: %d x %d x %d = %lld nodes, h %g m, margin %g m, origin (%g, %g, %g)\n", n[0], n[1], n[2],
-         (long long)total, h, margin, origin[0], origin[1], origin[2]);
+  printf("levelset %s -> %s\n", a->in, a->out);
+  printf("  surface: %lld points, %lld triangles, box [%g, %g] x [%g, %g] x [%g, %g]\n", (long long)s->np,
+         (long long)s->nt, g->lo[0], g->hi[0], g->lo[1], g->hi[1], g->lo[2], g->hi[2]);
+  printf("  grid: %d x %d x %d = %lld nodes, h %g m, margin %g m, origin (%g, %g, %g)\n", g->n[0], g->n[1], g->n[2],
+         (long long)g->total, g->h, g->margin, g->origin[0], g->origin[1], g->origin[2]);
   printf("  phi: [%g, %g] m, %lld nodes inside\n", vmin, vmax, (long long)n_inside);
   struct stat sb;
-  if (!stat(out, &sb)) printf("  file: %lld bytes\n", (long long)sb.st_size);
-  printf("  time: read %.3f s, tree %.3f s, sample %.3f s (%d threads), write %.3f s, total %.3f s\n", t_read - t0,
-         t_tree - t_read, t_sample - t_tree, threads, t_end - t_sample, t_end - t0);
-  free(values);
-  bs_levelset_destroy(&ls);
-  bs_shim_tree_destroy(&tree);
-  surface_free(&s);
-  return 0;
+  if (!stat(a->out, &sb)) printf("  file: %lld bytes\n", (long long)sb.st_size);
+  printf("  time: read %.3f s, tree %.3f s, sample %.3f s (%d threads), write %.3f s, total %.3f s\n",
+         t->read - t->t0, t->tree - t->read, t->sample - t->tree, threads, t->end - t->sample, t->end - t->t0);
+}
 
-fail:
-  fprintf(stderr, "bigstep levelset: %s\n", err.msg);
+/* Reads, checks, samples and writes; prints the summary on success. */
+static int make_levelset(const levelset_args *a, bs_error *err) {
+  stage_times t;
+  t.t0 = bs_seconds();
+  surface s;
+  int st = read_surface(a->in, a->size, &s, err);
+  t.read = bs_seconds();
+  bs_shim_tree *tree = NULL;
+  bs_levelset *ls = NULL;
+  double *values = NULL;
+  grid g;
+  if (st) goto done;
+  if (s.nt < 1) {
+    st = bs_error_set(err, BS_EINPUT, "'%s': no triangles", a->in);
+    goto done;
+  }
+  if ((st = check_closed(a->in, s.pts, s.np, s.tris, s.nt, err)) || (st = plan_grid(a->in, &s, a, &g, err)) ||
+      (st = bs_shim_tree_create(s.pts, s.np, s.tris, s.nt, &tree, err)))
+    goto done;
+  t.tree = bs_seconds();
+  values = malloc(sizeof(double) * (size_t)g.total);
+  if (!values) {
+    st = bs_error_set(err, BS_ENOMEM, "out of memory: a grid of %lld nodes", (long long)g.total);
+    goto done;
+  }
+  if ((st = sample(tree, g.origin, g.h, g.n, values, err))) goto done;
+  t.sample = bs_seconds();
+  if ((st = bs_levelset_grid_from_values(g.origin, g.h, g.n, values, &ls, err)) ||
+      (st = bs_levelset_grid_save(ls, a->out, err)))
+    goto done;
+  t.end = bs_seconds();
+  print_summary(a, &s, &g, values, &t);
+done:
   free(values);
   bs_levelset_destroy(&ls);
   bs_shim_tree_destroy(&tree);
   surface_free(&s);
-  return BS_EXIT_FAIL;
+  return st;
+}
+
+int bs_cmd_levelset(int argc, char **argv) {
+  /* argv[0] = "levelset" */
+  levelset_args a;
+  int rc = parse_args(argc, argv, &a);
+  if (rc) return rc < 0 ? 0 : rc;
+  bs_error err;
+  err.msg[0] = 0;
+  if (make_levelset(&a, &err)) {
+    fprintf(stderr, "bigstep levelset: %s\n", err.msg);
+    return BS_EXIT_FAIL;
+  }
+  return 0;
 }

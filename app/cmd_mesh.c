@@ -64,119 +64,131 @@ static void print_info(const bs_mesh *m, const char *name) {
             q.n_sliver, q.n_degenerate, q.n_inverted);
 }
 
-int bs_cmd_mesh(int argc, char **argv) {
-  /* argv[0] = "mesh" */
+typedef struct mesh_args {
+  const char *sub;    /* info, refine, reorder or convert */
+  int need_out;       /* the subcommand writes OUT */
+  const char *pos[2]; /* FILE, or IN and OUT */
+  int npos;
+  double size;
+  int refine, levels, have_order;
+  bs_order order;
+} mesh_args;
+
+/* One "--flag value" of the subcommand. 0, or the usage status. */
+static int parse_flag(mesh_args *a, const char *flag, const char *val) {
+  const char *sub = a->sub;
+  if (!strcmp(flag, "--size")) {
+    if (bs_app_parse_double(val, &a->size) || a->size <= 0)
+      return bs_app_usage_error("mesh", "--size must be a positive number, got '%s'", val);
+  } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
+    if (bs_app_parse_int(val, 0, 6, &a->refine))
+      return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
+  } else if (!strcmp(flag, "--levels") && !strcmp(sub, "refine")) {
+    if (bs_app_parse_int(val, 1, 6, &a->levels))
+      return bs_app_usage_error("mesh", "--levels must be an integer 1..6, got '%s'", val);
+  } else if ((!strcmp(flag, "--reorder") && !strcmp(sub, "info")) ||
+             (!strcmp(flag, "--method") && !strcmp(sub, "reorder"))) {
+    if (parse_order(val, &a->order)) return bs_app_usage_error("mesh", "%s must be metis or rcm, got '%s'", flag, val);
+    a->have_order = 1;
+  } else {
+    return bs_app_usage_error("mesh", "unknown flag '%s' for 'mesh %s'", flag, sub);
+  }
+  return 0;
+}
+
+/* 0, the usage status, or -1 when --help was printed. */
+static int parse_args(int argc, char **argv, mesh_args *a) {
   if (argc < 2) return bs_app_usage_error("mesh", "missing subcommand (info, refine, reorder, convert)");
-  const char *sub = argv[1];
+  *a = (mesh_args){.sub = argv[1], .levels = 1, .order = BS_ORDER_METIS};
   for (int i = 1; i < argc; i++)
     if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
       fputs(mesh_help, stdout);
-      return 0;
+      return -1;
     }
-  int need_out;
-  if (strcmp(sub, "info") == 0) need_out = 0;
-  else if (!strcmp(sub, "refine") || !strcmp(sub, "reorder") || !strcmp(sub, "convert")) need_out = 1;
+  const char *sub = a->sub;
+  if (strcmp(sub, "info") == 0) a->need_out = 0;
+  else if (!strcmp(sub, "refine") || !strcmp(sub, "reorder") || !strcmp(sub, "convert")) a->need_out = 1;
   else return bs_app_usage_error("mesh", "unknown subcommand '%s' (info, refine, reorder, convert)", sub);
-
-  const char *pos[2] = {NULL, NULL};
-  int npos = 0;
-  double size = 0;
-  int refine = 0, levels = 1, have_order = 0;
-  bs_order order = BS_ORDER_METIS;
   for (int i = 2; i < argc; i++) {
-    const char *a = argv[i];
-    if (strncmp(a, "--", 2) == 0) {
-      const char *val = NULL;
-      char flag[64];
-      const char *eq = strchr(a, '=');
-      if (eq) {
-        snprintf(flag, sizeof flag, "%.*s", (int)(eq - a), a);
-        val = eq + 1;
-      } else {
-        snprintf(flag, sizeof flag, "%s", a);
-        if (i + 1 < argc) val = argv[++i];
-      }
-      if (!val) return bs_app_usage_error("mesh", "flag %s needs a value", flag);
-      if (!strcmp(flag, "--size")) {
-        if (bs_app_parse_double(val, &size) || size <= 0)
-          return bs_app_usage_error("mesh", "--size must be a positive number, got '%s'", val);
-      } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
-        if (bs_app_parse_int(val, 0, 6, &refine))
-          return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
-      } else if (!strcmp(flag, "--levels") && !strcmp(sub, "refine")) {
-        if (bs_app_parse_int(val, 1, 6, &levels))
-          return bs_app_usage_error("mesh", "--levels must be an integer 1..6, got '%s'", val);
-      } else if ((!strcmp(flag, "--reorder") && !strcmp(sub, "info")) ||
-                 (!strcmp(flag, "--method") && !strcmp(sub, "reorder"))) {
-        if (parse_order(val, &order)) return bs_app_usage_error("mesh", "%s must be metis or rcm, got '%s'", flag, val);
-        have_order = 1;
-      } else {
-        return bs_app_usage_error("mesh", "unknown flag '%s' for 'mesh %s'", flag, sub);
-      }
+    const char *arg = argv[i];
+    if (strncmp(arg, "--", 2) == 0) {
+      char fbuf[64];
+      const char *flag, *val;
+      if (bs_app_flag_value(argc, argv, &i, fbuf, sizeof fbuf, &flag, &val))
+        return bs_app_usage_error("mesh", "flag %s needs a value", fbuf);
+      int rc = parse_flag(a, flag, val);
+      if (rc) return rc;
     } else {
-      if (npos >= 1 + need_out) return bs_app_usage_error("mesh", "unexpected argument '%s'", a);
-      pos[npos++] = a;
+      if (a->npos >= 1 + a->need_out) return bs_app_usage_error("mesh", "unexpected argument '%s'", arg);
+      a->pos[a->npos++] = arg;
     }
   }
-  if (npos < 1 + need_out)
-    return bs_app_usage_error("mesh", need_out ? "'mesh %s' needs IN and OUT" : "'mesh %s' needs FILE", sub);
+  if (a->npos < 1 + a->need_out)
+    return bs_app_usage_error("mesh", a->need_out ? "'mesh %s' needs IN and OUT" : "'mesh %s' needs FILE", sub);
+  return 0;
+}
 
+/* mesh info: optional reordering, the report and bs_mesh_check. */
+static int mesh_info(bs_mesh *m, const mesh_args *a, double t_load, bs_error *err) {
+  if (a->have_order) {
+    int64_t bw0, p0, bw1, p1;
+    bs_mesh_bandwidth(m, &bw0, &p0);
+    double t0 = bs_seconds();
+    if (bs_mesh_reorder(m, a->order, NULL, err)) {
+      fprintf(stderr, "bigstep mesh: %s\n", err->msg);
+      return BS_EXIT_FAIL;
+    }
+    bs_mesh_bandwidth(m, &bw1, &p1);
+    printf("reordered (%s) in %.3f s: bandwidth %lld -> %lld, profile %lld -> %lld\n",
+           a->order == BS_ORDER_METIS ? "metis" : "rcm", bs_seconds() - t0, (long long)bw0, (long long)bw1,
+           (long long)p0, (long long)p1);
+  }
+  print_info(m, a->pos[0]);
+  printf("  loaded in %.3f s\n", t_load);
+  if (bs_mesh_check(m, err)) {
+    fprintf(stderr, "bigstep mesh: check failed: %s\n", err->msg);
+    return BS_EXIT_FAIL;
+  }
+  printf("  check: ok\n");
+  return 0;
+}
+
+/* mesh refine|reorder|convert: reorders (reorder), then writes OUT. */
+static int mesh_write(bs_mesh *m, const mesh_args *a, bs_error *err) {
+  if (!strcmp(a->sub, "reorder")) {
+    int64_t bw0, p0, bw1, p1;
+    bs_mesh_bandwidth(m, &bw0, &p0);
+    if (bs_mesh_reorder(m, a->order, NULL, err)) {
+      fprintf(stderr, "bigstep mesh: %s\n", err->msg);
+      return BS_EXIT_FAIL;
+    }
+    bs_mesh_bandwidth(m, &bw1, &p1);
+    printf("bandwidth %lld -> %lld, profile %lld -> %lld\n", (long long)bw0, (long long)bw1, (long long)p0,
+           (long long)p1);
+  }
+  if (bs_app_write_mesh(m, a->pos[1], err)) {
+    fprintf(stderr, "bigstep mesh: %s\n", err->msg);
+    return BS_EXIT_FAIL;
+  }
+  printf("wrote %s: %d vertices, %d tets\n", a->pos[1], m->n_vertices, m->n_tets);
+  return 0;
+}
+
+int bs_cmd_mesh(int argc, char **argv) {
+  /* argv[0] = "mesh" */
+  mesh_args a;
+  int rc = parse_args(argc, argv, &a);
+  if (rc) return rc < 0 ? 0 : rc;
   bs_error err;
   bs_error_clear(&err);
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
-  if (!strcmp(sub, "refine")) refine = levels;
-  if (bs_app_load_mesh(pos[0], size, refine, &m, &err)) {
+  if (bs_app_load_mesh(a.pos[0], a.size, !strcmp(a.sub, "refine") ? a.levels : a.refine, &m, &err)) {
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
   double t_load = bs_seconds() - t0;
-  int rc = 0;
-  if (!strcmp(sub, "info")) {
-    if (have_order) {
-      int64_t bw0, p0, bw1, p1;
-      bs_mesh_bandwidth(m, &bw0, &p0);
-      t0 = bs_seconds();
-      if (bs_mesh_reorder(m, order, NULL, &err)) {
-        fprintf(stderr, "bigstep mesh: %s\n", err.msg);
-        rc = BS_EXIT_FAIL;
-      } else {
-        bs_mesh_bandwidth(m, &bw1, &p1);
-        printf("reordered (%s) in %.3f s: bandwidth %lld -> %lld, profile %lld -> %lld\n",
-               order == BS_ORDER_METIS ? "metis" : "rcm", bs_seconds() - t0, (long long)bw0, (long long)bw1,
-               (long long)p0, (long long)p1);
-      }
-    }
-    if (!rc) {
-      print_info(m, pos[0]);
-      printf("  loaded in %.3f s\n", t_load);
-      if (bs_mesh_check(m, &err)) {
-        fprintf(stderr, "bigstep mesh: check failed: %s\n", err.msg);
-        rc = BS_EXIT_FAIL;
-      } else {
-        printf("  check: ok\n");
-      }
-    }
-  } else {
-    if (!strcmp(sub, "reorder")) {
-      int64_t bw0, p0, bw1, p1;
-      bs_mesh_bandwidth(m, &bw0, &p0);
-      if (bs_mesh_reorder(m, order, NULL, &err)) {
-        fprintf(stderr, "bigstep mesh: %s\n", err.msg);
-        bs_mesh_destroy(&m);
-        return BS_EXIT_FAIL;
-      }
-      bs_mesh_bandwidth(m, &bw1, &p1);
-      printf("bandwidth %lld -> %lld, profile %lld -> %lld\n", (long long)bw0, (long long)bw1, (long long)p0,
-             (long long)p1);
-    }
-    if (bs_app_write_mesh(m, pos[1], &err)) {
-      fprintf(stderr, "bigstep mesh: %s\n", err.msg);
-      rc = BS_EXIT_FAIL;
-    } else {
-      printf("wrote %s: %d vertices, %d tets\n", pos[1], m->n_vertices, m->n_tets);
-    }
-  }
+  rc = !strcmp(a.sub, "info") ? mesh_info(m, &a, t_load, &err) : mesh_write(m, &a, &err);
   bs_mesh_destroy(&m);
   return rc;
 }
