@@ -72,7 +72,7 @@ int bs_app_flag_value(int argc, char **argv, int *i, char *fbuf, size_t n, const
   if (!strncmp(a, "--set=", 6)) {
     snprintf(fbuf, n, "--set");
     *value = a + 6;
-  } else if (eq && strncmp(a, "--set", 5) != 0) {
+  } else if (eq) {
     snprintf(fbuf, n, "%.*s", (int)(eq - a), a);
     *value = eq + 1;
   } else {

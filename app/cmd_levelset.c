@@ -239,7 +239,7 @@ static int parse_args(int argc, char **argv, levelset_args *a) {
       if (rc) return rc;
       i++;
     } else if (arg[0] == '-' && arg[1] == '-') {
-      return bs_app_usage_error("levelset", "unknown option '%s' (see 'bigstep levelset --help')", arg);
+      return bs_app_usage_error("levelset", "unknown option '%s'", arg);
     } else if (!a->in) {
       a->in = arg;
     } else if (!a->out) {
@@ -249,7 +249,7 @@ static int parse_args(int argc, char **argv, levelset_args *a) {
     }
   }
   if (!a->in || !a->out)
-    return bs_app_usage_error("levelset", "expected SURFACE and OUT (see 'bigstep levelset --help')");
+    return bs_app_usage_error("levelset", "expected SURFACE and OUT");
   return 0;
 }
 
