@@ -17,15 +17,7 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...) {
   return BS_EXIT_USAGE;
 }
 
-int bs_app_parse_double(const char *s, double *out) {
-  if (!s || !*s) return -1;
-  char *end;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (*end || errno || !isfinite(v)) return -1;
-  *out = v;
-  return 0;
-}
+int bs_app_parse_double(const char *s, double *out) { return bs_parse_double(s, out); }
 
 int bs_app_parse_int(const char *s, long lo, long hi, int *out) {
   if (!s || !*s) return -1;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <errno.h>
+#include <math.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -93,5 +94,15 @@ int bs_mkdir_p(const char *dir, bs_error *err) {
       *p = '/';
     }
   if (mkdir(buf, 0755) && errno != EEXIST) return bs_error_set(err, BS_EIO, "cannot create folder '%s'", buf);
+  return 0;
+}
+
+int bs_parse_double(const char *s, double *out) {
+  if (!s || !*s) return -1;
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (*end || errno || !isfinite(v)) return -1;
+  *out = v;
   return 0;
 }

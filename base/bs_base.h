@@ -68,6 +68,10 @@ size_t bs_peak_rss(void);
 /* calloc that records a BS_ENOMEM message naming `what` on failure. */
 void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err);
 
+/* Strict number parsing: the whole string must be a finite number (strtod
+ * syntax). 0 with *out set, else -1 and *out untouched. */
+int bs_parse_double(const char *s, double *out);
+
 /* Creates the folder dir and its missing parents (mode 0755), like
  * `mkdir -p`: 0, or BS_EIO naming the folder that could not be made. */
 int bs_mkdir_p(const char *dir, bs_error *err);

@@ -9,17 +9,6 @@
 
 #include "bs_study.h"
 
-/* Strict number parsing: the whole string must be a finite number. */
-static int parse_double(const char *s, double *out) {
-  if (!s || !*s) return -1;
-  char *end;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (*end || errno || !isfinite(v)) return -1;
-  *out = v;
-  return 0;
-}
-
 static int valid_key(const char *k) {
   if (!*k || *k == '.') return 0;
   for (const char *p = k; *p; p++)
@@ -88,7 +77,7 @@ static int knob_finest(const char *spec, bs_study_knob *k, bs_error *err) {
   int numeric = k->kind != BS_KNOB_METHOD && k->kind != BS_KNOB_OTHER;
   for (int j = 0; j < k->n; j++) {
     k->num[j] = NAN;
-    if (numeric && parse_double(k->vals[j], &k->num[j]))
+    if (numeric && bs_parse_double(k->vals[j], &k->num[j]))
       return bs_error_set(err, BS_EINPUT, "'%s': '%s' is not a number", spec, k->vals[j]);
   }
   k->finest = k->n - 1;
