@@ -125,52 +125,44 @@ void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks) {
 static int term_active(const bs_integrator *I, const bs_term *t) { return !(I->static_mode && t->dynamic_only); }
 
 /* ---- the objective handed to the minimizer ----------------------------- */
-/* A term's BS_TERM_NOT_EVALUABLE (bs_terms.h) is returned as it is: a nonzero
- * status, which the minimizer reads as "x is not evaluable" (E is then NaN). */
-static int obj_value(const double *x, double *E, void *ctx) {
-  bs_integrator *I = ctx;
-  double s = 0;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) {
-      double e;
-      int rc = I->terms[i]->ops->value(I->terms[i], x, &e);
-      if (rc) {
-        *E = NAN;
-        return rc;
-      }
-      s += e;
-    }
-  *E = s;
-  return isfinite(s) ? 0 : 1;
-}
+/* Which terms a sum of energies takes: all, the cheap ones (every term but
+ * the expensive ones, i.e. self-collision) or the expensive ones, which are
+ * >= 0 (section 3.3). */
+typedef enum { TERMS_ALL, TERMS_CHEAP, TERMS_EXPENSIVE } terms_which;
 
-/* The terms of E at x into *E: the cheap ones (every term but the expensive
- * ones, i.e. self-collision) or the expensive ones, which are >= 0 (section
- * 3.3). Nonzero (a term's status) when one is not evaluable. */
-static int terms_energy(bs_integrator *I, const double *x, int expensive, double *E) {
+/* The active terms' energies at x summed into *E, in term order. A term's
+ * BS_TERM_NOT_EVALUABLE (bs_terms.h) is returned as it is (E is then NaN). */
+static int terms_energy(bs_integrator *I, const double *x, terms_which which, double *E) {
   double s = 0;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && !I->terms[i]->expensive == !expensive) {
-      double e;
-      int rc = I->terms[i]->ops->value(I->terms[i], x, &e);
-      if (rc) return rc;
-      s += e;
-    }
+  *E = NAN;
+  for (int i = 0; i < I->n_terms; i++) {
+    const bs_term *t = I->terms[i];
+    if (!term_active(I, t) || (which != TERMS_ALL && !t->expensive != (which == TERMS_CHEAP))) continue;
+    double e;
+    int rc = t->ops->value(t, x, &e);
+    if (rc) return rc;
+    s += e;
+  }
   *E = s;
   return 0;
 }
 
+/* The minimizer reads a nonzero status as "x is not evaluable". */
+static int obj_value(const double *x, double *E, void *ctx) {
+  int rc = terms_energy(ctx, x, TERMS_ALL, E);
+  return rc ? rc : !isfinite(*E);
+}
+
 /* terms_energy for the initial guesses: +Inf where a term is not evaluable
  * (a candidate that is never chosen). */
-static double guess_part(bs_integrator *I, const double *x, int expensive) {
+static double guess_part(bs_integrator *I, const double *x, terms_which which) {
   double E;
-  return terms_energy(I, x, expensive, &E) ? INFINITY : E;
+  return terms_energy(I, x, which, &E) ? INFINITY : E;
 }
 
 static int obj_lower_bound(const double *x, double *E, void *ctx) {
-  int rc = terms_energy(ctx, x, 0, E);
-  if (rc) return rc;
-  return isfinite(*E) ? 0 : 1;
+  int rc = terms_energy(ctx, x, TERMS_CHEAP, E);
+  return rc ? rc : !isfinite(*E);
 }
 
 /* E at an initial-guess candidate whose cheap terms sum to cheap, when it may
@@ -178,7 +170,7 @@ static int obj_lower_bound(const double *x, double *E, void *ctx) {
  * the expensive terms, >= 0, are skipped, as in section 3.3). */
 static double guess_energy(bs_integrator *I, const double *x, double cheap, double best) {
   if (!isfinite(cheap) || cheap >= best) return cheap;
-  return cheap + guess_part(I, x, 1);
+  return cheap + guess_part(I, x, TERMS_EXPENSIVE);
 }
 
 /* grad E' at x, over the active terms, into g (zeroed first); the energy is
@@ -390,7 +382,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   /* the candidate with the smaller cheap part first: the other's expensive
      terms are then often skipped (and the detection left for the solve is the
      chosen guess's) */
-  const double c1 = guess_part(I, I->g1, 0), c2 = guess_part(I, I->g2, 0);
+  const double c1 = guess_part(I, I->g1, TERMS_CHEAP), c2 = guess_part(I, I->g2, TERMS_CHEAP);
   double E1, E2;
   if (c2 < c1) {
     E2 = guess_energy(I, I->g2, c2, INFINITY);
@@ -414,7 +406,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     if (I->script) I->script(t + dt, I->g1, I->script_ctx);
     if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
     const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
-    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, 0), isfinite(Eb) ? Eb : INFINITY);
+    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
       memcpy(x, I->g1, sizeof(double) * n3);
       st->guess = BS_GUESS_XN;

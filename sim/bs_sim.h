@@ -113,7 +113,6 @@ typedef struct bs_sim {
   bs_fem *fem;
   int n_terms;
   bs_term *terms[BS_SIM_MAX_TERMS]; /* the scene's terms (penalty terms are the obstacles') */
-  int n_user_terms;        /* the last n_user_terms of terms[]: bs_sim_add_term's */
   bs_obstacles *obstacles; /* NULL when the scene has none                  */
   bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
   bs_step_hooks obstacle_hooks;

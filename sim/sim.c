@@ -125,7 +125,6 @@ int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err) {
                         name);
   }
   s->terms[s->n_terms++] = t;
-  s->n_user_terms++;
   return make_integrator(s, err);
 }
 
