@@ -81,10 +81,11 @@ typedef struct run_ctx {
 /* After each frame: the folder's files, then the progress line. */
 static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
   run_ctx *c = ctx;
-  if (c->folder && bs_runfolder_frame(s, fs, c->folder, err)) return BS_EIO;
+  if ((c->args->quiet || fs->frame == 0) && !c->folder) return 0;
+  bs_sim_measures m; /* once: the folder's row (with intersections) and the line */
+  bs_sim_measure(s, c->folder != NULL, &m);
+  if (c->folder && bs_runfolder_write(c->folder, s, fs, &m, err)) return BS_EIO;
   if (c->args->quiet || fs->frame == 0) return 0;
-  bs_sim_measures m;
-  bs_sim_measure(s, 0, &m);
   if (s->scene->mode == BS_MODE_STATIC) {
     const bs_step_stats *st = &fs->steps[0].st;
     printf("static: %s after %d iterations (%d CG), |grad E| %.3e, E %.6e, %d inverted tets, %.3f s\n",

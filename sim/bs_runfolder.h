@@ -64,6 +64,11 @@ int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs
  * bs_runfolder (so that it can be handed to bs_sim_run). */
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err);
 
+/* The same with the frame's measures given (m: bs_sim_measure of the current
+ * state, with intersections), for a caller that measures the frame anyway. */
+int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
+                       bs_error *err);
+
 /* Writes frames.pvd (the VTU frames written) and summary.txt (when summary
  * is not NULL). */
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err);

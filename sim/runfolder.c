@@ -9,7 +9,6 @@
 struct bs_runfolder {
   char dir[BS_MAX_PATH];
   FILE *frames, *stats, *state;
-  int vtu_every;
   int n_vtu, cap_vtu;
   char **vtu_names;
   double *vtu_times;
@@ -38,7 +37,6 @@ int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   bs_runfolder *rf = calloc(1, sizeof *rf);
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
-  rf->vtu_every = sc->vtu_every;
   if (sc->stats_csv && !(st = open_file(rf, "stats.csv", "w", &rf->stats, err))) fprintf(rf->stats, "%s\n", BS_STATS_CSV_HEADER);
   if (!st && !(st = open_file(rf, "frames.csv", "w", &rf->frames, err))) fprintf(rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
   if (!st && sc->states && !(st = open_file(rf, "state.bin", "wb", &rf->state, err)) &&
@@ -65,12 +63,10 @@ static void write_stats_rows(FILE *f, const bs_frame_stats *fs) {
   fflush(f);
 }
 
-static void write_frame_row(FILE *f, const bs_sim *s, const bs_frame_stats *fs) {
-  bs_sim_measures m;
-  bs_sim_measure(s, 1, &m);
-  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m.kinetic,
-          m.elastic, m.gravity, m.total, m.inverted, m.min_detF, fs->iterations, fs->cg_iterations, fs->failed,
-          fs->seconds, m.penetrating, m.max_depth, (long long)m.self_intersections);
+static void write_frame_row(FILE *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m) {
+  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m->kinetic,
+          m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations, fs->cg_iterations, fs->failed,
+          fs->seconds, m->penetrating, m->max_depth, (long long)m->self_intersections);
   fflush(f);
 }
 
@@ -103,13 +99,20 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
 }
 
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
-  bs_runfolder *rf = ctx;
+  bs_sim_measures m;
+  bs_sim_measure(s, 1, &m);
+  return bs_runfolder_write(ctx, s, fs, &m, err);
+}
+
+int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
+                       bs_error *err) {
   if (rf->stats) write_stats_rows(rf->stats, fs);
-  write_frame_row(rf->frames, s, fs);
+  write_frame_row(rf->frames, s, fs, m);
   if (ferror(rf->frames)) return bs_error_set(err, BS_EIO, "cannot write '%s/frames.csv'", rf->dir);
   if (rf->stats && ferror(rf->stats)) return bs_error_set(err, BS_EIO, "cannot write '%s/stats.csv'", rf->dir);
   if (rf->state && write_state(rf->state, s)) return bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
-  if (rf->vtu_every > 0 && (fs->frame % rf->vtu_every == 0 || s->scene->mode == BS_MODE_STATIC))
+  const int every = s->scene->vtu_every;
+  if (every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
     return write_vtu(rf, s, fs->frame, err);
   return 0;
 }
