@@ -20,9 +20,6 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...)
 #endif
     ;
 
-/* Strict number parsing: the whole string must be a finite number. 0 on success. */
-int bs_app_parse_double(const char *s, double *out);
-int bs_app_parse_int(const char *s, long lo, long hi, int *out);
 
 /* Loads a mesh from a file (through Gmsh) or from a structured box spec
  * "box:NX[xNYxNZ][:LX[xLYxLZ]]" (bs_mesh_load), then refines `refine` times. */

@@ -1,5 +1,3 @@
-#include <errno.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,18 +13,6 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...) {
   fprintf(stderr, " (see 'bigstep %s --help')\n", cmd);
   va_end(ap);
   return BS_EXIT_USAGE;
-}
-
-int bs_app_parse_double(const char *s, double *out) { return bs_parse_double(s, out); }
-
-int bs_app_parse_int(const char *s, long lo, long hi, int *out) {
-  if (!s || !*s) return -1;
-  char *end;
-  errno = 0;
-  long v = strtol(s, &end, 10);
-  if (*end || errno || v < lo || v > hi) return -1;
-  *out = (int)v;
-  return 0;
 }
 
 int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, bs_error *err) {

@@ -212,7 +212,7 @@ typedef struct levelset_args {
 /* The value of --h, --margin or --size. 0, or the usage status. */
 static int parse_length(const char *flag, const char *val, levelset_args *a) {
   double v;
-  if (bs_app_parse_double(val, &v)) return bs_app_usage_error("levelset", "%s '%s': not a number", flag, val);
+  if (bs_parse_double(val, &v)) return bs_app_usage_error("levelset", "%s '%s': not a number", flag, val);
   if (!strcmp(flag, "--margin")) {
     if (v < 0) return bs_app_usage_error("levelset", "--margin %s: must be >= 0 (m)", val);
     a->margin = v;

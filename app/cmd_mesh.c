@@ -78,13 +78,13 @@ typedef struct mesh_args {
 static int parse_flag(mesh_args *a, const char *flag, const char *val) {
   const char *sub = a->sub;
   if (!strcmp(flag, "--size")) {
-    if (bs_app_parse_double(val, &a->size) || a->size <= 0)
+    if (bs_parse_double(val, &a->size) || a->size <= 0)
       return bs_app_usage_error("mesh", "--size must be a positive number, got '%s'", val);
   } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
-    if (bs_app_parse_int(val, 0, 6, &a->refine))
+    if (bs_parse_int(val, 0, 6, &a->refine))
       return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
   } else if (!strcmp(flag, "--levels") && !strcmp(sub, "refine")) {
-    if (bs_app_parse_int(val, 1, 6, &a->levels))
+    if (bs_parse_int(val, 1, 6, &a->levels))
       return bs_app_usage_error("mesh", "--levels must be an integer 1..6, got '%s'", val);
   } else if ((!strcmp(flag, "--reorder") && !strcmp(sub, "info")) ||
              (!strcmp(flag, "--method") && !strcmp(sub, "reorder"))) {

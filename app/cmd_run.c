@@ -66,7 +66,7 @@ static int parse_args(int argc, char **argv, run_args *a) {
     int is_count, n;
     const char *key = flag_key(flag, &is_count);
     if (!key) return bs_app_usage_error("run", "unknown flag '%s'", flag);
-    if (is_count && bs_app_parse_int(val, 1, 100000000, &n))
+    if (is_count && bs_parse_int(val, 1, 100000000, &n))
       return bs_app_usage_error("run", "%s must be a positive integer, got '%s'", flag, val);
     if (bs_app_sets_add(&a->sets, key, val, !is_count)) return bs_app_usage_error("run", "out of memory");
   }

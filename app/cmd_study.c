@@ -95,7 +95,7 @@ static int parse_flag(study_args *A, const char *flag, const char *val) {
   } else if (!strcmp(flag, "--reference")) {
     A->ref_dir = strcmp(val, "auto") ? val : NULL;
   } else if (!strcmp(flag, "--jobs")) {
-    if (bs_app_parse_int(val, 1, 1024, &A->jobs))
+    if (bs_parse_int(val, 1, 1024, &A->jobs))
       return bs_app_usage_error("study", "--jobs must be an integer in 1..1024, got '%s'", val);
   } else {
     A->out = val;

@@ -106,3 +106,13 @@ int bs_parse_double(const char *s, double *out) {
   *out = v;
   return 0;
 }
+
+int bs_parse_int(const char *s, long lo, long hi, int *out) {
+  if (!s || !*s) return -1;
+  char *end;
+  errno = 0;
+  long v = strtol(s, &end, 10);
+  if (*end || errno || v < lo || v > hi) return -1;
+  *out = (int)v;
+  return 0;
+}

@@ -72,6 +72,10 @@ void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err);
  * syntax). 0 with *out set, else -1 and *out untouched. */
 int bs_parse_double(const char *s, double *out);
 
+/* Strict integer parsing: the whole string a base-10 integer in [lo, hi].
+ * 0 with *out set, else -1 and *out untouched. */
+int bs_parse_int(const char *s, long lo, long hi, int *out);
+
 /* Creates the folder dir and its missing parents (mode 0755), like
  * `mkdir -p`: 0, or BS_EIO naming the folder that could not be made. */
 int bs_mkdir_p(const char *dir, bs_error *err);

@@ -1,7 +1,6 @@
 /* load.c — a mesh from a path or a structured-box spec, then refined; the
  * bounding box of a point set. */
 #define _POSIX_C_SOURCE 200809L
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,25 +28,6 @@ int bs_mesh_create_box_refined(const double size[3], const int cells[3], int ref
   return 0;
 }
 
-/* Strict numbers: the whole token must parse. */
-static int parse_cells(const char *tok, int *out) {
-  char *end;
-  errno = 0;
-  long v = strtol(tok, &end, 10);
-  if (!*tok || *end || errno || v < 1 || v > 4096) return -1;
-  *out = (int)v;
-  return 0;
-}
-
-static int parse_len(const char *tok, double *out) {
-  char *end;
-  errno = 0;
-  double v = strtod(tok, &end);
-  if (!*tok || *end || errno || !isfinite(v) || !(v > 0)) return -1;
-  *out = v;
-  return 0;
-}
-
 int bs_mesh_box_spec_parse(const char *spec, int n[3], double len[3], bs_error *err) {
   n[0] = n[1] = n[2] = 0;
   len[0] = len[1] = len[2] = 1.0;
@@ -58,7 +38,7 @@ int bs_mesh_box_spec_parse(const char *spec, int n[3], double len[3], bs_error *
   if (lens) *lens++ = '\0';
   int k = 0;
   for (char *tok = strtok_r(cells, "x", &save); tok; tok = strtok_r(NULL, "x", &save)) {
-    if (k >= 3 || parse_cells(tok, &n[k]) != 0)
+    if (k >= 3 || bs_parse_int(tok, 1, 4096, &n[k]))
       return bs_error_set(err, BS_EINPUT, "bad box spec '%s': cells must be NX or NXxNYxNZ, each 1..4096", spec);
     k++;
   }
@@ -67,7 +47,7 @@ int bs_mesh_box_spec_parse(const char *spec, int n[3], double len[3], bs_error *
   if (!lens) return 0;
   k = 0;
   for (char *tok = strtok_r(lens, "x", &save); tok; tok = strtok_r(NULL, "x", &save)) {
-    if (k >= 3 || parse_len(tok, &len[k]) != 0)
+    if (k >= 3 || bs_parse_double(tok, &len[k]) || !(len[k] > 0))
       return bs_error_set(err, BS_EINPUT, "bad box spec '%s': lengths must be positive numbers", spec);
     k++;
   }
