@@ -103,21 +103,15 @@ static int parse_flag(study_args *A, const char *flag, const char *val) {
   return 0;
 }
 
-/* The flag at argv[*i]: "--flag value" or "--flag=value". */
+/* The flag at argv[*i]: "--flag value" or "--flag=value" (bs_app_flag_value). */
 static int parse_option(study_args *A, int argc, char **argv, int *i) {
-  const char *a = argv[*i], *val = NULL, *eq = strchr(a, '=');
-  char flag[64];
-  if (eq) {
-    snprintf(flag, sizeof flag, "%.*s", (int)(eq - a), a);
-    val = eq + 1;
-  } else {
-    snprintf(flag, sizeof flag, "%s", a);
-    if (*i + 1 < argc) val = argv[++*i];
-  }
+  char fbuf[64];
+  const char *flag, *val;
+  const int missing = bs_app_flag_value(argc, argv, i, fbuf, sizeof fbuf, &flag, &val);
   int known = !strcmp(flag, "--vary") || !strcmp(flag, "--set") || !strcmp(flag, "--reference") ||
               !strcmp(flag, "--jobs") || !strcmp(flag, "--out");
   if (!known) return bs_app_usage_error("study", "unknown flag '%s'", flag);
-  if (!val) return bs_app_usage_error("study", "flag %s needs a value", flag);
+  if (missing) return bs_app_usage_error("study", "flag %s needs a value", flag);
   return parse_flag(A, flag, val);
 }
 
