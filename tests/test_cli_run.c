@@ -11,23 +11,13 @@
 
 #include "bs_runfolder.h"
 #include "cli_util.h"
+#include "scene_fixture.h"
 
-static const char *good =
-    "{\"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 1},\n"
-    " \"solver\": {\"method\": \"optimization\", \"tolerance\": 1e-3},\n"
-    " \"gravity\": [0, -9.8, 0],\n"
-    " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]},\n"
-    "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000},\n"
-    "   \"scripted\": [{\"group\": \"ymin\", \"fixed\": true}]}]}\n";
 
 /* Writes the good scene to a fresh file and runs `bigstep run FILE ARGS`. */
 static int run_good(const char *args, char **out) {
   char path[] = "/tmp/bs_cli_run_XXXXXX";
-  int fd = mkstemp(path);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
-  fputs(good, f);
-  fclose(f);
+  bs_test_write_scene(path, bs_test_good_scene);
   char cmd[2048];
   snprintf(cmd, sizeof cmd, "%s run %s %s", BS_BIGSTEP_EXE, path, args);
   int rc = bs_test_run(cmd, out);

@@ -17,6 +17,7 @@
 #include "bs_runfolder.h"
 #include "bs_scene.h"
 #include "bs_sim.h"
+#include "scene_fixture.h"
 
 #define FRAMES 3
 #define FPS 24.0
@@ -32,20 +33,12 @@ static void teardown(void) {
 
 /* A 2^3-cell box clamped at x = 0, thrown up and sagging for FRAMES frames, with stats and states. */
 static bs_scene *small_box(void) {
-  bs_scene *sc = NULL;
-  bs_scene_body *b = NULL;
+  bs_scene *sc = bs_test_box_scene(FRAMES, FPS, 1);
+  bs_scene_body *b = &sc->bodies[0];
   bs_error err;
-  cr_assert_eq(bs_scene_create(&sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_scene_add_body(sc, "box", &b, &err), 0, "%s", err.msg);
-  b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 2;
-  b->materials[0].youngs = 1e5;
-  b->materials[0].poisson = 0.3;
-  b->materials[0].density = 1000;
   b->velocity[1] = 0.5;
   bs_scene_script *clamp = NULL; /* clamped: the steps take Newton iterations */
   cr_assert_eq(bs_scene_body_add_script(b, "xmin", BS_SCRIPT_FIXED, &clamp, &err), 0, "%s", err.msg);
-  sc->frames = FRAMES;
-  sc->fps = FPS;
   sc->states = 1;
   sc->stats_csv = 1;
   sc->vtu_every = 0;

@@ -10,37 +10,27 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_fixture.h"
 #include "sim_util.h"
 
-static const char *good =
-    "{\"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 1},\n"
-    " \"solver\": {\"method\": \"optimization\", \"tolerance\": 1e-3},\n"
-    " \"gravity\": [0, -9.8, 0],\n"
-    " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]},\n"
-    "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000},\n"
-    "   \"scripted\": [{\"group\": \"ymin\", \"fixed\": true}]}]}\n";
 
 /* Writes text to a fresh scene file and loads it with the overrides, then
  * creates the simulation: the status, the message in *err. */
 static int load_scene(const char *text, int n_sets, const char *const *sets, bs_error *err) {
   char path[] = "/tmp/bs_scene_XXXXXX";
-  int fd = mkstemp(path);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
-  fputs(text, f);
-  fclose(f);
+  bs_test_write_scene(path, text);
   int rc = sim_load_error(path, sets, n_sets, err);
   unlink(path);
   return rc;
 }
 
-/* Replaces the first occurrence of `from` in good by `to`. */
+/* Replaces the first occurrence of `from` in the good scene by `to`. */
 static char *edit(const char *from, const char *to) {
-  const char *p = strstr(good, from);
+  const char *p = strstr(bs_test_good_scene, from);
   cr_assert_not_null(p, "fixture does not hold '%s'", from);
-  size_t n = strlen(good) - strlen(from) + strlen(to) + 1;
+  size_t n = strlen(bs_test_good_scene) - strlen(from) + strlen(to) + 1;
   char *s = malloc(n);
-  snprintf(s, n, "%.*s%s%s", (int)(p - good), good, to, p + strlen(from));
+  snprintf(s, n, "%.*s%s%s", (int)(p - bs_test_good_scene), bs_test_good_scene, to, p + strlen(from));
   return s;
 }
 
@@ -58,7 +48,7 @@ static void expect_error(const char *from, const char *to, const char *needle) {
 /* The good scene with one override is refused with a message holding needle. */
 static void expect_set_error(const char *set, const char *needle) {
   bs_error err;
-  int rc = load_scene(good, 1, &set, &err);
+  int rc = load_scene(bs_test_good_scene, 1, &set, &err);
   cr_expect_eq(rc, BS_EINPUT, "set %s: status %d: %s", set, rc, err.msg);
   cr_expect(strstr(err.msg, needle) != NULL, "set %s: message should hold '%s': %s", set, needle, err.msg);
 }
@@ -67,11 +57,7 @@ static void expect_set_error(const char *set, const char *needle) {
  * stats.csv with a row each, frames.pvd and the last frame's VTU. */
 Test(scene, good_scene_runs) {
   char path[] = "/tmp/bs_scene_XXXXXX";
-  int fd = mkstemp(path);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
-  fputs(good, f);
-  fclose(f);
+  bs_test_write_scene(path, bs_test_good_scene);
   cr_assert_eq(system("rm -rf /tmp/bs_scene_out"), 0);
   sim_rec rec;
   bs_run_totals T;
@@ -80,7 +66,7 @@ Test(scene, good_scene_runs) {
   cr_expect_eq(T.steps, 2);
   cr_expect_eq(T.failed, 0, "%s", T.first_fail_reason);
   cr_expect_eq(rec.failed, 0, "%s", rec.reason);
-  f = fopen("/tmp/bs_scene_out/stats.csv", "r");
+  FILE *f = fopen("/tmp/bs_scene_out/stats.csv", "r");
   cr_assert_not_null(f, "stats.csv missing");
   char line[4096];
   int lines = 0;
@@ -152,11 +138,7 @@ Test(scene, set_overrides_are_validated) {
   expect_set_error("bodies.0.velocity=[0,nan,0]", "bodies.0.velocity");
   /* a valid override takes effect: 2 steps per frame, 4 steps in the 2 frames */
   char path[] = "/tmp/bs_scene_XXXXXX";
-  int fd = mkstemp(path);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
-  fputs(good, f);
-  fclose(f);
+  bs_test_write_scene(path, bs_test_good_scene);
   sim_rec rec;
   bs_run_totals T;
   bs_scene *sc = NULL;

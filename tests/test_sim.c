@@ -11,6 +11,7 @@
 
 #include "bs_scene.h"
 #include "bs_sim.h"
+#include "scene_fixture.h"
 
 /* A clamped beam sagging under gravity, solved statically. */
 static const char *beam_json =
@@ -124,23 +125,6 @@ Test(sim, validate_names_the_key) {
   bs_scene_destroy(&sc);
 }
 
-/* A small dynamic scene: a 2^3-cell box falling freely. */
-static bs_scene *falling_box(int frames, double fps, int steps) {
-  bs_scene *sc = NULL;
-  bs_scene_body *b = NULL;
-  bs_error err;
-  cr_assert_eq(bs_scene_create(&sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_scene_add_body(sc, "box", &b, &err), 0, "%s", err.msg);
-  b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 2;
-  b->materials[0].youngs = 1e5;
-  b->materials[0].poisson = 0.3;
-  b->materials[0].density = 1000;
-  sc->frames = frames;
-  sc->fps = fps;
-  sc->steps_per_frame = steps;
-  cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
-  return sc;
-}
 
 typedef struct calls {
   int n, frames[16], n_steps[16], stop_at, code;
@@ -163,7 +147,7 @@ static int count_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 Test(sim, run_calls_back_every_frame_at_exact_times) {
   const int frames = 5, steps = 3;
   const double fps = 30;
-  bs_scene *sc = falling_box(frames, fps, steps);
+  bs_scene *sc = bs_test_box_scene(frames, fps, steps);
   bs_sim *s = NULL;
   bs_error err;
   cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
@@ -230,7 +214,7 @@ Test(sim, run_of_a_static_scene_calls_back_twice) {
  * overwritten by the next solve, so the simulation copies it (a frame of 3
  * steps once showed the last step's text on every row of stats.csv). */
 Test(sim, every_step_keeps_its_own_reason) {
-  bs_scene *sc = falling_box(1, 24, 3);
+  bs_scene *sc = bs_test_box_scene(1, 24, 3);
   bs_sim *s = NULL;
   bs_error err;
   bs_frame_stats fs;
