@@ -168,9 +168,6 @@ void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m);
  * rounding), and the largest depth (m, over all vertices). */
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
 
-/* Self-colliding vertices at the current state and the largest depth (m). */
-void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth);
-
 /* Body b of the scene alone, as bs_sim_create makes it: read (or built),
  * refined, reordered, scaled, rotated, translated. The caller owns it. */
 int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err);

@@ -130,13 +130,6 @@ int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err) {
 
 long bs_sim_dofs(const bs_sim *s) { return 3L * s->n_free; }
 
-void bs_sim_self_contacts(bs_sim *s, int32_t *count, double *max_depth) {
-  *count = 0;
-  *max_depth = 0;
-  bs_error err;
-  if (s->self) bs_term_self_detect(s->self, s->x, count, max_depth, &err);
-}
-
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth) {
   *count = 0;
   *max_depth = 0;

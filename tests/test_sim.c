@@ -233,3 +233,68 @@ Test(sim, every_step_keeps_its_own_reason) {
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
 }
+
+/* The rest of the C builder against its JSON: a material for a 3-D group, a
+ * keyframed group, an obstacle; the same state after two frames, bit for bit. */
+static const char *parts_json =
+    "{\"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 2},\n"
+    " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]},\n"
+    "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000},\n"
+    "   \"materials\": {\"body\": {\"model\": \"neo_hookean\", \"youngs\": 2e5, \"poisson\": 0.3, \"density\": 1000}},\n"
+    "   \"scripted\": [{\"group\": \"xmax\", \"keyframes\": [{\"t\": 0, \"offset\": [0, 0, 0]},\n"
+    "                                                  {\"t\": 0.1, \"offset\": [0.05, 0.02, 0]}]}]}],\n"
+    " \"obstacles\": [{\"shape\": \"plane\", \"normal\": [0, 1, 0], \"offset\": -0.01, \"friction\": 0.3}]}\n";
+
+Test(sim, builder_parts_match_the_json) {
+  bs_scene *sc = bs_test_box_scene(2, 24, 2);
+  bs_scene_body *b = &sc->bodies[0];
+  bs_scene_material *m = NULL;
+  bs_scene_script *key = NULL;
+  bs_scene_obstacle *o = NULL;
+  bs_error err;
+  cr_assert_eq(bs_scene_body_add_material(b, "body", &m, &err), 0, "%s", err.msg);
+  cr_expect(m->density == 1000 && m->youngs == 1e5, "a material starts as a copy of the body's default");
+  m->model = BS_MODEL_NEO_HOOKEAN;
+  m->youngs = 2e5;
+  const double kt[2] = {0, 0.1}, ko[6] = {0, 0, 0, 0.05, 0.02, 0};
+  cr_assert_eq(bs_scene_body_add_script(b, "xmax", BS_SCRIPT_FIXED, &key, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_scene_script_set_keyframes(key, 2, kt, ko, &err), 0, "%s", err.msg);
+  cr_expect_eq(key->kind, BS_SCRIPT_KEYFRAMES);
+  cr_assert_eq(bs_scene_add_obstacle(sc, BS_SHAPE_PLANE, &o, &err), 0, "%s", err.msg);
+  cr_expect(o->normal[1] == 1 && o->collision == BS_COLLIDE_CONSTRAINT, "the schema's obstacle defaults");
+  o->offset = -0.01;
+  o->friction = 0.3;
+  cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
+  bs_scene *js = NULL;
+  cr_assert_eq(bs_scene_parse(parts_json, "parts.json", 0, NULL, &js, &err), 0, "%s", err.msg);
+  bs_sim *a = NULL, *c = NULL;
+  cr_assert_eq(bs_sim_create(sc, &a, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_create(js, &c, &err), 0, "%s", err.msg);
+  bs_run_totals Ta, Tc;
+  cr_assert_eq(bs_sim_run(a, NULL, NULL, &Ta, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_run(c, NULL, NULL, &Tc, &err), 0, "%s", err.msg);
+  cr_expect_eq(Ta.failed, 0, "%s", Ta.first_fail_reason);
+  cr_expect_eq(Ta.iterations, Tc.iterations);
+  size_t n3 = 3 * (size_t)a->mesh->n_vertices;
+  cr_assert_eq(a->mesh->n_vertices, c->mesh->n_vertices);
+  cr_expect_eq(memcmp(a->x, c->x, sizeof(double) * n3), 0, "the C scene and its JSON end in different states");
+  cr_expect_eq(memcmp(a->v, c->v, sizeof(double) * n3), 0);
+  cr_expect_eq(a->tet_material[0], 1, "the group 'body' has the second material");
+  bs_sim_destroy(&a);
+  bs_sim_destroy(&c);
+  bs_scene_destroy(&js);
+  bs_scene_destroy(&sc);
+}
+
+Test(sim, shape_names_round_trip) {
+  for (int k = BS_SHAPE_PLANE; k <= BS_SHAPE_GRID; k++) {
+    bs_shape s;
+    bs_error err;
+    cr_expect_eq(bs_shape_parse(bs_shape_name((bs_shape)k), &s, &err), 0);
+    cr_expect_eq((int)s, k);
+  }
+  bs_shape s;
+  bs_error err;
+  cr_expect_eq(bs_shape_parse("cone", &s, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "cone") != NULL, "%s", err.msg);
+}
