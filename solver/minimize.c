@@ -429,17 +429,12 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   return 0;
 }
 
-int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st_out, bs_error *err) {
-  double t_start = bs_seconds();
-  bs_minimize_stats local, *st = st_out ? st_out : &local;
-  memset(st, 0, sizeof *st);
-  int rc = bs__obj_check(m, obj, x, err);
-  if (rc) return rc;
-  const bs_minimize_opts *o = &m->opts;
-  const int32_t n = m->n;
+/* The start of bs_minimize: with no unknowns, E and a reason (returns 1);
+ * else the initial guess projected (fixed dofs kept: m->y holds the input)
+ * and its energy and raw gradient (returns 1 with the reason when they are
+ * not evaluable, 0 to iterate). */
+static int start(bs_minimizer *m, const bs_objective *obj, double *x, double *E, bs_minimize_stats *st) {
   const int64_t N = m->n3;
-  if (o->linear == BS_LIN_AMG && ++m->amg_calls >= o->amg_rebuild_every && o->amg_rebuild_every > 0)
-    m->amg_reset = 1;
   if (N == 0) { /* nothing to move: report E */
     double E0 = 0;
     double t = bs_seconds();
@@ -448,24 +443,135 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     st->E = E0;
     if (vrc || !isfinite(E0)) bs__set_reason(m, st, BS_MIN_NONFINITE, "objective not evaluable (E = %g)", E0);
     else bs__set_reason(m, st, BS_MIN_CONVERGED, "no unknowns");
-    st->t_total = bs_seconds() - t_start;
-    return 0;
+    return 1;
   }
-
-  /* The initial guess is projected (fixed dofs kept: m->y holds the input). */
   if (obj->project) {
     memcpy(m->y, x, sizeof(double) * (size_t)N);
     bs__project(obj, x, m->y, st);
   }
-  double E = NAN;
   int64_t bad;
-  if (bs__gradient(m, obj, x, &E, m->g_raw, &bad, st)) {
-    st->E = E;
-    st->grad_norm = NAN;
-    if (bad >= 0)
-      bs__set_reason(m, st, BS_MIN_NONFINITE, "gradient not finite at the initial point: vertex %lld component %d (%g)",
-                     (long long)(bad / 3), (int)(bad % 3), m->g_raw[bad]);
-    else bs__set_reason(m, st, BS_MIN_NONFINITE, "objective not evaluable at the initial point (E = %g)", E);
+  if (!bs__gradient(m, obj, x, E, m->g_raw, &bad, st)) return 0;
+  st->E = *E;
+  st->grad_norm = NAN;
+  if (bad >= 0)
+    bs__set_reason(m, st, BS_MIN_NONFINITE, "gradient not finite at the initial point: vertex %lld component %d (%g)",
+                   (long long)(bad / 3), (int)(bad % 3), m->g_raw[bad]);
+  else bs__set_reason(m, st, BS_MIN_NONFINITE, "objective not evaluable at the initial point (E = %g)", *E);
+  return 1;
+}
+
+/* Steps 5 and 6 on the Newton direction m->d: the downhill check (dx, else
+ * -dx, else -grad E) and the length clamp. Returns phi'(0) = d.g. */
+static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stats *st, bs_min_iter *rec) {
+  const bs_minimize_opts *o = &m->opts;
+  const int64_t N = m->n3;
+  /* Step 5: downhill check. */
+  double dn = sqrt(bs__dot(N, m->d, m->d)), dg = bs__dot(N, m->d, m->g);
+  if (isfinite(dn) && isfinite(dg) && dn > 0 && dg < -o->kappa * dn * gnorm) {
+    rec->direction = BS_DIR_NEWTON;
+  } else if (isfinite(dn) && isfinite(dg) && dn > 0 && -dg < -o->kappa * dn * gnorm) {
+    for (int64_t i = 0; i < N; ++i) m->d[i] = -m->d[i];
+    rec->direction = BS_DIR_NEG_DX;
+    st->fallback_neg_dx++;
+  } else {
+    for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
+    dn = gnorm;
+    rec->direction = BS_DIR_NEG_GRAD;
+    st->fallback_neg_grad++;
+  }
+  /* Step 6: length clamp. */
+  if (dn > o->clamp) {
+    double s = o->clamp / dn;
+    for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
+    rec->clamped = 1;
+    st->clamps++;
+  }
+  return bs__dot(N, m->d, m->g);
+}
+
+/* The reason of a line search with no decrease. Paper 3.3: below some
+ * |grad E| the decrease a step can make, about |g.d|/2, is lost in the
+ * rounding of E itself. Say so when it is. */
+static void no_decrease_reason(bs_minimizer *m, bs_minimize_stats *st, const bs__ls_result *ls, int it, double E,
+                               double gnorm, double dphi0) {
+  if (-dphi0 <= bs__noise_level(E))
+    bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
+                   "no decrease of E in %d trial points at iteration %d: the predicted decrease |g.d| = %.3e "
+                   "is at the rounding level of E = %.9e (|grad E| = %.3e; tol %.3e is below what E resolves; "
+                   "see opts.accept_noise)",
+                   ls->evals, it, -dphi0, E, gnorm, m->opts.tol);
+  else
+    bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
+                   "no decrease of E along the search direction in %d trial points at iteration %d "
+                   "(|grad E| = %.3e, E = %.9e, g.d = %.3e)",
+                   ls->evals, it, gnorm, E, dphi0);
+}
+
+/* The AMG setup when due, from the objective's matrix (assembled in H's
+ * storage), then step 2's Hessian at x: 0, > 0 to stop (the reason is set),
+ * < 0 an error. */
+static int assemble(bs_minimizer *m, const bs_objective *obj, const double *x, int it, bs_minimize_stats *st,
+                    bs_error *err) {
+  if (m->opts.linear == BS_LIN_AMG && obj->precond_matrix) {
+    int rc = amg_prepare(m, obj, x, it, st, err);
+    if (rc) return rc;
+  }
+  double t = bs_seconds();
+  int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
+  st->t_assembly += bs_seconds() - t;
+  if (!hrc) return 0;
+  bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);
+  return 1;
+}
+
+/* The accepted iteration handed to obj->trace (before x moves to m->y). */
+static void trace_step(const bs_minimizer *m, const bs_objective *obj, const double *x, double E, double dphi0,
+                       const bs__ls_result *ls, bs_min_iter *rec) {
+  rec->ls_status = ls->status;
+  rec->ls_evaluations = ls->evals;
+  rec->alpha = ls->alpha;
+  rec->phi0 = E;
+  rec->dphi0 = dphi0;
+  rec->phi = ls->phi;
+  rec->dphi = ls->dphi;
+  rec->x = x;
+  rec->d = m->d;
+  rec->y = m->y;
+  obj->trace(rec, obj->ctx);
+}
+
+/* Whether the accepted point m->y differs from x on a free dof. */
+static int free_dofs_moved(const bs_minimizer *m, const bs_objective *obj, const double *x) {
+  for (int32_t v = 0; v < m->n; ++v)
+    if (!obj->mask || obj->mask[v])
+      for (int k = 0; k < 3; ++k)
+        if (m->y[3 * (int64_t)v + k] != x[3 * (int64_t)v + k]) return 1;
+  return 0;
+}
+
+/* Accept: x <- P(x + alpha d), with its gradient; the step-length counts.
+ * Returns E at the new x. */
+static double accept_step(bs_minimizer *m, double *x, const bs__ls_result *ls, bs_minimize_stats *st) {
+  memcpy(x, m->y, sizeof(double) * (size_t)m->n3);
+  memcpy(m->g_raw, m->gy_raw, sizeof(double) * (size_t)m->n3);
+  st->iterations++;
+  st->alpha_last = ls->alpha;
+  if (st->iterations == 1 || ls->alpha < st->alpha_min) st->alpha_min = ls->alpha;
+  if (st->iterations == 1 || ls->alpha > st->alpha_max) st->alpha_max = ls->alpha;
+  return ls->phi;
+}
+
+int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st_out, bs_error *err) {
+  double t_start = bs_seconds();
+  bs_minimize_stats local, *st = st_out ? st_out : &local;
+  memset(st, 0, sizeof *st);
+  int rc = bs__obj_check(m, obj, x, err);
+  if (rc) return rc;
+  const bs_minimize_opts *o = &m->opts;
+  if (o->linear == BS_LIN_AMG && ++m->amg_calls >= o->amg_rebuild_every && o->amg_rebuild_every > 0)
+    m->amg_reset = 1;
+  double E = NAN;
+  if (start(m, obj, x, &E, st)) { /* no unknowns, or not evaluable there: st says which */
     st->t_total = bs_seconds() - t_start;
     return 0;
   }
@@ -490,99 +596,31 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     rec.iteration = it;
     rec.grad_norm = gnorm;
 
-    /* AMG setup when due, from the objective's matrix (assembled in H's storage). */
-    if (o->linear == BS_LIN_AMG && obj->precond_matrix) {
-      rc = amg_prepare(m, obj, x, it, st, err);
-      if (rc < 0) return rc;
-      if (rc > 0) break;
-    }
-    /* Step 2: Hessian. */
-    double t = bs_seconds();
-    int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
-    st->t_assembly += bs_seconds() - t;
-    if (hrc) {
-      bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);
-      break;
-    }
+    rc = assemble(m, obj, x, it, st, err);
+    if (rc < 0) return rc;
+    if (rc > 0) break;
     /* Step 4: Newton direction. */
     rc = newton_direction(m, obj, x, gnorm, it, st, &rec, err);
     if (rc < 0) return rc;
     if (rc > 0) break;
 
-    /* Step 5: downhill check. */
-    double dn = sqrt(bs__dot(N, m->d, m->d)), dg = bs__dot(N, m->d, m->g);
-    if (isfinite(dn) && isfinite(dg) && dn > 0 && dg < -o->kappa * dn * gnorm) {
-      rec.direction = BS_DIR_NEWTON;
-    } else if (isfinite(dn) && isfinite(dg) && dn > 0 && -dg < -o->kappa * dn * gnorm) {
-      for (int64_t i = 0; i < N; ++i) m->d[i] = -m->d[i];
-      rec.direction = BS_DIR_NEG_DX;
-      st->fallback_neg_dx++;
-    } else {
-      for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
-      dn = gnorm;
-      rec.direction = BS_DIR_NEG_GRAD;
-      st->fallback_neg_grad++;
-    }
-    /* Step 6: length clamp. */
-    if (dn > o->clamp) {
-      double s = o->clamp / dn;
-      for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
-      rec.clamped = 1;
-      st->clamps++;
-    }
-    double dphi0 = bs__dot(N, m->d, m->g);
+    const double dphi0 = downhill_and_clamp(m, gnorm, st, &rec);
 
     /* Steps 7-9: line search along the projected curve. */
     bs__ls_result ls;
-    t = bs_seconds();
+    double t = bs_seconds();
     bs__line_search(m, obj, x, E, dphi0, st, &ls);
     st->t_line_search += bs_seconds() - t;
     st->ls_evaluations += ls.evals;
     if (ls.status == BS_LSEARCH_NO_DECREASE) {
-      /* Paper 3.3: below some |grad E| the decrease a step can make, about
-       * |g.d|/2, is lost in the rounding of E itself. Say so when it is. */
-      const double noise = bs__noise_level(E);
-      if (-dphi0 <= noise)
-        bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
-                       "no decrease of E in %d trial points at iteration %d: the predicted decrease |g.d| = %.3e "
-                       "is at the rounding level of E = %.9e (|grad E| = %.3e; tol %.3e is below what E resolves; "
-                       "see opts.accept_noise)",
-                       ls.evals, it, -dphi0, E, gnorm, o->tol);
-      else
-        bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
-                       "no decrease of E along the search direction in %d trial points at iteration %d "
-                       "(|grad E| = %.3e, E = %.9e, g.d = %.3e)",
-                       ls.evals, it, gnorm, E, dphi0);
+      no_decrease_reason(m, st, &ls, it, E, gnorm, dphi0);
       break;
     }
     if (ls.status == BS_LSEARCH_CAPPED) st->ls_failures++;
     if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
-    int moved = 0;
-    for (int32_t v = 0; v < n && !moved; ++v)
-      if (!obj->mask || obj->mask[v])
-        for (int k = 0; k < 3; ++k)
-          if (m->y[3 * (int64_t)v + k] != x[3 * (int64_t)v + k]) moved = 1;
-
-    rec.ls_status = ls.status;
-    rec.ls_evaluations = ls.evals;
-    rec.alpha = ls.alpha;
-    rec.phi0 = E;
-    rec.dphi0 = dphi0;
-    rec.phi = ls.phi;
-    rec.dphi = ls.dphi;
-    rec.x = x;
-    rec.d = m->d;
-    rec.y = m->y;
-    if (obj->trace) obj->trace(&rec, obj->ctx);
-
-    /* Accept: x <- P(x + alpha d), with its gradient. */
-    memcpy(x, m->y, sizeof(double) * (size_t)N);
-    memcpy(m->g_raw, m->gy_raw, sizeof(double) * (size_t)N);
-    E = ls.phi;
-    st->iterations++;
-    st->alpha_last = ls.alpha;
-    if (st->iterations == 1 || ls.alpha < st->alpha_min) st->alpha_min = ls.alpha;
-    if (st->iterations == 1 || ls.alpha > st->alpha_max) st->alpha_max = ls.alpha;
+    const int moved = free_dofs_moved(m, obj, x);
+    if (obj->trace) trace_step(m, obj, x, E, dphi0, &ls, &rec);
+    E = accept_step(m, x, &ls, st);
     if (!moved) {
       gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 0);
       st->E = E;
