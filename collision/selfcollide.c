@@ -184,50 +184,44 @@ static void map_derivs(int nz, int ny, const double *A, const double *gz, const 
   }
 }
 
-double bs_self_sqdist(int nv, const double *y, double *g, double *H) {
-  const double *p = y, *a = y + 3;
-  double u[3];
-  bs_sub3(p, a, u);
-  if (nv == 1) {
-    static const double A[2] = {1, -1};
-    double gz[3], Hz[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
-    for (int k = 0; k < 3; k++) gz[k] = 2 * u[k];
-    map_derivs(1, 2, A, gz, Hz, g, H);
-    return bs_dot3(u, u);
+/* Point p to the line through a and b (y = p, a, b). */
+static double sqdist_edge(const double *y, const double *u, double *g, double *H) {
+  const double *a = y + 3;
+  static const double A[2 * 3] = {1, -1, 0, /* u = p - a */
+                                  0, -1, 1 /* e = b - a */};
+  double e[3];
+  bs_sub3(y + 6, a, e);
+  double s = bs_dot3(u, e), q = bs_dot3(e, e);
+  double d = bs_dot3(u, u) - s * s / q;
+  if (!g && !H) return d;
+  double gz[6], Hz[36];
+  for (int k = 0; k < 3; k++) {
+    gz[k] = 2 * u[k] - 2 * s * e[k] / q;
+    gz[3 + k] = -2 * s * u[k] / q + 2 * s * s * e[k] / (q * q);
   }
-  if (nv == 2) {
-    static const double A[2 * 3] = {1, -1, 0, /* u = p - a */
-                                    0, -1, 1 /* e = b - a */};
-    double e[3];
-    bs_sub3(y + 6, a, e);
-    double s = bs_dot3(u, e), q = bs_dot3(e, e);
-    double d = bs_dot3(u, u) - s * s / q;
-    if (!g && !H) return d;
-    double gz[6], Hz[36];
-    for (int k = 0; k < 3; k++) {
-      gz[k] = 2 * u[k] - 2 * s * e[k] / q;
-      gz[3 + k] = -2 * s * u[k] / q + 2 * s * s * e[k] / (q * q);
+  double Buu[9], Bue[9], Bee[9], Beu[9];
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) {
+      double I = i == j;
+      Buu[3 * i + j] = 2 * I - 2 * e[i] * e[j] / q;
+      Bue[3 * i + j] = -2 * (e[i] * u[j] + s * I) / q + 4 * s * e[i] * e[j] / (q * q);
+      Bee[3 * i + j] = -2 * u[i] * u[j] / q + 4 * s * (u[i] * e[j] + e[i] * u[j]) / (q * q) + 2 * s * s * I / (q * q) -
+                       8 * s * s * e[i] * e[j] / (q * q * q);
     }
-    double Buu[9], Bue[9], Bee[9], Beu[9];
-    for (int i = 0; i < 3; i++)
-      for (int j = 0; j < 3; j++) {
-        double I = i == j;
-        Buu[3 * i + j] = 2 * I - 2 * e[i] * e[j] / q;
-        Bue[3 * i + j] = -2 * (e[i] * u[j] + s * I) / q + 4 * s * e[i] * e[j] / (q * q);
-        Bee[3 * i + j] = -2 * u[i] * u[j] / q + 4 * s * (u[i] * e[j] + e[i] * u[j]) / (q * q) + 2 * s * s * I / (q * q) -
-                         8 * s * s * e[i] * e[j] / (q * q * q);
-      }
-    for (int i = 0; i < 3; i++)
-      for (int j = 0; j < 3; j++) Beu[3 * i + j] = Bue[3 * j + i];
-    memset(Hz, 0, sizeof Hz);
-    add_block(Hz, 2, 0, 0, 1, Buu);
-    add_block(Hz, 2, 0, 1, 1, Bue);
-    add_block(Hz, 2, 1, 0, 1, Beu);
-    add_block(Hz, 2, 1, 1, 1, Bee);
-    map_derivs(2, 3, A, gz, Hz, g, H);
-    return d;
-  }
-  /* face */
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++) Beu[3 * i + j] = Bue[3 * j + i];
+  memset(Hz, 0, sizeof Hz);
+  add_block(Hz, 2, 0, 0, 1, Buu);
+  add_block(Hz, 2, 0, 1, 1, Bue);
+  add_block(Hz, 2, 1, 0, 1, Beu);
+  add_block(Hz, 2, 1, 1, 1, Bee);
+  map_derivs(2, 3, A, gz, Hz, g, H);
+  return d;
+}
+
+/* Point p to the plane through a, b and c (y = p, a, b, c). */
+static double sqdist_face(const double *y, const double *u, double *g, double *H) {
+  const double *a = y + 3;
   static const double A[3 * 4] = {1, -1, 0, 0, /* u  = p - a */
                                   0, -1, 1, 0, /* e1 = b - a */
                                   0, -1, 0, 1 /* e2 = c - a */};
@@ -292,6 +286,20 @@ double bs_self_sqdist(int nv, const double *y, double *g, double *H) {
   add_block(Hz, 3, 2, 1, 1, T);
   map_derivs(3, 4, A, gz, Hz, g, H);
   return d;
+}
+
+double bs_self_sqdist(int nv, const double *y, double *g, double *H) {
+  const double *p = y, *a = y + 3;
+  double u[3];
+  bs_sub3(p, a, u);
+  if (nv == 1) {
+    static const double A[2] = {1, -1};
+    double gz[3], Hz[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
+    for (int k = 0; k < 3; k++) gz[k] = 2 * u[k];
+    map_derivs(1, 2, A, gz, Hz, g, H);
+    return bs_dot3(u, u);
+  }
+  return nv == 2 ? sqdist_edge(y, u, g, H) : sqdist_face(y, u, g, H);
 }
 
 double bs_self_pair_energy(int nv, const double *y, double k, double *g, double *H) {
