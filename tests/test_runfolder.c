@@ -46,6 +46,74 @@ static bs_scene *small_box(void) {
   return sc;
 }
 
+/* state.bin: FRAMES + 1 frames, frame 0 the rest state, the last one s->x, s->v */
+static void check_state(const char *out, const bs_sim *s) {
+  const int32_t n = s->mesh->n_vertices;
+  const size_t bytes = 3 * sizeof(double) * (size_t)n;
+  bs_state_reader r;
+  bs_error err;
+  cr_assert_eq(bs_state_open(out, &r, &err), 0, "%s", err.msg);
+  cr_expect_eq(r.version, BS_STATE_VERSION);
+  cr_expect_eq(r.n, n);
+  cr_assert_eq(r.frames, FRAMES + 1);
+  long k = 0;
+  int last_ok = 0;
+  while (bs_state_next(&r) == 0) {
+    cr_expect_eq(r.time, k / FPS, "frame %ld at %.17g", k, r.time);
+    if (k == 0) cr_expect_eq(memcmp(r.x, s->x0, bytes), 0, "frame 0 is not the rest state");
+    last_ok = memcmp(r.x, s->x, bytes) == 0 && memcmp(r.v, s->v, bytes) == 0;
+    k++;
+  }
+  bs_state_close(&r);
+  cr_expect_eq(k, FRAMES + 1, "%ld frames read", k);
+  cr_expect(last_ok, "the last frame's x, v are not s->x, s->v bit for bit");
+  cr_expect_neq(memcmp(s->x, s->x0, bytes), 0, "nothing moved");
+}
+
+/* frames.csv: a row per frame at its time, the run's sums */
+static void check_frames(const char *out, const bs_run_totals *T) {
+  bs_frames_table t;
+  bs_error err;
+  cr_assert_eq(bs_frames_csv_read(out, &t, &err), 0, "%s", err.msg);
+  cr_expect_eq(t.n, FRAMES + 1);
+  for (int f = 0; f < t.n && f <= FRAMES; f++)
+    cr_expect(fabs(t.time[f] - f / FPS) <= 1e-9 * (f / FPS), "row %d: time %.17g", f, t.time[f]);
+  cr_expect_eq(t.newton, T->iterations);
+  cr_expect_eq(t.failed, T->failed);
+  cr_expect_eq(t.inverted_max, 0);
+  cr_expect(t.has_depth);
+  bs_frames_table_free(&t);
+  cr_expect_eq(bs_frames_csv_lines(out), FRAMES + 2);
+}
+
+/* summary.txt: what bs_summary_format wrote (u, made with 1.5 s of wall time),
+ * and a failed count and solves/step of another summary round-trip too */
+static void check_summary(const char *out, const bs_sim *s, const bs_run_totals *T, bs_summary *u) {
+  bs_summary back;
+  bs_error err;
+  cr_assert_eq(bs_summary_read(out, &back, &err), 0, "%s", err.msg);
+  cr_expect_str_eq(back.method, "optimization");
+  cr_expect_eq(back.steps_per_frame, 1);
+  cr_expect_eq(back.dofs, bs_sim_dofs(s));
+  cr_expect_eq(back.failed, 0);
+  cr_expect(fabs(back.solves_per_step - (double)T->iterations / T->steps) <= 0.005, "solves/step %g, not %g",
+            back.solves_per_step, (double)T->iterations / T->steps);
+  cr_expect(fabs(back.s_per_frame - 1.5 / FRAMES) <= 5e-5, "s/frame %g", back.s_per_frame);
+  cr_expect(isfinite(back.peak_mib) && back.peak_mib > 0, "peak %g MiB", back.peak_mib);
+  char text[2048], p[600];
+  u->failed = 17;
+  u->solves_per_step = 4.25;
+  bs_summary_format(u, text, sizeof text);
+  snprintf(p, sizeof p, "%s/summary.txt", out);
+  FILE *f = fopen(p, "w");
+  cr_assert_not_null(f);
+  fputs(text, f);
+  fclose(f);
+  cr_assert_eq(bs_summary_read(out, &back, &err), 0, "%s", err.msg);
+  cr_expect_eq(back.failed, 17);
+  cr_expect_eq(back.solves_per_step, 4.25);
+}
+
 Test(runfolder, round_trip, .init = setup, .fini = teardown) {
   bs_scene *sc = small_box();
   bs_sim *s = NULL;
@@ -66,66 +134,9 @@ Test(runfolder, round_trip, .init = setup, .fini = teardown) {
   cr_assert_null(rf);
   cr_assert_eq(T.steps, FRAMES);
   cr_assert_gt(T.iterations, 0);
-
-  /* state.bin: FRAMES + 1 frames, frame 0 the rest state, the last one s->x, s->v */
-  const int32_t n = s->mesh->n_vertices;
-  const size_t bytes = 3 * sizeof(double) * (size_t)n;
-  bs_state_reader r;
-  cr_assert_eq(bs_state_open(out, &r, &err), 0, "%s", err.msg);
-  cr_expect_eq(r.version, BS_STATE_VERSION);
-  cr_expect_eq(r.n, n);
-  cr_assert_eq(r.frames, FRAMES + 1);
-  long k = 0;
-  int last_ok = 0;
-  while (bs_state_next(&r) == 0) {
-    cr_expect_eq(r.time, k / FPS, "frame %ld at %.17g", k, r.time);
-    if (k == 0) cr_expect_eq(memcmp(r.x, s->x0, bytes), 0, "frame 0 is not the rest state");
-    last_ok = memcmp(r.x, s->x, bytes) == 0 && memcmp(r.v, s->v, bytes) == 0;
-    k++;
-  }
-  bs_state_close(&r);
-  cr_expect_eq(k, FRAMES + 1, "%ld frames read", k);
-  cr_expect(last_ok, "the last frame's x, v are not s->x, s->v bit for bit");
-  cr_expect_neq(memcmp(s->x, s->x0, bytes), 0, "nothing moved");
-
-  /* frames.csv: a row per frame at its time, the run's sums */
-  bs_frames_table t;
-  cr_assert_eq(bs_frames_csv_read(out, &t, &err), 0, "%s", err.msg);
-  cr_expect_eq(t.n, FRAMES + 1);
-  for (int f = 0; f < t.n && f <= FRAMES; f++)
-    cr_expect(fabs(t.time[f] - f / FPS) <= 1e-9 * (f / FPS), "row %d: time %.17g", f, t.time[f]);
-  cr_expect_eq(t.newton, T.iterations);
-  cr_expect_eq(t.failed, T.failed);
-  cr_expect_eq(t.inverted_max, 0);
-  cr_expect(t.has_depth);
-  bs_frames_table_free(&t);
-  cr_expect_eq(bs_frames_csv_lines(out), FRAMES + 2);
-
-  /* summary.txt: what bs_summary_format wrote */
-  bs_summary back;
-  cr_assert_eq(bs_summary_read(out, &back, &err), 0, "%s", err.msg);
-  cr_expect_str_eq(back.method, "optimization");
-  cr_expect_eq(back.steps_per_frame, 1);
-  cr_expect_eq(back.dofs, bs_sim_dofs(s));
-  cr_expect_eq(back.failed, 0);
-  cr_expect(fabs(back.solves_per_step - (double)T.iterations / T.steps) <= 0.005, "solves/step %g, not %g",
-            back.solves_per_step, (double)T.iterations / T.steps);
-  cr_expect(fabs(back.s_per_frame - 1.5 / FRAMES) <= 5e-5, "s/frame %g", back.s_per_frame);
-  cr_expect(isfinite(back.peak_mib) && back.peak_mib > 0, "peak %g MiB", back.peak_mib);
-
-  /* a failed count and solves/step of another summary round-trip too */
-  u.failed = 17;
-  u.solves_per_step = 4.25;
-  bs_summary_format(&u, text, sizeof text);
-  char p[600];
-  snprintf(p, sizeof p, "%s/summary.txt", out);
-  FILE *f = fopen(p, "w");
-  cr_assert_not_null(f);
-  fputs(text, f);
-  fclose(f);
-  cr_assert_eq(bs_summary_read(out, &back, &err), 0, "%s", err.msg);
-  cr_expect_eq(back.failed, 17);
-  cr_expect_eq(back.solves_per_step, 4.25);
+  check_state(out, s);
+  check_frames(out, &T);
+  check_summary(out, s, &T, &u);
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
 }
