@@ -48,7 +48,7 @@ cmake --build "$BUILD_DIR" -j "$JOBS"
 
 case "$mode" in
   build) ;;
-  run)  "$BUILD_DIR/app/bigstep" run data/scenes/cube_stretch.json ;;
+  run)  "$BUILD_DIR/app/bigstep" run data/scenes/cube_stretch.json --replace ;;
   test) ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
   *) echo "usage: bash setup.sh run|test|build" >&2; exit 2 ;;
 esac

@@ -45,6 +45,11 @@ int bs_app_flag_value(int argc, char **argv, int *i, char *fbuf, size_t n, const
 /* Writes a mesh by the extension of path: .msh (Gmsh) or .vtu. */
 int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err);
 
+/* "bigstep CMD ARGS..." with each argument shell-quoted where it needs it
+ * (argv[0] is the command name); the caller frees the string. NULL when out
+ * of memory. */
+char *bs_app_command_line(int argc, char **argv);
+
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);
 int bs_cmd_study(int argc, char **argv);

@@ -66,3 +66,28 @@ int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err) {
   if (dot && strcmp(dot, ".vtu") == 0) return bs_mesh_write_vtu(m, NULL, path, err);
   return bs_error_set(err, BS_EINPUT, "cannot write '%s': the output extension must be .msh or .vtu", path);
 }
+
+/* Appends arg to buf (length *len, capacity cap), quoted when it has a
+ * character the shell would read. */
+static void append_quoted(char *buf, size_t *len, const char *arg) {
+  int plain = *arg != 0;
+  for (const char *c = arg; *c; c++)
+    if (!strchr("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./=:,+@%", *c)) plain = 0;
+  if (plain) {
+    *len += (size_t)sprintf(buf + *len, " %s", arg);
+    return;
+  }
+  *len += (size_t)sprintf(buf + *len, " '");
+  for (const char *c = arg; *c; c++) *len += (size_t)(*c == '\'' ? sprintf(buf + *len, "'\\''") : sprintf(buf + *len, "%c", *c));
+  *len += (size_t)sprintf(buf + *len, "'");
+}
+
+char *bs_app_command_line(int argc, char **argv) {
+  size_t cap = 16;
+  for (int i = 0; i < argc; i++) cap += 4 * strlen(argv[i]) + 4;
+  char *buf = malloc(cap);
+  if (!buf) return NULL;
+  size_t len = (size_t)sprintf(buf, "bigstep");
+  for (int i = 0; i < argc; i++) append_quoted(buf, &len, argv[i]);
+  return buf;
+}

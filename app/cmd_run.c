@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "app.h"
 #include "bs_runfolder.h"
@@ -11,22 +12,27 @@
 
 static const char *run_help =
     "usage: bigstep run SCENE [--method M] [--steps-per-frame N] [--frames N]\n"
-    "                         [--set key.path=value]... [--out DIR] [--quiet] [--trace]\n"
+    "                         [--set key.path=value]... [--out DIR] [--replace] [--quiet] [--trace]\n"
     "\n"
     "Runs a scene (JSON; see README.md, 'Scenes'). Prints a line per frame and a\n"
     "summary in the columns of the paper's Figure 11; writes VTU/PVD files and a\n"
     "per-step stats CSV into the output folder. Exit status 1 when a step failed.\n"
+    "On a terminal the frame lines update one progress line (frames, elapsed time,\n"
+    "s/frame, ETA); otherwise each frame prints its own line.\n"
     "  --method M            optimization | newton | newton_k (solver.method)\n"
     "  --steps-per-frame N   time.steps_per_frame\n"
     "  --frames N            time.frames\n"
     "  --set key.path=value  any scene key, arrays by index (bodies.0.material.youngs=1e6)\n"
     "  --out DIR             output.dir\n"
+    "  --replace             replace an earlier run's files in the output folder\n"
+    "                        (without it such a folder is refused)\n"
     "  --quiet               no per-frame lines\n"
     "  --trace               one line per solver iteration on stderr (to follow a slow step)\n";
 
 typedef struct run_args {
   const char *scene;
-  int quiet, trace;
+  int quiet, trace, replace;
+  char *command;  /* the command line, for run.txt */
   bs_app_sets sets;
 } run_args;
 
@@ -48,8 +54,8 @@ static int parse_args(int argc, char **argv, run_args *a) {
       fputs(run_help, stdout);
       return -1;
     }
-    if (!strcmp(arg, "--quiet") || !strcmp(arg, "--trace")) {
-      *(arg[2] == 'q' ? &a->quiet : &a->trace) = 1;
+    if (!strcmp(arg, "--quiet") || !strcmp(arg, "--trace") || !strcmp(arg, "--replace")) {
+      *(arg[2] == 'q' ? &a->quiet : arg[2] == 't' ? &a->trace : &a->replace) = 1;
       continue;
     }
     if (strncmp(arg, "--", 2)) {
@@ -76,7 +82,16 @@ static int parse_args(int argc, char **argv, run_args *a) {
 typedef struct run_ctx {
   const run_args *args;
   bs_runfolder *folder; /* NULL: no output folder */
+  double t0;            /* wall clock at the start of the run */
+  int tty;              /* stdout is a terminal: one updating line */
 } run_ctx;
+
+/* The progress part of a frame line: frames done, elapsed, s/frame, ETA. */
+static void print_progress(const run_ctx *c, const bs_sim *s, int frame) {
+  double el = bs_seconds() - c->t0, per = el / frame;
+  printf("  [%d/%d, %.1f s, %.3g s/frame, ETA %.0f s]", frame, s->scene->frames, el, per,
+         per * (s->scene->frames - frame));
+}
 
 /* After each frame: the folder's files, then the progress line. */
 static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
@@ -93,10 +108,13 @@ static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
            st->min.E, m.inverted, st->seconds);
     return 0;
   }
+  if (c->tty) printf("\r\033[K");
   printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d", fs->frame, s->scene->frames, fs->iterations,
          fs->cg_iterations, fs->grad_max, m.inverted);
   if (s->obstacles) printf("  inside obstacles %d (depth %.2e m)", m.penetrating, m.max_depth);
-  printf("  peak %.0f MiB  %.3f s%s\n", bs_peak_rss() / 1048576.0, fs->seconds, fs->failed ? "  FAILED STEPS" : "");
+  printf("  peak %.0f MiB  %.3f s%s", bs_peak_rss() / 1048576.0, fs->seconds, fs->failed ? "  FAILED STEPS" : "");
+  print_progress(c, s, fs->frame);
+  if (!c->tty || fs->frame == s->scene->frames) putchar('\n');
   fflush(stdout);
   return 0;
 }
@@ -109,15 +127,17 @@ static void print_header(const run_args *a, const bs_sim *s) {
          bs_method_name(sc->solver.method),
          sc->solver.method == BS_METHOD_OPTIMIZATION ? bs_lin_kind_name(sc->solver.min.linear) : "minres", sc->frames,
          sc->fps, sc->steps_per_frame, sc->dt, sc->solver.min.tol);
+  fflush(stdout);
 }
 
 /* The loop and the summary; the exit status. */
 static int run_scene(const run_args *a, bs_sim *s) {
   bs_error err;
   bs_error_clear(&err);
-  run_ctx c = {a, NULL};
+  run_ctx c = {a, NULL, bs_seconds(), isatty(fileno(stdout))};
   const bs_scene *sc = s->scene;
-  if (sc->out_dir[0] && bs_runfolder_create(sc->out_dir, s, &c.folder, &err)) {
+  const bs_runfolder_opts fo = {.replace = a->replace, .command_line = a->command};
+  if (sc->out_dir[0] && bs_runfolder_open(sc->out_dir, s, &fo, &c.folder, &err)) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
@@ -148,6 +168,7 @@ static int run_scene(const run_args *a, bs_sim *s) {
 int bs_cmd_run(int argc, char **argv) {
   run_args a = {0};
   int rc = parse_args(argc, argv, &a);
+  if (!rc && !(a.command = bs_app_command_line(argc, argv))) rc = bs_app_usage_error("run", "out of memory");
   if (rc) {
     bs_app_sets_free(&a.sets);
     return rc < 0 ? 0 : rc;
@@ -168,5 +189,6 @@ int bs_cmd_run(int argc, char **argv) {
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
   bs_app_sets_free(&a.sets);
+  free(a.command);
   return rc;
 }

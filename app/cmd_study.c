@@ -216,6 +216,7 @@ static int start_run(const bs_study *S, bs_study_run *r, slot *sl, const char *o
   argv[a++] = "run";
   argv[a++] = (char *)S->scene_path;
   argv[a++] = "--quiet";
+  argv[a++] = "--replace"; /* a run that is not reused is run again from scratch */
   for (int i = 0; i < r->n_sets; i++) {
     argv[a++] = "--set";
     argv[a++] = r->sets[i];

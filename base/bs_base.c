@@ -65,6 +65,11 @@ double bs_seconds(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+#ifndef BS_VERSION_STRING
+#error "BS_VERSION_STRING is set by base/CMakeLists.txt"
+#endif
+const char *bs_version(void) { return BS_VERSION_STRING; }
+
 size_t bs_peak_rss(void) {
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;

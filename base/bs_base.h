@@ -62,6 +62,9 @@ const char *bs_status_name(int code);
 /* Seconds on a monotonic wall clock. */
 double bs_seconds(void);
 
+/* bigstep's version, "MAJOR.MINOR.PATCH" (the CMake project version). */
+const char *bs_version(void);
+
 /* Peak resident memory of this process in bytes (0 if unknown). */
 size_t bs_peak_rss(void);
 

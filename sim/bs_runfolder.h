@@ -15,13 +15,20 @@
  *   summary.txt  the closing summary in the columns of the paper's Figure 11
  *                (bs_summary_format), read back by bs_summary_read;
  *   frame_NNNNN.vtu and frames.pvd  the frames for ParaView (mesh/ writes
- *                the VTU and PVD files).
+ *                the VTU and PVD files); frames.pvd is rewritten (through a
+ *                temporary file and a rename) after every VTU frame, so an
+ *                interrupted run leaves a readable series;
+ *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
+ *                "cwd: ...", "started: ISO 8601 UTC".
  *
- * Writing: bs_runfolder_create makes the folder and opens the files the
- * scene's output section asks for; bs_runfolder_frame (a bs_frame_fn for
- * bs_sim_run) writes a frame's rows, state and VTU; bs_runfolder_finish
- * writes frames.pvd and summary.txt; bs_runfolder_destroy closes what is
- * open (also after an error). Rows are flushed after every frame.
+ * Writing: bs_runfolder_open makes the folder, refuses it when it holds an
+ * earlier run (any file named above; BS_EINPUT naming the folder and a file)
+ * unless opts->replace, in which case those files (and only those) are
+ * removed first, writes run.txt and opens the files the scene's output
+ * section asks for; bs_runfolder_frame (a bs_frame_fn for bs_sim_run) writes
+ * a frame's rows, state and VTU; bs_runfolder_finish writes summary.txt;
+ * bs_runfolder_destroy closes what is open (also after an error). Rows are
+ * flushed after every frame.
  *
  * Ownership: the writer owns its open files; readers return tables and
  * readers that the caller frees with the matching free/close function.
@@ -55,9 +62,29 @@ extern "C" {
 
 typedef struct bs_runfolder bs_runfolder;
 
-/* Makes dir (and its parents) and opens frames.csv, stats.csv (scene
- * output.stats) and state.bin (output.states) for the simulation s. */
+typedef struct bs_runfolder_opts {
+  int replace;              /* 1: remove an earlier run's files; 0: refuse the folder */
+  const char *command_line; /* for run.txt; NULL: "(library call)"                  */
+} bs_runfolder_opts;
+
+/* Makes dir (and its parents), checks it (see the top), writes run.txt and
+ * opens frames.csv, stats.csv (scene output.stats) and state.bin
+ * (output.states) for the simulation s. opts NULL: all zero. */
+int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
+                      bs_error *err);
+
+/* bs_runfolder_open with opts NULL (an earlier run is refused). */
 int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
+
+/* Whether a file name is one a run folder holds (the list at the top). */
+int bs_runfolder_is_run_file(const char *name);
+
+/* Refuses dir when it holds a run's files (BS_EINPUT), or with replace
+ * removes them (*n_removed: how many; may be NULL). A missing dir is fine. */
+int bs_runfolder_prepare(const char *dir, int replace, int *n_removed, bs_error *err);
+
+/* Writes dir/run.txt (see the top). */
+int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err);
 
 /* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state
  * and, every output.vtu_every frames, frame_NNNNN.vtu. ctx is the
@@ -69,8 +96,7 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err);
 
-/* Writes frames.pvd (the VTU frames written) and summary.txt (when summary
- * is not NULL). */
+/* Writes summary.txt (when summary is not NULL). */
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err);
 
 void bs_runfolder_destroy(bs_runfolder **rf);

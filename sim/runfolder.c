@@ -1,5 +1,6 @@
 /* runfolder.c — writing a run folder: frames.csv, stats.csv, state.bin,
  * the VTU frames and their PVD collection (formats: bs_runfolder.h). */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,19 +30,34 @@ static int write_state_header(FILE *f, int32_t n) {
 }
 
 int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
-  *out = NULL;
+  return bs_runfolder_open(dir, s, NULL, out, err);
+}
+
+static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
-  if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
-  int st = bs_mkdir_p(dir, err);
-  if (st) return st;
-  bs_runfolder *rf = calloc(1, sizeof *rf);
-  if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
-  snprintf(rf->dir, sizeof rf->dir, "%s", dir);
+  int st = 0;
   if (sc->stats_csv && !(st = open_file(rf, "stats.csv", "w", &rf->stats, err))) fprintf(rf->stats, "%s\n", BS_STATS_CSV_HEADER);
   if (!st && !(st = open_file(rf, "frames.csv", "w", &rf->frames, err))) fprintf(rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
   if (!st && sc->states && !(st = open_file(rf, "state.bin", "wb", &rf->state, err)) &&
       write_state_header(rf->state, s->mesh->n_vertices))
-    st = bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", dir);
+    st = bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
+  return st;
+}
+
+int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
+                      bs_error *err) {
+  *out = NULL;
+  const bs_runfolder_opts none = {0};
+  if (!o) o = &none;
+  if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
+  int st = bs_mkdir_p(dir, err);
+  if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
+  if (st) return st;
+  bs_runfolder *rf = calloc(1, sizeof *rf);
+  if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  snprintf(rf->dir, sizeof rf->dir, "%s", dir);
+  st = bs_runfolder_write_record(dir, o->command_line, err);
+  if (!st) st = open_files(rf, s, err);
   if (st) {
     bs_runfolder_destroy(&rf);
     return st;
@@ -77,6 +93,17 @@ static int write_state(FILE *f, const bs_sim *s) {
   return fflush(f) == 0 && ok ? 0 : -1;
 }
 
+/* frames.pvd of the frames written so far, through a temporary file renamed
+ * over the old one: the collection is valid after every frame. */
+static int write_pvd(const bs_runfolder *rf, bs_error *err) {
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+  snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
+  snprintf(tmp, sizeof tmp, "%s/frames.pvd.tmp", rf->dir);
+  int st = bs_pvd_write(tmp, rf->n_vtu, rf->vtu_times, (const char *const *)rf->vtu_names, err);
+  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
+  return st;
+}
+
 static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
   if (rf->n_vtu == rf->cap_vtu) {
     int cap = rf->cap_vtu ? 2 * rf->cap_vtu : 64;
@@ -95,7 +122,7 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   if (st) return st;
   if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
   rf->vtu_times[rf->n_vtu++] = s->time;
-  return 0;
+  return write_pvd(rf, err);
 }
 
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
@@ -119,11 +146,6 @@ int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *
 
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {
   char p[BS_MAX_PATH + 64];
-  if (rf->n_vtu > 0) {
-    snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
-    int st = bs_pvd_write(p, rf->n_vtu, rf->vtu_times, (const char *const *)rf->vtu_names, err);
-    if (st) return st;
-  }
   if (!summary) return 0;
   snprintf(p, sizeof p, "%s/summary.txt", rf->dir);
   FILE *f = fopen(p, "w");

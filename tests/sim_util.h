@@ -138,7 +138,8 @@ static inline bs_sim *sim_run_scene(const char *scene, const char *sets, const c
   bs_error err;
   bs_error_clear(&err);
   cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s [%s]: %s", scene, sets ? sets : "", err.msg);
-  if (dir) cr_assert_eq(bs_runfolder_create(dir, s, &rec->folder, &err), 0, "%s", err.msg);
+  const bs_runfolder_opts fo = {.replace = 1};
+  if (dir) cr_assert_eq(bs_runfolder_open(dir, s, &fo, &rec->folder, &err), 0, "%s", err.msg);
   int st = bs_sim_run(s, sim_rec_frame, rec, T, &err);
   cr_assert_eq(st, 0, "%s [%s]: bs_sim_run %d: %s", scene, sets ? sets : "", st, err.msg);
   if (rec->folder) {

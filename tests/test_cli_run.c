@@ -126,3 +126,35 @@ Test(cli_run, usage_errors_exit_2_and_help_0) {
   cr_expect(strstr(out, "usage: bigstep run SCENE") == out, "%s", out);
   free(out);
 }
+
+Test(cli_run, refuses_an_earlier_run_unless_replace_and_records_the_command) {
+  cr_assert_eq(system("rm -rf /tmp/bs_cli_run_again"), 0);
+  char *out = NULL;
+  cr_assert_eq(run_good("--out /tmp/bs_cli_run_again --quiet", &out), 0, "%s", out);
+  free(out);
+  cr_expect_eq(run_good("--out /tmp/bs_cli_run_again --quiet", &out), 1, "%s", out);
+  cr_expect_not_null(strstr(out, "bigstep run: output folder '/tmp/bs_cli_run_again' holds an earlier run"), "%s", out);
+  cr_expect_not_null(strstr(out, "--replace"), "%s", out);
+  free(out);
+  cr_expect_eq(run_good("--out /tmp/bs_cli_run_again --quiet --replace --set 'time.frames=1'", &out), 0, "%s", out);
+  free(out);
+  FILE *f = fopen("/tmp/bs_cli_run_again/run.txt", "r");
+  cr_assert_not_null(f);
+  char text[2048] = "";
+  size_t n = fread(text, 1, sizeof text - 1, f);
+  text[n] = 0;
+  fclose(f);
+  cr_expect_not_null(strstr(text, "\ncommand: bigstep run /tmp/bs_cli_run_"), "%s", text);
+  cr_expect_not_null(strstr(text, " --replace --set time.frames=1\n"), "%s", text);
+  cr_expect_eq(access("/tmp/bs_cli_run_again/frame_00002.vtu", F_OK), -1, "a stale frame is left");
+  cr_expect_eq(system("rm -rf /tmp/bs_cli_run_again"), 0);
+}
+
+Test(cli_run, frame_lines_show_progress_when_not_a_terminal) {
+  char *out = NULL;
+  cr_assert_eq(run_good("--out ''", &out), 0, "%s", out);
+  cr_expect_not_null(strstr(out, "  [1/2, "), "%s", out);
+  cr_expect_not_null(strstr(out, " s/frame, ETA "), "%s", out);
+  cr_expect_null(strstr(out, "\r"), "a terminal's carriage return in a pipe:\n%s", out);
+  free(out);
+}

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "bs_runfolder.h"
+#include "bs_vtu_read.h"
 #include "bs_scene.h"
 #include "bs_sim.h"
 #include "scene_fixture.h"
@@ -123,7 +124,7 @@ Test(runfolder, round_trip, .init = setup, .fini = teardown) {
   char out[512];
   snprintf(out, sizeof out, "%s/run", dir);
   cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_runfolder_create(out, s, &rf, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_runfolder_open(out, s, &(bs_runfolder_opts){.replace = 1}, &rf, &err), 0, "%s", err.msg);
   cr_assert_eq(bs_sim_run(s, bs_runfolder_frame, rf, &T, &err), 0, "%s", err.msg);
   bs_summary u;
   char text[2048];
@@ -220,4 +221,76 @@ Test(runfolder, bad_state_messages, .init = setup, .fini = teardown) {
   /* a folder without state.bin: BS_EIO naming it */
   cr_expect_eq(bs_state_open(dir, &r, &err), BS_EIO);
   cr_expect_not_null(strstr(err.msg, "state.bin"), "%s", err.msg);
+}
+
+/* After each frame: frames.pvd lists every VTU frame written so far. */
+static int pvd_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
+  int st = bs_runfolder_frame(s, fs, ctx, err);
+  if (st) return st;
+  char p[600];
+  snprintf(p, sizeof p, "%s/run/frames.pvd", dir);
+  bs_pvd *pvd = NULL;
+  cr_assert_eq(bs_pvd_read(p, &pvd, err), 0, "frame %d: %s", fs->frame, err->msg);
+  cr_expect_eq(pvd->n, fs->frame + 1, "frame %d: %d entries", fs->frame, pvd->n);
+  cr_expect_eq(pvd->times[pvd->n - 1], s->time);
+  bs_pvd_destroy(&pvd);
+  return 0;
+}
+
+/* Runs small_box into dir/run with VTU frames, the options o. */
+static int run_into(const bs_runfolder_opts *o, bs_error *err) {
+  bs_scene *sc = small_box();
+  sc->vtu_every = 1;
+  bs_sim *s = NULL;
+  bs_runfolder *rf = NULL;
+  bs_run_totals T;
+  char out[512];
+  snprintf(out, sizeof out, "%s/run", dir);
+  cr_assert_eq(bs_sim_create(sc, &s, err), 0, "%s", err->msg);
+  int st = bs_runfolder_open(out, s, o, &rf, err);
+  if (!st) st = bs_sim_run(s, pvd_frame, rf, &T, err);
+  if (!st) st = bs_runfolder_finish(rf, NULL, err);
+  bs_runfolder_destroy(&rf);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+  return st;
+}
+
+static int exists(const char *name) {
+  char p[600];
+  snprintf(p, sizeof p, "%s/run/%s", dir, name);
+  return access(p, F_OK) == 0;
+}
+
+Test(runfolder, pvd_valid_each_frame_and_earlier_run_refused, .init = setup, .fini = teardown) {
+  bs_error err;
+  bs_runfolder_opts o = {.replace = 0, .command_line = "bigstep run test"};
+  cr_assert_eq(run_into(&o, &err), 0, "%s", err.msg);
+  cr_expect(exists("run.txt") && exists("frame_00003.vtu") && exists("frames.pvd"));
+  cr_expect(!exists("frames.pvd.tmp"), "the temporary PVD is left");
+  char p[600];
+  snprintf(p, sizeof p, "%s/run/notes.txt", dir); /* the user's file: never removed */
+  FILE *f = fopen(p, "w");
+  cr_assert_not_null(f);
+  fclose(f);
+  snprintf(p, sizeof p, "%s/run/frame_00009.vtu", dir); /* a stale frame of a longer run */
+  cr_assert_not_null(f = fopen(p, "w"));
+  fclose(f);
+  bs_error_clear(&err);
+  cr_expect_eq(run_into(&o, &err), BS_EINPUT, "an earlier run's folder was not refused");
+  cr_expect_not_null(strstr(err.msg, "earlier run"), "%s", err.msg);
+  cr_expect_not_null(strstr(err.msg, dir), "the message does not name the folder: %s", err.msg);
+  o.replace = 1;
+  cr_assert_eq(run_into(&o, &err), 0, "%s", err.msg);
+  cr_expect(!exists("frame_00009.vtu"), "a stale frame file is left beside the new ones");
+  cr_expect(exists("notes.txt"), "the user's own file was removed");
+  cr_expect(exists("frame_00003.vtu"));
+  snprintf(p, sizeof p, "%s/run/run.txt", dir);
+  cr_assert_not_null(f = fopen(p, "r"));
+  char line[256];
+  cr_assert_not_null(fgets(line, sizeof line, f));
+  fclose(f);
+  char want[64];
+  snprintf(want, sizeof want, "version: bigstep %s\n", bs_version());
+  cr_expect_str_eq(line, want);
 }

@@ -1,0 +1,81 @@
+/* runfolder_prepare.c — before a run writes into a folder: refuse one that
+ * holds an earlier run, or remove that run's files (bs_runfolder.h), and the
+ * run's record run.txt. */
+#include <dirent.h>
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bs_runfolder.h"
+
+static int has_suffix(const char *s, const char *suf) {
+  size_t n = strlen(s), m = strlen(suf);
+  return n >= m && !strcmp(s + n - m, suf);
+}
+
+int bs_runfolder_is_run_file(const char *name) {
+  static const char *const fixed[] = {"frames.csv", "stats.csv", "state.bin", "summary.txt", "frames.pvd",
+                                      "qoi.csv",    "run.txt",   "scene.json", NULL};
+  for (int i = 0; fixed[i]; i++)
+    if (!strcmp(name, fixed[i])) return 1;
+  if (!strncmp(name, "frame_", 6) && has_suffix(name, ".vtu")) return 1;
+  if (!strncmp(name, "obstacle", 8))
+    return has_suffix(name, ".vtu") || has_suffix(name, ".pvd") || has_suffix(name, ".vti") ||
+           has_suffix(name, ".vtm");
+  return has_suffix(name, ".tmp") && !strncmp(name, "frames.pvd", 10);
+}
+
+/* Counts (and with remove, unlinks) the run files of dir; *first gets the
+ * first one's name. */
+static int scan(const char *dir, int remove, int *count, char *first, size_t nfirst, bs_error *err) {
+  *count = 0;
+  DIR *d = opendir(dir);
+  if (!d) return errno == ENOENT ? 0 : bs_error_set(err, BS_EIO, "cannot read folder '%s': %s", dir, strerror(errno));
+  int st = 0;
+  for (struct dirent *e; !st && (e = readdir(d));) {
+    if (!bs_runfolder_is_run_file(e->d_name)) continue;
+    if (*count == 0) snprintf(first, nfirst, "%s", e->d_name);
+    (*count)++;
+    char p[BS_MAX_PATH + 300];
+    snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+    if (remove && unlink(p) && errno != ENOENT)
+      st = bs_error_set(err, BS_EIO, "cannot remove '%s' of the earlier run: %s", p, strerror(errno));
+  }
+  closedir(d);
+  return st;
+}
+
+int bs_runfolder_prepare(const char *dir, int replace, int *n_removed, bs_error *err) {
+  int count = 0;
+  char first[300] = "";
+  if (n_removed) *n_removed = 0;
+  int st = scan(dir, 0, &count, first, sizeof first, err);
+  if (st || count == 0) return st;
+  if (!replace)
+    return bs_error_set(err, BS_EINPUT,
+                        "output folder '%s' holds an earlier run (%s and %d other file%s): replace it (bigstep run "
+                        "--replace) or choose another output.dir",
+                        dir, first, count - 1, count == 2 ? "" : "s");
+  st = scan(dir, 1, &count, first, sizeof first, err);
+  if (!st && n_removed) *n_removed = count;
+  return st;
+}
+
+int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err) {
+  char p[BS_MAX_PATH + 16], stamp[64] = "?";
+  snprintf(p, sizeof p, "%s/run.txt", dir);
+  time_t now = time(NULL);
+  struct tm tm;
+  if (gmtime_r(&now, &tm)) strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  char cwd[BS_MAX_PATH];
+  if (!getcwd(cwd, sizeof cwd)) snprintf(cwd, sizeof cwd, "?");
+  FILE *f = fopen(p, "w");
+  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s': %s", p, strerror(errno));
+  int ok = fprintf(f, "version: bigstep %s\ncommand: %s\ncwd: %s\nstarted: %s\n", bs_version(),
+                   command_line ? command_line : "(library call)", cwd, stamp) > 0;
+  int eno = errno;
+  if (fclose(f) || !ok) return bs_error_set(err, BS_EIO, "cannot write '%s': %s", p, strerror(ok ? errno : eno));
+  return 0;
+}
