@@ -329,6 +329,56 @@ Test(vtu_read, missing_closing_tags_and_unsupported_forms) {
   expect_error(&b, "no_underscore.vtu", BS_EINPUT, "does not start with '_'", NULL);
 }
 
+/* Corrupted bytes anywhere (bit flips, XML punctuation, random bytes, a cut
+ * file) in each form: the reader returns OK or an error naming the file,
+ * never crashes (the sanitizer build checks the memory accesses). */
+Test(vtu_read, corrupted_bytes_give_errors_not_crashes) {
+  static const char *const files[] = {"bigstep.vtu", "meshio_zlib.vtu", "meshio_ascii.vtu",
+                                      "paraview_appended_base64_zlib.vtu", "paraview_appended_zlib.vtu"};
+  char path[256];
+  snprintf(path, sizeof path, "%s/mutant.vtu", dir);
+  uint32_t seed = 12345;
+  int errors = 0, reads = 0;
+  for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
+    buf b = load(files[f]);
+    char *m = malloc(b.n + 1);
+    for (int it = 0; it < 150; it++) {
+      memcpy(m, b.s, b.n);
+      size_t n = b.n;
+      seed = seed * 1103515245u + 12345u;
+      const int kind = (int)(seed >> 16) % 4, count = 1 + (int)(seed >> 8) % 4;
+      for (int k = 0; k < count; k++) {
+        seed = seed * 1103515245u + 12345u;
+        const size_t at = (seed >> 4) % b.n;
+        if (kind == 0) m[at] ^= (char)(1u << ((seed >> 2) % 8));
+        else if (kind == 1) m[at] = "0123456789<>/=\"_ &;"[(seed >> 3) % 19];
+        else if (kind == 2) n = at < n ? at : n;
+        else m[at] = (char)(seed >> 24);
+      }
+      FILE *fp = fopen(path, "wb");
+      cr_assert_not_null(fp);
+      cr_assert_eq(fwrite(m, 1, n, fp), n);
+      fclose(fp);
+      bs_vtu *v = NULL;
+      bs_error err = {0};
+      int rc = bs_vtu_read(path, &v, &err);
+      reads++;
+      if (rc) {
+        errors++;
+        cr_assert(rc == BS_EINPUT || rc == BS_ENUMERIC, "%s mutant %d: status %d: %s", files[f], it, rc, err.msg);
+        cr_assert_null(v);
+        cr_assert_not_null(strstr(err.msg, path), "%s mutant %d: %s", files[f], it, err.msg);
+      } else {
+        cr_assert(v->n_points >= 0 && v->n_cells >= 0);
+      }
+      bs_vtu_destroy(&v);
+    }
+    free(m);
+    free(b.s);
+  }
+  cr_assert_gt(errors, reads / 2, "most mutants are refused (%d of %d)", errors, reads);
+}
+
 /* ---- the decoders directly ---------------------------------------------------------- */
 
 Test(vtu_read, base64_pieces_decode_as_one) {
