@@ -136,12 +136,12 @@ static int check_cells(const char *path, const bs__vtu_doc *d, const roles *r, b
 
 static int read_cells(const char *path, const bs__vtu_doc *d, const roles *r, bs_vtu *v, bs_error *err) {
   const int64_t nc = d->n_cells;
+  int rc = nc ? check_cells(path, d, r, err) : BS_OK; /* the types hold nc cells: nc is not a bare count */
+  if (rc) return rc;
   v->tets = malloc(4 * (size_t)nc * sizeof(int32_t) + 1);
   if (!v->tets) return bs_error_set(err, BS_ENOMEM, "reading '%s': out of memory for %lld cells", path, (long long)nc);
   v->n_cells = (int32_t)nc;
   if (nc == 0) return BS_OK;
-  int rc = check_cells(path, d, r, err);
-  if (rc) return rc;
   const unsigned char *data;
   unsigned char *owned;
   if ((rc = values(path, d, r->conn, 4 * nc, &data, &owned, err))) return rc;

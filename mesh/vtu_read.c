@@ -149,9 +149,9 @@ static void on_piece(xstate *st, const XML_Char **a) {
   uint64_t vp, vc;
   const int bad_p = parse_count(np, INT32_MAX, &vp), bad_c = parse_count(nc, INT32_MAX, &vc);
   if (bad_p || bad_c) {
+    const char *key = bad_p ? "NumberOfPoints" : "NumberOfCells", *val = bad_p ? np : nc;
     fail(st, bs_error_set(st->err, BS_EINPUT, "'%s': <Piece> %s is '%s': expected an integer in [0, 2^31)",
-                          st->path, bad_p ? "NumberOfPoints" : "NumberOfCells",
-                          (bad_p ? np : nc) ? (bad_p ? np : nc) : "(none)"));
+                          st->path, key, val ? val : "(none)"));
     return;
   }
   d->n_points = (int64_t)vp;

@@ -38,11 +38,12 @@ const char *bs__vtu_type_name(bs__vtu_type t) { return type_names[t]; }
 int bs__vtu_type_size(bs__vtu_type t) { return type_sizes[t]; }
 int bs__vtu_type_is_float(bs__vtu_type t) { return t == BS__VTU_F32 || t == BS__VTU_F64; }
 
-/* Loads value i as an integer (*is_int = 1) or a float (*is_int = 0). */
+/* Loads value i: *kind 0 a signed or small unsigned integer (in *iv), 1 a
+ * UInt64 (in *uv), 2 a float (in *fv). */
 static void load(const unsigned char *data, bs__vtu_type t, size_t i, int64_t *iv, uint64_t *uv, double *fv,
                  int *kind) {
   const unsigned char *p = data + i * (size_t)type_sizes[t];
-  *kind = 0; /* 0 signed, 1 unsigned, 2 float */
+  *kind = 0;
   switch (t) {
     case BS__VTU_I8: { int8_t v; memcpy(&v, p, 1); *iv = v; break; }
     case BS__VTU_U8: { uint8_t v; memcpy(&v, p, 1); *iv = v; break; }

@@ -227,6 +227,10 @@ Test(vtu_read, huge_counts_are_refused_before_allocating) {
   b = load("meshio_ascii.vtu");
   replace(&b, "NumberOfPoints=\"100\"", "NumberOfPoints=\"2000000000\"", 0);
   expect_error(&b, "huge_ascii.vtu", BS_EINPUT, "hold at most", "expected 6000000000");
+  b = load("paraview_appended_zlib.vtu"); /* the types must hold the cells before tets are allocated */
+  replace(&b, "NumberOfCells=\"288\"", "NumberOfCells=\"2000000000\"", 0);
+  expect_error(&b, "huge_cells_zlib.vtu", BS_EINPUT, "Cells array 'types' (2000000000 x 1 UInt8)",
+               "holds 288 bytes (uncompressed), expected 2000000000");
   b = load("bigstep.vtu");
   replace(&b, "NumberOfCells=\"288\"", "NumberOfCells=\"4294967296\"", 0);
   expect_error(&b, "huge_cells.vtu", BS_EINPUT, "NumberOfCells is '4294967296'", "[0, 2^31)");
