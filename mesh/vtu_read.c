@@ -184,16 +184,16 @@ static void on_array(xstate *st, const XML_Char **a, bs__vtu_section sec) {
   if (sec == BS__VTU_OTHER && (f != BS__VTU_APPENDED || bad_off)) return;
   if (f < 0)
     FAIL(st, bs_error_set(err, BS_EINPUT, "'%s': array '%s' has format '%s' (expected ascii, binary or "
-                                 "appended)", p, shown, fmt ? fmt : "(none)"));
+                          "appended)", p, shown, fmt ? fmt : "(none)"));
   if (bad_off)
     FAIL(st, bs_error_set(err, BS_EINPUT, "'%s': array '%s' has no valid offset attribute ('%s')", p, shown,
-                                 off ? off : "(none)"));
+                          off ? off : "(none)"));
   if (sec != BS__VTU_OTHER && bs__vtu_type_parse(ty, &dl.type))
     FAIL(st, bs_error_set(err, BS_EINPUT, "'%s': array '%s' has unknown type '%s'", p, shown,
-                                 ty ? ty : "(none)"));
+                          ty ? ty : "(none)"));
   if (sec != BS__VTU_OTHER && nc && (parse_count(nc, 1024, &v) || v < 1))
     FAIL(st, bs_error_set(err, BS_EINPUT, "'%s': array '%s' has NumberOfComponents '%s' (expected 1..1024)",
-                                 p, shown, nc));
+                          p, shown, nc));
   dl.ncomp = nc && sec != BS__VTU_OTHER ? (int)v : 1;
   dl.format = (bs__vtu_format)f;
   int idx = (dl.name = bs__strdup(shown)) ? add_decl(st->d, &dl) : -1;
@@ -210,11 +210,11 @@ static void on_array(xstate *st, const XML_Char **a, bs__vtu_section sec) {
 static void on_appended(xstate *st, const XML_Char **a) {
   if (st->depth != 1)
     FAIL(st, bs_error_set(st->err, BS_EINPUT, "'%s': <AppendedData> inside <%s>: a closing tag is missing "
-                                 "before it", st->path, st->names[st->depth]));
+                          "before it", st->path, st->names[st->depth]));
   const char *enc = att(a, "encoding");
   if (!enc || (strcmp(enc, "raw") && strcmp(enc, "base64")))
     FAIL(st, bs_error_set(st->err, BS_EINPUT, "'%s': AppendedData encoding is '%s' (expected raw or base64)",
-                                 st->path, enc ? enc : "(none)"));
+                          st->path, enc ? enc : "(none)"));
   st->d->app_base64 = !strcmp(enc, "base64");
   st->app_tag_end = (size_t)(XML_GetCurrentByteIndex(st->xp) + XML_GetCurrentByteCount(st->xp));
   st->at_appended = 1;
