@@ -1,15 +1,31 @@
-/* bs_vtu_read.h — reading back the VTU and PVD files bigstep writes (for
- * `bigstep check` and for tests).
+/* bs_vtu_read.h — reading VTU and PVD files: those bigstep writes and those
+ * ParaView (VTK) and meshio write (for `bigstep check`, the study and tests).
  *
- * Scope: VTK XML UnstructuredGrid files with one Piece whose DataArrays are
- * all format="appended" in an <AppendedData encoding="raw"> block (the shape
- * bs_mesh_write_vtu writes): header_type UInt64 (or UInt32, VTK's default),
- * either byte order (swapped when it differs from the machine's), no
- * compressor. Array types Int8 ... UInt64, Float32, Float64. Cells must all be
- * tetrahedra (VTK type 10, four vertices each). Anything else (inline ascii or
- * base64 arrays, compressed data, other cell types, a block that runs past
- * the end of the file, a missing closing tag) is an error naming the file and
- * the array, cell or attribute at fault.
+ * Scope: VTK XML UnstructuredGrid files (VTKFile type="UnstructuredGrid")
+ * with one Piece, parsed with expat. DataArrays in any of VTK's forms:
+ * format="ascii" (whitespace-separated numbers), format="binary" (inline
+ * base64) and format="appended" in an <AppendedData> block of encoding "raw"
+ * or "base64"; uncompressed, or compressor="vtkZLibDataCompressor" (VTK's
+ * zlib blocks); header_type UInt32 (VTK's default) or UInt64; either
+ * byte_order (swapped when it differs from the machine's). Array types Int8
+ * ... UInt64, Float32, Float64 (and the legacy names Float, Double, Int, Char,
+ * UChar). Read: Points (3 components), the Cells arrays connectivity, offsets
+ * and types, every PointData and CellData array; FieldData and other
+ * elements are skipped. Cells must all be tetrahedra (VTK type 10): a file
+ * with other cells (a mesh exported with its surface triangles, say) is an
+ * error naming the first such cell and its type, because a bs_vtu is a tet
+ * mesh whose cell data has one tuple per tet.
+ *
+ * Every size in a file is checked before it sizes an allocation: an array
+ * must hold exactly NumberOfPoints (or NumberOfCells) x NumberOfComponents
+ * values, and its header's byte count must fit in the bytes that are there
+ * (a zlib block may not claim more than deflate can expand), so a corrupt
+ * count gives an error, not a huge allocation. Errors name the file and the
+ * array, cell or attribute at fault: not VTK XML, malformed or truncated
+ * XML, an unknown type, format or compressor, bad base64, a zlib error, a
+ * block that runs past the end of the data, a size that does not match the
+ * counts, a connectivity index outside [0, NumberOfPoints), a non-tet cell,
+ * a non-finite point.
  *
  * Values: Points and the arrays are converted to double (exact for every
  * Float32/Float64 value and every integer up to 2^53 in magnitude); a Float64
@@ -23,6 +39,14 @@
  * Status: BS_OK, or BS_EIO (missing or unreadable file), BS_EINPUT (not a
  * VTU/PVD file, or malformed), BS_ENUMERIC (a non-finite point coordinate),
  * BS_ENOMEM; the message names the file and what is malformed.
+ *
+ * Usage:
+ *   bs_vtu *v = NULL;
+ *   bs_error err;
+ *   if (bs_vtu_read("out/frame_00010.vtu", &v, &err)) { report(err.msg); return; }
+ *   const bs_vtu_array *detF = bs_vtu_cell_array(v, "detF"); // NULL if absent
+ *   ... v->x[3 * i + k], v->tets[4 * t + j], detF->data[t] ...
+ *   bs_vtu_destroy(&v);
  */
 #ifndef BS_VTU_READ_H
 #define BS_VTU_READ_H
@@ -38,7 +62,8 @@ extern "C" {
 /* One PointData or CellData array. */
 typedef struct bs_vtu_array {
   char *name;          /* the Name attribute (never NULL, may be "")          */
-  char type[16];       /* the VTK type as written: "Float64", "Int32", ...   */
+  char type[16];       /* the VTK type: "Float64", "Int32", ... (a legacy
+                          name as its modern one: "Float" is "Float32")       */
   int ncomp;           /* NumberOfComponents (1 when absent)                 */
   int64_t n_tuples;    /* n_points or n_cells                                */
   double *data;        /* ncomp * n_tuples values, tuple-major               */
@@ -58,7 +83,7 @@ typedef struct bs_vtu {
   bs_vtu_array *cell_data;
 } bs_vtu;
 
-/* Reads a VTU file written by bs_mesh_write_vtu (or of the shape above). */
+/* Reads a VTU file of the scope above. */
 int bs_vtu_read(const char *path, bs_vtu **out, bs_error *err);
 
 /* Frees a VTU (NULL or *v == NULL is fine) and sets *v = NULL. */
