@@ -26,7 +26,7 @@ int bs_cmd_schema(int argc, char **argv) {
       return 0;
     }
     if ((!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) && i + 1 < argc) out = argv[++i];
-    else return bs_app_usage_error("schema", "unexpected argument '%s' (see 'bigstep schema --help')", argv[i]);
+    else return bs_app_usage_error("schema", "unexpected argument '%s'", argv[i]);
   }
   char *text;
   bs_error err;

@@ -75,6 +75,20 @@ static int unknown_key(ctx *c, const char *where, const char *bad, const char *c
   return fail(c, w, "unknown key%s (allowed here: %s)", hint, list);
 }
 
+/* "must be "a", "b" or "c", got "x"; did you mean "a"?" for the value v of
+ * the key k (its path w). */
+static int bad_choice(ctx *c, const char *w, const bs_schema_key *k, const char *v) {
+  char list[512] = "", hint[128] = "";
+  for (int i = 0; k->choices[i]; i++) {
+    char one[96];
+    snprintf(one, sizeof one, "%s\"%s\"", i == 0 ? "" : k->choices[i + 1] ? ", " : " or ", k->choices[i]);
+    strncat(list, one, sizeof list - strlen(list) - 1);
+  }
+  const char *near = bs_schema_nearest_(v, k->choices, -1);
+  if (near) snprintf(hint, sizeof hint, "; did you mean \"%s\"?", near);
+  return fail(c, w, "must be %s, got \"%.64s\"%s", list, v, hint);
+}
+
 static int is_finite_number(const cJSON *v) { return cJSON_IsNumber(v) && isfinite(v->valuedouble); }
 
 /* 1 when v is an array of 3 finite numbers. */
@@ -113,8 +127,35 @@ static const char *type_misfit(const bs_schema_key *k, const cJSON *v, char *wan
   case BS_SCHEMA_OBJECT: ok = cJSON_IsObject(v), snprintf(want, n, "an object"); break;
   case BS_SCHEMA_ARRAY: ok = cJSON_IsArray(v), snprintf(want, n, "an array"); break;
   case BS_SCHEMA_MAP: ok = cJSON_IsObject(v), snprintf(want, n, "an object {name: object}"); break;
+  case BS_SCHEMA_STRINGS:
+    ok = cJSON_IsArray(v);
+    for (const cJSON *e = ok ? v->child : NULL; e; e = e->next) ok &= cJSON_IsString(e);
+    snprintf(want, n, "an array of strings");
+    break;
   }
   return ok ? NULL : want;
+}
+
+/* The value v of key k (at path w) against the table: its type, and for
+ * STRINGS with choices each element. */
+static int check_value(ctx *c, const char *w, const bs_schema_key *k, const cJSON *v) {
+  char want[160], g[96];
+  if (!type_misfit(k, v, want, sizeof want)) {
+    if (k->type != BS_SCHEMA_STRINGS || !k->choices) return 0;
+    int i = 0;
+    for (const cJSON *e = v->child; e; e = e->next, i++)
+      if (bs_schema_choice_(k, e->valuestring) < 0) {
+        char wi[600];
+        snprintf(wi, sizeof wi, "%s.%d", w, i);
+        return bad_choice(c, wi, k, e->valuestring);
+      }
+    return 0;
+  }
+  if (cJSON_IsArray(v) && cJSON_GetArraySize(v) == 3 && strstr(want, "array of 3")) /* name the element */
+    for (int e = 0; e < 3; e++)
+      if (!is_finite_number(cJSON_GetArrayItem(v, e)))
+        return fail(c, w, "element %d must be a finite number, got %s", e, got(cJSON_GetArrayItem(v, e), g, sizeof g));
+  return fail(c, w, "must be %s, got %s", want, got(v, g, sizeof g));
 }
 
 /* obj must be an object whose keys are all keys of the table's `section`,
@@ -131,13 +172,8 @@ static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *s
     join(w, sizeof w, where, it->string);
     for (const cJSON *p = obj->child; p != it; p = p->next)
       if (!strcmp(p->string, it->string)) return fail(c, w, "given twice");
-    char want[160];
-    if (!type_misfit(bs_schema_find_(section, it->string), it, want, sizeof want)) continue;
-    if (cJSON_IsArray(it) && cJSON_GetArraySize(it) == 3 && strstr(want, "array of 3")) /* name the element */
-      for (int e = 0; e < 3; e++)
-        if (!is_finite_number(cJSON_GetArrayItem(it, e)))
-          return fail(c, w, "element %d must be a finite number, got %s", e, got(cJSON_GetArrayItem(it, e), g, sizeof g));
-    return fail(c, w, "must be %s, got %s", want, got(it, g, sizeof g));
+    int st = check_value(c, w, bs_schema_find_(section, it->string), it);
+    if (st) return st;
   }
   return 0;
 }
@@ -194,16 +230,9 @@ static int get_choice_str(ctx *c, const cJSON *obj, const char *where, const cha
   buf[0] = 0;
   int st = get_str(c, obj, where, key, k->required, buf, n);
   if (st || !buf[0] || bs_schema_choice_(k, buf) >= 0) return st;
-  char w[512], list[512] = "", hint[128] = "";
+  char w[512];
   join(w, sizeof w, where, key);
-  for (int i = 0; k->choices[i]; i++) {
-    char one[96];
-    snprintf(one, sizeof one, "%s\"%s\"", i == 0 ? "" : k->choices[i + 1] ? ", " : " or ", k->choices[i]);
-    strncat(list, one, sizeof list - strlen(list) - 1);
-  }
-  const char *near = bs_schema_nearest_(buf, k->choices, -1);
-  if (near) snprintf(hint, sizeof hint, "; did you mean \"%s\"?", near);
-  return fail(c, w, "must be %s, got \"%s\"%s", list, buf, hint);
+  return bad_choice(c, w, k, buf);
 }
 
 /* The same as an index into the choices: *out untouched when absent. */

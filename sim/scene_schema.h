@@ -17,13 +17,18 @@
  * A key of type OBJECT, ARRAY or MAP names the section of its value, of its
  * elements or of its map values in `sub`.
  *
- * Adding a key is one row in scene_schema.c (and its parsing in scene.c):
+ * Adding a key is one row in scene_schema.c, e.g.
  *     {"output", "compress", BS_SCHEMA_BOOLEAN, .def = "false",
  *      .doc = "zlib-compress the VTU arrays"},
+ * then its reading in scene.c (check_keys already admits it and checks its
+ * JSON type), its writing in scene_write.c (test_scene_write checks that a
+ * minimal scene resolves to the row's default), `bigstep schema -o
+ * data/scene.schema.json`, and, for a new section, a row in
+ * bs_schema_sections_ and an instance in tests/scene_full.h.
  *
  * Ranges are intervals: "[0, 6]", "(0, )" (> 0), "[0, )" (>= 0); an empty
  * bound is unbounded. For VEC3, IVEC3 and NUM_OR_VEC3 they bound each
- * element; for ARRAY the number of elements.
+ * element; for ARRAY and STRINGS the number of elements.
  *
  * Nothing here allocates, prints or fails except where a status is returned. */
 #ifndef BS_SCENE_SCHEMA_H
@@ -42,7 +47,8 @@ typedef enum {
   BS_SCHEMA_NUM_OR_CHOICE, /* a number, or one of the strings `choices`        */
   BS_SCHEMA_OBJECT,       /* an object following the section `sub`              */
   BS_SCHEMA_ARRAY,        /* an array of objects following the section `sub`    */
-  BS_SCHEMA_MAP           /* {name: an object following the section `sub`}     */
+  BS_SCHEMA_MAP,          /* {name: an object following the section `sub`}     */
+  BS_SCHEMA_STRINGS       /* an array of strings, each one of `choices` if given */
 } bs_schema_type;
 
 typedef struct bs_schema_key {

@@ -85,6 +85,15 @@ static cJSON *value_schema(const bs_schema_key *k) {
     cJSON_AddItemToObject(o, "items", section_schema(k->sub));
     if (r.has_lo) cJSON_AddNumberToObject(o, "minItems", r.lo);
     return o;
+  case BS_SCHEMA_STRINGS:
+    o = scalar("array", NULL);
+    cJSON *item = scalar("string", NULL);
+    if (k->choices) cJSON_AddItemToObject(item, "enum", choices(k->choices));
+    cJSON_AddItemToObject(o, "items", item);
+    if (r.has_lo) cJSON_AddNumberToObject(o, "minItems", r.lo);
+    if (r.has_hi) cJSON_AddNumberToObject(o, "maxItems", r.hi);
+    if (k->choices) cJSON_AddTrueToObject(o, "uniqueItems");
+    return o;
   case BS_SCHEMA_MAP:
     o = scalar("object", NULL);
     cJSON_AddItemToObject(o, "additionalProperties", section_schema(k->sub));

@@ -15,8 +15,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "bs_scene.h"
+#include "cli_util.h"
 #include "scene_full.h"
 #include "scene_schema.h"
 
@@ -58,6 +60,24 @@ Test(scene_schema, published_file_is_generated_from_the_table) {
   free(text);
 }
 
+/* `bigstep schema` prints the same text, and -o writes it. */
+Test(scene_schema, command_prints_the_published_file) {
+  char *out, *file = read_text(BS_SOURCE_DIR "/data/scene.schema.json");
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " schema", &out), 0, "%s", out);
+  cr_expect(strcmp(out, file) == 0, "`bigstep schema` differs from data/scene.schema.json");
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " schema -o /tmp/bs_test_scene.schema.json", &out), 0, "%s", out);
+  free(out);
+  char *written = read_text("/tmp/bs_test_scene.schema.json");
+  cr_expect(strcmp(written, file) == 0, "`bigstep schema -o` differs from data/scene.schema.json");
+  unlink("/tmp/bs_test_scene.schema.json");
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " schema --bogus", &out), 2, "%s", out);
+  cr_expect(strstr(out, "bigstep schema: unexpected argument '--bogus'") != NULL, "%s", out);
+  free(out);
+  free(written);
+  free(file);
+}
+
 /* A default fits its key's type, range and choices. */
 static void expect_default_fits(const bs_schema_key *k) {
   cJSON *d = cJSON_Parse(k->def);
@@ -84,6 +104,12 @@ static void expect_default_fits(const bs_schema_key *k) {
   case BS_SCHEMA_NUM_OR_CHOICE:
     cr_expect(cJSON_IsNumber(d) || bs_schema_choice_(k, d->valuestring) >= 0, "%s.%s", k->section, k->key);
     break;
+  case BS_SCHEMA_STRINGS:
+    cr_expect(cJSON_IsArray(d), "%s.%s: default %s", k->section, k->key, k->def);
+    for (const cJSON *e = d->child; e; e = e->next)
+      cr_expect(cJSON_IsString(e) && (!k->choices || bs_schema_choice_(k, e->valuestring) >= 0), "%s.%s: default %s",
+                k->section, k->key, k->def);
+    break;
   default: cr_expect(0, "%s.%s: a default on an object or array key", k->section, k->key);
   }
   cJSON_Delete(d);
@@ -96,8 +122,9 @@ Test(scene_schema, table_is_consistent) {
     cr_expect(k->doc && k->doc[0], "%s.%s: no description", k->section, k->key);
     int nested = k->type == BS_SCHEMA_OBJECT || k->type == BS_SCHEMA_ARRAY || k->type == BS_SCHEMA_MAP;
     cr_expect(nested ? k->sub && is_section(k->sub) : !k->sub, "%s.%s: sub", k->section, k->key);
-    cr_expect(!k->choices || k->type == BS_SCHEMA_STRING || k->type == BS_SCHEMA_NUM_OR_CHOICE, "%s.%s: choices",
-              k->section, k->key);
+    cr_expect(!k->choices || k->type == BS_SCHEMA_STRING || k->type == BS_SCHEMA_NUM_OR_CHOICE ||
+                  k->type == BS_SCHEMA_STRINGS,
+              "%s.%s: choices", k->section, k->key);
     cr_expect(k->type != BS_SCHEMA_NUM_OR_CHOICE || k->choices, "%s.%s: no choices", k->section, k->key);
     bs_schema_range r;
     if (bs_schema_range_(k, &r)) cr_expect(r.has_lo || r.has_hi, "%s.%s: range %s", k->section, k->key, k->range);
@@ -152,7 +179,7 @@ Test(scene_schema, types_agree_with_the_loader) {
       [BS_SCHEMA_NUMBER] = "\"abc\"", [BS_SCHEMA_INTEGER] = "2.5", [BS_SCHEMA_STRING] = "5",
       [BS_SCHEMA_BOOLEAN] = "1", [BS_SCHEMA_VEC3] = "[1, 2]", [BS_SCHEMA_IVEC3] = "\"x\"",
       [BS_SCHEMA_NUM_OR_VEC3] = "[1, 2]", [BS_SCHEMA_NUM_OR_CHOICE] = "true", [BS_SCHEMA_OBJECT] = "5",
-      [BS_SCHEMA_ARRAY] = "{}", [BS_SCHEMA_MAP] = "[1]"};
+      [BS_SCHEMA_ARRAY] = "{}", [BS_SCHEMA_MAP] = "[1]", [BS_SCHEMA_STRINGS] = "[\"a\", 1]"};
   for (int i = 0; i < bs_schema_n_keys_; i++) {
     const bs_schema_key *k = &bs_schema_keys_[i];
     char path[256], set[512], parent[256];
@@ -217,15 +244,16 @@ Test(scene_schema, choices_agree_with_the_loader) {
     if (!k->choices) continue;
     char path[256], set[2][600], hint[128];
     bs_test_key_path(k->section, k->key, path, sizeof path);
+    const char *open = k->type == BS_SCHEMA_STRINGS ? "[" : "", *close = k->type == BS_SCHEMA_STRINGS ? "]" : "";
     for (int c = 0; k->choices[c]; c++) {
-      snprintf(set[0], sizeof set[0], "%s=\"%s\"", path, k->choices[c]);
+      snprintf(set[0], sizeof set[0], "%s=%s\"%s\"%s", path, open, k->choices[c], close);
       snprintf(set[1], sizeof set[1], "obstacles.0.file=\"%s\"", BS_SOURCE_DIR "/data/levelsets/bowl.bsls");
       bs_error err;
       const char *sets[2] = {set[0], set[1]};
       int st = load_full(!strcmp(k->choices[c], "grid") ? 2 : 1, sets, &err);
       cr_expect_eq(st, 0, "--set %s: %s", set[0], err.msg);
       if (k->type == BS_SCHEMA_NUM_OR_CHOICE) continue;
-      snprintf(set[0], sizeof set[0], "%s=\"%sx\"", path, k->choices[c]);
+      snprintf(set[0], sizeof set[0], "%s=%s\"%sx\"%s", path, open, k->choices[c], close);
       snprintf(hint, sizeof hint, "did you mean \"%s\"?", k->choices[c]);
       expect_refused(set[0], path, k->key, hint);
     }
