@@ -55,5 +55,6 @@ int bs_cmd_run(int argc, char **argv);
 int bs_cmd_study(int argc, char **argv);
 int bs_cmd_check(int argc, char **argv);
 int bs_cmd_levelset(int argc, char **argv);
+int bs_cmd_schema(int argc, char **argv);
 
 #endif

@@ -17,6 +17,7 @@ static const char *main_help =
     "  check DIR|FILE.vtu|FILE.pvd        audit saved states (inverted tets, self-intersections, obstacles)\n"
     "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
     "  levelset SURFACE OUT               a grid level set (signed distance) from a closed surface\n"
+    "  schema                             the scene schema as a JSON Schema (for editors)\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
     "  bigstep --version        the version\n";
@@ -40,6 +41,7 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "study")) return bs_cmd_study(argc - 1, argv + 1);
   if (!strcmp(cmd, "check")) return bs_cmd_check(argc - 1, argv + 1);
   if (!strcmp(cmd, "levelset")) return bs_cmd_levelset(argc - 1, argv + 1);
+  if (!strcmp(cmd, "schema")) return bs_cmd_schema(argc - 1, argv + 1);
   fprintf(stderr, "bigstep: unknown command '%s' (see 'bigstep --help')\n", cmd);
   return BS_EXIT_USAGE;
 }

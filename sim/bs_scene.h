@@ -7,8 +7,11 @@
  *    checked: an unknown key, a wrong type, a missing mesh or group file, or
  *    an impossible value is BS_EINPUT (BS_EIO for a missing file) with a
  *    message naming the file and the key path, e.g.
- *    "scene.json: obstacles.0.friction: must be >= 0, got -0.5". The schema
- *    is documented in README.md ("Scenes");
+ *    "scene.json: obstacles.0.friction: must be >= 0, got -0.5"; an unknown
+ *    key names the nearest allowed one ("did you mean 'gravity'?"), a wrong
+ *    type what it got ("must be a number, got string \"24\""), malformed
+ *    JSON its line and column. The schema is documented in README.md
+ *    ("Scenes") and published as a JSON Schema (bs_scene_schema_json);
  *  - in C, without any JSON: bs_scene_create gives a scene holding every
  *    default of the JSON schema and no body; bs_scene_add_body,
  *    bs_scene_body_add_script, bs_scene_body_add_material and
@@ -130,6 +133,7 @@ typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
 
 typedef struct bs_scene {
   char path[BS_MAX_PATH];  /* the scene file; "<scene>" for one built in C     */
+  char *description;       /* "description" (owned, malloc'd); NULL: none       */
   double fps;
   int frames, steps_per_frame;
   double dt;               /* derived: 1 / (fps * steps_per_frame); the loader and */
@@ -201,6 +205,26 @@ int bs_scene_validate(bs_scene *s, bs_error *err);
  * steps_per_frame give: 0, or BS_EINPUT naming the key path. Meshes and
  * groups are checked by bs_sim_create, which calls this first. */
 int bs_scene_check(const bs_scene *s, bs_error *err);
+
+/* ---- the schema and the resolved scene -------------------------------- */
+
+/* The scene schema as a JSON Schema (draft-07) text, generated from the table
+ * the loader checks keys, types, integer ranges and allowed strings with
+ * (data/scene.schema.json holds a copy; `bigstep schema` prints it). *out is
+ * malloc'd (free it), ending in a newline. 0, or BS_ENOMEM. */
+int bs_scene_schema_json(char **out, bs_error *err);
+
+/* The resolved scene as JSON text in the input layout: every key the loader
+ * reads, with its value (defaults filled in), mesh and grid paths made
+ * absolute when they name an existing file; "time.dt" is left out (fps and
+ * steps_per_frame give it). bs_scene_parse of the text gives back the same
+ * scene, and writing that again the same text. *out is malloc'd (free it),
+ * ending in a newline. 0, or BS_ENOMEM. */
+int bs_scene_write_json(const bs_scene *s, char **out, bs_error *err);
+
+/* The same written to the file `path` (replaced): 0, BS_ENOMEM, or BS_EIO
+ * naming the file. */
+int bs_scene_write_json_file(const bs_scene *s, const char *path, bs_error *err);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,9 @@
 /* scene.c — strict JSON scene parsing (cJSON): keys and types here, values in
- * scene_check.c (shared with scenes built in C). */
+ * scene_check.c (shared with scenes built in C). The keys allowed in each
+ * object, the integer ranges and the allowed strings come from the schema
+ * table (scene_schema.c). */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,7 +11,9 @@
 #include <cJSON.h>
 
 #include "bs_scene.h"
+#include "json_locate.h"
 #include "scene_internal.h"
+#include "scene_schema.h"
 
 /* ---- small strict accessors -------------------------------------------- */
 
@@ -23,7 +28,6 @@ static int fail(ctx *c, const char *where, const char *fmt, ...)
 #endif
     ;
 
-#include <stdarg.h>
 static int fail(ctx *c, const char *where, const char *fmt, ...) {
   char msg[768];
   va_list ap;
@@ -38,46 +42,169 @@ static void join(char *out, size_t n, const char *where, const char *key) {
   else snprintf(out, n, "%s", key);
 }
 
-/* Every key of obj must be in allowed (NULL-terminated). */
-static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *const *allowed) {
-  if (!cJSON_IsObject(obj)) return fail(c, where[0] ? where : "(top level)", "must be an object");
+/* What a value is, for "got ..." in messages: string "abc", 3, inf, true,
+ * false, null, array of 2, object. */
+static const char *got(const cJSON *it, char *buf, size_t n) {
+  if (cJSON_IsString(it)) snprintf(buf, n, "string \"%.40s%s\"", it->valuestring, strlen(it->valuestring) > 40 ? "..." : "");
+  else if (cJSON_IsNumber(it)) snprintf(buf, n, "%.17g", it->valuedouble);
+  else if (cJSON_IsBool(it)) snprintf(buf, n, "%s", cJSON_IsTrue(it) ? "true" : "false");
+  else if (cJSON_IsNull(it)) snprintf(buf, n, "null");
+  else if (cJSON_IsArray(it)) snprintf(buf, n, "array of %d", cJSON_GetArraySize(it));
+  else if (cJSON_IsObject(it)) snprintf(buf, n, "object");
+  else snprintf(buf, n, "an invalid value");
+  return buf;
+}
+
+/* The table's row of section.key (a key the parser reads must be there). */
+static const bs_schema_key *row(ctx *c, const char *where, const char *section, const char *key) {
+  const bs_schema_key *k = bs_schema_find_(section, key);
+  if (!k) bs_error_set(c->err, BS_EINTERNAL, "%s: %s.%s: not in the schema table (a bug)", c->file, where, key);
+  return k;
+}
+
+/* "unknown key; did you mean 'X'? (allowed here: ...)" for the key `bad`. */
+static int unknown_key(ctx *c, const char *where, const char *bad, const char *const *keys, int n) {
+  char w[512], list[768] = "", hint[128] = "";
+  join(w, sizeof w, where, bad);
+  for (int i = 0; i < n; i++) {
+    strncat(list, keys[i], sizeof list - strlen(list) - 1);
+    if (i + 1 < n) strncat(list, ", ", sizeof list - strlen(list) - 1);
+  }
+  const char *near = bs_schema_nearest_(bad, keys, n);
+  if (near) snprintf(hint, sizeof hint, "; did you mean '%s'?", near);
+  return fail(c, w, "unknown key%s (allowed here: %s)", hint, list);
+}
+
+/* "must be "a", "b" or "c", got "x"; did you mean "a"?" for the value v of
+ * the key k (its path w). */
+static int bad_choice(ctx *c, const char *w, const bs_schema_key *k, const char *v) {
+  char list[512] = "", hint[128] = "";
+  for (int i = 0; k->choices[i]; i++) {
+    char one[96];
+    snprintf(one, sizeof one, "%s\"%s\"", i == 0 ? "" : k->choices[i + 1] ? ", " : " or ", k->choices[i]);
+    strncat(list, one, sizeof list - strlen(list) - 1);
+  }
+  const char *near = bs_schema_nearest_(v, k->choices, -1);
+  if (near) snprintf(hint, sizeof hint, "; did you mean \"%s\"?", near);
+  return fail(c, w, "must be %s, got \"%.64s\"%s", list, v, hint);
+}
+
+static int is_finite_number(const cJSON *v) { return cJSON_IsNumber(v) && isfinite(v->valuedouble); }
+
+/* 1 when v is an array of 3 finite numbers. */
+static int is_vec3(const cJSON *v) {
+  if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 3) return 0;
+  for (const cJSON *e = v->child; e; e = e->next)
+    if (!is_finite_number(e)) return 0;
+  return 1;
+}
+
+/* What v must be for the table's type of its key (into want), or NULL when
+ * it fits. */
+static const char *type_misfit(const bs_schema_key *k, const cJSON *v, char *want, size_t n) {
+  bs_schema_range r;
+  char rt[96] = "";
+  if (bs_schema_range_(k, &r)) bs_schema_range_text_(&r, rt, sizeof rt);
+  int ok = 1;
+  switch (k->type) {
+  case BS_SCHEMA_NUMBER:
+    ok = is_finite_number(v);
+    snprintf(want, n, "%s", cJSON_IsNumber(v) ? "finite" : "a number");
+    break;
+  case BS_SCHEMA_INTEGER:
+    ok = is_finite_number(v) && v->valuedouble == floor(v->valuedouble);
+    snprintf(want, n, "an integer%s%s", rt[0] ? " in " : "", rt);
+    break;
+  case BS_SCHEMA_STRING: ok = cJSON_IsString(v), snprintf(want, n, "a string"); break;
+  case BS_SCHEMA_BOOLEAN: ok = cJSON_IsBool(v), snprintf(want, n, "true or false"); break;
+  case BS_SCHEMA_VEC3: ok = is_vec3(v), snprintf(want, n, "an array of 3 numbers"); break;
+  case BS_SCHEMA_IVEC3: ok = is_vec3(v), snprintf(want, n, "an array of 3 integers"); break;
+  case BS_SCHEMA_NUM_OR_VEC3: ok = is_finite_number(v) || is_vec3(v), snprintf(want, n, "a number or an array of 3 numbers"); break;
+  case BS_SCHEMA_NUM_OR_CHOICE:
+    ok = is_finite_number(v) || (cJSON_IsString(v) && bs_schema_choice_(k, v->valuestring) >= 0);
+    snprintf(want, n, "a number%s%s or \"%s\"", rt[0] ? " " : "", rt, k->choices ? k->choices[0] : "");
+    break;
+  case BS_SCHEMA_OBJECT: ok = cJSON_IsObject(v), snprintf(want, n, "an object"); break;
+  case BS_SCHEMA_ARRAY: ok = cJSON_IsArray(v), snprintf(want, n, "an array"); break;
+  case BS_SCHEMA_MAP: ok = cJSON_IsObject(v), snprintf(want, n, "an object {name: object}"); break;
+  case BS_SCHEMA_STRINGS:
+    ok = cJSON_IsArray(v);
+    for (const cJSON *e = ok ? v->child : NULL; e; e = e->next) ok &= cJSON_IsString(e);
+    snprintf(want, n, "an array of strings");
+    break;
+  }
+  return ok ? NULL : want;
+}
+
+/* The value v of key k (at path w) against the table: its type, and for
+ * STRINGS with choices each element. */
+static int check_value(ctx *c, const char *w, const bs_schema_key *k, const cJSON *v) {
+  char want[160], g[96];
+  if (!type_misfit(k, v, want, sizeof want)) {
+    if (k->type != BS_SCHEMA_STRINGS || !k->choices) return 0;
+    int i = 0;
+    for (const cJSON *e = v->child; e; e = e->next, i++)
+      if (bs_schema_choice_(k, e->valuestring) < 0) {
+        char wi[600];
+        snprintf(wi, sizeof wi, "%s.%d", w, i);
+        return bad_choice(c, wi, k, e->valuestring);
+      }
+    return 0;
+  }
+  if (cJSON_IsArray(v) && cJSON_GetArraySize(v) == 3 && strstr(want, "array of 3")) /* name the element */
+    for (int e = 0; e < 3; e++)
+      if (!is_finite_number(cJSON_GetArrayItem(v, e)))
+        return fail(c, w, "element %d must be a finite number, got %s", e, got(cJSON_GetArrayItem(v, e), g, sizeof g));
+  return fail(c, w, "must be %s, got %s", want, got(v, g, sizeof g));
+}
+
+/* obj must be an object whose keys are all keys of the table's `section`,
+ * each given once, each value of its key's type. */
+static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *section) {
+  char g[96], w[512];
+  if (!cJSON_IsObject(obj)) return fail(c, where[0] ? where : "(top level)", "must be an object, got %s", got(obj, g, sizeof g));
+  const char *keys[128];
+  int n = bs_schema_section_keys_(section, keys, 128);
   for (const cJSON *it = obj->child; it; it = it->next) {
     int ok = 0;
-    for (int i = 0; allowed[i]; i++)
-      if (strcmp(it->string, allowed[i]) == 0) ok = 1;
-    if (!ok) {
-      char w[512], list[512] = "";
-      join(w, sizeof w, where, it->string);
-      for (int i = 0; allowed[i]; i++) {
-        strncat(list, allowed[i], sizeof list - strlen(list) - 1);
-        if (allowed[i + 1]) strncat(list, ", ", sizeof list - strlen(list) - 1);
-      }
-      return fail(c, w, "unknown key (allowed here: %s)", list);
-    }
+    for (int i = 0; i < n && !ok; i++) ok = !strcmp(it->string, keys[i]);
+    if (!ok) return unknown_key(c, where, it->string, keys, n);
+    join(w, sizeof w, where, it->string);
+    for (const cJSON *p = obj->child; p != it; p = p->next)
+      if (!strcmp(p->string, it->string)) return fail(c, w, "given twice");
+    int st = check_value(c, w, bs_schema_find_(section, it->string), it);
+    if (st) return st;
   }
   return 0;
 }
 
 static int get_num(ctx *c, const cJSON *obj, const char *where, const char *key, int required, double *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  char w[512];
+  char w[512], g[96];
   join(w, sizeof w, where, key);
   if (!it) return required ? fail(c, w, "missing (a number is required)") : 0;
-  if (!cJSON_IsNumber(it)) return fail(c, w, "must be a number");
+  if (!cJSON_IsNumber(it)) return fail(c, w, "must be a number, got %s", got(it, g, sizeof g));
   if (!isfinite(it->valuedouble)) return fail(c, w, "must be finite, got %g", it->valuedouble);
   *out = it->valuedouble;
   return 0;
 }
 
-static int get_int(ctx *c, const cJSON *obj, const char *where, const char *key, int required, long lo, long hi,
-                   int *out) {
+/* An integer in the table's range for section.key (required as the table
+ * says); untouched when absent. */
+static int get_int(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key, int *out) {
+  const bs_schema_key *k = row(c, where, section, key);
+  if (!k) return BS_EINTERNAL;
   double v = *out;
-  char w[512];
+  char w[512], rt[96];
   join(w, sizeof w, where, key);
-  if (!cJSON_GetObjectItemCaseSensitive(obj, key) && !required) return 0;
-  int st = get_num(c, obj, where, key, required, &v);
+  if (!cJSON_GetObjectItemCaseSensitive(obj, key) && !k->required) return 0;
+  int st = get_num(c, obj, where, key, k->required, &v);
   if (st) return st;
-  if (v != floor(v) || v < lo || v > hi) return fail(c, w, "must be an integer in [%ld, %ld], got %g", lo, hi, v);
+  bs_schema_range r;
+  bs_schema_range_(k, &r);
+  bs_schema_range_text_(&r, rt, sizeof rt);
+  if (v != floor(v) || !bs_schema_in_range_(&r, v) || fabs(v) > 2147483647.0)
+    return fail(c, w, "must be an integer in %s, got %.17g", rt, v);
   *out = (int)v;
   return 0;
 }
@@ -85,69 +212,136 @@ static int get_int(ctx *c, const cJSON *obj, const char *where, const char *key,
 static int get_str(ctx *c, const cJSON *obj, const char *where, const char *key, int required, char *out,
                    size_t n) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  char w[512];
+  char w[512], g[96];
   join(w, sizeof w, where, key);
   if (!it) return required ? fail(c, w, "missing (a string is required)") : 0;
-  if (!cJSON_IsString(it)) return fail(c, w, "must be a string");
-  if (strlen(it->valuestring) >= n) return fail(c, w, "string too long");
+  if (!cJSON_IsString(it)) return fail(c, w, "must be a string, got %s", got(it, g, sizeof g));
+  if (strlen(it->valuestring) >= n) return fail(c, w, "string too long (at most %zu characters)", n - 1);
   snprintf(out, n, "%s", it->valuestring);
   return 0;
 }
 
-/* An optional string key with two allowed values: *out = 0 for a, 1 for b;
- * untouched when the key is absent. */
-static int get_choice(ctx *c, const cJSON *obj, const char *where, const char *key, const char *a, const char *b,
-                      int *out) {
-  char buf[64] = "", w[512];
-  int st = get_str(c, obj, where, key, 0, buf, sizeof buf);
-  if (st || !buf[0]) return st;
-  if (!strcmp(buf, a)) *out = 0;
-  else if (!strcmp(buf, b)) *out = 1;
-  else {
-    join(w, sizeof w, where, key);
-    return fail(c, w, "must be \"%s\" or \"%s\", got \"%s\"", a, b, buf);
-  }
-  return 0;
+/* A string key that must be one of the table's choices for section.key:
+ * buf holds it ("" when absent and not required). */
+static int get_choice_str(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key,
+                          char *buf, size_t n) {
+  const bs_schema_key *k = row(c, where, section, key);
+  if (!k) return BS_EINTERNAL;
+  buf[0] = 0;
+  int st = get_str(c, obj, where, key, k->required, buf, n);
+  if (st || !buf[0] || bs_schema_choice_(k, buf) >= 0) return st;
+  char w[512];
+  join(w, sizeof w, where, key);
+  return bad_choice(c, w, k, buf);
+}
+
+/* The same as an index into the choices: *out untouched when absent. */
+static int get_choice(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key, int *out) {
+  char buf[64];
+  int st = get_choice_str(c, obj, where, section, key, buf, sizeof buf);
+  if (!st && buf[0]) *out = bs_schema_choice_(bs_schema_find_(section, key), buf);
+  return st;
 }
 
 static int get_bool(ctx *c, const cJSON *obj, const char *where, const char *key, int *out) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  char w[512];
+  char w[512], g[96];
   join(w, sizeof w, where, key);
   if (!it) return 0;
-  if (!cJSON_IsBool(it)) return fail(c, w, "must be true or false");
+  if (!cJSON_IsBool(it)) return fail(c, w, "must be true or false, got %s", got(it, g, sizeof g));
   *out = cJSON_IsTrue(it);
   return 0;
 }
 
 static int get_vec3(ctx *c, const cJSON *obj, const char *where, const char *key, int required, double out[3]) {
   const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-  char w[512];
+  char w[512], g[96];
   join(w, sizeof w, where, key);
   if (!it) return required ? fail(c, w, "missing (an array of 3 numbers is required)") : 0;
-  if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3) return fail(c, w, "must be an array of 3 numbers");
+  if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 3)
+    return fail(c, w, "must be an array of 3 numbers, got %s", got(it, g, sizeof g));
   for (int k = 0; k < 3; k++) {
     const cJSON *e = cJSON_GetArrayItem(it, k);
-    if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) return fail(c, w, "element %d must be a finite number", k);
+    if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble))
+      return fail(c, w, "element %d must be a finite number, got %s", k, got(e, g, sizeof g));
     out[k] = e->valuedouble;
   }
   return 0;
 }
 
+/* An array value (NULL when absent): *arr, or a message naming what it got;
+ * non_empty: at least one element. */
+static int get_array(ctx *c, const cJSON *obj, const char *where, const char *key, int non_empty, const cJSON **arr) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+  char w[512], g[96];
+  join(w, sizeof w, where, key);
+  *arr = it;
+  if (!it) return 0;
+  if (!cJSON_IsArray(it) || (non_empty && cJSON_GetArraySize(it) < 1))
+    return fail(c, w, "must be a%s array, got %s", non_empty ? " non-empty" : "n", got(it, g, sizeof g));
+  return 0;
+}
+
+/* ---- sections ------------------------------------------------------------ */
+
+/* An enum parsed from a string that the table allows: `parse` maps the name
+ * (the module's own parser); *out untouched when absent. */
+static int get_enum(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key,
+                    int (*parse)(const char *, int *, bs_error *), int *out) {
+  char buf[64], w[512];
+  int st = get_choice_str(c, obj, where, section, key, buf, sizeof buf);
+  if (st || !buf[0]) return st;
+  bs_error e2;
+  if (parse(buf, out, &e2)) {
+    join(w, sizeof w, where, key);
+    return fail(c, w, "%s", e2.msg);
+  }
+  return 0;
+}
+
+static int parse_model(const char *name, int *out, bs_error *err) {
+  bs_model m;
+  int st = bs_model_parse(name, &m, err);
+  *out = (int)m;
+  return st;
+}
+
+static int parse_shape(const char *name, int *out, bs_error *err) {
+  bs_shape s;
+  int st = bs_shape_parse(name, &s, err);
+  *out = (int)s;
+  return st;
+}
+
+static int parse_collide(const char *name, int *out, bs_error *err) {
+  bs_collide_mode m;
+  int st = bs_collide_mode_parse(name, &m, err);
+  *out = (int)m;
+  return st;
+}
+
+static int parse_method(const char *name, int *out, bs_error *err) {
+  bs_method m;
+  int st = bs_method_parse(name, &m, err);
+  *out = (int)m;
+  return st;
+}
+
+static int parse_linear(const char *name, int *out, bs_error *err) {
+  bs_lin_kind k;
+  int st = bs_lin_kind_parse(name, &k, err);
+  *out = (int)k;
+  return st;
+}
+
 /* ---- sections ------------------------------------------------------------ */
 
 static int parse_material(ctx *c, const cJSON *o, const char *where, bs_scene_material *m) {
-  static const char *const keys[] = {"model", "youngs", "poisson", "density", "rayleigh", NULL};
-  int st;
-  if ((st = check_keys(c, o, where, keys))) return st;
-  char model[64] = "fixed_corotated";
-  if ((st = get_str(c, o, where, "model", 0, model, sizeof model))) return st;
-  bs_error e2;
-  if (bs_model_parse(model, &m->model, &e2)) {
-    char w[512];
-    join(w, sizeof w, where, "model");
-    return fail(c, w, "%s", e2.msg);
-  }
+  int st, model = (int)m->model;
+  if ((st = check_keys(c, o, where, "bodies[].material")) ||
+      (st = get_enum(c, o, where, "bodies[].material", "model", parse_model, &model)))
+    return st;
+  m->model = (bs_model)model;
   m->rayleigh = 0;
   if ((st = get_num(c, o, where, "youngs", 1, &m->youngs)) || (st = get_num(c, o, where, "poisson", 1, &m->poisson)) ||
       (st = get_num(c, o, where, "density", 1, &m->density)) || (st = get_num(c, o, where, "rayleigh", 0, &m->rayleigh)))
@@ -155,10 +349,26 @@ static int parse_material(ctx *c, const cJSON *o, const char *where, bs_scene_ma
   return 0;
 }
 
-static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_script *s) {
-  static const char *const keys[] = {"group", "velocity", "fixed", "keyframes", NULL};
+static int parse_script_keys(ctx *c, const cJSON *arr, const char *w, bs_scene_script *s) {
   int st;
-  if ((st = check_keys(c, o, where, keys))) return st;
+  s->n_keys = cJSON_GetArraySize(arr);
+  s->key_t = calloc((size_t)s->n_keys, sizeof(double));
+  s->key_offset = calloc(3 * (size_t)s->n_keys, sizeof(double));
+  if (!s->key_t || !s->key_offset) return bs_error_set(c->err, BS_ENOMEM, "out of memory reading %s", w);
+  for (int i = 0; i < s->n_keys; i++) {
+    char wi[600];
+    snprintf(wi, sizeof wi, "%s.%d", w, i);
+    const cJSON *k = cJSON_GetArrayItem(arr, i);
+    if ((st = check_keys(c, k, wi, "bodies[].scripted[].keyframes[]")) ||
+        (st = get_num(c, k, wi, "t", 1, &s->key_t[i])) || (st = get_vec3(c, k, wi, "offset", 1, s->key_offset + 3 * i)))
+      return st;
+  }
+  return 0;
+}
+
+static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_script *s) {
+  int st;
+  if ((st = check_keys(c, o, where, "bodies[].scripted[]"))) return st;
   if ((st = get_str(c, o, where, "group", 1, s->group, sizeof s->group))) return st;
   int has_v = cJSON_HasObjectItem(o, "velocity"), has_k = cJSON_HasObjectItem(o, "keyframes");
   int fixed = 0;
@@ -174,21 +384,9 @@ static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_scri
     s->kind = BS_SCRIPT_KEYFRAMES;
     char w[512];
     join(w, sizeof w, where, "keyframes");
-    const cJSON *arr = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
-    if (!cJSON_IsArray(arr) || cJSON_GetArraySize(arr) < 1) return fail(c, w, "must be a non-empty array");
-    s->n_keys = cJSON_GetArraySize(arr);
-    s->key_t = calloc((size_t)s->n_keys, sizeof(double));
-    s->key_offset = calloc(3 * (size_t)s->n_keys, sizeof(double));
-    if (!s->key_t || !s->key_offset) return bs_error_set(c->err, BS_ENOMEM, "out of memory reading %s", w);
-    for (int i = 0; i < s->n_keys; i++) {
-      char wi[600];
-      snprintf(wi, sizeof wi, "%s.%d", w, i);
-      const cJSON *k = cJSON_GetArrayItem(arr, i);
-      static const char *const kk[] = {"t", "offset", NULL};
-      if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &s->key_t[i])) ||
-          (st = get_vec3(c, k, wi, "offset", 1, s->key_offset + 3 * i)))
-        return st;
-    }
+    const cJSON *arr;
+    if ((st = get_array(c, o, where, "keyframes", 1, &arr))) return st;
+    return parse_script_keys(c, arr, w, s);
   }
   return 0;
 }
@@ -196,8 +394,11 @@ static int parse_script(ctx *c, const cJSON *o, const char *where, bs_scene_scri
 /* "material" (the default, required) and "materials": {group: {...}}. */
 static int parse_body_materials(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
   int st;
-  char w[512];
+  char w[512], g[96];
   const cJSON *mats = cJSON_GetObjectItemCaseSensitive(o, "materials");
+  join(w, sizeof w, where, "materials");
+  if (mats && !cJSON_IsObject(mats))
+    return fail(c, w, "must be an object {group name: material}, got %s", got(mats, g, sizeof g));
   int nm = 1 + (mats ? cJSON_GetArraySize(mats) : 0);
   b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
   if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
@@ -209,11 +410,11 @@ static int parse_body_materials(ctx *c, const cJSON *o, const char *where, bs_sc
   if ((st = parse_material(c, mat, w, &b->materials[0]))) return st;
   if (mats) {
     join(w, sizeof w, where, "materials");
-    if (!cJSON_IsObject(mats)) return fail(c, w, "must be an object {group name: material}");
     int i = 1;
     for (const cJSON *it = mats->child; it; it = it->next, i++) {
       char wi[600];
       snprintf(wi, sizeof wi, "%s.%s", w, it->string);
+      if (strlen(it->string) >= sizeof b->materials[i].group) return fail(c, wi, "group name too long");
       snprintf(b->materials[i].group, sizeof b->materials[i].group, "%s", it->string);
       if ((st = parse_material(c, it, wi, &b->materials[i]))) return st;
     }
@@ -226,28 +427,18 @@ static int parse_body_init(ctx *c, const cJSON *o, const char *where, bs_scene_b
   int st;
   char w[512];
   const cJSON *is = cJSON_GetObjectItemCaseSensitive(o, "initial_state");
-  if (is) {
-    join(w, sizeof w, where, "initial_state");
-    static const char *const ik[] = {"type", "lo", "hi", "point", "seed", NULL};
-    if ((st = check_keys(c, is, w, ik))) return st;
-    char type[32];
-    if ((st = get_str(c, is, w, "type", 1, type, sizeof type))) return st;
-    int seed = 1;
-    if ((st = get_int(c, is, w, "seed", 0, 0, 2147483647L, &seed))) return st;
-    b->init_seed = (unsigned)seed;
-    if (!strcmp(type, "rest")) b->init = BS_INIT_REST;
-    else if (!strcmp(type, "random")) {
-      b->init = BS_INIT_RANDOM;
-      if ((st = get_vec3(c, is, w, "lo", 1, b->init_lo)) || (st = get_vec3(c, is, w, "hi", 1, b->init_hi))) return st;
-    } else if (!strcmp(type, "point")) {
-      b->init = BS_INIT_POINT;
-      if ((st = get_vec3(c, is, w, "point", 0, b->init_lo))) return st;
-    } else {
-      char wt[600];
-      snprintf(wt, sizeof wt, "%s.type", w);
-      return fail(c, wt, "must be \"rest\", \"random\" or \"point\", got \"%s\"", type);
-    }
-  }
+  if (!is) return 0;
+  join(w, sizeof w, where, "initial_state");
+  int type = 0, seed = 1;
+  if ((st = check_keys(c, is, w, "bodies[].initial_state")) ||
+      (st = get_choice(c, is, w, "bodies[].initial_state", "type", &type)) ||
+      (st = get_int(c, is, w, "bodies[].initial_state", "seed", &seed)))
+    return st;
+  b->init_seed = (unsigned)seed;
+  b->init = (bs_init_kind)type; /* the table's order: rest, random, point */
+  if (b->init == BS_INIT_RANDOM)
+    return (st = get_vec3(c, is, w, "lo", 1, b->init_lo)) ? st : get_vec3(c, is, w, "hi", 1, b->init_hi);
+  if (b->init == BS_INIT_POINT) return get_vec3(c, is, w, "point", 0, b->init_lo);
   return 0;
 }
 
@@ -255,28 +446,43 @@ static int parse_body_init(ctx *c, const cJSON *o, const char *where, bs_scene_b
 static int parse_body_scripts(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
   int st;
   char w[512];
-  const cJSON *scr = cJSON_GetObjectItemCaseSensitive(o, "scripted");
-  if (scr) {
-    join(w, sizeof w, where, "scripted");
-    if (!cJSON_IsArray(scr)) return fail(c, w, "must be an array");
-    b->n_scripts = cJSON_GetArraySize(scr);
-    b->scripts = calloc((size_t)(b->n_scripts ? b->n_scripts : 1), sizeof(bs_scene_script));
-    if (!b->scripts) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
-    for (int i = 0; i < b->n_scripts; i++) {
-      char wi[600];
-      snprintf(wi, sizeof wi, "%s.%d", w, i);
-      if ((st = parse_script(c, cJSON_GetArrayItem(scr, i), wi, &b->scripts[i]))) return st;
-    }
+  const cJSON *scr;
+  if ((st = get_array(c, o, where, "scripted", 0, &scr)) || !scr) return st;
+  join(w, sizeof w, where, "scripted");
+  b->n_scripts = cJSON_GetArraySize(scr);
+  b->scripts = calloc((size_t)(b->n_scripts ? b->n_scripts : 1), sizeof(bs_scene_script));
+  if (!b->scripts) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  for (int i = 0; i < b->n_scripts; i++) {
+    char wi[600];
+    snprintf(wi, sizeof wi, "%s.%d", w, i);
+    if ((st = parse_script(c, cJSON_GetArrayItem(scr, i), wi, &b->scripts[i]))) return st;
+  }
+  return 0;
+}
+
+/* "box": {"cells": [nx, ny, nz] (integers in the table's range), "size"}. */
+static int parse_body_box(ctx *c, const cJSON *box, const char *w, bs_scene_body *b) {
+  int st;
+  double cells[3];
+  if ((st = check_keys(c, box, w, "bodies[].box")) || (st = get_vec3(c, box, w, "cells", 1, cells)) ||
+      (st = get_vec3(c, box, w, "size", 0, b->box_size)))
+    return st;
+  bs_schema_range r;
+  char wc[600], rt[96];
+  bs_schema_range_(bs_schema_find_("bodies[].box", "cells"), &r);
+  bs_schema_range_text_(&r, rt, sizeof rt);
+  snprintf(wc, sizeof wc, "%s.cells", w);
+  for (int k = 0; k < 3; k++) {
+    if (cells[k] != floor(cells[k]) || !bs_schema_in_range_(&r, cells[k]))
+      return fail(c, wc, "element %d must be an integer in %s, got %.17g", k, rt, cells[k]);
+    b->box_cells[k] = (int)cells[k];
   }
   return 0;
 }
 
 static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
-  static const char *const keys[] = {"mesh", "box", "mesh_size", "refine", "reorder", "translate", "rotate", "scale",
-                                     "material", "materials", "velocity", "angular_velocity", "initial_state",
-                                     "scripted", NULL};
   int st;
-  if ((st = check_keys(c, o, where, keys))) return st;
+  if ((st = check_keys(c, o, where, "bodies[]"))) return st;
   if ((st = get_str(c, o, where, "mesh", 1, b->mesh, sizeof b->mesh))) return st;
   char w[512];
   bs_scene_body_defaults_(b);
@@ -284,28 +490,16 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   join(w, sizeof w, where, "box");
   if (strcmp(b->mesh, "box") == 0) {
     if (!box) return fail(c, w, "missing: \"mesh\": \"box\" needs \"box\": {\"cells\": [nx, ny, nz], \"size\": [lx, ly, lz]}");
-    static const char *const bk[] = {"cells", "size", NULL};
-    if ((st = check_keys(c, box, w, bk))) return st;
-    double cells[3];
-    if ((st = get_vec3(c, box, w, "cells", 1, cells)) || (st = get_vec3(c, box, w, "size", 0, b->box_size))) return st;
-    for (int k = 0; k < 3; k++) {
-      if (cells[k] != floor(cells[k]) || cells[k] < 1 || cells[k] > 4096) return fail(c, w, "cells must be integers in [1, 4096]");
-      b->box_cells[k] = (int)cells[k];
-    }
+    if ((st = parse_body_box(c, box, w, b))) return st;
   } else if (box) {
     return fail(c, w, "only allowed with \"mesh\": \"box\"");
   }
-  if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size))) return st;
-  if ((st = get_int(c, o, where, "refine", 0, 0, 6, &b->refine))) return st;
-  char reorder[32] = "none";
-  if ((st = get_str(c, o, where, "reorder", 0, reorder, sizeof reorder))) return st;
-  if (!strcmp(reorder, "none")) b->reorder = BS_ORDER_NONE;
-  else if (!strcmp(reorder, "metis")) b->reorder = BS_ORDER_METIS;
-  else if (!strcmp(reorder, "rcm")) b->reorder = BS_ORDER_RCM;
-  else {
-    join(w, sizeof w, where, "reorder");
-    return fail(c, w, "must be \"none\", \"metis\" or \"rcm\", got \"%s\"", reorder);
-  }
+  int reorder = (int)b->reorder; /* the table's order: none, metis, rcm */
+  if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size)) ||
+      (st = get_int(c, o, where, "bodies[]", "refine", &b->refine)) ||
+      (st = get_choice(c, o, where, "bodies[]", "reorder", &reorder)))
+    return st;
+  b->reorder = (bs_order)reorder;
   const cJSON *sc = cJSON_GetObjectItemCaseSensitive(o, "scale");
   if (cJSON_IsNumber(sc)) b->scale[0] = b->scale[1] = b->scale[2] = sc->valuedouble;
   else if ((st = get_vec3(c, o, where, "scale", 0, b->scale))) return st;
@@ -318,42 +512,12 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   return parse_body_scripts(c, o, where, b);
 }
 
-/* An optional string key parsed by `parse` into an enum (untouched when absent). */
-static int get_enum(ctx *c, const cJSON *obj, const char *where, const char *key, int required,
-                    int (*parse)(const char *, int *, bs_error *), int *out) {
-  char buf[64] = "", w[512];
-  int st = get_str(c, obj, where, key, required, buf, sizeof buf);
-  if (st || !buf[0]) return st;
-  bs_error e2;
-  if (parse(buf, out, &e2)) {
-    join(w, sizeof w, where, key);
-    return fail(c, w, "%s", e2.msg);
-  }
-  return 0;
-}
-
-static int parse_shape(const char *name, int *out, bs_error *err) {
-  bs_shape s;
-  int st = bs_shape_parse(name, &s, err);
-  *out = (int)s;
-  return st;
-}
-
-static int parse_collide(const char *name, int *out, bs_error *err) {
-  bs_collide_mode m;
-  if (bs_collide_mode_parse(name, &m, err))
-    return bs_error_set(err, BS_EINPUT, "must be constraint, penalty or postprocess, got \"%s\"", name);
-  *out = (int)m;
-  return 0;
-}
-
 static int parse_obstacle_keys(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
-  const cJSON *keysj = cJSON_GetObjectItemCaseSensitive(o, "keyframes");
-  if (!keysj) return 0;
+  const cJSON *keysj;
   char w[512];
   int st;
+  if ((st = get_array(c, o, where, "keyframes", 1, &keysj)) || !keysj) return st;
   join(w, sizeof w, where, "keyframes");
-  if (!cJSON_IsArray(keysj) || cJSON_GetArraySize(keysj) < 1) return fail(c, w, "must be a non-empty array");
   b->n_keys = cJSON_GetArraySize(keysj);
   b->key_t = calloc((size_t)b->n_keys, sizeof(double));
   b->key_translate = calloc(3 * (size_t)b->n_keys, sizeof(double));
@@ -363,8 +527,7 @@ static int parse_obstacle_keys(ctx *c, const cJSON *o, const char *where, bs_sce
     char wi[600];
     snprintf(wi, sizeof wi, "%s.%d", w, i);
     const cJSON *k = cJSON_GetArrayItem(keysj, i);
-    static const char *const kk[] = {"t", "translate", "rotate", NULL};
-    if ((st = check_keys(c, k, wi, kk)) || (st = get_num(c, k, wi, "t", 1, &b->key_t[i])) ||
+    if ((st = check_keys(c, k, wi, "obstacles[].keyframes[]")) || (st = get_num(c, k, wi, "t", 1, &b->key_t[i])) ||
         (st = get_vec3(c, k, wi, "translate", 0, b->key_translate + 3 * i)) ||
         (st = get_vec3(c, k, wi, "rotate", 0, b->key_rotate + 3 * i)))
       return st;
@@ -373,13 +536,10 @@ static int parse_obstacle_keys(ctx *c, const cJSON *o, const char *where, bs_sce
 }
 
 static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
-  static const char *const keys[] = {"shape", "normal", "offset", "center", "radius", "half_extents", "axis",
-                                     "half_height", "major", "minor", "inside_out", "file", "grid_h", "collision",
-                                     "stiffness", "friction", "velocity", "angular_velocity", "keyframes", NULL};
   int st, shape = 0, collision = BS_COLLIDE_CONSTRAINT;
-  if ((st = check_keys(c, o, where, keys))) return st;
+  if ((st = check_keys(c, o, where, "obstacles[]"))) return st;
   bs_scene_obstacle_defaults_(b);
-  if ((st = get_enum(c, o, where, "shape", 1, parse_shape, &shape))) return st;
+  if ((st = get_enum(c, o, where, "obstacles[]", "shape", parse_shape, &shape))) return st;
   b->shape = (bs_shape)shape;
   if ((st = get_vec3(c, o, where, "normal", 0, b->normal)) || (st = get_num(c, o, where, "offset", 0, &b->offset)) ||
       (st = get_vec3(c, o, where, "center", 0, b->center)) || (st = get_num(c, o, where, "radius", 0, &b->radius)) ||
@@ -390,7 +550,7 @@ static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_ob
       (st = get_bool(c, o, where, "inside_out", &b->inside_out)) ||
       (st = get_str(c, o, where, "file", 0, b->grid_file, sizeof b->grid_file)) ||
       (st = get_num(c, o, where, "grid_h", 0, &b->grid_h)) ||
-      (st = get_enum(c, o, where, "collision", 0, parse_collide, &collision)) ||
+      (st = get_enum(c, o, where, "obstacles[]", "collision", parse_collide, &collision)) ||
       (st = get_num(c, o, where, "stiffness", 0, &b->stiffness)) ||
       (st = get_num(c, o, where, "friction", 0, &b->friction)) ||
       (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
@@ -403,39 +563,35 @@ static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_ob
 static int parse_self_collision(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *sc = cJSON_GetObjectItemCaseSensitive(root, "self_collision");
-  if (sc) {
-    static const char *const sk[] = {"stiffness", "friction", NULL};
-    if ((st = check_keys(c, sc, "self_collision", sk))) return st;
-    s->self_collision = 1;
-    s->self_stiffness = 1e5;
-    s->self_friction = 0;
-    if ((st = get_num(c, sc, "self_collision", "stiffness", 0, &s->self_stiffness)) ||
-        (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
-      return st;
-  }
+  if (!sc) return 0;
+  if ((st = check_keys(c, sc, "self_collision", "self_collision"))) return st;
+  s->self_collision = 1;
+  s->self_stiffness = 1e5;
+  s->self_friction = 0;
+  if ((st = get_num(c, sc, "self_collision", "stiffness", 0, &s->self_stiffness)) ||
+      (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
+    return st;
   return 0;
 }
 
 static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
-  if (t) {
-    static const char *const tk[] = {"fps", "frames", "steps_per_frame", "dt", NULL};
-    if ((st = check_keys(c, t, "time", tk)) || (st = get_num(c, t, "time", "fps", 0, &s->fps)) ||
-        (st = get_int(c, t, "time", "frames", 0, 0, 10000000, &s->frames)) ||
-        (st = get_int(c, t, "time", "steps_per_frame", 0, 1, 1000000, &s->steps_per_frame)))
-      return st;
-    if (!(s->fps > 0)) return fail(c, "time.fps", "must be > 0, got %g", s->fps);
-    double dt = 0;
-    if ((st = get_num(c, t, "time", "dt", 0, &dt))) return st;
-    if (cJSON_HasObjectItem(t, "dt")) {
-      if (!(dt > 0)) return fail(c, "time.dt", "must be > 0, got %g", dt);
-      if (cJSON_HasObjectItem(t, "steps_per_frame")) return fail(c, "time.dt", "give either dt or steps_per_frame, not both");
-      double spf = 1.0 / (s->fps * dt);
-      if (fabs(spf - floor(spf + 0.5)) > 1e-9 * spf || floor(spf + 0.5) < 1)
-        return fail(c, "time.dt", "1/(fps*dt) must be a whole number of steps per frame, got %g", spf);
-      s->steps_per_frame = (int)floor(spf + 0.5);
-    }
+  if (!t) return 0;
+  if ((st = check_keys(c, t, "time", "time")) || (st = get_num(c, t, "time", "fps", 0, &s->fps)) ||
+      (st = get_int(c, t, "time", "time", "frames", &s->frames)) ||
+      (st = get_int(c, t, "time", "time", "steps_per_frame", &s->steps_per_frame)))
+    return st;
+  if (!(s->fps > 0)) return fail(c, "time.fps", "must be > 0, got %g", s->fps);
+  double dt = 0;
+  if ((st = get_num(c, t, "time", "dt", 0, &dt))) return st;
+  if (cJSON_HasObjectItem(t, "dt")) {
+    if (!(dt > 0)) return fail(c, "time.dt", "must be > 0, got %g", dt);
+    if (cJSON_HasObjectItem(t, "steps_per_frame")) return fail(c, "time.dt", "give either dt or steps_per_frame, not both");
+    double spf = 1.0 / (s->fps * dt);
+    if (fabs(spf - floor(spf + 0.5)) > 1e-9 * spf || floor(spf + 0.5) < 1)
+      return fail(c, "time.dt", "1/(fps*dt) must be a whole number of steps per frame, got %g", spf);
+    s->steps_per_frame = (int)floor(spf + 0.5);
   }
   return 0;
 }
@@ -443,11 +599,12 @@ static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
 /* solver.cg_sigma ("auto" or a number) and solver.cg_sigma_scale. */
 static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
   int st;
+  char g[96];
   const cJSON *sg = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma");
   const int has_scale = cJSON_GetObjectItemCaseSensitive(so, "cg_sigma_scale") != NULL;
+  if (sg && !cJSON_IsNumber(sg) && !(cJSON_IsString(sg) && !strcmp(sg->valuestring, "auto")))
+    return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got %s", got(sg, g, sizeof g));
   if (cJSON_IsString(sg)) {
-    if (strcmp(sg->valuestring, "auto") != 0)
-      return fail(c, "solver.cg_sigma", "must be a number > 0 or \"auto\", got \"%s\"", sg->valuestring);
     s->solver.min.sigma_auto = 1;
   } else if (sg) {
     if (has_scale)
@@ -461,55 +618,47 @@ static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
   return 0;
 }
 
+/* The solver's string keys. */
+static int parse_solver_choices(ctx *c, const cJSON *so, bs_scene *s) {
+  int st, method = (int)s->solver.method, linear = (int)s->solver.min.linear;
+  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC;
+  if ((st = get_enum(c, so, "solver", "solver", "method", parse_method, &method)) ||
+      (st = get_enum(c, so, "solver", "solver", "linear", parse_linear, &linear)) ||
+      (st = get_choice(c, so, "solver", "solver", "cg_precision", &s->solver.min.cg_single)) ||
+      (st = get_choice(c, so, "solver", "solver", "amg_matrix", &current)) ||
+      (st = get_choice(c, so, "solver", "solver", "cg_forcing", &s->solver.min.forcing_ew)) ||
+      (st = get_choice(c, so, "solver", "solver", "mode", &stat)))
+    return st;
+  s->solver.method = (bs_method)method;
+  s->solver.min.linear = (bs_lin_kind)linear;
+  s->solver.amg_at_rest = !current;
+  s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
+  return 0;
+}
+
 static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
-  if (so) {
-    static const char *const sk[] = {"method", "linear", "tolerance", "max_iterations", "cg_max_iterations",
-                                     "newton_k", "mode", "load_steps", "project_hessian", "cg_sigma",
-                                     "amg_matrix", "amg_rebuild_factor", "amg_rebuild_every", "cg_precision",
-                                     "cg_sigma_scale", "cg_downhill", "cg_forcing", NULL};
-    if ((st = check_keys(c, so, "solver", sk))) return st;
-    char buf[64];
-    bs_error e2;
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "method", 0, buf, sizeof buf))) return st;
-    if (buf[0] && bs_method_parse(buf, &s->solver.method, &e2)) return fail(c, "solver.method", "%s", e2.msg);
-    buf[0] = 0;
-    if ((st = get_str(c, so, "solver", "linear", 0, buf, sizeof buf))) return st;
-    if (buf[0] && (bs_lin_kind_parse(buf, &s->solver.min.linear, &e2) || s->solver.min.linear == BS_LIN_MINRES))
-      return fail(c, "solver.linear", "must be \"cg\", \"pcg\", \"amg\" or \"cholmod\", got \"%s\"", buf);
-    int current = !s->solver.amg_at_rest;
-    if ((st = get_choice(c, so, "solver", "cg_precision", "double", "single", &s->solver.min.cg_single)) ||
-        (st = get_choice(c, so, "solver", "amg_matrix", "rest", "current", &current)))
-      return st;
-    s->solver.amg_at_rest = !current;
-    if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor))) return st;
-    if ((st = get_int(c, so, "solver", "amg_rebuild_every", 0, 0, 100000000, &s->solver.min.amg_rebuild_every)))
-      return st;
-    if ((st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol))) return st;
-    if ((st = parse_sigma(c, so, s))) return st;
-    if ((st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill))) return st;
-    if ((st = get_choice(c, so, "solver", "cg_forcing", "paper", "eisenstat_walker", &s->solver.min.forcing_ew)))
-      return st;
-    if ((st = get_int(c, so, "solver", "max_iterations", 0, 1, 100000000, &s->solver.min.max_iter)) ||
-        (st = get_int(c, so, "solver", "cg_max_iterations", 0, 1, 100000000, &s->solver.min.cg_max_iter)) ||
-        (st = get_int(c, so, "solver", "newton_k", 0, 1, 1000000, &s->solver.newton_k)) ||
-        (st = get_int(c, so, "solver", "load_steps", 0, 1, 100000, &s->load_steps)) ||
-        (st = get_bool(c, so, "solver", "project_hessian", &s->project_hessian)))
-      return st;
-    int stat = s->mode == BS_MODE_STATIC;
-    if ((st = get_choice(c, so, "solver", "mode", "dynamic", "static", &stat))) return st;
-    s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
-  }
+  if (!so) return 0;
+  if ((st = check_keys(c, so, "solver", "solver")) || (st = parse_solver_choices(c, so, s))) return st;
+  if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor)) ||
+      (st = get_int(c, so, "solver", "solver", "amg_rebuild_every", &s->solver.min.amg_rebuild_every)) ||
+      (st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol)) || (st = parse_sigma(c, so, s)) ||
+      (st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill)) ||
+      (st = get_int(c, so, "solver", "solver", "max_iterations", &s->solver.min.max_iter)) ||
+      (st = get_int(c, so, "solver", "solver", "cg_max_iterations", &s->solver.min.cg_max_iter)) ||
+      (st = get_int(c, so, "solver", "solver", "newton_k", &s->solver.newton_k)) ||
+      (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||
+      (st = get_bool(c, so, "solver", "project_hessian", &s->project_hessian)))
+    return st;
   return 0;
 }
 
 static int parse_bodies(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
-  const cJSON *bodies = cJSON_GetObjectItemCaseSensitive(root, "bodies");
+  const cJSON *bodies;
+  if ((st = get_array(c, root, "", "bodies", 1, &bodies))) return st;
   if (!bodies) return fail(c, "bodies", "missing (an array of at least one body is required)");
-  if (!cJSON_IsArray(bodies) || cJSON_GetArraySize(bodies) < 1) return fail(c, "bodies", "must be a non-empty array");
   s->n_bodies = cJSON_GetArraySize(bodies);
   s->bodies = calloc((size_t)s->n_bodies, sizeof(bs_scene_body));
   if (!s->bodies) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
@@ -523,17 +672,15 @@ static int parse_bodies(ctx *c, const cJSON *root, bs_scene *s) {
 
 static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
-  const cJSON *obs = cJSON_GetObjectItemCaseSensitive(root, "obstacles");
-  if (obs) {
-    if (!cJSON_IsArray(obs)) return fail(c, "obstacles", "must be an array");
-    s->n_obstacles = cJSON_GetArraySize(obs);
-    s->obstacles = calloc((size_t)(s->n_obstacles ? s->n_obstacles : 1), sizeof(bs_scene_obstacle));
-    if (!s->obstacles) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
-    for (int i = 0; i < s->n_obstacles; i++) {
-      char w[64];
-      snprintf(w, sizeof w, "obstacles.%d", i);
-      if ((st = parse_obstacle(c, cJSON_GetArrayItem(obs, i), w, &s->obstacles[i]))) return st;
-    }
+  const cJSON *obs;
+  if ((st = get_array(c, root, "", "obstacles", 0, &obs)) || !obs) return st;
+  s->n_obstacles = cJSON_GetArraySize(obs);
+  s->obstacles = calloc((size_t)(s->n_obstacles ? s->n_obstacles : 1), sizeof(bs_scene_obstacle));
+  if (!s->obstacles) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
+  for (int i = 0; i < s->n_obstacles; i++) {
+    char w[64];
+    snprintf(w, sizeof w, "obstacles.%d", i);
+    if ((st = parse_obstacle(c, cJSON_GetArrayItem(obs, i), w, &s->obstacles[i]))) return st;
   }
   return 0;
 }
@@ -541,25 +688,32 @@ static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
 static int parse_output(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
-  if (out) {
-    static const char *const ok[] = {"dir", "vtu_every", "stats", "states", NULL};
-    if ((st = check_keys(c, out, "output", ok)) || (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
-        (st = get_int(c, out, "output", "vtu_every", 0, 0, 1000000, &s->vtu_every)) ||
-        (st = get_bool(c, out, "output", "stats", &s->stats_csv)) ||
-        (st = get_bool(c, out, "output", "states", &s->states)))
-      return st;
-  }
+  if (!out) return 0;
+  if ((st = check_keys(c, out, "output", "output")) ||
+      (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
+      (st = get_int(c, out, "output", "output", "vtu_every", &s->vtu_every)) ||
+      (st = get_bool(c, out, "output", "stats", &s->stats_csv)) || (st = get_bool(c, out, "output", "states", &s->states)))
+    return st;
   return 0;
 }
 
-static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
-  static const char *const keys[] = {"time", "solver", "gravity", "drag", "bodies", "output", "obstacles",
-                                     "self_collision", "description", NULL};
-  int st;
-  if ((st = check_keys(c, root, "", keys)) || (st = parse_self_collision(c, root, s))) return st;
+/* "$schema" (for editors) and "description" (kept in the scene). */
+static int parse_notes(ctx *c, const cJSON *root, bs_scene *s) {
+  char g[96];
+  const cJSON *sch = cJSON_GetObjectItemCaseSensitive(root, "$schema");
+  if (sch && !cJSON_IsString(sch)) return fail(c, "$schema", "must be a string, got %s", got(sch, g, sizeof g));
   const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
-  if (desc && !cJSON_IsString(desc)) return fail(c, "description", "must be a string");
+  if (!desc) return 0;
+  if (!cJSON_IsString(desc)) return fail(c, "description", "must be a string, got %s", got(desc, g, sizeof g));
+  free(s->description);
+  s->description = strdup(desc->valuestring);
+  return s->description ? 0 : bs_error_set(c->err, BS_ENOMEM, "out of memory");
+}
 
+static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
+  if ((st = check_keys(c, root, "", "")) || (st = parse_notes(c, root, s)) || (st = parse_self_collision(c, root, s)))
+    return st;
   if ((st = parse_time(c, root, s))) return st;
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
   if ((st = parse_solver(c, root, s)) || (st = get_vec3(c, root, "", "gravity", 0, s->gravity)) ||
@@ -660,18 +814,35 @@ static int resolve_files(bs_scene *s, bs_error *err) {
   return 0;
 }
 
+/* "FILE: line L, column C: malformed JSON: expected X near '...'" at the
+ * first character that cannot continue the text (json_locate.h; cJSON's own
+ * position when that check finds nothing). Columns count characters, not
+ * bytes, from 1. */
+static int malformed(const char *text, const char *at, const char *name, bs_error *err) {
+  size_t len = strlen(text);
+  const char *what = NULL;
+  if (!bs_json_locate_(text, &at, &what) && (!at || at < text || at > text + len)) at = text + len;
+  int line = 1, col = 1;
+  for (const char *p = text; p < at; p++) {
+    if (*p == '\n') line++, col = 1;
+    else if (((unsigned char)*p & 0xC0) != 0x80) col++;
+  }
+  char expect[160] = "";
+  if (what) snprintf(expect, sizeof expect, ": expected %s", what);
+  if (!*at) return bs_error_set(err, BS_EINPUT, "%s: line %d, column %d: malformed JSON%s at the end of the text", name, line, col, expect);
+  int n = 0;
+  while (n < 24 && at[n] && at[n] != '\n' && at[n] != '\r') n++;
+  while (n > 0 && ((unsigned char)at[n] & 0xC0) == 0x80) n--; /* whole characters */
+  return bs_error_set(err, BS_EINPUT, "%s: line %d, column %d: malformed JSON%s, found '%.*s'", name, line, col, expect, n, at);
+}
+
 int bs_scene_parse(const char *text, const char *name, int n_sets, const char *const *sets, bs_scene **out,
                    bs_error *err) {
   *out = NULL;
   if (!name) name = "<scene>";
-  cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
-  if (!root) {
-    const char *at = cJSON_GetErrorPtr();
-    int line = 1;
-    if (at)
-      for (const char *p = text; p < at && *p; p++) line += (*p == '\n');
-    return bs_error_set(err, BS_EINPUT, "%s: line %d: malformed JSON", name, line);
-  }
+  const char *at = NULL;
+  cJSON *root = cJSON_ParseWithOpts(text, &at, 1);
+  if (!root) return malformed(text, at, name, err);
   ctx c = {name, err};
   int st = 0;
   for (int i = 0; i < n_sets && !st; i++) st = apply_set(&c, root, sets[i]);

@@ -184,6 +184,7 @@ void bs_scene_destroy(bs_scene **ps) {
     free(s->obstacles[i].key_rotate);
   }
   free(s->obstacles);
+  free(s->description);
   free(s);
   *ps = NULL;
 }

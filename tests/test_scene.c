@@ -97,7 +97,7 @@ Test(scene, impossible_values) {
   expect_error("\"poisson\": 0.3", "\"poisson\": 0.5", "poisson");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": -1", "solver.tolerance");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_sigma\": \"half\"",
-               "solver.cg_sigma: must be a number > 0 or \"auto\", got \"half\"");
+               "solver.cg_sigma: must be a number > 0 or \"auto\", got string \"half\"");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_sigma\": 0", "solver.cg_sigma: must be > 0");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_precision\": \"half\"",
                "solver.cg_precision: must be \"double\" or \"single\", got \"half\"");
@@ -125,7 +125,7 @@ Test(scene, malformed_json_and_missing_file) {
   bs_error err;
   int rc = load_scene("{\"time\": {\"fps\": 24,,}", 0, NULL, &err);
   cr_expect_eq(rc, BS_EINPUT, "%d: %s", rc, err.msg);
-  cr_expect(strstr(err.msg, "malformed JSON") != NULL, "%s", err.msg);
+  cr_expect(strstr(err.msg, "line 1, column 21: malformed JSON") != NULL, "%s", err.msg);
   rc = sim_load_error("/no/such/scene.json", NULL, 0, &err);
   cr_expect_eq(rc, BS_EIO, "%d: %s", rc, err.msg);
   cr_expect(strstr(err.msg, "/no/such/scene.json") != NULL, "%s", err.msg);

@@ -1,0 +1,286 @@
+/* scene_schema.c — the scene schema, one row per key (scene_schema.h), and
+ * the lookups the loader makes in it. The defaults here are the ones
+ * scene_build.c sets (test_scene_schema.c compares them with a resolved
+ * scene); the ranges are the ones the loader and scene_check.c enforce. */
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene_schema.h"
+
+#define CHOICES(...) ((const char *const[]){__VA_ARGS__, NULL})
+#define NUM BS_SCHEMA_NUMBER
+#define INT BS_SCHEMA_INTEGER
+#define STR BS_SCHEMA_STRING
+#define BOOL BS_SCHEMA_BOOLEAN
+#define VEC3 BS_SCHEMA_VEC3
+#define ZERO3 "[0, 0, 0]"
+
+const bs_schema_key bs_schema_keys_[] = {
+    /* ---- the top level ---- */
+    {"", "$schema", STR, .doc = "the JSON Schema this file follows (for editors; the loader ignores it)"},
+    {"", "description", STR, .doc = "free text"},
+    {"", "time", BS_SCHEMA_OBJECT, .sub = "time", .doc = "frames and time steps"},
+    {"", "solver", BS_SCHEMA_OBJECT, .sub = "solver", .doc = "the integrator and its linear solver"},
+    {"", "gravity", VEC3, .def = "[0, -9.8, 0]", .doc = "gravitational acceleration (m/s^2)"},
+    {"", "drag", NUM, .range = "[0, )", .def = "0",
+     .doc = "simple drag coefficient k (1/s) of k/(2 dt) (x - x_n)^T M (x - x_n)"},
+    {"", "bodies", BS_SCHEMA_ARRAY, 1, .sub = "bodies[]", .range = "[1, )", .doc = "the deformable bodies"},
+    {"", "obstacles", BS_SCHEMA_ARRAY, .sub = "obstacles[]", .doc = "collision objects as level sets"},
+    {"", "self_collision", BS_SCHEMA_OBJECT, .sub = "self_collision",
+     .doc = "penalty self-collisions (section 5.3), also between bodies; absent: none"},
+    {"", "output", BS_SCHEMA_OBJECT, .sub = "output", .doc = "what is written, and where"},
+
+    /* ---- time ---- */
+    {"time", "fps", NUM, .range = "(0, )", .def = "24", .doc = "frames per second"},
+    {"time", "frames", INT, .range = "[0, 10000000]", .def = "24", .doc = "frames to simulate"},
+    {"time", "steps_per_frame", INT, .range = "[1, 1000000]", .def = "1", .doc = "time steps per frame"},
+    {"time", "dt", NUM, .range = "(0, )",
+     .doc = "time step (s) instead of steps_per_frame; 1/(fps dt) must be a whole number"},
+
+    /* ---- solver ---- */
+    {"solver", "method", STR, .choices = CHOICES("optimization", "newton", "newton_k"), .def = "\"optimization\"",
+     .doc = "optimization (the paper's integrator), newton (the baseline), newton_k (k Newton steps)"},
+    {"solver", "linear", STR, .choices = CHOICES("cg", "pcg", "amg", "cholmod"), .def = "\"cg\"",
+     .doc = "linear solver of the Newton steps"},
+    {"solver", "tolerance", NUM, .range = "(0, )", .def = "0.001", .doc = "tau on ||grad E|| (N)"},
+    {"solver", "max_iterations", INT, .range = "[1, 100000000]", .def = "500", .doc = "Newton iterations per step"},
+    {"solver", "cg_max_iterations", INT, .range = "[0, 100000000]", .def = "0",
+     .doc = "Krylov iterations per solve; 0: 2 x free dofs + 100"},
+    {"solver", "newton_k", INT, .range = "[1, 1000000]", .def = "1",
+     .doc = "k of newton_k (1: linearized backward Euler)"},
+    {"solver", "mode", STR, .choices = CHOICES("dynamic", "static"), .def = "\"dynamic\"",
+     .doc = "dynamic, or static (minimize the potential energy alone)"},
+    {"solver", "load_steps", INT, .range = "[1, 100000]", .def = "1", .doc = "load increments of a static solve"},
+    {"solver", "project_hessian", BOOL, .def = "false", .doc = "PSD-project each tet's Hessian (a Newton option)"},
+    {"solver", "cg_sigma", BS_SCHEMA_NUM_OR_CHOICE, .choices = CHOICES("auto"), .range = "(0, )", .def = "\"auto\"",
+     .doc = "sigma of the CG tolerance min(1/2, sigma sqrt(max(||grad E||, tau))), or auto (unitless)"},
+    {"solver", "cg_sigma_scale", NUM, .range = "(0, )", .def = "1", .doc = "c of cg_sigma auto"},
+    {"solver", "cg_forcing", STR, .choices = CHOICES("paper", "eisenstat_walker"), .def = "\"paper\"",
+     .doc = "CG forcing terms: the paper's, or also capped by Eisenstat and Walker's choice 2"},
+    {"solver", "cg_downhill", BOOL, .def = "true",
+     .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
+    {"solver", "cg_precision", STR, .choices = CHOICES("double", "single"), .def = "\"double\"",
+     .doc = "precision of the Hessian values inside cg, pcg and amg solves"},
+    {"solver", "amg_matrix", STR, .choices = CHOICES("rest", "current"), .def = "\"rest\"",
+     .doc = "what the AMG is built from: the rest-state stiffness, or the Hessian at the iterate"},
+    {"solver", "amg_rebuild_factor", NUM, .range = "[0, )", .def = "3",
+     .doc = "rebuild the AMG when iterations per decade grow past this factor (0: never; else >= 1)"},
+    {"solver", "amg_rebuild_every", INT, .range = "[0, 100000000]", .def = "0",
+     .doc = "rebuild the AMG every N solves (0: never)"},
+
+    /* ---- bodies[] ---- */
+    {"bodies[]", "mesh", STR, 1, .doc = "a mesh or geometry file (against the working, then the scene's folder), or box"},
+    {"bodies[]", "box", BS_SCHEMA_OBJECT, .sub = "bodies[].box", .doc = "the structured box (required with mesh box)"},
+    {"bodies[]", "mesh_size", NUM, .range = "[0, )", .def = "0",
+     .doc = "target mesh size (m) for geometry inputs; 0: the file's own"},
+    {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", .doc = "uniform 1-to-8 refinements"},
+    {"bodies[]", "reorder", STR, .choices = CHOICES("none", "metis", "rcm"), .def = "\"none\"",
+     .doc = "vertex renumbering"},
+    {"bodies[]", "scale", BS_SCHEMA_NUM_OR_VEC3, .range = "(0, )", .def = "[1, 1, 1]",
+     .doc = "scale factors (a number or 3), applied first"},
+    {"bodies[]", "rotate", VEC3, .def = ZERO3, .doc = "rotation axis x angle (degrees), applied after scale"},
+    {"bodies[]", "translate", VEC3, .def = ZERO3, .doc = "translation (m), applied last"},
+    {"bodies[]", "material", BS_SCHEMA_OBJECT, 1, .sub = "bodies[].material", .doc = "the body's material"},
+    {"bodies[]", "materials", BS_SCHEMA_MAP, .sub = "bodies[].material",
+     .doc = "{3-D physical group: material}: per group overrides"},
+    {"bodies[]", "velocity", VEC3, .def = ZERO3, .doc = "initial velocity (m/s)"},
+    {"bodies[]", "angular_velocity", VEC3, .def = ZERO3,
+     .doc = "initial angular velocity (rad/s) about the vertex centroid"},
+    {"bodies[]", "initial_state", BS_SCHEMA_OBJECT, .sub = "bodies[].initial_state",
+     .doc = "the free vertices' initial positions"},
+    {"bodies[]", "scripted", BS_SCHEMA_ARRAY, .sub = "bodies[].scripted[]",
+     .doc = "vertex groups whose positions are prescribed"},
+
+    {"bodies[].box", "cells", BS_SCHEMA_IVEC3, 1, .range = "[1, 4096]", .doc = "cells [nx, ny, nz]"},
+    {"bodies[].box", "size", VEC3, .range = "(0, )", .def = "[1, 1, 1]", .doc = "edge lengths (m)"},
+
+    {"bodies[].material", "model", STR,
+     .choices = CHOICES("fixed_corotated", "corotated", "neo_hookean", "stable_neo_hookean", "linear"),
+     .def = "\"fixed_corotated\"", .doc = "constitutive model"},
+    {"bodies[].material", "youngs", NUM, 1, .range = "(0, )", .doc = "Young's modulus (Pa)"},
+    {"bodies[].material", "poisson", NUM, 1, .range = "(-1, 0.5)", .doc = "Poisson's ratio"},
+    {"bodies[].material", "density", NUM, 1, .range = "(0, )", .doc = "density (kg/m^3)"},
+    {"bodies[].material", "rayleigh", NUM, .range = "[0, )", .def = "0", .doc = "lagged Rayleigh damping k (s)"},
+
+    {"bodies[].initial_state", "type", STR, 1, .choices = CHOICES("rest", "random", "point"),
+     .doc = "rest, random (uniform in the box lo..hi) or point (all at one point)"},
+    {"bodies[].initial_state", "lo", VEC3, .doc = "random: the box's low corner (m)"},
+    {"bodies[].initial_state", "hi", VEC3, .doc = "random: the box's high corner (m)"},
+    {"bodies[].initial_state", "point", VEC3, .def = ZERO3, .doc = "point: the point (m)"},
+    {"bodies[].initial_state", "seed", INT, .range = "[0, 2147483647]", .def = "1", .doc = "random: the seed"},
+
+    {"bodies[].scripted[]", "group", STR, 1, .doc = "a physical group of the body's mesh"},
+    {"bodies[].scripted[]", "fixed", BOOL, .doc = "true: held at rest"},
+    {"bodies[].scripted[]", "velocity", VEC3, .doc = "moved at this constant velocity (m/s)"},
+    {"bodies[].scripted[]", "keyframes", BS_SCHEMA_ARRAY, .sub = "bodies[].scripted[].keyframes[]", .range = "[1, )",
+     .doc = "offsets from the initial position, linear in between, held after the last"},
+    {"bodies[].scripted[].keyframes[]", "t", NUM, 1, .doc = "time (s), increasing"},
+    {"bodies[].scripted[].keyframes[]", "offset", VEC3, 1, .doc = "offset from the initial position (m)"},
+
+    /* ---- obstacles[] ---- */
+    {"obstacles[]", "shape", STR, 1, .choices = CHOICES("plane", "sphere", "box", "cylinder", "torus", "grid"),
+     .doc = "the level set's shape"},
+    {"obstacles[]", "normal", VEC3, .def = "[0, 1, 0]", .doc = "plane: outward normal"},
+    {"obstacles[]", "offset", NUM, .def = "0", .doc = "plane: normal . x >= offset is outside (m)"},
+    {"obstacles[]", "center", VEC3, .def = ZERO3, .doc = "sphere, box, cylinder, torus: the center (m)"},
+    {"obstacles[]", "radius", NUM, .def = "0.5", .doc = "sphere, cylinder: the radius (m)"},
+    {"obstacles[]", "half_extents", VEC3, .def = "[0.5, 0.5, 0.5]", .doc = "box: half edge lengths (m)"},
+    {"obstacles[]", "axis", VEC3, .def = "[0, 1, 0]", .doc = "cylinder, torus: the axis"},
+    {"obstacles[]", "half_height", NUM, .def = "0.5", .doc = "cylinder: half its height (m)"},
+    {"obstacles[]", "major", NUM, .def = "1", .doc = "torus: major radius (m)"},
+    {"obstacles[]", "minor", NUM, .def = "0.25", .doc = "torus: minor radius (m)"},
+    {"obstacles[]", "inside_out", BOOL, .def = "false", .doc = "the complement of the shape (a bowl, a hole)"},
+    {"obstacles[]", "file", STR, .def = "\"\"", .doc = "grid: a grid level-set file (bigstep levelset)"},
+    {"obstacles[]", "grid_h", NUM, .range = "[0, )", .def = "0",
+     .doc = "> 0: sample the analytic shape onto a grid of this spacing (m)"},
+    {"obstacles[]", "collision", STR, .choices = CHOICES("constraint", "penalty", "postprocess"),
+     .def = "\"constraint\"", .doc = "gradient projection, penalty k(-phi)^3, or push out after the solve"},
+    {"obstacles[]", "stiffness", NUM, .range = "(0, )", .def = "1000000", .doc = "penalty stiffness k"},
+    {"obstacles[]", "friction", NUM, .range = "[0, )", .def = "0", .doc = "friction coefficient mu"},
+    {"obstacles[]", "velocity", VEC3, .def = ZERO3, .doc = "constant velocity (m/s)"},
+    {"obstacles[]", "angular_velocity", VEC3, .def = ZERO3, .doc = "constant angular velocity (rad/s)"},
+    {"obstacles[]", "keyframes", BS_SCHEMA_ARRAY, .sub = "obstacles[].keyframes[]", .range = "[1, )",
+     .doc = "motion by keyframes (instead of velocity)"},
+    {"obstacles[].keyframes[]", "t", NUM, 1, .doc = "time (s), increasing"},
+    {"obstacles[].keyframes[]", "translate", VEC3, .def = ZERO3, .doc = "translation (m)"},
+    {"obstacles[].keyframes[]", "rotate", VEC3, .def = ZERO3, .doc = "rotation axis x angle (degrees)"},
+
+    /* ---- self_collision, output ---- */
+    {"self_collision", "stiffness", NUM, .range = "(0, )", .def = "100000", .doc = "penalty stiffness k"},
+    {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", .doc = "friction coefficient mu"},
+
+    {"output", "dir", STR, .def = "\"\"", .doc = "output folder (empty: no files)"},
+    {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", .doc = "frames between VTU files (0: none)"},
+    {"output", "stats", BOOL, .def = "true", .doc = "write stats.csv"},
+    {"output", "states", BOOL, .def = "false", .doc = "write state.bin (time, x, v of every frame)"},
+};
+const int bs_schema_n_keys_ = (int)(sizeof bs_schema_keys_ / sizeof bs_schema_keys_[0]);
+
+const bs_schema_section bs_schema_sections_[] = {
+    {"", NULL},
+    {"time", NULL},
+    {"solver", NULL},
+    {"bodies[]", NULL},
+    {"bodies[].box", NULL},
+    {"bodies[].material", NULL},
+    {"bodies[].initial_state", NULL},
+    {"bodies[].scripted[]", "fixed|velocity|keyframes"},
+    {"bodies[].scripted[].keyframes[]", NULL},
+    {"obstacles[]", NULL},
+    {"obstacles[].keyframes[]", NULL},
+    {"self_collision", NULL},
+    {"output", NULL},
+};
+const int bs_schema_n_sections_ = (int)(sizeof bs_schema_sections_ / sizeof bs_schema_sections_[0]);
+
+/* ---- lookups ------------------------------------------------------------- */
+
+const bs_schema_key *bs_schema_find_(const char *section, const char *key) {
+  for (int i = 0; i < bs_schema_n_keys_; i++)
+    if (!strcmp(bs_schema_keys_[i].section, section) && !strcmp(bs_schema_keys_[i].key, key)) return &bs_schema_keys_[i];
+  return NULL;
+}
+
+int bs_schema_section_keys_(const char *section, const char **keys, int cap) {
+  int n = 0;
+  for (int i = 0; i < bs_schema_n_keys_ && n + 1 < cap; i++)
+    if (!strcmp(bs_schema_keys_[i].section, section)) keys[n++] = bs_schema_keys_[i].key;
+  if (cap > 0) keys[n] = NULL;
+  return n;
+}
+
+int bs_schema_choice_(const bs_schema_key *k, const char *value) {
+  if (!k || !k->choices) return -1;
+  for (int i = 0; k->choices[i]; i++)
+    if (!strcmp(k->choices[i], value)) return i;
+  return -1;
+}
+
+/* One bound of "[lo, hi]": the number before `stop`, if any. */
+static const char *parse_bound(const char *p, char stop, int *has, double *v) {
+  while (*p == ' ') p++;
+  *has = 0;
+  if (*p != stop) {
+    char *end;
+    *v = strtod(p, &end);
+    *has = end != p;
+    p = end;
+  }
+  while (*p == ' ') p++;
+  return p;
+}
+
+int bs_schema_range_(const bs_schema_key *k, bs_schema_range *r) {
+  memset(r, 0, sizeof *r);
+  if (!k || !k->range) return 0;
+  const char *p = k->range;
+  r->lo_open = *p == '(';
+  p = parse_bound(p + 1, ',', &r->has_lo, &r->lo);
+  if (*p == ',') p++;
+  while (*p == ' ') p++;
+  int has = 0;
+  double v = 0;
+  const char *q = p;
+  while (*q && *q != ')' && *q != ']') q++;
+  r->hi_open = *q == ')';
+  if (q != p) {
+    parse_bound(p, *q, &has, &v);
+    r->has_hi = has;
+    r->hi = v;
+  }
+  return 1;
+}
+
+int bs_schema_in_range_(const bs_schema_range *r, double v) {
+  if (r->has_lo && (r->lo_open ? !(v > r->lo) : !(v >= r->lo))) return 0;
+  if (r->has_hi && (r->hi_open ? !(v < r->hi) : !(v <= r->hi))) return 0;
+  return 1;
+}
+
+void bs_schema_range_text_(const bs_schema_range *r, char *out, size_t n) {
+  if (r->has_lo && r->has_hi)
+    snprintf(out, n, "%c%.17g, %.17g%c", r->lo_open ? '(' : '[', r->lo, r->hi, r->hi_open ? ')' : ']');
+  else if (r->has_lo) snprintf(out, n, "%s %.17g", r->lo_open ? ">" : ">=", r->lo);
+  else if (r->has_hi) snprintf(out, n, "%s %.17g", r->hi_open ? "<" : "<=", r->hi);
+  else snprintf(out, n, "any value");
+}
+
+/* ---- "did you mean" ----------------------------------------------------- */
+
+/* Optimal string alignment distance of a and b, case-insensitive; words of
+ * up to 63 characters (longer ones are far from everything). */
+static int osa_distance(const char *a, const char *b) {
+  int na = (int)strlen(a), nb = (int)strlen(b);
+  if (na > 63 || nb > 63) return 1000;
+  int d[64][64];
+  for (int i = 0; i <= na; i++) d[i][0] = i;
+  for (int j = 0; j <= nb; j++) d[0][j] = j;
+  for (int i = 1; i <= na; i++)
+    for (int j = 1; j <= nb; j++) {
+      int ca = tolower((unsigned char)a[i - 1]), cb = tolower((unsigned char)b[j - 1]);
+      int v = d[i - 1][j - 1] + (ca != cb);
+      if (d[i - 1][j] + 1 < v) v = d[i - 1][j] + 1;
+      if (d[i][j - 1] + 1 < v) v = d[i][j - 1] + 1;
+      if (i > 1 && j > 1 && ca == tolower((unsigned char)b[j - 2]) && tolower((unsigned char)a[i - 2]) == cb &&
+          d[i - 2][j - 2] + 1 < v)
+        v = d[i - 2][j - 2] + 1;
+      d[i][j] = v;
+    }
+  return d[na][nb];
+}
+
+const char *bs_schema_nearest_(const char *word, const char *const *cands, int n) {
+  int len = (int)strlen(word), best = 1000;
+  const char *pick = NULL;
+  for (int i = 0; n >= 0 ? i < n : cands[i] != NULL; i++) {
+    int d = osa_distance(word, cands[i]);
+    if (d < best) {
+      best = d;
+      pick = cands[i];
+    }
+  }
+  int limit = len >= 6 ? 2 : 1;
+  return pick && best <= limit && best < len ? pick : NULL;
+}

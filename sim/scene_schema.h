@@ -1,0 +1,109 @@
+/* scene_schema.h — the scene schema as one table (not installed): every key
+ * the JSON loader accepts, by section, with its type, allowed values, simple
+ * range, default (as JSON text) and a one-line description.
+ *
+ * Who reads it:
+ *  - the loader (scene.c): the keys allowed in each object (check_keys), the
+ *    integer ranges (get_int), the allowed strings (get_choice), the "did you
+ *    mean" suggestions;
+ *  - bs_scene_schema_json (scene_schema_json.c): the published JSON Schema,
+ *    data/scene.schema.json;
+ *  - the tests (test_scene_schema.c): defaults against a resolved scene,
+ *    ranges, types and required keys against the loader, every shipped scene.
+ *
+ * Sections are named by their path from the top level: "" (the top level),
+ * "time", "bodies[]" (an element of the array "bodies"), "bodies[].box",
+ * "bodies[].material" (also the values of the map "bodies[].materials"), ...
+ * A key of type OBJECT, ARRAY or MAP names the section of its value, of its
+ * elements or of its map values in `sub`.
+ *
+ * Adding a key is one row in scene_schema.c, e.g.
+ *     {"output", "compress", BS_SCHEMA_BOOLEAN, .def = "false",
+ *      .doc = "zlib-compress the VTU arrays"},
+ * then its reading in scene.c (check_keys already admits it and checks its
+ * JSON type), its writing in scene_write.c (test_scene_write checks that a
+ * minimal scene resolves to the row's default), `bigstep schema -o
+ * data/scene.schema.json`, and, for a new section, a row in
+ * bs_schema_sections_ and an instance in tests/scene_full.h.
+ *
+ * Ranges are intervals: "[0, 6]", "(0, )" (> 0), "[0, )" (>= 0); an empty
+ * bound is unbounded. For VEC3, IVEC3 and NUM_OR_VEC3 they bound each
+ * element; for ARRAY and STRINGS the number of elements.
+ *
+ * Nothing here allocates, prints or fails except where a status is returned. */
+#ifndef BS_SCENE_SCHEMA_H
+#define BS_SCENE_SCHEMA_H
+
+#include <stddef.h>
+
+typedef enum {
+  BS_SCHEMA_NUMBER = 0,   /* a finite number                                    */
+  BS_SCHEMA_INTEGER,      /* a whole number in `range`                          */
+  BS_SCHEMA_STRING,       /* a string; one of `choices` when they are given     */
+  BS_SCHEMA_BOOLEAN,      /* true or false                                      */
+  BS_SCHEMA_VEC3,         /* an array of 3 finite numbers                       */
+  BS_SCHEMA_IVEC3,        /* an array of 3 whole numbers                        */
+  BS_SCHEMA_NUM_OR_VEC3,  /* a number (the same for x, y, z) or an array of 3   */
+  BS_SCHEMA_NUM_OR_CHOICE, /* a number, or one of the strings `choices`        */
+  BS_SCHEMA_OBJECT,       /* an object following the section `sub`              */
+  BS_SCHEMA_ARRAY,        /* an array of objects following the section `sub`    */
+  BS_SCHEMA_MAP,          /* {name: an object following the section `sub`}     */
+  BS_SCHEMA_STRINGS       /* an array of strings, each one of `choices` if given */
+} bs_schema_type;
+
+typedef struct bs_schema_key {
+  const char *section;         /* "", "time", "bodies[]", ...                     */
+  const char *key;
+  bs_schema_type type;
+  int required;                /* 1: the loader refuses the section without it    */
+  const char *sub;             /* OBJECT, ARRAY, MAP: the section of the value    */
+  const char *const *choices;  /* NULL-terminated; NULL: any string               */
+  const char *range;           /* NULL: none                                      */
+  const char *def;             /* the default as JSON text; NULL: none            */
+  const char *doc;             /* one line                                        */
+} bs_schema_key;
+
+typedef struct bs_schema_section {
+  const char *name;
+  const char *one_of; /* "a|b|c": exactly one of these keys (NULL: no such rule) */
+} bs_schema_section;
+
+/* The table, in the order the keys are documented and written. */
+extern const bs_schema_key bs_schema_keys_[];
+extern const int bs_schema_n_keys_;
+extern const bs_schema_section bs_schema_sections_[];
+extern const int bs_schema_n_sections_;
+
+/* The row of section.key, or NULL. */
+const bs_schema_key *bs_schema_find_(const char *section, const char *key);
+
+/* The index of value in k->choices, or -1 (also when k has none). */
+int bs_schema_choice_(const bs_schema_key *k, const char *value);
+
+/* A parsed range. */
+typedef struct bs_schema_range {
+  int has_lo, has_hi, lo_open, hi_open;
+  double lo, hi;
+} bs_schema_range;
+
+/* Parses k->range (all zero when k has none); 1 when k has a range. */
+int bs_schema_range_(const bs_schema_key *k, bs_schema_range *r);
+
+/* 1 when v lies in r. */
+int bs_schema_in_range_(const bs_schema_range *r, double v);
+
+/* r as text, e.g. "[0, 6]", "> 0", ">= 1" (for messages). */
+void bs_schema_range_text_(const bs_schema_range *r, char *out, size_t n);
+
+/* The candidate nearest to word (case-insensitive optimal string alignment
+ * distance: insertions, deletions, substitutions, adjacent transpositions)
+ * when it is close enough to be a likely typo (distance <= 1, or <= 2 for
+ * words of 6 characters or more, and less than the word's length); else NULL.
+ * cands is NULL-terminated, or counted by n when n >= 0. */
+const char *bs_schema_nearest_(const char *word, const char *const *cands, int n);
+
+/* The candidate keys of a section, NULL-terminated, into keys (room for cap
+ * entries); the count. */
+int bs_schema_section_keys_(const char *section, const char **keys, int cap);
+
+#endif
