@@ -18,13 +18,15 @@
  *                the VTU and PVD files); frames.pvd is rewritten (through a
  *                temporary file and a rename) after every VTU frame, so an
  *                interrupted run leaves a readable series;
+ *   scene.json   the resolved scene (bs_scene_write_json: every key, the
+ *                defaults filled in, absolute paths), which loads again;
  *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
  *                "cwd: ...", "started: ISO 8601 UTC".
  *
  * Writing: bs_runfolder_open makes the folder, refuses it when it holds an
  * earlier run (any file named above; BS_EINPUT naming the folder and a file)
  * unless opts->replace, in which case those files (and only those) are
- * removed first, writes run.txt and opens the files the scene's output
+ * removed first, writes scene.json and run.txt and opens the files the scene's output
  * section asks for; bs_runfolder_frame (a bs_frame_fn for bs_sim_run) writes
  * a frame's rows, state and VTU; bs_runfolder_finish writes summary.txt;
  * bs_runfolder_destroy closes what is open (also after an error). Rows are

@@ -57,6 +57,9 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
   st = bs_runfolder_write_record(dir, o->command_line, err);
+  char p[BS_MAX_PATH + 16];
+  snprintf(p, sizeof p, "%s/scene.json", dir);
+  if (!st) st = bs_scene_write_json_file(s->scene, p, err);
   if (!st) st = open_files(rf, s, err);
   if (st) {
     bs_runfolder_destroy(&rf);

@@ -266,7 +266,13 @@ Test(runfolder, pvd_valid_each_frame_and_earlier_run_refused, .init = setup, .fi
   bs_error err;
   bs_runfolder_opts o = {.replace = 0, .command_line = "bigstep run test"};
   cr_assert_eq(run_into(&o, &err), 0, "%s", err.msg);
-  cr_expect(exists("run.txt") && exists("frame_00003.vtu") && exists("frames.pvd"));
+  cr_expect(exists("run.txt") && exists("scene.json") && exists("frame_00003.vtu") && exists("frames.pvd"));
+  char sp[600];
+  snprintf(sp, sizeof sp, "%s/run/scene.json", dir);
+  bs_scene *back = NULL;
+  cr_expect_eq(bs_scene_load(sp, 0, NULL, &back, &err), 0, "the resolved scene does not load: %s", err.msg);
+  if (back) cr_expect_eq(back->frames, FRAMES);
+  bs_scene_destroy(&back);
   cr_expect(!exists("frames.pvd.tmp"), "the temporary PVD is left");
   char p[600];
   snprintf(p, sizeof p, "%s/run/notes.txt", dir); /* the user's file: never removed */
