@@ -19,16 +19,21 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
   /* the shorthand "method" would repeat the method column's name: its path instead */
   for (int k = 0; k < S->n_knobs; k++)
     fprintf(f, ",%s", !strcmp(S->knobs[k].key, "method") ? S->knobs[k].path : S->knobs[k].key);
-  fprintf(f, ",method,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,pos_err_max,"
-             "pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,pareto\n");
+  fprintf(f, ",method,status,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,"
+             "pos_err_max,pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,"
+             "pareto");
+  for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%s,%s_err_last,%s_err_max", S->qoi[q], S->qoi[q], S->qoi[q]);
+  fputc('\n', f);
   for (int i = 0; i < S->n_runs; i++) {
     const bs_study_run *r = &S->runs[i];
     fprintf(f, "%s", r->name);
     for (int k = 0; k < S->n_knobs; k++) fprintf(f, ",%s", S->knobs[k].vals[r->idx[k]]);
-    fprintf(f, ",%s,%d,%d,%ld,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.6g,%d,%d\n", r->method, r->exit_code,
-            r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
+    fprintf(f, ",%s,%s,%d,%d,%ld,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.6g,%d,%d", r->method,
+            bs_study_run_status(r), r->exit_code, r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
             r->cg_per_step, r->peak_mib, r->pos_max, r->pos_last, r->vel_max, r->vel_last, r->drift, r->inv_max,
             r->pen_max, r->is_ref, r->pareto);
+    for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%.12g,%.6g,%.6g", r->q_last[q], r->q_err_last[q], r->q_err_max[q]);
+    fputc('\n', f);
   }
   if (fclose(f)) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
   return 0;
@@ -188,72 +193,3 @@ int bs_study_plots_write(const bs_study *S, bs_error *err) {
   return 0;
 }
 
-/* ---- the summary ------------------------------------------------------------ */
-
-/* For each method, the cheapest run within 1%, 0.1% and 0.01%. */
-static void summary_cheapest(const bs_study *S, const char **methods, int nm, FILE *f) {
-  static const double thr[3] = {1e-2, 1e-3, 1e-4};
-  static const char *thr_name[3] = {"1%", "0.1%", "0.01%"};
-  int n = S->n_runs;
-  double *cost = malloc(sizeof(double) * ((size_t)n + 1)), *error = malloc(sizeof(double) * ((size_t)n + 1));
-  int *ok = malloc(sizeof(int) * ((size_t)n + 1));
-  for (int i = 0; cost && error && i < n; i++) {
-    cost[i] = S->runs[i].s_per_frame;
-    error[i] = S->runs[i].pos_max;
-  }
-  fprintf(f, "cheapest setting (by s/frame) within a position error (max over frames, / body size) of:\n");
-  for (int m = 0; cost && error && ok && m < nm; m++) {
-    fprintf(f, "  method %s\n", methods[m]);
-    for (int i = 0; i < n; i++) ok[i] = !strcmp(S->runs[i].method, methods[m]) && S->runs[i].exit_code == 0;
-    for (int t = 0; t < 3; t++) {
-      int best = bs_study_cheapest_within(n, cost, error, ok, thr[t]);
-      if (best < 0) fprintf(f, "    %-6s none\n", thr_name[t]);
-      else
-        fprintf(f, "    %-6s %s  (%.4g s/frame, error %.3g%%)\n", thr_name[t], S->runs[best].name,
-                S->runs[best].s_per_frame, 100 * S->runs[best].pos_max);
-    }
-  }
-  free(cost);
-  free(error);
-  free(ok);
-}
-
-/* The orders of knob k for one method: against the reference, and from successive levels. */
-static void summary_order(const bs_study *S, int k, const char *method, FILE *f) {
-  const bs_study_knob *v = &S->knobs[k];
-  int is_t = bs_study_knob_is_time(v);
-  bs_study_order o = bs_study_order_fit(S, k, method);
-  if (isfinite(o.p))
-    fprintf(f, "order in %s (error ~ %s^p, vs %s): method %s p = %.3f over %d runs\n", is_t ? "time" : "space",
-            is_t ? "dt" : "h", v->key, method, o.p, o.used);
-  else
-    fprintf(f, "order in %s (vs %s): method %s: not measurable (fewer than 2 runs with a positive error)\n",
-            is_t ? "time" : "space", v->key, method);
-  int used = 0;
-  double ps = bs_study_order_successive(S, k, method, &used, NULL);
-  if (isfinite(ps))
-    fprintf(f, "  from successive levels (each run against the next finer): p = %.3f over %d pairs\n", ps, used);
-}
-
-void bs_study_summary_write(const bs_study *S, FILE *f) {
-  const char *methods[MAX_METHODS];
-  int nm = bs_study_methods(S, methods, MAX_METHODS);
-  int n_failed = 0;
-  for (int i = 0; i < S->n_runs; i++) n_failed += S->runs[i].exit_code != 0;
-  char ref_desc[1600];
-  if (S->ref_dir[0]) snprintf(ref_desc, sizeof ref_desc, "the run in %s", S->ref_dir);
-  else snprintf(ref_desc, sizeof ref_desc, "%s", S->ref >= 0 ? S->runs[S->ref].name : "?");
-  fprintf(f, "\nstudy %s: %d runs (%d failed), body size %.4g m; reference: %s\n", S->name, S->n_runs, n_failed,
-          S->size, ref_desc);
-  summary_cheapest(S, methods, nm, f);
-  int any_t = 0, any_s = 0;
-  for (int k = 0; k < S->n_knobs; k++) {
-    int is_t = bs_study_knob_is_time(&S->knobs[k]), is_s = S->knobs[k].kind == BS_KNOB_REFINE;
-    if (!is_t && !is_s) continue;
-    any_t |= is_t;
-    any_s |= is_s;
-    for (int m = 0; m < nm; m++) summary_order(S, k, methods[m], f);
-  }
-  if (!any_t) fprintf(f, "order in time: steps_per_frame not varied\n");
-  if (!any_s) fprintf(f, "order in space: refine not varied\n");
-}
