@@ -10,8 +10,11 @@ const char *bs_study_run_status(const bs_study_run *r) {
   return r->timed_out ? "timeout" : r->exit_code != 0 ? "failed" : "ok";
 }
 
+/* The reference's folder; NULL when the reference run failed or timed out. */
 static const char *ref_dir(const bs_study *S) {
-  return S->ref_dir[0] ? S->ref_dir : S->ref >= 0 ? S->runs[S->ref].dir : NULL;
+  if (S->ref_dir[0]) return S->ref_dir;
+  if (S->ref < 0 || S->runs[S->ref].exit_code != 0 || S->runs[S->ref].timed_out) return NULL;
+  return S->runs[S->ref].dir;
 }
 
 /* The columns of S->qoi in t (-1: absent). */

@@ -63,52 +63,107 @@ static void pareto_data(const bs_study *S) {
   fclose(d);
 }
 
-/* 1. error against cost, the Pareto front marked. */
-static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+/* The smallest positive finite position error of the runs (1e-6 if none):
+ * failed and timed-out runs are drawn at half of it. */
+static double error_floor(const bs_study *S) {
+  double m = INFINITY;
+  for (int i = 0; i < S->n_runs; i++)
+    if (S->runs[i].pos_max > 0 && S->runs[i].pos_max < m) m = S->runs[i].pos_max;
+  return isfinite(m) ? 0.5 * m : 1e-6;
+}
+
+/* A run's cost for the plots: s/frame, else its wall seconds per frame. */
+static double plot_cost_of(const bs_study_run *r) {
+  if (r->s_per_frame > 0 && isfinite(r->s_per_frame)) return r->s_per_frame;
+  return r->wall > 0 && r->frames > 0 ? r->wall / r->frames : NAN;
+}
+
+/* plot_cost.dat: per method the runs with a positive error (cost, error,
+ * label), then one block of the failed and timed-out runs; the points written. */
+static int cost_data(const bs_study *S, const char **methods, int nm) {
   char p[1400];
   snprintf(p, sizeof p, "%s/plot_cost.dat", S->out);
   FILE *d = fopen(p, "w");
-  for (int m = 0; d && m < nm; m++) {
-    fprintf(d, "# method %s: s_per_frame pos_err_max\n", methods[m]);
+  int n = 0;
+  for (int m = 0; d && m <= nm; m++) {
+    fprintf(d, m < nm ? "# method %s: s_per_frame pos_err_max setting\n" : "# failed or timeout%s: cost floor\n",
+            m < nm ? methods[m] : "");
     for (int i = 0; i < S->n_runs; i++) {
       const bs_study_run *r = &S->runs[i];
-      if (!strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) && r->s_per_frame > 0)
-        fprintf(d, "%.9g %.9g\n", r->s_per_frame, r->pos_max);
+      int bad = r->exit_code != 0 || r->timed_out;
+      if (m < nm && !bad && !strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) &&
+          r->s_per_frame > 0)
+        n += fprintf(d, "%.9g %.9g \"%s\"\n", r->s_per_frame, r->pos_max, r->name) > 0;
+      if (m == nm && bad && isfinite(plot_cost_of(r)))
+        fprintf(d, "%.9g %.9g \"%s (%s)\"\n", plot_cost_of(r), error_floor(S), r->name, bs_study_run_status(r));
     }
-    fprintf(d, "\n\n");
+    fprintf(d, "%s\n\n", m == nm ? "nan nan \"\"" : "");
   }
   if (d) fclose(d);
-  pareto_data(S);
-  fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'seconds per frame'\n"
-              "set ylabel 'position error (max over frames, / body size)'\n"
-              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\nplot ",
-          S->name);
-  for (int m = 0; m < nm; m++)
-    fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', ", m, methods[m]);
-  fprintf(gp, "'plot_pareto.dat' using 1:2 with linespoints lw 2 lc rgb 'black' pt 6 ps 2.2 title 'Pareto front'\n"
-              "unset logscale\n");
+  return n;
 }
 
-/* One method's curves of the refinement plot of knob k. */
+/* Fixed ranges and a note when a plot has no point (gnuplot refuses an
+ * empty log-scale range). */
+static void empty_guard(FILE *gp, int n_points, const char *what) {
+  if (n_points == 0)
+    fprintf(gp, "set xrange [1e-3:1]\nset yrange [1e-6:1]\nset label 1 'no run with a positive %s' at graph 0.2,0.5\n",
+            what);
+}
+
+static void empty_unguard(FILE *gp) { fprintf(gp, "set autoscale xy\nunset label 1\n"); }
+
+/* 1. error against cost, the Pareto front marked, points labelled. */
+static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+  int n = cost_data(S, methods, nm);
+  pareto_data(S);
+  fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'cost: solver seconds per frame (s)'\n"
+              "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
+              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\n",
+          S->name);
+  empty_guard(gp, n, "position error");
+  fprintf(gp, "plot ");
+  for (int m = 0; m < nm; m++)
+    fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', "
+                "'plot_cost.dat' index %d using 1:2:3 with labels offset 0,0.8 font ',7' notitle, ",
+            m, methods[m], m);
+  fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 2 ps 2 lc rgb 'red' title 'failed or timeout (no "
+              "error; drawn at the floor)', 'plot_cost.dat' index %d using 1:2:3 with labels offset 0,-0.8 font ',7' "
+              "tc rgb 'red' notitle, ",
+          nm, nm);
+  fprintf(gp, "'plot_pareto.dat' using 1:2 with linespoints lw 2 lc rgb 'black' pt 6 ps 2.2 title 'Pareto front'\n"
+              "unset logscale\n");
+  empty_unguard(gp);
+}
+
+/* One method's curves of the convergence plot of knob k: level (space) or
+ * dt (time) against the position error. */
 static void plot_refine_method(const bs_study *S, int k, int m, const char *method, int *grp, FILE *d, FILE *ds,
                                FILE *gp) {
+  const int is_t = bs_study_knob_is_time(&S->knobs[k]);
   bs_study_order o = bs_study_order_fit(S, k, method);
   int ng = bs_study_group(S, k, method, grp);
   if (d) {
-    fprintf(d, "# method %s: level pos_err_max\n", method);
+    fprintf(d, "# method %s: %s pos_err_max\n", method, is_t ? "dt" : "level");
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
-      if (bs_study_fit_point(S, r, k) && r->pos_max > 0) fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
+      if (!bs_study_fit_point(S, r, k) || !(r->pos_max > 0)) continue;
+      if (is_t) fprintf(d, "%.9g %.9g\n", bs_study_knob_h(S, r, k), r->pos_max);
+      else fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
     }
     fprintf(d, "\n\n");
   }
   fprintf(gp, "'plot_refine_%d.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s: against the reference', ", k,
           m, method);
-  if (isfinite(o.p))
-    fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f', ", o.logc, o.p, method, o.p);
+  if (isfinite(o.p) && is_t)
+    fprintf(gp, "exp(%.9g) * x**%.9g with lines dt 2 title '%s fit: slope %.2f (%d runs)', ", o.logc, o.p, method, o.p,
+            o.used);
+  else if (isfinite(o.p))
+    fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f (%d runs)', ", o.logc, o.p,
+            method, o.p, o.used);
   int used = 0;
   if (ds) fprintf(ds, "# method %s: level, position error against the next finer level\n", method);
-  double ps = bs_study_order_successive(S, k, method, &used, ds);
+  double ps = is_t ? NAN : bs_study_order_successive(S, k, method, &used, ds);
   if (ds) fprintf(ds, "\n\n");
   if (ds && used > 0) {
     char ord[64] = "";
@@ -119,20 +174,41 @@ static void plot_refine_method(const bs_study *S, int k, int m, const char *meth
   }
 }
 
-/* 2. error against refinement level, with the fitted order. */
+/* Points the convergence plot of knob k will hold. */
+static int refine_points(const bs_study *S, int k, const char **methods, int nm, int *grp) {
+  int n = 0;
+  for (int m = 0; m < nm; m++) {
+    int ng = bs_study_group(S, k, methods[m], grp);
+    for (int i = 0; i < ng; i++) n += bs_study_fit_point(S, &S->runs[grp[i]], k) && S->runs[grp[i]].pos_max > 0;
+  }
+  return n;
+}
+
+/* 2. error against refinement level (log-log in h = 2^-level) or against dt
+ * (log-log), with the fitted order. */
 static void plot_refine(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
+  const int is_t = bs_study_knob_is_time(&S->knobs[k]);
   char p[1400];
   snprintf(p, sizeof p, "%s/plot_refine_%d.dat", S->out, k);
   FILE *d = fopen(p, "w");
   snprintf(p, sizeof p, "%s/plot_refine_successive_%d.dat", S->out, k);
   FILE *ds = fopen(p, "w");
-  fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
-              "set xlabel '%s (h ~ 2^-level)'\n"
-              "set ylabel 'position error (max over frames, / body size)'\n"
-              "set title 'Error against refinement (other knobs at the reference)'\nplot ",
-          k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  if (is_t)
+    fprintf(gp, "set output 'error_vs_dt%s%s.png'\nset logscale xy\nset key inside top left\n"
+                "set xlabel 'time step dt (s) [%s]'\n",
+            k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  else
+    fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
+                "set xlabel '%s: refinement level (cell size h ~ 2^-level, so log-log in h)'\n",
+            k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  fprintf(gp, "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
+              "set title 'Error against %s (other knobs at the reference)'\n",
+          is_t ? "time step" : "refinement");
+  empty_guard(gp, refine_points(S, k, methods, nm, grp), "position error");
+  fprintf(gp, "plot ");
   for (int m = 0; m < nm; m++) plot_refine_method(S, k, m, methods[m], grp, d, ds, gp);
   fprintf(gp, "1/0 notitle\nunset logscale\nset key outside right\nset xtics autofreq\n");
+  empty_unguard(gp);
   if (d) fclose(d);
   if (ds) fclose(ds);
 }
@@ -182,7 +258,8 @@ int bs_study_plots_write(const bs_study *S, bs_error *err) {
               "set grid\nset key outside right\nset format y '%%.0e'\n");
   plot_cost(S, methods, nm, gp);
   for (int k = 0; k < S->n_knobs; k++)
-    if (S->knobs[k].kind == BS_KNOB_REFINE) plot_refine(S, k, methods, nm, grp, gp);
+    if (S->knobs[k].kind == BS_KNOB_REFINE || bs_study_knob_is_time(&S->knobs[k]))
+      plot_refine(S, k, methods, nm, grp, gp);
   for (int k = 0; k < S->n_knobs; k++)
     if (S->knobs[k].kind == BS_KNOB_STEPS_PER_FRAME) {
       plot_iterations(S, k, methods, nm, grp, gp);
