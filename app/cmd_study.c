@@ -26,11 +26,13 @@
 
 static const char *study_help =
     "usage: bigstep study SCENE --vary KEY=v1,v2,... [--vary ...] [--set key.path=value]...\n"
-    "                           [--reference auto|RUN_DIR] [--jobs N] [--out DIR]\n"
+    "                           [--qoi NAME]... [--reference auto|RUN_DIR] [--jobs N] [--out DIR]\n"
+    "                           [--run-budget SECONDS] [--force]\n"
     "\n"
     "Runs every combination of the varied settings (`bigstep run --quiet` in its own\n"
     "folder under DIR, default out/study/<scene name>; a folder holding a complete\n"
-    "frames.csv and a 'done' marker is not run again), compares each run with the\n"
+    "frames.csv and a 'done' marker made from the same scene content (the scene\n"
+    "file, the settings and the mesh files' bytes) is not run again), compares each run with the\n"
     "reference at common frame times, and writes study.csv, PNG plots (gnuplot) and\n"
     "a summary: for each method the cheapest setting within 1%, 0.1% and 0.01%\n"
     "position error, and the observed orders of convergence in space and time.\n"
@@ -43,6 +45,13 @@ static const char *study_help =
     "                        method optimization (else the first listed); the last listed\n"
     "                        value of any other key\n"
     "  --reference RUN_DIR   a run folder holding frames.csv and state.bin\n"
+    "  --qoi NAME            a quantity of interest of the scene (a qoi.csv column):\n"
+    "                        its error against the reference per run, and with three\n"
+    "                        or more levels of a refine or time knob its observed\n"
+    "                        order, Richardson extrapolation and GCI (Roache, Fs 1.25)\n"
+    "  --run-budget SECONDS  wall seconds a run may take before it is stopped and\n"
+    "                        marked timeout [900]\n"
+    "  --force               rerun every run, cached or not\n"
     "  --jobs N              runs in parallel [1] (each child gets OMP_NUM_THREADS =\n"
     "                        cores / N unless set)\n"
     "  --out DIR             the study folder\n"
@@ -62,7 +71,10 @@ typedef struct study_args {
   bs_study_knob knobs[BS_STUDY_MAX_KNOBS];
   int n_user;
   const char **user_sets;
-  int jobs, help;
+  int jobs, help, force;
+  double budget;  /* s: a run's wall-clock budget */
+  int n_qoi;
+  const char *qoi[BS_STUDY_MAX_QOI];
 } study_args;
 
 /* A run as a process. */
@@ -70,6 +82,7 @@ typedef struct slot {
   int pending;
   pid_t pid;
   double t0;
+  double term_at;  /* when SIGTERM was sent after the budget (0: not) */
 } slot;
 
 /* ---- argument parsing --------------------------------------------------- */
@@ -94,6 +107,12 @@ static int parse_flag(study_args *A, const char *flag, const char *val) {
     A->user_sets[A->n_user++] = val;
   } else if (!strcmp(flag, "--reference")) {
     A->ref_dir = strcmp(val, "auto") ? val : NULL;
+  } else if (!strcmp(flag, "--qoi")) {
+    if (A->n_qoi == BS_STUDY_MAX_QOI) return bs_app_usage_error("study", "at most %d --qoi flags", BS_STUDY_MAX_QOI);
+    A->qoi[A->n_qoi++] = val;
+  } else if (!strcmp(flag, "--run-budget")) {
+    if (bs_parse_double(val, &A->budget) || !(A->budget > 0))
+      return bs_app_usage_error("study", "--run-budget must be a positive number of seconds, got '%s'", val);
   } else if (!strcmp(flag, "--jobs")) {
     if (bs_parse_int(val, 1, 1024, &A->jobs))
       return bs_app_usage_error("study", "--jobs must be an integer in 1..1024, got '%s'", val);
@@ -109,7 +128,8 @@ static int parse_option(study_args *A, int argc, char **argv, int *i) {
   const char *flag, *val;
   const int missing = bs_app_flag_value(argc, argv, i, fbuf, sizeof fbuf, &flag, &val);
   int known = !strcmp(flag, "--vary") || !strcmp(flag, "--set") || !strcmp(flag, "--reference") ||
-              !strcmp(flag, "--jobs") || !strcmp(flag, "--out");
+              !strcmp(flag, "--jobs") || !strcmp(flag, "--out") || !strcmp(flag, "--qoi") ||
+              !strcmp(flag, "--run-budget");
   if (!known) return bs_app_usage_error("study", "unknown flag '%s'", flag);
   if (missing) return bs_app_usage_error("study", "flag %s needs a value", flag);
   return parse_flag(A, flag, val);
@@ -122,6 +142,10 @@ static int parse_args(study_args *A, int argc, char **argv) {
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       A->help = 1;
       return 0;
+    }
+    if (!strcmp(a, "--force")) {
+      A->force = 1;
+      continue;
     }
     if (!strncmp(a, "--", 2)) rc = parse_option(A, argc, argv, &i);
     else if (A->scene) rc = bs_app_usage_error("study", "unexpected argument '%s'", a);
@@ -149,44 +173,53 @@ static void args_line(const bs_study_run *r, char *buf, size_t n) {
   for (int i = 0; i < r->n_sets && k < n; i++) k += (size_t)snprintf(buf + k, n - k, "%s%s", i ? " " : "", r->sets[i]);
 }
 
-/* Reads the done marker; 0 when present and made with the same settings. */
-static int read_done(bs_study_run *r, const char *want_args) {
+/* Reads the done marker; 0 when present and made from the same scene
+ * content (its key line equals key). */
+static int read_done(bs_study_run *r, const char *key) {
   char p[1500];
   snprintf(p, sizeof p, "%s/done", r->dir);
   FILE *f = fopen(p, "r");
   if (!f) return -1;
   char line[8192];
-  int ok_args = 0;
+  int ok_key = 0;
   r->exit_code = -1;
   while (fgets(line, sizeof line, f)) {
     line[strcspn(line, "\n")] = 0;
     if (!strncmp(line, "exit ", 5)) r->exit_code = atoi(line + 5);
     else if (!strncmp(line, "maxrss_kib ", 11)) r->maxrss_kib = atol(line + 11);
     else if (!strncmp(line, "wall ", 5)) r->wall = atof(line + 5);
-    else if (!strncmp(line, "args ", 5)) ok_args = !strcmp(line + 5, want_args);
+    else if (!strncmp(line, "timeout ", 8)) r->timed_out = atoi(line + 8);
+    else if (!strncmp(line, "key ", 4)) ok_key = !strcmp(line + 4, key);
   }
   fclose(f);
-  return ok_args && r->exit_code >= 0 ? 0 : -1;
+  return ok_key && r->exit_code >= 0 ? 0 : -1;
 }
 
-static void write_done(const bs_study_run *r) {
-  char p[1500], args[8192];
+static void write_done(const bs_study *S, const bs_study_run *r) {
+  char p[1500], args[8192], key[BS_STUDY_KEY_LEN + 1] = "none";
+  bs_error err;
   snprintf(p, sizeof p, "%s/done", r->dir);
   args_line(r, args, sizeof args);
+  if (bs_study_run_key(S, r, key, &err)) fprintf(stderr, "bigstep study: %s (the run will not be reused)\n", err.msg);
   FILE *f = fopen(p, "w");
   if (!f) return;
-  fprintf(f, "exit %d\nmaxrss_kib %ld\nwall %.6f\nargs %s\n", r->exit_code, r->maxrss_kib, r->wall, args);
-  fclose(f);
+  fprintf(f, "exit %d\nmaxrss_kib %ld\nwall %.6f\ntimeout %d\nkey %s\nargs %s\n", r->exit_code, r->maxrss_kib,
+          r->wall, r->timed_out, key, args);
+  if (fclose(f)) fprintf(stderr, "bigstep study: cannot write '%s'\n", p);
 }
 
-/* Marks the runs left to do; returns how many. */
-static int mark_pending(bs_study *S, slot *sl) {
+/* Marks the runs left to do (all with force); returns how many. A run whose
+ * key cannot be computed (an unreadable mesh) is run, and fails there. */
+static int mark_pending(bs_study *S, slot *sl, int force) {
   int n_pending = 0;
   for (int i = 0; i < S->n_runs; i++) {
     bs_study_run *r = &S->runs[i];
-    char args[8192];
-    args_line(r, args, sizeof args);
-    sl[i].pending = !(read_done(r, args) == 0 && bs_study_run_complete(r));
+    char key[BS_STUDY_KEY_LEN + 1];
+    bs_error err;
+    int have_key = bs_study_run_key(S, r, key, &err) == 0;
+    sl[i].pending = force || !have_key || !(read_done(r, key) == 0 && (r->timed_out || bs_study_run_complete(r) ||
+                                                                       r->exit_code != 0));
+    if (sl[i].pending) r->timed_out = 0;
     n_pending += sl[i].pending;
   }
   return n_pending;
@@ -225,6 +258,7 @@ static int start_run(const bs_study *S, bs_study_run *r, slot *sl, const char *o
   fflush(stdout);
   fflush(stderr);
   sl->t0 = bs_seconds();
+  sl->term_at = 0;
   pid_t pid = fork();
   if (pid < 0) {
     free(argv);
@@ -277,14 +311,29 @@ static int reap(bs_study *S, slot *sl, pid_t pid, int status, const struct rusag
     r->wall = bs_seconds() - sl[i].t0;
     r->maxrss_kib = ru->ru_maxrss;
     r->exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-    write_done(r);
+    write_done(S, r);
     return 1;
   }
   return 0;
 }
 
-/* Runs the pending runs, at most jobs at a time. */
-static int run_all(bs_study *S, slot *sl, int jobs, int n_pending) {
+/* Stops the runs past their budget: SIGTERM, then SIGKILL 5 s later. */
+static void enforce_budget(bs_study *S, slot *sl, double budget) {
+  double now = bs_seconds();
+  for (int i = 0; i < S->n_runs; i++) {
+    if (!sl[i].pending || sl[i].pid <= 0) continue;
+    if (!sl[i].term_at && now - sl[i].t0 > budget) {
+      S->runs[i].timed_out = 1;
+      sl[i].term_at = now;
+      kill(sl[i].pid, SIGTERM);
+    } else if (sl[i].term_at && now - sl[i].term_at > 5.0) {
+      kill(sl[i].pid, SIGKILL);
+    }
+  }
+}
+
+/* Runs the pending runs, at most jobs at a time, each within budget seconds. */
+static int run_all(bs_study *S, slot *sl, int jobs, int n_pending, double budget) {
   if (n_pending == 0) return 0;
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   char omp[16];
@@ -312,7 +361,12 @@ static int run_all(bs_study *S, slot *sl, int jobs, int n_pending) {
     if (!running) break;
     int status;
     struct rusage ru;
-    pid_t pid = wait4(-1, &status, 0, &ru);
+    pid_t pid = wait4(-1, &status, WNOHANG, &ru);
+    if (pid == 0) {
+      enforce_budget(S, sl, budget);
+      usleep(20000);
+      continue;
+    }
     if (pid < 0) {
       if (errno == EINTR) continue;
       break;
@@ -369,7 +423,8 @@ static int plan(const study_args *A, bs_study **S) {
   bs_error err;
   bs_error_clear(&err);
   bs_study_opts o = {.scene = A->scene, .n_sets = A->n_user, .sets = A->user_sets, .n_knobs = A->n_knobs,
-                     .knobs = A->knobs, .reference = A->ref_dir, .out = A->out};
+                     .knobs = A->knobs, .reference = A->ref_dir, .out = A->out, .n_qoi = A->n_qoi,
+                     .qoi = A->qoi};
   if (bs_study_create(&o, S, &err)) {
     fprintf(stderr, "bigstep study: %s\n", err.msg);
     return BS_EXIT_FAIL;
@@ -415,6 +470,7 @@ int bs_cmd_study(int argc, char **argv) {
   study_args A;
   memset(&A, 0, sizeof A);
   A.jobs = 1;
+  A.budget = 900;
   A.user_sets = calloc((size_t)argc + 1, sizeof(char *));
   bs_study *S = NULL;
   slot *sl = NULL;
@@ -426,11 +482,11 @@ int bs_cmd_study(int argc, char **argv) {
     rc = BS_EXIT_FAIL;
   }
   if (!rc && !A.help) {
-    int n_pending = mark_pending(S, sl);
+    int n_pending = mark_pending(S, sl, A.force);
     printf("study %s: %d runs, %d to do (%d done before), in %s\n", S->name, S->n_runs, n_pending,
            S->n_runs - n_pending, S->out);
     fflush(stdout);
-    run_all(S, sl, A.jobs, n_pending);
+    run_all(S, sl, A.jobs, n_pending, A.budget);
     rc = report(S);
   }
   for (int k = 0; k < A.n_knobs; k++) bs_study_knob_free(&A.knobs[k]);

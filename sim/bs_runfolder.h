@@ -151,6 +151,26 @@ void bs_frames_table_free(bs_frames_table *t);
  * newline counts); -1 when the file is missing. */
 int bs_frames_csv_lines(const char *dir);
 
+/* ---- reading qoi.csv ------------------------------------------------------- */
+
+/* qoi.csv: the scene's quantities of interest, one row per frame written
+ * (frame 0 included): header "frame,time,NAME1,NAME2,...", rows
+ * "%d,%.17g,%.17g,..." (the values in the scene's order; units those of the
+ * quantity: m, m/s, N, J). */
+typedef struct bs_qoi_table {
+  int n_qoi, n_rows;
+  char **names;              /* n_qoi                                          */
+  double *time;              /* n_rows (s)                                     */
+  double *values;            /* n_rows * n_qoi, row-major                      */
+} bs_qoi_table;
+
+/* Reads dir/qoi.csv: BS_EIO when it cannot be opened, BS_EINPUT (naming the
+ * line) for a bad header, a row without 2 + n_qoi finite numbers. */
+int bs_qoi_csv_read(const char *dir, bs_qoi_table *t, bs_error *err);
+void bs_qoi_table_free(bs_qoi_table *t);
+/* The column of a name, or -1. */
+int bs_qoi_table_column(const bs_qoi_table *t, const char *name);
+
 /* ---- reading state.bin ---------------------------------------------------- */
 
 typedef struct bs_state_reader {

@@ -74,6 +74,39 @@ extern "C" {
 #define BS_STUDY_MAX_KNOBS 16
 #define BS_STUDY_MAX_BODIES 64
 #define BS_STUDY_MAX_RUNS 100000
+#define BS_STUDY_MAX_QOI 16
+
+/* ---- convergence of a quantity (pure; study_gci.c) --------------------- */
+
+/* Richardson extrapolation and the grid convergence index (GCI) of a
+ * quantity f at three levels h[0] < h[1] < h[2] (fine to coarse: cell size
+ * 2^-refine, or dt), after Roache and Celik et al. 2008 (J. Fluids Eng. 130,
+ * 078001), safety factor 1.25 as ASME V&V 20 uses for three levels:
+ *   e21 = f1 - f0, e32 = f2 - f1, r21 = h1/h0, r32 = h2/h1, s = sign(e32/e21);
+ *   p   the root of e32/e21 = r21^p (r32^p - 1) / (r21^p - 1) (Celik's eq. (4)
+ *       for monotone convergence, s = 1), by bisection on (0, 64];
+ *   extrapolated = (r21^p f0 - f1) / (r21^p - 1);
+ *   e_a = |(f0 - f1)/f0|, GCI_fine = 1.25 e_a / (r21^p - 1), GCI_coarse the
+ *   same of levels 1, 2 with r32; asymptotic = GCI_coarse / (r21^p GCI_fine),
+ *   near 1 in the asymptotic range; e_ext = |(extrapolated - f0)/extrapolated|.
+ * Fields are NAN where not defined; relative figures are fractions (not %). */
+typedef enum {
+  BS_GCI_OK = 0,        /* monotone convergence: every field set                    */
+  BS_GCI_OSCILLATORY,   /* e32 / e21 < 0: no order or extrapolation is fitted        */
+  BS_GCI_DIVERGENT,     /* |e21| >= |e32|: the differences do not shrink            */
+  BS_GCI_CONVERGED,     /* e21 = e32 = 0 (to 1e-14): extrapolated = f0, GCI 0        */
+  BS_GCI_NO_ORDER,      /* one difference 0, or the fixed point failed               */
+  BS_GCI_BAD_INPUT      /* a non-finite value, h not positive and increasing         */
+} bs_gci_status;
+
+typedef struct bs_gci {
+  bs_gci_status status;
+  double p, extrapolated, e_a, e_ext, gci_fine, gci_coarse, asymptotic;
+} bs_gci;
+
+/* "monotone", "oscillatory", "divergent", "converged", "no_order", "bad_input". */
+const char *bs_gci_status_name(bs_gci_status s);
+bs_gci_status bs_study_gci(const double h[3], const double f[3], bs_gci *g);
 
 /* ---- knobs ----------------------------------------------------------------- */
 
@@ -124,6 +157,7 @@ typedef struct bs_study_run {
   int *body_refine;            /* n_bodies                                  */
   /* the process: the caller's to fill */
   int exit_code;               /* 0 ok; anything else: failed               */
+  int timed_out;               /* 1: stopped after the run budget           */
   long maxrss_kib;             /* peak memory of the process (0: unknown)    */
   double wall;                 /* s                                          */
   /* results (bs_study_evaluate) */
@@ -131,7 +165,14 @@ typedef struct bs_study_run {
   long newton, cg, failed_steps;
   double s_per_frame, newton_per_step, cg_per_step, peak_mib;
   double pos_max, pos_last, vel_max, vel_last, drift, pen_max;
+  /* quantities of interest (bs_study_read_qoi; NAN where not measured) */
+  double q_last[BS_STUDY_MAX_QOI];     /* the value at the last frame       */
+  double q_err_last[BS_STUDY_MAX_QOI]; /* |q - q_ref| / Q at the last common frame */
+  double q_err_max[BS_STUDY_MAX_QOI];  /* the max over common frames        */
 } bs_study_run;
+
+/* "ok", "failed" (nonzero exit), "timeout" (timed_out). */
+const char *bs_study_run_status(const bs_study_run *r);
 
 typedef struct bs_study_opts {
   const char *scene;            /* the scene file                              */
@@ -141,6 +182,8 @@ typedef struct bs_study_opts {
   const bs_study_knob *knobs;   /* copied                                      */
   const char *reference;        /* a run folder; NULL: the finest run (auto)   */
   const char *out;              /* the study folder; NULL: out/study/<scene name> */
+  int n_qoi;                    /* quantities of interest measured (qoi.csv names) */
+  const char *const *qoi;
 } bs_study_opts;
 
 typedef struct bs_study {
@@ -159,6 +202,10 @@ typedef struct bs_study {
   int64_t cmp[BS_STUDY_MAX_BODIES]; /* compared vertices per body              */
   double vscale;                /* velocity scale V (m/s)                      */
   int direct;                   /* whole states compared (no refinement relation) */
+  int n_qoi;
+  char qoi[BS_STUDY_MAX_QOI][BS_MAX_NAME];
+  double q_ref_scale[BS_STUDY_MAX_QOI]; /* Q: the reference's largest |q| over frames (1 if 0) */
+  int q_ref_ok[BS_STUDY_MAX_QOI];      /* the reference's qoi.csv had the column */
 } bs_study;
 
 /* Copies the options and loads the scene with the user's settings (its
@@ -176,6 +223,15 @@ int bs_study_plan(bs_study *S, bs_error *err);
 
 /* Body size L and the per-body counts of the unrefined meshes. */
 int bs_study_measure_bodies(bs_study *S, bs_error *err);
+
+/* The cache key of run r: a digest (zlib's CRC-32 and Adler-32, and the
+ * byte count) of the scene file's bytes, the run's --set list, and the bytes
+ * of every mesh and grid level-set file the run's scene names (resolved
+ * paths); hex, BS_STUDY_KEY_LEN characters. A run folder is reused only when
+ * the key it was made with is this one. BS_EIO for a file that cannot be
+ * read, or the scene loader's codes. */
+#define BS_STUDY_KEY_LEN 32
+int bs_study_run_key(const bs_study *S, const bs_study_run *r, char key[BS_STUDY_KEY_LEN + 1], bs_error *err);
 
 /* Rows of a complete frames.csv of run r (header excluded), and whether
  * r->dir holds that many. */
@@ -216,6 +272,21 @@ int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks
  * off_ref, into r's error fields (left as they are when a state file cannot
  * be opened, NAN when the vertices do not match); 0, or -1 when not compared. */
 int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref);
+
+/* The quantities of interest: each run's qoi.csv column of every S->qoi
+ * name, compared with the reference's at common frame times (as the
+ * states): error = |q - q_ref| / Q, Q = the reference's largest |q| over its
+ * frames (1 when that is 0, making the error absolute). Returns the number
+ * of complete runs whose qoi.csv could not be read or lacks a name. */
+int bs_study_read_qoi(bs_study *S);
+
+/* GCI of quantity q (an index into S->qoi) along knob k for method: the
+ * three finest complete runs of the knob's group (other knobs at the
+ * reference, distinct h), their q_last values.
+ * used[3] gets their run indices (-1: missing), *n_skipped the runs of the
+ * group that failed or timed out. BS_GCI_BAD_INPUT with fewer than three. */
+bs_gci_status bs_study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
+                               int *n_skipped);
 
 /* Largest vertex speed over all frames of dir/state.bin (m/s); 0 if unreadable. */
 double bs_study_max_speed(const char *dir);
@@ -266,6 +337,7 @@ void bs_study_pareto(int n, const double *cost, const double *error, const int *
 /* The index of the cheapest point (the first of equal costs) among those
  * that are ok, have error <= threshold and a finite cost; -1 if none. */
 int bs_study_cheapest_within(int n, const double *cost, const double *error, const int *ok, double threshold);
+
 
 /* Energy drift of a frames table (formula at the top); NAN for no rows. */
 double bs_study_energy_drift(const bs_frames_table *t);

@@ -146,6 +146,14 @@ int bs_study_compare(bs_study *S) {
   int64_t off_ref[BS_STUDY_MAX_BODIES];
   reference_blocks(S, off_ref);
   const char *ref_dir = S->ref_dir[0] ? S->ref_dir : S->runs[S->ref].dir;
+  if (!S->ref_dir[0] && (S->runs[S->ref].exit_code != 0 || S->runs[S->ref].timed_out)) {
+    /* a failed or stopped reference: its frames are no reference */
+    for (int i = 0; i < S->n_runs; i++) {
+      bs_study_run *r = &S->runs[i];
+      r->pos_max = r->pos_last = r->vel_max = r->vel_last = NAN;
+    }
+    return S->n_runs;
+  }
   int n_bad = 0;
   for (int i = 0; i < S->n_runs; i++)
     if (bs_study_compare_run(S, &S->runs[i], ref_dir, off_ref)) n_bad++;

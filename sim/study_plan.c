@@ -76,6 +76,15 @@ int bs_study_create(const bs_study_opts *o, bs_study **out, bs_error *err) {
     if (!(S->user_sets[S->n_user++] = xstrdup(o->sets[i]))) st = bs_error_set(err, BS_ENOMEM, "out of memory (study)");
   for (int k = 0; !st && k < o->n_knobs; k++)
     if (knob_copy(&o->knobs[k], &S->knobs[S->n_knobs++])) st = bs_error_set(err, BS_ENOMEM, "out of memory (study)");
+  if (!st && (o->n_qoi < 0 || o->n_qoi > BS_STUDY_MAX_QOI))
+    st = bs_error_set(err, BS_EINPUT, "at most %d quantities (--qoi), got %d", BS_STUDY_MAX_QOI, o->n_qoi);
+  for (int q = 0; !st && q < o->n_qoi; q++) {
+    if (strlen(o->qoi[q]) >= BS_MAX_NAME || !o->qoi[q][0])
+      st = bs_error_set(err, BS_EINPUT, "--qoi '%s': not a quantity name", o->qoi[q]);
+    for (int j = 0; !st && j < q; j++)
+      if (!strcmp(o->qoi[j], o->qoi[q])) st = bs_error_set(err, BS_EINPUT, "--qoi '%s' is given twice", o->qoi[q]);
+    if (!st) snprintf(S->qoi[S->n_qoi++], BS_MAX_NAME, "%s", o->qoi[q]);
+  }
   if (!st) st = base_scene(S, err);
   if (st) {
     bs_study_destroy(&S);

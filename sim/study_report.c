@@ -19,16 +19,21 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
   /* the shorthand "method" would repeat the method column's name: its path instead */
   for (int k = 0; k < S->n_knobs; k++)
     fprintf(f, ",%s", !strcmp(S->knobs[k].key, "method") ? S->knobs[k].path : S->knobs[k].key);
-  fprintf(f, ",method,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,pos_err_max,"
-             "pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,pareto\n");
+  fprintf(f, ",method,status,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,"
+             "pos_err_max,pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,"
+             "pareto");
+  for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%s,%s_err_last,%s_err_max", S->qoi[q], S->qoi[q], S->qoi[q]);
+  fputc('\n', f);
   for (int i = 0; i < S->n_runs; i++) {
     const bs_study_run *r = &S->runs[i];
     fprintf(f, "%s", r->name);
     for (int k = 0; k < S->n_knobs; k++) fprintf(f, ",%s", S->knobs[k].vals[r->idx[k]]);
-    fprintf(f, ",%s,%d,%d,%ld,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.6g,%d,%d\n", r->method, r->exit_code,
-            r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
+    fprintf(f, ",%s,%s,%d,%d,%ld,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%.6g,%d,%d", r->method,
+            bs_study_run_status(r), r->exit_code, r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
             r->cg_per_step, r->peak_mib, r->pos_max, r->pos_last, r->vel_max, r->vel_last, r->drift, r->inv_max,
             r->pen_max, r->is_ref, r->pareto);
+    for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%.12g,%.6g,%.6g", r->q_last[q], r->q_err_last[q], r->q_err_max[q]);
+    fputc('\n', f);
   }
   if (fclose(f)) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
   return 0;
@@ -58,52 +63,107 @@ static void pareto_data(const bs_study *S) {
   fclose(d);
 }
 
-/* 1. error against cost, the Pareto front marked. */
-static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+/* The smallest positive finite position error of the runs (1e-6 if none):
+ * failed and timed-out runs are drawn at half of it. */
+static double error_floor(const bs_study *S) {
+  double m = INFINITY;
+  for (int i = 0; i < S->n_runs; i++)
+    if (S->runs[i].pos_max > 0 && S->runs[i].pos_max < m) m = S->runs[i].pos_max;
+  return isfinite(m) ? 0.5 * m : 1e-6;
+}
+
+/* A run's cost for the plots: s/frame, else its wall seconds per frame. */
+static double plot_cost_of(const bs_study_run *r) {
+  if (r->s_per_frame > 0 && isfinite(r->s_per_frame)) return r->s_per_frame;
+  return r->wall > 0 && r->frames > 0 ? r->wall / r->frames : NAN;
+}
+
+/* plot_cost.dat: per method the runs with a positive error (cost, error,
+ * label), then one block of the failed and timed-out runs; the points written. */
+static int cost_data(const bs_study *S, const char **methods, int nm) {
   char p[1400];
   snprintf(p, sizeof p, "%s/plot_cost.dat", S->out);
   FILE *d = fopen(p, "w");
-  for (int m = 0; d && m < nm; m++) {
-    fprintf(d, "# method %s: s_per_frame pos_err_max\n", methods[m]);
+  int n = 0;
+  for (int m = 0; d && m <= nm; m++) {
+    fprintf(d, m < nm ? "# method %s: s_per_frame pos_err_max setting\n" : "# failed or timeout%s: cost floor\n",
+            m < nm ? methods[m] : "");
     for (int i = 0; i < S->n_runs; i++) {
       const bs_study_run *r = &S->runs[i];
-      if (!strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) && r->s_per_frame > 0)
-        fprintf(d, "%.9g %.9g\n", r->s_per_frame, r->pos_max);
+      int bad = r->exit_code != 0 || r->timed_out;
+      if (m < nm && !bad && !strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) &&
+          r->s_per_frame > 0)
+        n += fprintf(d, "%.9g %.9g \"%s\"\n", r->s_per_frame, r->pos_max, r->name) > 0;
+      if (m == nm && bad && isfinite(plot_cost_of(r)))
+        fprintf(d, "%.9g %.9g \"%s (%s)\"\n", plot_cost_of(r), error_floor(S), r->name, bs_study_run_status(r));
     }
-    fprintf(d, "\n\n");
+    fprintf(d, "%s\n\n", m == nm ? "nan nan \"\"" : "");
   }
   if (d) fclose(d);
-  pareto_data(S);
-  fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'seconds per frame'\n"
-              "set ylabel 'position error (max over frames, / body size)'\n"
-              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\nplot ",
-          S->name);
-  for (int m = 0; m < nm; m++)
-    fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', ", m, methods[m]);
-  fprintf(gp, "'plot_pareto.dat' using 1:2 with linespoints lw 2 lc rgb 'black' pt 6 ps 2.2 title 'Pareto front'\n"
-              "unset logscale\n");
+  return n;
 }
 
-/* One method's curves of the refinement plot of knob k. */
+/* Fixed ranges and a note when a plot has no point (gnuplot refuses an
+ * empty log-scale range). */
+static void empty_guard(FILE *gp, int n_points, const char *what) {
+  if (n_points == 0)
+    fprintf(gp, "set xrange [1e-3:1]\nset yrange [1e-6:1]\nset label 1 'no run with a positive %s' at graph 0.2,0.5\n",
+            what);
+}
+
+static void empty_unguard(FILE *gp) { fprintf(gp, "set autoscale xy\nunset label 1\n"); }
+
+/* 1. error against cost, the Pareto front marked, points labelled. */
+static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+  int n = cost_data(S, methods, nm);
+  pareto_data(S);
+  fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'cost: solver seconds per frame (s)'\n"
+              "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
+              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\n",
+          S->name);
+  empty_guard(gp, n, "position error");
+  fprintf(gp, "plot ");
+  for (int m = 0; m < nm; m++)
+    fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', "
+                "'plot_cost.dat' index %d using 1:2:3 with labels offset 0,0.8 font ',7' notitle, ",
+            m, methods[m], m);
+  fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 2 ps 2 lc rgb 'red' title 'failed or timeout (no "
+              "error; drawn at the floor)', 'plot_cost.dat' index %d using 1:2:3 with labels offset 0,-0.8 font ',7' "
+              "tc rgb 'red' notitle, ",
+          nm, nm);
+  fprintf(gp, "'plot_pareto.dat' using 1:2 with linespoints lw 2 lc rgb 'black' pt 6 ps 2.2 title 'Pareto front'\n"
+              "unset logscale\n");
+  empty_unguard(gp);
+}
+
+/* One method's curves of the convergence plot of knob k: level (space) or
+ * dt (time) against the position error. */
 static void plot_refine_method(const bs_study *S, int k, int m, const char *method, int *grp, FILE *d, FILE *ds,
                                FILE *gp) {
+  const int is_t = bs_study_knob_is_time(&S->knobs[k]);
   bs_study_order o = bs_study_order_fit(S, k, method);
   int ng = bs_study_group(S, k, method, grp);
   if (d) {
-    fprintf(d, "# method %s: level pos_err_max\n", method);
+    fprintf(d, "# method %s: %s pos_err_max\n", method, is_t ? "dt" : "level");
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
-      if (bs_study_fit_point(S, r, k) && r->pos_max > 0) fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
+      if (!bs_study_fit_point(S, r, k) || !(r->pos_max > 0)) continue;
+      if (is_t) fprintf(d, "%.9g %.9g\n", bs_study_knob_h(S, r, k), r->pos_max);
+      else fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
     }
     fprintf(d, "\n\n");
   }
   fprintf(gp, "'plot_refine_%d.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s: against the reference', ", k,
           m, method);
-  if (isfinite(o.p))
-    fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f', ", o.logc, o.p, method, o.p);
+  if (isfinite(o.p) && is_t)
+    fprintf(gp, "exp(%.9g) * x**%.9g with lines dt 2 title '%s fit: slope %.2f (%d runs)', ", o.logc, o.p, method, o.p,
+            o.used);
+  else if (isfinite(o.p))
+    fprintf(gp, "exp(%.9g) * 2**(-%.9g * x) with lines dt 2 title '%s fit: order %.2f (%d runs)', ", o.logc, o.p,
+            method, o.p, o.used);
   int used = 0;
   if (ds) fprintf(ds, "# method %s: level, position error against the next finer level\n", method);
-  double ps = bs_study_order_successive(S, k, method, &used, ds);
+  double ps = is_t ? NAN : bs_study_order_successive(S, k, method, &used, ds);
   if (ds) fprintf(ds, "\n\n");
   if (ds && used > 0) {
     char ord[64] = "";
@@ -114,20 +174,41 @@ static void plot_refine_method(const bs_study *S, int k, int m, const char *meth
   }
 }
 
-/* 2. error against refinement level, with the fitted order. */
+/* Points the convergence plot of knob k will hold. */
+static int refine_points(const bs_study *S, int k, const char **methods, int nm, int *grp) {
+  int n = 0;
+  for (int m = 0; m < nm; m++) {
+    int ng = bs_study_group(S, k, methods[m], grp);
+    for (int i = 0; i < ng; i++) n += bs_study_fit_point(S, &S->runs[grp[i]], k) && S->runs[grp[i]].pos_max > 0;
+  }
+  return n;
+}
+
+/* 2. error against refinement level (log-log in h = 2^-level) or against dt
+ * (log-log), with the fitted order. */
 static void plot_refine(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
+  const int is_t = bs_study_knob_is_time(&S->knobs[k]);
   char p[1400];
   snprintf(p, sizeof p, "%s/plot_refine_%d.dat", S->out, k);
   FILE *d = fopen(p, "w");
   snprintf(p, sizeof p, "%s/plot_refine_successive_%d.dat", S->out, k);
   FILE *ds = fopen(p, "w");
-  fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
-              "set xlabel '%s (h ~ 2^-level)'\n"
-              "set ylabel 'position error (max over frames, / body size)'\n"
-              "set title 'Error against refinement (other knobs at the reference)'\nplot ",
-          k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  if (is_t)
+    fprintf(gp, "set output 'error_vs_dt%s%s.png'\nset logscale xy\nset key inside top left\n"
+                "set xlabel 'time step dt (s) [%s]'\n",
+            k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  else
+    fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
+                "set xlabel '%s: refinement level (cell size h ~ 2^-level, so log-log in h)'\n",
+            k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
+  fprintf(gp, "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
+              "set title 'Error against %s (other knobs at the reference)'\n",
+          is_t ? "time step" : "refinement");
+  empty_guard(gp, refine_points(S, k, methods, nm, grp), "position error");
+  fprintf(gp, "plot ");
   for (int m = 0; m < nm; m++) plot_refine_method(S, k, m, methods[m], grp, d, ds, gp);
   fprintf(gp, "1/0 notitle\nunset logscale\nset key outside right\nset xtics autofreq\n");
+  empty_unguard(gp);
   if (d) fclose(d);
   if (ds) fclose(ds);
 }
@@ -177,7 +258,8 @@ int bs_study_plots_write(const bs_study *S, bs_error *err) {
               "set grid\nset key outside right\nset format y '%%.0e'\n");
   plot_cost(S, methods, nm, gp);
   for (int k = 0; k < S->n_knobs; k++)
-    if (S->knobs[k].kind == BS_KNOB_REFINE) plot_refine(S, k, methods, nm, grp, gp);
+    if (S->knobs[k].kind == BS_KNOB_REFINE || bs_study_knob_is_time(&S->knobs[k]))
+      plot_refine(S, k, methods, nm, grp, gp);
   for (int k = 0; k < S->n_knobs; k++)
     if (S->knobs[k].kind == BS_KNOB_STEPS_PER_FRAME) {
       plot_iterations(S, k, methods, nm, grp, gp);
@@ -188,72 +270,3 @@ int bs_study_plots_write(const bs_study *S, bs_error *err) {
   return 0;
 }
 
-/* ---- the summary ------------------------------------------------------------ */
-
-/* For each method, the cheapest run within 1%, 0.1% and 0.01%. */
-static void summary_cheapest(const bs_study *S, const char **methods, int nm, FILE *f) {
-  static const double thr[3] = {1e-2, 1e-3, 1e-4};
-  static const char *thr_name[3] = {"1%", "0.1%", "0.01%"};
-  int n = S->n_runs;
-  double *cost = malloc(sizeof(double) * ((size_t)n + 1)), *error = malloc(sizeof(double) * ((size_t)n + 1));
-  int *ok = malloc(sizeof(int) * ((size_t)n + 1));
-  for (int i = 0; cost && error && i < n; i++) {
-    cost[i] = S->runs[i].s_per_frame;
-    error[i] = S->runs[i].pos_max;
-  }
-  fprintf(f, "cheapest setting (by s/frame) within a position error (max over frames, / body size) of:\n");
-  for (int m = 0; cost && error && ok && m < nm; m++) {
-    fprintf(f, "  method %s\n", methods[m]);
-    for (int i = 0; i < n; i++) ok[i] = !strcmp(S->runs[i].method, methods[m]) && S->runs[i].exit_code == 0;
-    for (int t = 0; t < 3; t++) {
-      int best = bs_study_cheapest_within(n, cost, error, ok, thr[t]);
-      if (best < 0) fprintf(f, "    %-6s none\n", thr_name[t]);
-      else
-        fprintf(f, "    %-6s %s  (%.4g s/frame, error %.3g%%)\n", thr_name[t], S->runs[best].name,
-                S->runs[best].s_per_frame, 100 * S->runs[best].pos_max);
-    }
-  }
-  free(cost);
-  free(error);
-  free(ok);
-}
-
-/* The orders of knob k for one method: against the reference, and from successive levels. */
-static void summary_order(const bs_study *S, int k, const char *method, FILE *f) {
-  const bs_study_knob *v = &S->knobs[k];
-  int is_t = bs_study_knob_is_time(v);
-  bs_study_order o = bs_study_order_fit(S, k, method);
-  if (isfinite(o.p))
-    fprintf(f, "order in %s (error ~ %s^p, vs %s): method %s p = %.3f over %d runs\n", is_t ? "time" : "space",
-            is_t ? "dt" : "h", v->key, method, o.p, o.used);
-  else
-    fprintf(f, "order in %s (vs %s): method %s: not measurable (fewer than 2 runs with a positive error)\n",
-            is_t ? "time" : "space", v->key, method);
-  int used = 0;
-  double ps = bs_study_order_successive(S, k, method, &used, NULL);
-  if (isfinite(ps))
-    fprintf(f, "  from successive levels (each run against the next finer): p = %.3f over %d pairs\n", ps, used);
-}
-
-void bs_study_summary_write(const bs_study *S, FILE *f) {
-  const char *methods[MAX_METHODS];
-  int nm = bs_study_methods(S, methods, MAX_METHODS);
-  int n_failed = 0;
-  for (int i = 0; i < S->n_runs; i++) n_failed += S->runs[i].exit_code != 0;
-  char ref_desc[1600];
-  if (S->ref_dir[0]) snprintf(ref_desc, sizeof ref_desc, "the run in %s", S->ref_dir);
-  else snprintf(ref_desc, sizeof ref_desc, "%s", S->ref >= 0 ? S->runs[S->ref].name : "?");
-  fprintf(f, "\nstudy %s: %d runs (%d failed), body size %.4g m; reference: %s\n", S->name, S->n_runs, n_failed,
-          S->size, ref_desc);
-  summary_cheapest(S, methods, nm, f);
-  int any_t = 0, any_s = 0;
-  for (int k = 0; k < S->n_knobs; k++) {
-    int is_t = bs_study_knob_is_time(&S->knobs[k]), is_s = S->knobs[k].kind == BS_KNOB_REFINE;
-    if (!is_t && !is_s) continue;
-    any_t |= is_t;
-    any_s |= is_s;
-    for (int m = 0; m < nm; m++) summary_order(S, k, methods[m], f);
-  }
-  if (!any_t) fprintf(f, "order in time: steps_per_frame not varied\n");
-  if (!any_s) fprintf(f, "order in space: refine not varied\n");
-}

@@ -82,5 +82,5 @@ int bs_study_evaluate(bs_study *S) {
   bs_study_read_costs(S);
   int n_bad = bs_study_compare(S);
   bs_study_mark_pareto(S);
-  return n_bad;
+  return n_bad + bs_study_read_qoi(S);
 }

@@ -240,3 +240,57 @@ Test(study, backward_euler_is_first_order_in_time) {
   cr_expect(p > 0.8 && p < 1.2, "observed order in time %g, expected 1 (0.8..1.2):\n%s", p, out);
   free(out);
 }
+
+/* Replaces the first occurrence of `from` in dir/scene.json by `to`. */
+static void edit_scene(const char *dir, const char *from, const char *to) {
+  char p[512], text[4096];
+  snprintf(p, sizeof p, "%s/scene.json", dir);
+  FILE *f = fopen(p, "r");
+  cr_assert_not_null(f);
+  size_t n = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  text[n] = 0;
+  char *at = strstr(text, from);
+  cr_assert_not_null(at, "'%s' not in the scene", from);
+  char out[4096];
+  snprintf(out, sizeof out, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+  cr_assert_not_null(f = fopen(p, "w"));
+  fputs(out, f);
+  fclose(f);
+}
+
+Test(study, cache_is_keyed_by_the_scene_content) {
+  char dir[256], *out = NULL;
+  make_dir(dir, sizeof dir, box_scene);
+  cr_assert_eq(study(dir, "--vary steps_per_frame=1,2", &out), 0, "%s", out);
+  cr_expect_not_null(strstr(out, "2 runs, 2 to do"), "%s", out);
+  free(out);
+  cr_assert_eq(study(dir, "--vary steps_per_frame=1,2", &out), 0, "%s", out);
+  cr_expect_not_null(strstr(out, "2 runs, 0 to do"), "an unchanged study ran again:\n%s", out);
+  free(out);
+  edit_scene(dir, "\"youngs\": 1e5", "\"youngs\": 2e5"); /* the same --set list, another scene */
+  cr_assert_eq(study(dir, "--vary steps_per_frame=1,2", &out), 0, "%s", out);
+  cr_expect_not_null(strstr(out, "2 runs, 2 to do"), "the edited scene's runs were reused:\n%s", out);
+  free(out);
+  cr_assert_eq(study(dir, "--vary steps_per_frame=1,2 --force", &out), 0, "%s", out);
+  cr_expect_not_null(strstr(out, "2 runs, 2 to do"), "--force did not rerun:\n%s", out);
+  free(out);
+}
+
+Test(study, a_run_past_its_budget_is_stopped_and_listed) {
+  char dir[256], *out = NULL, p[512];
+  make_dir(dir, sizeof dir, box_scene);
+  /* 3 frames of 100000 steps each on a 2-cell box: far more than 3 s */
+  int rc = study(dir, "--vary steps_per_frame=1,100000 --run-budget 3 --reference auto", &out);
+  cr_expect_eq(rc, 0, "%s", out);
+  cr_expect_not_null(strstr(out, "(0 failed, 1 timed out)"), "%s", out);
+  cr_expect_not_null(strstr(out, "  timeout steps_per_frame=100000"), "%s", out);
+  free(out);
+  static table t;
+  memset(&t, 0, sizeof t);
+  snprintf(p, sizeof p, "%s/study/study.csv", dir);
+  cr_assert_eq(read_table(p, &t), 3, "study.csv: header and 2 rows");
+  int n_timeout = 0;
+  for (int r = 1; r < 3; r++) n_timeout += !strcmp(field(&t, r, "status"), "timeout");
+  cr_expect_eq(n_timeout, 1);
+}
