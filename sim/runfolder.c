@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_fields.h"
 #include "bs_runfolder.h"
 
 struct bs_runfolder {
@@ -13,6 +14,7 @@ struct bs_runfolder {
   int n_vtu, cap_vtu;
   char **vtu_names;
   double *vtu_times;
+  bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
 };
 
 static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
@@ -61,6 +63,7 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
   if (!st) st = open_files(rf, s, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
   if (st) {
     bs_runfolder_destroy(&rf);
     return st;
@@ -120,8 +123,7 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   char path[BS_MAX_PATH + 64], name[64];
   snprintf(name, sizeof name, "frame_%05d.vtu", frame);
   snprintf(path, sizeof path, "%s/%s", rf->dir, name);
-  bs_vtu_fields f = {.x = s->x, .velocity = s->v, .cell_detF = NULL};
-  int st = bs_mesh_write_vtu(s->mesh, &f, path, err);
+  int st = bs_fields_write_vtu(rf->fields, s, path, err);
   if (st) return st;
   if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
   rf->vtu_times[rf->n_vtu++] = s->time;
@@ -164,6 +166,7 @@ void bs_runfolder_destroy(bs_runfolder **prf) {
   if (rf->frames) fclose(rf->frames);
   if (rf->stats) fclose(rf->stats);
   if (rf->state) fclose(rf->state);
+  bs_fields_destroy(&rf->fields);
   for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
   free(rf->vtu_names);
   free(rf->vtu_times);
