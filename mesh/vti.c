@@ -51,8 +51,9 @@ int bs_vti_write(const bs_vti_grid *g, const char *path, bs_error *err) {
   bad |= fputs("\">\n        <DataArray type=\"Float64\" Name=\"", fp) < 0;
   bad |= bs_vtk_put_escaped_(fp, g->name) < 0;
   bad |= fputs("\" format=\"appended\" offset=\"0\"/>\n      </PointData>\n      <CellData>\n      </CellData>\n"
-               "    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _",
+               "    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n",
                fp) < 0;
+  bad |= bs_vtk_start_appended_(fp) < 0;
   bad |= bs_vtk_blob_write_(fp, &b) < 0;
   bad |= fputs("\n  </AppendedData>\n</VTKFile>\n", fp) < 0;
   return bs_vtk_close_(fp, bad, "vti", path, err);

@@ -85,6 +85,21 @@ void bs_vtk_blob_free_(bs_vtk_blob *b) {
   memset(b, 0, sizeof *b);
 }
 
+int bs_vtk_start_appended_(FILE *fp) {
+  enum { BLOCK = 8192 };
+  long at = ftell(fp);
+  if (at < 0) return -1;
+  long target = (at + BLOCK - 1) / BLOCK * BLOCK + BLOCK;
+  char buf[256];
+  memset(buf, ' ', sizeof buf);
+  for (long n = target - at - 1; n > 0;) {
+    size_t k = n > (long)sizeof buf ? sizeof buf : (size_t)n;
+    if (fwrite(buf, 1, k, fp) != k) return -1;
+    n -= (long)k;
+  }
+  return fputc('_', fp) == EOF ? -1 : 0;
+}
+
 int bs_vtk_close_(FILE *fp, int bad, const char *what, const char *path, bs_error *err) {
   int e = errno;
   if (ferror(fp)) bad = 1;

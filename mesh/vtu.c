@@ -133,7 +133,8 @@ static int put_array(FILE *fp, const out_array *a) {
   return bad;
 }
 
-/* The XML header up to the '_' marker, with the sections' tags. */
+/* The XML header and the '_' marker (after bs_vtk_start_appended_'s
+ * padding), with the sections' tags. */
 static int put_header(FILE *fp, const ugrid *g) {
   static const char *const open[] = {"PointData", "CellData", "Points", "Cells"};
   int bad = fprintf(fp,
@@ -152,7 +153,8 @@ static int put_header(FILE *fp, const ugrid *g) {
     for (; i < g->n && g->a[i].section == sec; i++) bad |= put_array(fp, &g->a[i]);
     bad |= fprintf(fp, "      </%s>\n", open[sec]) < 0;
   }
-  bad |= fputs("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _", fp) < 0;
+  bad |= fputs("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n", fp) < 0;
+  bad |= bs_vtk_start_appended_(fp) < 0;
   return bad;
 }
 
