@@ -55,12 +55,9 @@ void bs_vtk_blob_free_(bs_vtk_blob *b);
 /* Writes the whitespace and the '_' that start the appended data, fp being
  * just after the <AppendedData encoding="raw"> tag: spaces up to the second
  * 8192-byte boundary after the tag (at most 16 KiB), which readers skip
- * (VTK's, meshio's, bigstep's). Why: VTK 9.2 as Debian 12 builds it (with an
- * expat that carries expat 2.6's "reparse deferral") fails on raw appended
- * data, VTK's own files included ("not well-formed (invalid token)", VTK
- * issue 19258), unless the binary bytes start at least one of its 8192-byte
- * read blocks after the block that holds the tag; measured with python3-vtk
- * and pvpython on headers of 2 to 80 kB. 0 or -1. */
+ * (VTK's, meshio's, bigstep's), so that the binary bytes begin at least one
+ * of VTK's 8192-byte read blocks after the block that holds the tag (why:
+ * vtk_xml.c). 0 or -1. */
 int bs_vtk_start_appended_(FILE *fp);
 
 /* Closes fp; on a write error before (bad != 0) or at the close, removes the
