@@ -13,7 +13,10 @@
  * side: origin = lo - margin, n[k] = ceil((hi[k] - lo[k] + 2 margin) / h) + 1
  * nodes of spacing h, values phi = signed distance (negative inside), sampled
  * one z slice at a time over OpenMP threads (the shim's queries are
- * read-only and thread-safe). */
+ * read-only and thread-safe).
+ *
+ * OUT ending in ".vti" is written as VTK ImageData (bs_vti_write, point data
+ * "phi"); any other name in the .bsls format of bs_levelset_grid_save. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -33,8 +36,10 @@ static const char *levelset_help =
     "usage: bigstep levelset SURFACE OUT [--h H] [--margin M] [--size S]\n"
     "\n"
     "Samples the signed distance to a closed surface (negative inside) on a\n"
-    "regular grid and writes it as a grid level set file (.bsls), the 'file' of\n"
-    "a scene obstacle of shape \"grid\" (collision \"penalty\").\n"
+    "regular grid and writes it: OUT.vti as VTK image data (point data \"phi\",\n"
+    "for ParaView: Contour at 0 shows the surface); any other name (OUT.bsls) as\n"
+    "a grid level set file, the 'file' of a scene obstacle of shape \"grid\"\n"
+    "(collision \"penalty\").\n"
     "SURFACE: a triangle surface (.off, .obj, .ply, .stl, read as is), or any\n"
     "         mesh or geometry bigstep reads (.msh, .geo, .step, .brep, box:...),\n"
     "         whose boundary triangles are used. It must be closed.\n"
@@ -297,6 +302,15 @@ static int plan_grid(const char *in, const surface *s, const levelset_args *a, g
   return 0;
 }
 
+/* .vti (ImageData) for OUT.vti, else the .bsls grid file. */
+static int write_grid(const bs_levelset *ls, const char *out, bs_error *err) {
+  const char *dot = strrchr(out, '.');
+  if (!dot || strchr(dot, '/') || strcmp(dot, ".vti")) return bs_levelset_grid_save(ls, out, err);
+  bs_vti_grid g = {.name = "phi"};
+  g.values = bs_levelset_grid_values(ls, g.n, g.origin, &g.h);
+  return bs_vti_write(&g, out, err);
+}
+
 /* bs_seconds() at the start and after each stage. */
 typedef struct stage_times {
   double t0, read, tree, sample, end;
@@ -354,8 +368,7 @@ static int make_levelset(const levelset_args *a, bs_error *err) {
   }
   if ((st = sample(tree, g.origin, g.h, g.n, values, err))) goto done;
   t.sample = bs_seconds();
-  if ((st = bs_levelset_grid_from_values(g.origin, g.h, g.n, values, &ls, err)) ||
-      (st = bs_levelset_grid_save(ls, a->out, err)))
+  if ((st = bs_levelset_grid_from_values(g.origin, g.h, g.n, values, &ls, err)) || (st = write_grid(ls, a->out, err)))
     goto done;
   t.end = bs_seconds();
   print_summary(a, &s, &g, values, &t);

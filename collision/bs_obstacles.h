@@ -131,6 +131,8 @@ void bs_obstacles_destroy(bs_obstacles **o);
 int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, double stiffness, double friction,
                      bs_error *err);
 int bs_obstacles_count(const bs_obstacles *o);
+/* Obstacle i's level set (owned by o), or NULL when i is out of range. */
+const bs_levelset *bs_obstacles_levelset(const bs_obstacles *o, int i);
 
 /* The penalty terms to hand to the integrator (owned by o); returns their
  * number, *terms pointing at them (valid until the next add). */

@@ -131,6 +131,10 @@ int bs_obstacles_create(const bs_fem *fem, const bs_step_data *step, const uint8
 
 int bs_obstacles_count(const bs_obstacles *o) { return o ? o->n : 0; }
 
+const bs_levelset *bs_obstacles_levelset(const bs_obstacles *o, int i) {
+  return o && i >= 0 && i < o->n ? o->obs[i].ls : NULL;
+}
+
 int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, double stiffness, double friction,
                      bs_error *err) {
   int idx = o->n, rc = 0;

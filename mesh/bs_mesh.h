@@ -198,19 +198,83 @@ typedef struct bs_mesh_quality {
 /* Quality of the mesh at positions x (NULL: rest positions). */
 void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality *q);
 
-/* ---- output ---------------------------------------------------------- */
+/* ---- output ----------------------------------------------------------
+ *
+ * VTK XML files for ParaView. Every array goes into one
+ * <AppendedData encoding="raw"> block after a '_' marker, header_type
+ * "UInt64", in the machine's byte order (stated in byte_order). Uncompressed
+ * (compress = 0) each array is a UInt64 byte count and the raw values;
+ * compressed (compress = 1) the file says compressor="vtkZLibDataCompressor"
+ * and each array is VTK's zlib block layout: UInt64 words [n_blocks,
+ * block_size (32768), size of a partial last block (0: full), the n_blocks
+ * compressed sizes], then the zlib streams of the blocks (VTK's default
+ * level 5). ParaView, VTK and meshio read both. Files are written whole or
+ * removed: a failed write leaves no partial file behind. */
 
-/* Fields written with a VTU file; any pointer may be NULL. */
+/* A caller-given data array: ncomp values per point (or per cell), tuple
+ * after tuple. Ids and flags go as Int32 / UInt8. */
+typedef enum { BS_VTU_FLOAT64 = 0, BS_VTU_INT32, BS_VTU_UINT8 } bs_vtu_type;
+
+typedef struct bs_vtu_data {
+  const char *name;    /* the DataArray's Name (escaped as needed)        */
+  bs_vtu_type type;
+  int ncomp;           /* >= 1 (ParaView shows 9 as a 3x3 tensor)         */
+  const void *data;    /* ncomp * n_points (or n_cells) values             */
+} bs_vtu_data;
+
+/* What a tet-mesh VTU holds besides Points and Cells; any pointer may be
+ * NULL (and the counts 0). */
 typedef struct bs_vtu_fields {
   const double *x;             /* current positions (NULL: rest)          */
   const double *velocity;      /* 3 per vertex                            */
   const double *cell_detF;     /* per tet; computed from x when NULL     */
+  int custom_cells;            /* 1: none of the cell data below but cell_data */
+  int n_point_data;            /* more point data, after the above        */
+  const bs_vtu_data *point_data;
+  int n_cell_data;             /* more cell data, after the above         */
+  const bs_vtu_data *cell_data;
+  int compress;                /* 1: zlib (see above)                     */
 } bs_vtu_fields;
 
-/* VTU (XML UnstructuredGrid, binary appended raw data): points at f->x,
- * point data "displacement" (x - rest) and "velocity", cell data
- * "material", "detF", "inverted". */
+/* VTU (XML UnstructuredGrid of VTK_TETRA cells): points at f->x; point data
+ * "displacement" (x - rest: always written, it gives back the rest shape),
+ * "velocity" (when given), then f->point_data; cell data "material" (Int32,
+ * the mesh's material tags), "detF" (given, or the signed current over rest
+ * volume) and "inverted" (UInt8, detF <= 0 or NaN) unless f->custom_cells,
+ * then f->cell_data. f may be NULL (rest positions, nothing else). An array
+ * with no name, ncomp < 1, no data or an unknown type is BS_EINPUT naming it. */
 int bs_mesh_write_vtu(const bs_mesh *m, const bs_vtu_fields *f, const char *path, bs_error *err);
+
+/* A triangle surface (VTK_TRIANGLE cells), e.g. an obstacle's. */
+typedef struct bs_vtu_surface {
+  int32_t n_points;
+  const double *x;             /* 3 per point                              */
+  int32_t n_tris;
+  const int32_t *tris;         /* 3 per triangle, 0-based                  */
+  int n_point_data;
+  const bs_vtu_data *point_data;
+  int n_cell_data;
+  const bs_vtu_data *cell_data;
+  int compress;
+} bs_vtu_surface;
+
+/* Writes s as a VTU; a triangle index out of range is BS_EINPUT naming it. */
+int bs_surface_write_vtu(const bs_vtu_surface *s, const char *path, bs_error *err);
+
+/* A scalar field on a regular grid: VTK ImageData (.vti), point data `name`
+ * (Float64, raw appended). Nodes origin + direction (h (i, j, k)), i fastest:
+ * values[i + n[0] (j + n[1] k)]; direction (row-major 3x3, columns the grid
+ * axes in world coordinates) NULL for the identity. */
+typedef struct bs_vti_grid {
+  int32_t n[3];                /* nodes per axis, >= 1                    */
+  double origin[3], h;         /* m; h > 0                                */
+  const double *direction;     /* 9 or NULL                               */
+  const char *name;            /* e.g. "phi"                              */
+  const double *values;
+} bs_vti_grid;
+
+/* Writes g to path (.vti). Bad sizes, h or a missing array: BS_EINPUT. */
+int bs_vti_write(const bs_vti_grid *g, const char *path, bs_error *err);
 
 /* PVD collection: n entries (time, file relative to the PVD's folder). */
 int bs_pvd_write(const char *path, int n, const double *times, const char *const *files, bs_error *err);

@@ -1,19 +1,13 @@
-/* vtu.c — ParaView output: VTK XML UnstructuredGrid (.vtu) and collections
- * (.pvd).
+/* vtu.c — ParaView output: VTK XML UnstructuredGrid files (.vtu) of tet
+ * meshes and of triangle surfaces, and collections (.pvd).
  *
- * The .vtu file keeps all arrays in one <AppendedData encoding="raw"> block
- * after a '_' marker. With header_type="UInt64" each array there is an 8-byte
- * byte count followed by the raw values in the machine's byte order (stated
- * in byte_order); a DataArray's offset attribute is the position of its
- * byte count relative to the first byte after '_'. Every array is written
- * with a single fwrite (converted through one scratch buffer when its type
- * differs from the mesh's), so writing runs at disk speed.
- *
- * Arrays: Points (Float64 x 3, current positions), connectivity and offsets
- * (Int64), types (UInt8, 10 = VTK_TETRA); PointData "displacement" (x - rest)
- * and "velocity" (when given); CellData "material" (Int32), "detF" (Float64:
- * given, or the signed current volume over the rest volume) and "inverted"
- * (UInt8: detF <= 0). */
+ * A .vtu keeps all arrays in one <AppendedData encoding="raw"> block after
+ * a '_' marker, each raw or zlib-compressed (vtk_xml.h: the layouts, and
+ * bs_mesh.h). Order, in the XML and in the block: PointData, CellData,
+ * Points (Float64 x 3), connectivity and offsets (Int64), types (UInt8: 10
+ * VTK_TETRA, 5 VTK_TRIANGLE). Arrays the caller holds are written from its
+ * memory; converted ones (displacement, connectivity, ...) from one buffer
+ * filled first, so every array is one fwrite. */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -22,15 +16,9 @@
 #include <string.h>
 
 #include "bs_mesh.h"
+#include "vtk_xml.h"
 
-enum { VTK_TETRA = 10 };
-
-static const char *byte_order(void) {
-  const uint16_t one = 1;
-  unsigned char c;
-  memcpy(&c, &one, 1);
-  return c ? "LittleEndian" : "BigEndian";
-}
+enum { VTK_TRIANGLE = 5, VTK_TETRA = 10 };
 
 /* 6 x signed volume of tet (a, b, c, d) at positions x. */
 static double tet_vol6(const double *x, const int32_t *t) {
@@ -45,18 +33,176 @@ static double tet_vol6(const double *x, const int32_t *t) {
   return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
 }
 
-typedef struct appended {
-  const char *name, *type;
-  int ncomp;
-  uint64_t bytes;
-  uint64_t offset;
-} appended;
+/* ---- an unstructured grid to write ---------------------------------------- */
 
-/* Writes one appended block: the byte count, then the data in one fwrite. */
-static int write_block(FILE *fp, const void *data, uint64_t bytes) {
-  if (fwrite(&bytes, sizeof bytes, 1, fp) != 1) return -1;
-  if (bytes && fwrite(data, 1, (size_t)bytes, fp) != (size_t)bytes) return -1;
+enum { SEC_POINT_DATA, SEC_CELL_DATA, SEC_POINTS, SEC_CELLS };
+
+typedef struct out_array {
+  const char *name, *type;
+  int ncomp, section;
+  bs_vtk_blob blob;
+  uint64_t offset;
+} out_array;
+
+typedef struct ugrid {
+  int64_t n_points, n_cells;
+  int compress;
+  int n, cap;
+  out_array *a;       /* in writing order: sections ascending             */
+  const char *vectors, *scalars; /* PointData Vectors / CellData Scalars   */
+  unsigned char *buf; /* the converted topology (connectivity, offsets, types) */
+  unsigned char *data;/* the converted data arrays                          */
+} ugrid;
+
+static const char *type_name(bs_vtu_type t) {
+  switch (t) {
+    case BS_VTU_FLOAT64: return "Float64";
+    case BS_VTU_INT32: return "Int32";
+    case BS_VTU_UINT8: return "UInt8";
+  }
+  return NULL;
+}
+
+static size_t type_size(bs_vtu_type t) { return t == BS_VTU_FLOAT64 ? 8 : t == BS_VTU_INT32 ? 4 : 1; }
+
+/* Appends an array (encoded at once when the grid is compressed). */
+static int ug_add(ugrid *g, int section, const char *name, const char *type, int ncomp, const void *data,
+                  uint64_t bytes, bs_error *err) {
+  if (g->n == g->cap) {
+    int cap = g->cap ? 2 * g->cap : 16;
+    out_array *a = realloc(g->a, sizeof *a * (size_t)cap);
+    if (!a) return bs_error_set(err, BS_ENOMEM, "out of memory");
+    g->a = a;
+    g->cap = cap;
+  }
+  out_array *o = &g->a[g->n];
+  *o = (out_array){.name = name, .type = type, .ncomp = ncomp, .section = section};
+  int st = bs_vtk_blob_encode_(&o->blob, data, bytes, g->compress, name, err);
+  if (!st) g->n++;
+  return st;
+}
+
+/* Appends the caller's arrays of one section (n_tuples each), checked. */
+static int ug_add_given(ugrid *g, int section, int n, const bs_vtu_data *d, int64_t n_tuples, bs_error *err) {
+  const char *what = section == SEC_POINT_DATA ? "point" : "cell";
+  if (n > 0 && !d) return bs_error_set(err, BS_EINPUT, "%d %s data arrays but no array list", n, what);
+  for (int i = 0; i < n; i++) {
+    const char *tn = type_name(d[i].type);
+    if (!d[i].name || !d[i].name[0]) return bs_error_set(err, BS_EINPUT, "%s data array %d has no name", what, i);
+    if (!tn || d[i].ncomp < 1 || (!d[i].data && n_tuples > 0))
+      return bs_error_set(err, BS_EINPUT, "%s data '%s': %s", what, d[i].name,
+                          !tn ? "unknown type" : d[i].ncomp < 1 ? "NumberOfComponents < 1" : "no data");
+    uint64_t bytes = (uint64_t)n_tuples * (uint64_t)d[i].ncomp * type_size(d[i].type);
+    int st = ug_add(g, section, d[i].name, tn, d[i].ncomp, d[i].data, bytes, err);
+    if (st) return st;
+  }
   return 0;
+}
+
+/* Points, then connectivity, offsets and types of n_cells cells of k
+ * vertices each (cells: k int32 per cell) into buf (32 k + 9 bytes a cell). */
+static int ug_add_topology(ugrid *g, const double *x, int k, const int32_t *cells, int vtk_type, unsigned char *buf,
+                           bs_error *err) {
+  const int64_t nc = g->n_cells;
+  int64_t *conn = (int64_t *)buf, *offs = conn + k * nc;
+  unsigned char *types = (unsigned char *)(offs + nc);
+  for (int64_t i = 0; i < k * nc; i++) conn[i] = cells[i];
+  for (int64_t c = 0; c < nc; c++) offs[c] = k * (c + 1);
+  memset(types, vtk_type, (size_t)nc);
+  int st = ug_add(g, SEC_POINTS, "Points", "Float64", 3, x, 24u * (uint64_t)g->n_points, err);
+  if (!st) st = ug_add(g, SEC_CELLS, "connectivity", "Int64", 1, conn, 8u * (uint64_t)(k * nc), err);
+  if (!st) st = ug_add(g, SEC_CELLS, "offsets", "Int64", 1, offs, 8u * (uint64_t)nc, err);
+  if (!st) st = ug_add(g, SEC_CELLS, "types", "UInt8", 1, types, (uint64_t)nc, err);
+  return st;
+}
+
+static void ug_free(ugrid *g) {
+  for (int i = 0; i < g->n; i++) bs_vtk_blob_free_(&g->a[i].blob);
+  free(g->a);
+  free(g->buf);
+  free(g->data);
+  memset(g, 0, sizeof *g);
+}
+
+/* The XML of one DataArray. */
+static int put_array(FILE *fp, const out_array *a) {
+  int bad = fprintf(fp, "        <DataArray type=\"%s\" Name=\"", a->type) < 0;
+  bad |= bs_vtk_put_escaped_(fp, a->name) < 0;
+  if (a->ncomp > 1) bad |= fprintf(fp, "\" NumberOfComponents=\"%d", a->ncomp) < 0;
+  bad |= fprintf(fp, "\" format=\"appended\" offset=\"%llu\"/>\n", (unsigned long long)a->offset) < 0;
+  return bad;
+}
+
+/* The XML header and the '_' marker (after bs_vtk_start_appended_'s
+ * padding), with the sections' tags. */
+static int put_header(FILE *fp, const ugrid *g) {
+  static const char *const open[] = {"PointData", "CellData", "Points", "Cells"};
+  int bad = fprintf(fp,
+                    "<?xml version=\"1.0\"?>\n"
+                    "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"%s\" header_type=\"UInt64\"%s>\n"
+                    "  <UnstructuredGrid>\n"
+                    "    <Piece NumberOfPoints=\"%lld\" NumberOfCells=\"%lld\">\n",
+                    bs_vtk_byte_order_(), g->compress ? " compressor=\"vtkZLibDataCompressor\"" : "",
+                    (long long)g->n_points, (long long)g->n_cells) < 0;
+  int i = 0;
+  for (int sec = SEC_POINT_DATA; sec <= SEC_CELLS; sec++) {
+    const char *attr = sec == SEC_POINT_DATA ? g->vectors : sec == SEC_CELL_DATA ? g->scalars : NULL;
+    bad |= fprintf(fp, "      <%s", open[sec]) < 0;
+    if (attr) bad |= fprintf(fp, " %s=\"%s\"", sec == SEC_POINT_DATA ? "Vectors" : "Scalars", attr) < 0;
+    bad |= fputs(">\n", fp) < 0;
+    for (; i < g->n && g->a[i].section == sec; i++) bad |= put_array(fp, &g->a[i]);
+    bad |= fprintf(fp, "      </%s>\n", open[sec]) < 0;
+  }
+  bad |= fputs("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n", fp) < 0;
+  bad |= bs_vtk_start_appended_(fp) < 0;
+  return bad;
+}
+
+/* Offsets, header, blocks, trailer. `what` names the writer in messages. */
+static int ug_write(ugrid *g, const char *what, const char *path, bs_error *err) {
+  uint64_t off = 0;
+  for (int i = 0; i < g->n; i++) {
+    g->a[i].offset = off;
+    off += g->a[i].blob.encoded;
+  }
+  FILE *fp = fopen(path, "wb");
+  if (!fp) {
+    int e = errno;
+    return bs_error_set(err, BS_EIO, "write %s: cannot open '%s' for writing: %s", what, path, strerror(e));
+  }
+  int bad = put_header(fp, g);
+  for (int i = 0; i < g->n && !bad; i++) bad |= bs_vtk_blob_write_(fp, &g->a[i].blob);
+  bad |= fputs("\n  </AppendedData>\n</VTKFile>\n", fp) < 0;
+  return bs_vtk_close_(fp, bad, what, path, err);
+}
+
+/* ---- tet meshes ------------------------------------------------------------ */
+
+/* Fills the converted arrays of a tet mesh into g->data: displacement, then
+ * (unless custom_cells) detF, material and inverted. */
+static int tet_builtins(const bs_mesh *m, const bs_vtu_fields *f, const double *x, ugrid *g, bs_error *err) {
+  const int32_t nv = m->n_vertices, nt = m->n_tets;
+  const size_t cells = f->custom_cells ? 0 : 13u * (size_t)nt;
+  unsigned char *b = g->data = malloc(24u * (size_t)nv + cells + 8);
+  if (!b) return bs_error_set(err, BS_ENOMEM, "out of memory (%d vertices, %d tets)", nv, nt);
+  double *disp = (double *)b, *detF = disp + 3 * (size_t)nv;
+  for (size_t i = 0; i < 3 * (size_t)nv; i++) disp[i] = x[i] - m->x[i];
+  int st = ug_add(g, SEC_POINT_DATA, "displacement", "Float64", 3, disp, 24u * (uint64_t)nv, err);
+  if (!st && f->velocity) st = ug_add(g, SEC_POINT_DATA, "velocity", "Float64", 3, f->velocity, 24u * (uint64_t)nv, err);
+  if (!st) st = ug_add_given(g, SEC_POINT_DATA, f->n_point_data, f->point_data, nv, err);
+  if (st || f->custom_cells) return st;
+  int32_t *mat = (int32_t *)(detF + nt);
+  uint8_t *inv = (uint8_t *)(mat + nt);
+  for (int32_t t = 0; t < nt; t++) {
+    const int32_t *tv = m->tets + 4 * (size_t)t;
+    detF[t] = f->cell_detF ? f->cell_detF[t] : x == m->x ? 1.0 : tet_vol6(x, tv) / tet_vol6(m->x, tv);
+    mat[t] = m->material ? m->material[t] : 0;
+    inv[t] = !(detF[t] > 0.0); /* a NaN detF counts as inverted too */
+  }
+  st = ug_add(g, SEC_CELL_DATA, "material", "Int32", 1, mat, 4u * (uint64_t)nt, err);
+  if (!st) st = ug_add(g, SEC_CELL_DATA, "detF", "Float64", 1, detF, 8u * (uint64_t)nt, err);
+  if (!st) st = ug_add(g, SEC_CELL_DATA, "inverted", "UInt8", 1, inv, (uint64_t)nt, err);
+  return st;
 }
 
 int bs_mesh_write_vtu(const bs_mesh *m, const bs_vtu_fields *f, const char *path, bs_error *err) {
@@ -65,142 +211,43 @@ int bs_mesh_write_vtu(const bs_mesh *m, const bs_vtu_fields *f, const char *path
     return bs_error_set(err, BS_EINPUT, "write vtu '%s': mesh is NULL or empty", path);
   const bs_vtu_fields none = {0};
   if (!f) f = &none;
-  const int32_t nv = m->n_vertices, nt = m->n_tets;
   const double *x = f->x ? f->x : m->x;
-  const int has_vel = f->velocity != NULL;
-
-  /* array layout in the appended block, in writing order */
-  enum { A_DISP, A_VEL, A_MAT, A_DETF, A_INV, A_PTS, A_CONN, A_OFFS, A_TYPES, A_N };
-  appended a[A_N] = {
-      [A_DISP] = {"displacement", "Float64", 3, 24u * (uint64_t)nv, 0},
-      [A_VEL] = {"velocity", "Float64", 3, has_vel ? 24u * (uint64_t)nv : 0, 0},
-      [A_MAT] = {"material", "Int32", 1, 4u * (uint64_t)nt, 0},
-      [A_DETF] = {"detF", "Float64", 1, 8u * (uint64_t)nt, 0},
-      [A_INV] = {"inverted", "UInt8", 1, (uint64_t)nt, 0},
-      [A_PTS] = {"Points", "Float64", 3, 24u * (uint64_t)nv, 0},
-      [A_CONN] = {"connectivity", "Int64", 1, 32u * (uint64_t)nt, 0},
-      [A_OFFS] = {"offsets", "Int64", 1, 8u * (uint64_t)nt, 0},
-      [A_TYPES] = {"types", "UInt8", 1, (uint64_t)nt, 0},
-  };
-  uint64_t off = 0;
-  for (int i = 0; i < A_N; i++) {
-    if (i == A_VEL && !has_vel) continue;
-    a[i].offset = off;
-    off += 8 + a[i].bytes;
-  }
-
-  /* one scratch buffer, large enough for the biggest converted array */
-  size_t scratch = 24u * (size_t)nv;
-  if (32u * (size_t)nt > scratch) scratch = 32u * (size_t)nt;
-  unsigned char *buf = bs_calloc(scratch + 8, 1, "write vtu: scratch buffer", err);
-  if (!buf) {
-    bs_error_prefix(err, "write vtu '%s'", path);
-    return BS_ENOMEM;
-  }
-
-  FILE *fp = fopen(path, "wb");
-  if (!fp) {
-    int e = errno;
-    free(buf);
-    return bs_error_set(err, BS_EIO, "write vtu: cannot open '%s' for writing: %s", path, strerror(e));
-  }
-
-  int bad = 0;
-  bad |= fprintf(fp,
-                 "<?xml version=\"1.0\"?>\n"
-                 "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"%s\" header_type=\"UInt64\">\n"
-                 "  <UnstructuredGrid>\n"
-                 "    <Piece NumberOfPoints=\"%d\" NumberOfCells=\"%d\">\n"
-                 "      <PointData Vectors=\"displacement\">\n",
-                 byte_order(), nv, nt) < 0;
-  for (int i = 0; i < A_N; i++) {
-    if (i == A_VEL && !has_vel) continue;
-    if (i == A_MAT) bad |= fputs("      </PointData>\n      <CellData Scalars=\"material\">\n", fp) < 0;
-    if (i == A_PTS) bad |= fputs("      </CellData>\n      <Points>\n", fp) < 0;
-    if (i == A_CONN) bad |= fputs("      </Points>\n      <Cells>\n", fp) < 0;
-    if (a[i].ncomp > 1)
-      bad |= fprintf(fp,
-                     "        <DataArray type=\"%s\" Name=\"%s\" NumberOfComponents=\"%d\" format=\"appended\" "
-                     "offset=\"%llu\"/>\n",
-                     a[i].type, a[i].name, a[i].ncomp, (unsigned long long)a[i].offset) < 0;
-    else
-      bad |= fprintf(fp, "        <DataArray type=\"%s\" Name=\"%s\" format=\"appended\" offset=\"%llu\"/>\n", a[i].type,
-                     a[i].name, (unsigned long long)a[i].offset) < 0;
-  }
-  bad |= fputs("      </Cells>\n"
-               "    </Piece>\n"
-               "  </UnstructuredGrid>\n"
-               "  <AppendedData encoding=\"raw\">\n"
-               "   _",
-               fp) < 0;
-
-  /* displacement */
-  double *d = (double *)buf;
-  for (size_t i = 0; i < 3 * (size_t)nv; i++) d[i] = x[i] - m->x[i];
-  bad |= write_block(fp, d, a[A_DISP].bytes);
-  if (has_vel) bad |= write_block(fp, f->velocity, a[A_VEL].bytes);
-  /* material */
-  if (m->material) {
-    bad |= write_block(fp, m->material, a[A_MAT].bytes);
-  } else {
-    memset(buf, 0, (size_t)a[A_MAT].bytes);
-    bad |= write_block(fp, buf, a[A_MAT].bytes);
-  }
-  /* detF: given, or current over rest volume */
-  if (f->cell_detF) {
-    memcpy(d, f->cell_detF, (size_t)nt * sizeof(double));
-  } else {
-    for (int32_t t = 0; t < nt; t++) {
-      const int32_t *tv = m->tets + 4 * (size_t)t;
-      d[t] = x == m->x ? 1.0 : tet_vol6(x, tv) / tet_vol6(m->x, tv);
-    }
-  }
-  bad |= write_block(fp, d, a[A_DETF].bytes);
-  /* inverted (detF <= 0; a NaN detF counts as inverted too) */
-  for (int32_t t = 0; t < nt; t++) buf[8u * (size_t)nt + t] = !(d[t] > 0.0);
-  bad |= write_block(fp, buf + 8u * (size_t)nt, a[A_INV].bytes);
-  /* points */
-  bad |= write_block(fp, x, a[A_PTS].bytes);
-  /* connectivity, offsets, types */
-  int64_t *q = (int64_t *)buf;
-  for (size_t i = 0; i < 4 * (size_t)nt; i++) q[i] = m->tets[i];
-  bad |= write_block(fp, q, a[A_CONN].bytes);
-  for (int32_t t = 0; t < nt; t++) q[t] = 4 * (int64_t)(t + 1);
-  bad |= write_block(fp, q, a[A_OFFS].bytes);
-  memset(buf, VTK_TETRA, (size_t)nt);
-  bad |= write_block(fp, buf, a[A_TYPES].bytes);
-  bad |= fputs("\n  </AppendedData>\n</VTKFile>\n", fp) < 0;
-
-  int e = errno;
-  if (ferror(fp)) bad = 1;
-  if (fclose(fp) != 0) {
-    e = errno;
-    bad = 1;
-  }
-  free(buf);
-  if (bad) {
-    remove(path);
-    return bs_error_set(err, BS_EIO, "write vtu: writing '%s' failed: %s", path, strerror(e));
-  }
-  return BS_OK;
+  ugrid g = {.n_points = m->n_vertices, .n_cells = m->n_tets, .compress = f->compress, .vectors = "displacement"};
+  if (!f->custom_cells) g.scalars = "material";
+  g.buf = malloc(41u * (size_t)m->n_tets + 8);
+  int st = g.buf ? 0 : bs_error_set(err, BS_ENOMEM, "out of memory (%d tets)", m->n_tets);
+  if (!st) st = tet_builtins(m, f, x, &g, err);
+  if (!st) st = ug_add_given(&g, SEC_CELL_DATA, f->n_cell_data, f->cell_data, m->n_tets, err);
+  if (!st) st = ug_add_topology(&g, x, 4, m->tets, VTK_TETRA, g.buf, err);
+  if (!st) st = ug_write(&g, "vtu", path, err);
+  else bs_error_prefix(err, "write vtu '%s'", path);
+  ug_free(&g);
+  return st;
 }
 
-/* XML attribute value with &, <, >, " and ' escaped. */
-static int put_escaped(FILE *fp, const char *s) {
-  for (; *s; s++) {
-    int r;
-    switch (*s) {
-      case '&': r = fputs("&amp;", fp); break;
-      case '<': r = fputs("&lt;", fp); break;
-      case '>': r = fputs("&gt;", fp); break;
-      case '"': r = fputs("&quot;", fp); break;
-      case '\'': r = fputs("&apos;", fp); break;
-      default: r = fputc(*s, fp); break;
-    }
-    if (r < 0) return -1;
-  }
-  return 0;
+/* ---- triangle surfaces ----------------------------------------------------- */
+
+int bs_surface_write_vtu(const bs_vtu_surface *s, const char *path, bs_error *err) {
+  if (!path) return bs_error_set(err, BS_EINPUT, "write surface vtu: path is NULL");
+  if (!s || s->n_points < 0 || s->n_tris < 0 || (s->n_points > 0 && !s->x) || (s->n_tris > 0 && !s->tris))
+    return bs_error_set(err, BS_EINPUT, "write surface vtu '%s': no points or triangles", path);
+  for (int64_t i = 0; i < 3 * (int64_t)s->n_tris; i++)
+    if (s->tris[i] < 0 || s->tris[i] >= s->n_points)
+      return bs_error_set(err, BS_EINPUT, "write surface vtu '%s': triangle %lld uses point %d of %d", path,
+                          (long long)(i / 3), s->tris[i], s->n_points);
+  ugrid g = {.n_points = s->n_points, .n_cells = s->n_tris, .compress = s->compress};
+  g.buf = malloc(33u * (size_t)s->n_tris + 8);
+  int st = g.buf ? 0 : bs_error_set(err, BS_ENOMEM, "out of memory (%d triangles)", s->n_tris);
+  if (!st) st = ug_add_given(&g, SEC_POINT_DATA, s->n_point_data, s->point_data, s->n_points, err);
+  if (!st) st = ug_add_given(&g, SEC_CELL_DATA, s->n_cell_data, s->cell_data, s->n_tris, err);
+  if (!st) st = ug_add_topology(&g, s->x, 3, s->tris, VTK_TRIANGLE, g.buf, err);
+  if (!st) st = ug_write(&g, "surface vtu", path, err);
+  else bs_error_prefix(err, "write surface vtu '%s'", path);
+  ug_free(&g);
+  return st;
 }
+
+/* ---- collections ----------------------------------------------------------- */
 
 int bs_pvd_write(const char *path, int n, const double *times, const char *const *files, bs_error *err) {
   if (!path) return bs_error_set(err, BS_EINPUT, "write pvd: path is NULL");
@@ -222,22 +269,12 @@ int bs_pvd_write(const char *path, int n, const double *times, const char *const
                  "<?xml version=\"1.0\"?>\n"
                  "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"%s\">\n"
                  "  <Collection>\n",
-                 byte_order()) < 0;
+                 bs_vtk_byte_order_()) < 0;
   for (int i = 0; i < n && !bad; i++) {
     bad |= fprintf(fp, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", times[i]) < 0;
-    bad |= put_escaped(fp, files[i]) < 0;
+    bad |= bs_vtk_put_escaped_(fp, files[i]) < 0;
     bad |= fputs("\"/>\n", fp) < 0;
   }
   bad |= fputs("  </Collection>\n</VTKFile>\n", fp) < 0;
-  int e = errno;
-  if (ferror(fp)) bad = 1;
-  if (fclose(fp) != 0) {
-    e = errno;
-    bad = 1;
-  }
-  if (bad) {
-    remove(path);
-    return bs_error_set(err, BS_EIO, "write pvd: writing '%s' failed: %s", path, strerror(e));
-  }
-  return BS_OK;
+  return bs_vtk_close_(fp, bad, "pvd", path, err);
 }

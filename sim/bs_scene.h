@@ -154,6 +154,8 @@ typedef struct bs_scene {
   int vtu_every;           /* frames between VTU files (0: none)               */
   int stats_csv;
   int states;              /* write state.bin (x, v every frame)                */
+  uint32_t out_fields;     /* output.fields: a set of bs_field bits (bs_fields.h) */
+  int out_compress;        /* output.compress: zlib-compressed VTU frames       */
 } bs_scene;
 
 /* Loads and validates a scene file, applying the n_sets overrides

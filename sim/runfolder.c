@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_fields.h"
+#include "bs_obstacle_output.h"
 #include "bs_runfolder.h"
 
 struct bs_runfolder {
@@ -13,6 +15,8 @@ struct bs_runfolder {
   int n_vtu, cap_vtu;
   char **vtu_names;
   double *vtu_times;
+  bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
+  bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
 };
 
 static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
@@ -61,6 +65,8 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
   if (!st) st = open_files(rf, s, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(dir, s, &rf->obstacles, err);
   if (st) {
     bs_runfolder_destroy(&rf);
     return st;
@@ -120,8 +126,8 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   char path[BS_MAX_PATH + 64], name[64];
   snprintf(name, sizeof name, "frame_%05d.vtu", frame);
   snprintf(path, sizeof path, "%s/%s", rf->dir, name);
-  bs_vtu_fields f = {.x = s->x, .velocity = s->v, .cell_detF = NULL};
-  int st = bs_mesh_write_vtu(s->mesh, &f, path, err);
+  int st = bs_fields_write_vtu(rf->fields, s, path, err);
+  if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
   if (st) return st;
   if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
   rf->vtu_times[rf->n_vtu++] = s->time;
@@ -164,6 +170,8 @@ void bs_runfolder_destroy(bs_runfolder **prf) {
   if (rf->frames) fclose(rf->frames);
   if (rf->stats) fclose(rf->stats);
   if (rf->state) fclose(rf->state);
+  bs_fields_destroy(&rf->fields);
+  bs_obstacle_output_destroy(&rf->obstacles);
   for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
   free(rf->vtu_names);
   free(rf->vtu_times);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_fields.h"
 #include "bs_scene.h"
 #include "scene_internal.h"
 
@@ -41,6 +42,8 @@ void bs_scene_defaults_(bs_scene *s) {
   s->drag = 0;
   s->vtu_every = 1;
   s->stats_csv = 1;
+  s->out_fields = BS_FIELDS_DEFAULT;
+  s->out_compress = 0; /* raw: faster to write (README, Output fields) */
 }
 
 void bs_scene_body_defaults_(bs_scene_body *b) {

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fields_json.h"
 #include "scene_schema.h"
 
 #define CHOICES(...) ((const char *const[]){__VA_ARGS__, NULL})
@@ -155,6 +156,11 @@ const bs_schema_key bs_schema_keys_[] = {
     {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", .doc = "frames between VTU files (0: none)"},
     {"output", "stats", BOOL, .def = "true", .doc = "write stats.csv"},
     {"output", "states", BOOL, .def = "false", .doc = "write state.bin (time, x, v of every frame)"},
+    {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs_field_names_,
+     .def = "[\"displacement\", \"velocity\", \"scripted\", \"body\", \"material\", \"detF\", \"inverted\", "
+            "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\"]",
+     .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
+    {"output", "compress", BOOL, .def = "false", .doc = "zlib-compressed VTU frames and obstacle surfaces"},
 };
 const int bs_schema_n_keys_ = (int)(sizeof bs_schema_keys_ / sizeof bs_schema_keys_[0]);
 

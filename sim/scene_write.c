@@ -8,6 +8,7 @@
 
 #include <cJSON.h>
 
+#include "bs_fields.h"
 #include "bs_scene.h"
 #include "json_print.h"
 #include "scene_schema.h"
@@ -196,6 +197,12 @@ static void write_tail(writer *w, cJSON *root, const bs_scene *s) {
     num(w, out, "vtu_every", s->vtu_every);
     boolean(w, out, "stats", s->stats_csv);
     boolean(w, out, "states", s->states);
+    const char *names[BS_FIELD_COUNT];
+    int n = 0;
+    for (int f = 0; f < BS_FIELD_COUNT; f++)
+      if (s->out_fields & BS_FIELD_BIT(f)) names[n++] = bs_field_name((bs_field)f);
+    put(w, out, "fields", cJSON_CreateStringArray(names, n));
+    boolean(w, out, "compress", s->out_compress);
   }
 }
 

@@ -1,0 +1,148 @@
+/* obstacle_output.c — the obstacles of a run written each frame (see
+ * bs_obstacle_output.h): analytic shapes as triangle surfaces, grids as
+ * image data, one PVD collection per obstacle. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_ls_surface.h"
+#include "bs_obstacle_output.h"
+
+typedef struct obs_out {
+  const bs_levelset *ls;
+  int grid, moving, written;
+  double *phi;       /* a complemented grid's values, negated (else NULL) */
+  int n, cap;        /* the PVD's entries                                  */
+  double *times;
+  char **files;
+} obs_out;
+
+struct bs_obstacle_output {
+  char dir[BS_MAX_PATH];
+  double lo[3], hi[3]; /* the bodies' box at t = 0: a plane's patch */
+  int compress;
+  int n;
+  obs_out *o;
+};
+
+void bs_obstacle_output_destroy(bs_obstacle_output **po) {
+  if (!po || !*po) return;
+  bs_obstacle_output *w = *po;
+  for (int k = 0; k < w->n; k++) {
+    obs_out *o = &w->o[k];
+    for (int i = 0; i < o->n; i++) free(o->files[i]);
+    free(o->files);
+    free(o->times);
+    free(o->phi);
+  }
+  free(w->o);
+  free(w);
+  *po = NULL;
+}
+
+/* A complemented grid's values, negated once (phi -> -phi). */
+static int grid_values(obs_out *o, bs_error *err) {
+  int32_t n[3];
+  const double *v = bs_levelset_grid_values(o->ls, n, NULL, NULL);
+  if (!bs_levelset_is_complement(o->ls)) return 0;
+  size_t N = (size_t)n[0] * n[1] * n[2];
+  if (!(o->phi = malloc(sizeof(double) * N))) return bs_error_set(err, BS_ENOMEM, "out of memory (a grid of %zu nodes)", N);
+  for (size_t i = 0; i < N; i++) o->phi[i] = -v[i];
+  return 0;
+}
+
+int bs_obstacle_output_create(const char *dir, const bs_sim *s, bs_obstacle_output **out, bs_error *err) {
+  *out = NULL;
+  const int n = bs_obstacles_count(s->obstacles);
+  if (n == 0) return 0;
+  bs_obstacle_output *w = calloc(1, sizeof *w);
+  if (w) w->o = calloc((size_t)n, sizeof *w->o);
+  if (!w || !w->o) {
+    free(w);
+    return bs_error_set(err, BS_ENOMEM, "out of memory");
+  }
+  snprintf(w->dir, sizeof w->dir, "%s", dir);
+  bs_bbox(s->mesh->n_vertices, s->x0, w->lo, w->hi);
+  w->compress = s->scene->out_compress;
+  w->n = n;
+  int st = 0;
+  for (int k = 0; k < n && !st; k++) {
+    obs_out *o = &w->o[k];
+    o->ls = bs_obstacles_levelset(s->obstacles, k);
+    o->grid = !bs_levelset_is_analytic(o->ls);
+    o->moving = bs_levelset_motion(o->ls) != BS_LS_STATIC;
+    if (o->grid) st = grid_values(o, err);
+  }
+  if (st) bs_obstacle_output_destroy(&w);
+  *out = w;
+  return st;
+}
+
+/* The grid at its pose at t: origin c + M (origin0 - c0), axes M. */
+static int write_grid(const obs_out *o, double t, const char *path, bs_error *err) {
+  bs_vti_grid g = {.name = "phi"};
+  double origin0[3];
+  g.values = bs_levelset_grid_values(o->ls, g.n, origin0, &g.h);
+  if (o->phi) g.values = o->phi;
+  bs_levelset_frame f;
+  bs_levelset_frame_at(o->ls, t, &f);
+  double d[3] = {origin0[0] - o->ls->c0[0], origin0[1] - o->ls->c0[1], origin0[2] - o->ls->c0[2]};
+  for (int k = 0; k < 3; k++) g.origin[k] = f.c[k] + f.M[3 * k] * d[0] + f.M[3 * k + 1] * d[1] + f.M[3 * k + 2] * d[2];
+  g.direction = f.M;
+  return bs_vti_write(&g, path, err);
+}
+
+static int write_surface(const bs_obstacle_output *w, const obs_out *o, double t, const char *path, bs_error *err) {
+  bs_ls_surface sf;
+  int st = bs_ls_surface_make(o->ls, t, w->lo, w->hi, &sf, err);
+  if (st) return st;
+  bs_vtu_surface v = {.n_points = sf.n_points, .x = sf.x, .n_tris = sf.n_tris, .tris = sf.tris, .compress = w->compress};
+  st = bs_surface_write_vtu(&v, path, err);
+  bs_ls_surface_free(&sf);
+  return st;
+}
+
+/* Appends (t, name) to obstacle k's collection and rewrites obstacles_K.pvd
+ * through a temporary file (named obstacles_K.tmp.pvd, a run file too). */
+static int write_pvd(const bs_obstacle_output *w, int k, obs_out *o, double t, const char *name, bs_error *err) {
+  if (o->n == o->cap) {
+    int cap = o->cap ? 2 * o->cap : 64;
+    char **nf = realloc(o->files, sizeof(char *) * (size_t)cap);
+    if (nf) o->files = nf;
+    double *nt = nf ? realloc(o->times, sizeof(double) * (size_t)cap) : NULL;
+    if (!nf || !nt) return bs_error_set(err, BS_ENOMEM, "out of memory");
+    o->times = nt;
+    o->cap = cap;
+  }
+  if (!(o->files[o->n] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  o->times[o->n++] = t;
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+  snprintf(p, sizeof p, "%s/obstacles_%d.pvd", w->dir, k);
+  snprintf(tmp, sizeof tmp, "%s/obstacles_%d.tmp.pvd", w->dir, k);
+  int st = bs_pvd_write(tmp, o->n, o->times, (const char *const *)o->files, err);
+  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
+  return st;
+}
+
+int bs_obstacle_output_frame(bs_obstacle_output *w, const bs_sim *s, int frame, bs_error *err) {
+  if (!w) return 0;
+  for (int k = 0; k < w->n; k++) {
+    obs_out *o = &w->o[k];
+    const char *ext = o->grid ? "vti" : "vtu";
+    char name[64], path[BS_MAX_PATH + 64];
+    if (o->moving) snprintf(name, sizeof name, "obstacle_%d_%05d.%s", k, frame, ext);
+    else snprintf(name, sizeof name, "obstacle_%d.%s", k, ext);
+    snprintf(path, sizeof path, "%s/%s", w->dir, name);
+    int st = 0;
+    if (o->moving || !o->written)
+      st = o->grid ? write_grid(o, s->time, path, err) : write_surface(w, o, s->time, path, err);
+    if (!st) st = write_pvd(w, k, o, s->time, name, err);
+    if (st) {
+      bs_error_prefix(err, "obstacle %d", k);
+      return st;
+    }
+    o->written = 1;
+  }
+  return 0;
+}
