@@ -129,6 +129,31 @@ typedef struct bs_scene_obstacle {
   double *key_t, *key_translate, *key_rotate; /* rotate in degrees (axis-angle) */
 } bs_scene_obstacle;
 
+/* A quantity of interest, written per frame to qoi.csv (bs_qoi.h). */
+typedef enum {
+  BS_QOI_DISPLACEMENT = 0, /* x - x0 (m), over a group or at the vertex nearest a point */
+  BS_QOI_POSITION,         /* x (m)                                                  */
+  BS_QOI_VELOCITY,         /* v (m/s)                                                */
+  BS_QOI_REACTION,         /* the force a scripted group's support applies (N)       */
+  BS_QOI_CONTACT,          /* the total contact force of one obstacle on the bodies (N) */
+  BS_QOI_ENERGY            /* an energy of bs_sim_measure (J)                         */
+} bs_qoi_kind;
+typedef enum { BS_QOI_MEAN = 0, BS_QOI_MAX, BS_QOI_MIN } bs_qoi_reduce;
+typedef enum { BS_QOI_KINETIC = 0, BS_QOI_ELASTIC, BS_QOI_GRAVITY, BS_QOI_TOTAL } bs_qoi_energy;
+
+typedef struct bs_scene_qoi {
+  char name[BS_MAX_NAME];  /* the qoi.csv column: unique, no comma             */
+  bs_qoi_kind kind;
+  int component;           /* 0, 1, 2 (x, y, z) or 3 (the magnitude)          */
+  bs_qoi_reduce reduce;    /* over the group's vertices (kinematic kinds)     */
+  int body;                /* the group's body                                */
+  char group[BS_MAX_NAME]; /* a physical group ("" : `at`)                    */
+  int has_at;
+  double at[3];            /* the vertex nearest this rest position (m)       */
+  int obstacle;            /* BS_QOI_CONTACT: the obstacle's index            */
+  bs_qoi_energy energy;    /* BS_QOI_ENERGY                                   */
+} bs_scene_qoi;
+
 typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
 
 typedef struct bs_scene {
@@ -148,6 +173,8 @@ typedef struct bs_scene {
   bs_scene_body *bodies;
   int n_obstacles;
   bs_scene_obstacle *obstacles;
+  int n_qoi;
+  bs_scene_qoi *qoi;       /* quantities of interest (qoi.csv)                  */
   int self_collision;      /* penalty self-collisions (section 5.3)             */
   double self_stiffness, self_friction;
   char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
@@ -198,6 +225,10 @@ int bs_scene_script_set_keyframes(bs_scene_script *sc, int n, const double *t, c
  * normal +y offset 0, radius 0.5, constraint collision, stiffness 1e6, no
  * friction). */
 int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, bs_error *err);
+
+/* Appends a quantity of interest named `name` of the given kind (component
+ * x, reduce mean, body 0, no group, obstacle 0, energy total: set them). */
+int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_qoi **out, bs_error *err);
 
 /* Sets s->dt = 1 / (fps * steps_per_frame), then bs_scene_check. */
 int bs_scene_validate(bs_scene *s, bs_error *err);

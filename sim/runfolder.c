@@ -7,6 +7,7 @@
 
 #include "bs_fields.h"
 #include "bs_obstacle_output.h"
+#include "bs_qoi.h"
 #include "bs_runfolder.h"
 
 struct bs_runfolder {
@@ -17,6 +18,9 @@ struct bs_runfolder {
   double *vtu_times;
   bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
   bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
+  FILE *qoi_csv;     /* qoi.csv, when the scene names quantities      */
+  bs_qoi *qoi;
+  double *qoi_values;
 };
 
 static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
@@ -48,6 +52,30 @@ static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
   return st;
 }
 
+/* qoi.csv and the quantities resolved on s (bs_qoi.h). */
+static int open_qoi(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+  int st = bs_qoi_create(s, &rf->qoi, err);
+  if (!st && !(rf->qoi_values = calloc((size_t)s->scene->n_qoi, sizeof(double))))
+    st = bs_error_set(err, BS_ENOMEM, "out of memory");
+  if (!st) st = open_file(rf, "qoi.csv", "w", &rf->qoi_csv, err);
+  if (st) return st;
+  fprintf(rf->qoi_csv, "frame,time");
+  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%s", s->scene->qoi[i].name);
+  fputc('\n', rf->qoi_csv);
+  return 0;
+}
+
+/* The frame's row of qoi.csv (format: bs_runfolder.h). */
+static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
+  int st = bs_qoi_eval(rf->qoi, s, rf->qoi_values, err);
+  if (st) return st;
+  fprintf(rf->qoi_csv, "%d,%.17g", frame, s->time);
+  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%.17g", rf->qoi_values[i]);
+  fputc('\n', rf->qoi_csv);
+  if (fflush(rf->qoi_csv) || ferror(rf->qoi_csv)) return bs_error_set(err, BS_EIO, "cannot write '%s/qoi.csv'", rf->dir);
+  return 0;
+}
+
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
                       bs_error *err) {
   *out = NULL;
@@ -67,6 +95,7 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   if (!st) st = open_files(rf, s, err);
   if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
   if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(dir, s, &rf->obstacles, err);
+  if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, err);
   if (st) {
     bs_runfolder_destroy(&rf);
     return st;
@@ -147,6 +176,8 @@ int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *
   if (ferror(rf->frames)) return bs_error_set(err, BS_EIO, "cannot write '%s/frames.csv'", rf->dir);
   if (rf->stats && ferror(rf->stats)) return bs_error_set(err, BS_EIO, "cannot write '%s/stats.csv'", rf->dir);
   if (rf->state && write_state(rf->state, s)) return bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
+  int st = rf->qoi_csv ? write_qoi_row(rf, s, fs->frame, err) : 0;
+  if (st) return st;
   const int every = s->scene->vtu_every;
   if (every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
     return write_vtu(rf, s, fs->frame, err);
@@ -175,6 +206,9 @@ void bs_runfolder_destroy(bs_runfolder **prf) {
   for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
   free(rf->vtu_names);
   free(rf->vtu_times);
+  if (rf->qoi_csv) fclose(rf->qoi_csv);
+  bs_qoi_destroy(&rf->qoi);
+  free(rf->qoi_values);
   free(rf);
   *prf = NULL;
 }

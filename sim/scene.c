@@ -686,6 +686,45 @@ static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
   return 0;
 }
 
+/* One quantity of interest: its keys, then the kind's own requirements. */
+static int parse_one_qoi(ctx *c, const cJSON *o, const char *where, bs_scene *s) {
+  int st, kind = 0, comp = 0, red = 0, term = BS_QOI_TOTAL;
+  char name[BS_MAX_NAME];
+  bs_scene_qoi *q;
+  if ((st = check_keys(c, o, where, "qoi[]")) || (st = get_str(c, o, where, "name", 1, name, sizeof name)) ||
+      (st = get_choice(c, o, where, "qoi[]", "quantity", &kind)) ||
+      (st = get_choice(c, o, where, "qoi[]", "component", &comp)) ||
+      (st = get_choice(c, o, where, "qoi[]", "reduce", &red)) || (st = get_choice(c, o, where, "qoi[]", "term", &term)))
+    return st;
+  for (int i = 0; i < s->n_qoi; i++)
+    if (!strcmp(s->qoi[i].name, name)) return fail(c, where, "name '%s' is used by qoi.%d too", name, i);
+  if ((st = bs_scene_add_qoi(s, name, (bs_qoi_kind)kind, &q, c->err))) return st;
+  q->component = comp;
+  q->reduce = (bs_qoi_reduce)red;
+  q->energy = (bs_qoi_energy)term;
+  q->has_at = cJSON_HasObjectItem(o, "at");
+  if ((st = get_int(c, o, where, "qoi[]", "body", &q->body)) || (st = get_int(c, o, where, "qoi[]", "obstacle", &q->obstacle)) ||
+      (st = get_str(c, o, where, "group", 0, q->group, sizeof q->group)) ||
+      (st = get_vec3(c, o, where, "at", 0, q->at)))
+    return st;
+  int kinematic = kind <= BS_QOI_VELOCITY;
+  if (kinematic && !!q->group[0] + q->has_at != 1) return fail(c, where, "give exactly one of \"group\" or \"at\"");
+  if (kind == BS_QOI_REACTION && !q->group[0]) return fail(c, where, "a reaction needs the scripted \"group\"");
+  return 0;
+}
+
+static int parse_qoi(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
+  const cJSON *arr;
+  if ((st = get_array(c, root, "", "qoi", 0, &arr)) || !arr) return st;
+  for (int i = 0; i < cJSON_GetArraySize(arr); i++) {
+    char w[64];
+    snprintf(w, sizeof w, "qoi.%d", i);
+    if ((st = parse_one_qoi(c, cJSON_GetArrayItem(arr, i), w, s))) return st;
+  }
+  return 0;
+}
+
 static int parse_output(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
@@ -721,7 +760,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
   if ((st = parse_solver(c, root, s)) || (st = get_vec3(c, root, "", "gravity", 0, s->gravity)) ||
       (st = get_num(c, root, "", "drag", 0, &s->drag)) || (st = parse_bodies(c, root, s)) ||
-      (st = parse_obstacles(c, root, s)))
+      (st = parse_obstacles(c, root, s)) || (st = parse_qoi(c, root, s)))
     return st;
   return parse_output(c, root, s);
 }

@@ -168,6 +168,22 @@ int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, 
   return 0;
 }
 
+int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_qoi **out, bs_error *err) {
+  if (!name || !name[0] || strlen(name) >= BS_MAX_NAME || strchr(name, ','))
+    return bs_error_set(err, BS_EINPUT, "%s: qoi.%d.name: must be 1 to %d characters without a comma", s->path,
+                        s->n_qoi, BS_MAX_NAME - 1);
+  if ((unsigned)kind > BS_QOI_ENERGY)
+    return bs_error_set(err, BS_EINPUT, "%s: qoi.%d.quantity: unknown kind %d", s->path, s->n_qoi, (int)kind);
+  bs_scene_qoi *q = grow(s->qoi, s->n_qoi, sizeof *q, err);
+  if (!q) return BS_ENOMEM;
+  s->qoi = q;
+  q += s->n_qoi++;
+  *q = (bs_scene_qoi){.kind = kind, .reduce = BS_QOI_MEAN, .energy = BS_QOI_TOTAL};
+  snprintf(q->name, sizeof q->name, "%s", name);
+  *out = q;
+  return 0;
+}
+
 void bs_scene_destroy(bs_scene **ps) {
   if (!ps || !*ps) return;
   bs_scene *s = *ps;
@@ -187,6 +203,7 @@ void bs_scene_destroy(bs_scene **ps) {
     free(s->obstacles[i].key_rotate);
   }
   free(s->obstacles);
+  free(s->qoi);
   free(s->description);
   free(s);
   *ps = NULL;

@@ -32,6 +32,7 @@ const bs_schema_key bs_schema_keys_[] = {
     {"", "self_collision", BS_SCHEMA_OBJECT, .sub = "self_collision",
      .doc = "penalty self-collisions (section 5.3), also between bodies; absent: none"},
     {"", "output", BS_SCHEMA_OBJECT, .sub = "output", .doc = "what is written, and where"},
+    {"", "qoi", BS_SCHEMA_ARRAY, .sub = "qoi[]", .doc = "quantities of interest, written per frame to qoi.csv"},
 
     /* ---- time ---- */
     {"time", "fps", NUM, .range = "(0, )", .def = "24", .doc = "frames per second"},
@@ -161,6 +162,20 @@ const bs_schema_key bs_schema_keys_[] = {
             "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\"]",
      .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
     {"output", "compress", BOOL, .def = "false", .doc = "zlib-compressed VTU frames and obstacle surfaces"},
+    {"qoi[]", "name", STR, 1, .doc = "the qoi.csv column (unique, no comma)"},
+    {"qoi[]", "quantity", STR, 1,
+     .choices = CHOICES("displacement", "position", "velocity", "reaction", "contact", "energy"),
+     .doc = "what is measured (README, Quantities of interest)"},
+    {"qoi[]", "component", STR, .choices = CHOICES("x", "y", "z", "magnitude"), .def = "\"x\"",
+     .doc = "the vector component (or its length)"},
+    {"qoi[]", "reduce", STR, .choices = CHOICES("mean", "max", "min"), .def = "\"mean\"",
+     .doc = "over a group's vertices (displacement, position, velocity)"},
+    {"qoi[]", "body", INT, .range = "[0, 1000000]", .def = "0", .doc = "the body of `group` or `at`"},
+    {"qoi[]", "group", STR, .doc = "a physical group of the body's mesh (reaction: a scripted group)"},
+    {"qoi[]", "at", VEC3, .doc = "the body's vertex nearest this rest position (m), instead of a group"},
+    {"qoi[]", "obstacle", INT, .range = "[0, 1000000]", .def = "0", .doc = "contact: the obstacle's index"},
+    {"qoi[]", "term", STR, .choices = CHOICES("kinetic", "elastic", "gravity", "total"), .def = "\"total\"",
+     .doc = "energy: which one (J)"},
 };
 const int bs_schema_n_keys_ = (int)(sizeof bs_schema_keys_ / sizeof bs_schema_keys_[0]);
 
@@ -178,6 +193,7 @@ const bs_schema_section bs_schema_sections_[] = {
     {"obstacles[].keyframes[]", NULL},
     {"self_collision", NULL},
     {"output", NULL},
+    {"qoi[]", NULL},
 };
 const int bs_schema_n_sections_ = (int)(sizeof bs_schema_sections_ / sizeof bs_schema_sections_[0]);
 

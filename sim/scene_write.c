@@ -183,7 +183,24 @@ static void write_obstacle(writer *w, cJSON *o, const bs_scene_obstacle *b) {
 }
 
 /* Sections after the bodies: obstacles, self_collision, output. */
+static void write_qoi(writer *w, cJSON *o, const bs_scene_qoi *q) {
+  if (!o) return;
+  str(w, o, "name", q->name);
+  str(w, o, "quantity", choice("qoi[]", "quantity", (int)q->kind));
+  str(w, o, "component", choice("qoi[]", "component", q->component));
+  str(w, o, "reduce", choice("qoi[]", "reduce", (int)q->reduce));
+  num(w, o, "body", q->body);
+  if (q->group[0]) str(w, o, "group", q->group);
+  if (q->has_at) vec3(w, o, "at", q->at);
+  num(w, o, "obstacle", q->obstacle);
+  str(w, o, "term", choice("qoi[]", "term", (int)q->energy));
+}
+
 static void write_tail(writer *w, cJSON *root, const bs_scene *s) {
+  if (s->n_qoi > 0) {
+    cJSON *qa = array(w, root, "qoi");
+    for (int i = 0; i < s->n_qoi; i++) write_qoi(w, element(w, qa), &s->qoi[i]);
+  }
   cJSON *obs = array(w, root, "obstacles");
   for (int i = 0; i < s->n_obstacles; i++) write_obstacle(w, element(w, obs), &s->obstacles[i]);
   cJSON *sc = s->self_collision ? object(w, root, "self_collision") : NULL;
