@@ -75,6 +75,8 @@ typedef enum bs_field {
   BS_FIELD_GREEN_STRAIN,
   BS_FIELD_STRETCHES,
   BS_FIELD_ENERGY_DENSITY,
+  BS_FIELD_ELASTIC_FORCE,      /* point: -dPhi_e/dx (N), bs_forces.h          */
+  BS_FIELD_CONTACT_FORCE,      /* point: obstacles and self-collision (N)     */
   BS_FIELD_COUNT
 } bs_field;
 
@@ -106,9 +108,10 @@ typedef struct bs_fields {
   double *P, *cauchy, *green;  /* 9 per tet                                   */
   double *von_mises, *psi;     /* 1 per tet                                   */
   double *stretch;             /* 3 per tet                                   */
+  double *f_elastic, *f_contact; /* 3 per vertex (N)                          */
   /* the arrays handed to the VTU writer */
   int n_point_data, n_cell_data;
-  bs_vtu_data point_data[4], cell_data[BS_FIELD_COUNT];
+  bs_vtu_data point_data[6], cell_data[BS_FIELD_COUNT];
 } bs_fields;
 
 /* Buffers for the fields of `set` on s's mesh (and the fields that do not

@@ -8,6 +8,7 @@
 
 #include "bs_element.h"
 #include "bs_fields.h"
+#include "bs_forces.h"
 #include "bs_stress.h"
 
 #define HAS(f, F) (((f)->set & BS_FIELD_BIT(F)) != 0)
@@ -32,6 +33,8 @@ void bs_fields_destroy(bs_fields **pf) {
   free(f->von_mises);
   free(f->psi);
   free(f->stretch);
+  free(f->f_elastic);
+  free(f->f_contact);
   free(f);
   *pf = NULL;
 }
@@ -60,6 +63,8 @@ static int alloc_buffers(bs_fields *f, bs_error *err) {
   f->von_mises = alloc_if(HAS(f, BS_FIELD_VON_MISES), nt, sizeof(double), &oom);
   f->psi = alloc_if(HAS(f, BS_FIELD_ENERGY_DENSITY), nt, sizeof(double), &oom);
   f->stretch = alloc_if(HAS(f, BS_FIELD_STRETCHES), 3 * nt, sizeof(double), &oom);
+  f->f_elastic = alloc_if(HAS(f, BS_FIELD_ELASTIC_FORCE), 3 * nv, sizeof(double), &oom);
+  f->f_contact = alloc_if(HAS(f, BS_FIELD_CONTACT_FORCE), 3 * nv, sizeof(double), &oom);
   return oom ? bs_error_set(err, BS_ENOMEM, "out of memory for the output fields (%d tets)", f->n_tets) : 0;
 }
 
@@ -103,6 +108,8 @@ static void list_arrays(bs_fields *f) {
   int np = 0, nc = 0;
   add_array(f->point_data, &np, "scripted", BS_VTU_UINT8, 1, f->scripted);
   add_array(f->point_data, &np, "body", BS_VTU_INT32, 1, f->point_body);
+  add_array(f->point_data, &np, "elastic_force", BS_VTU_FLOAT64, 3, f->f_elastic);
+  add_array(f->point_data, &np, "contact_force", BS_VTU_FLOAT64, 3, f->f_contact);
   add_array(f->cell_data, &nc, "body", BS_VTU_INT32, 1, HAS(f, BS_FIELD_BODY) ? f->cell_body : NULL);
   add_array(f->cell_data, &nc, "material", BS_VTU_INT32, 1, f->material);
   add_array(f->cell_data, &nc, "detF", BS_VTU_FLOAT64, 1, HAS(f, BS_FIELD_DETF) ? f->J : NULL);
@@ -166,6 +173,9 @@ void bs_fields_compute(bs_fields *f, const bs_sim *s) {
 
 int bs_fields_write_vtu(bs_fields *f, const bs_sim *s, const char *path, bs_error *err) {
   bs_fields_compute(f, s);
+  int st = f->f_elastic ? bs_sim_force_elastic(s, f->f_elastic, err) : 0;
+  if (!st && f->f_contact) st = bs_sim_force_contact(s, -1, f->f_contact, err);
+  if (st) return st;
   bs_vtu_fields v = {.x = s->x,
                      .velocity = HAS(f, BS_FIELD_VELOCITY) ? s->v : NULL,
                      .custom_cells = 1,

@@ -159,7 +159,8 @@ const bs_schema_key bs_schema_keys_[] = {
     {"output", "states", BOOL, .def = "false", .doc = "write state.bin (time, x, v of every frame)"},
     {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs_field_names_,
      .def = "[\"displacement\", \"velocity\", \"scripted\", \"body\", \"material\", \"detF\", \"inverted\", "
-            "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\"]",
+            "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\", \"elastic_force\", "
+            "\"contact_force\"]",
      .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
     {"output", "compress", BOOL, .def = "false", .doc = "zlib-compressed VTU frames and obstacle surfaces"},
     {"qoi[]", "name", STR, 1, .doc = "the qoi.csv column (unique, no comma)"},

@@ -70,13 +70,19 @@ Test(convergence, static_beam_tip_converges_under_refinement) {
   const int n_coarse = 21 * 3 * 3;
   char cmd[4096], *out = NULL, p[512];
   snprintf(cmd, sizeof cmd,
-           "%s study %s/data/scenes/beam_sag.json --out %s/study --set solver.linear=cholmod --vary refine=0,1,2,3",
+           "%s study %s/data/scenes/beam_sag.json --out %s/study --set solver.linear=cholmod --vary refine=0,1,2,3 --qoi tip_y",
            BS_BIGSTEP_EXE, BS_SOURCE_DIR, dir);
   int rc = bs_test_run(cmd, &out);
   cr_assert_eq(rc, 0, "%s", out);
   const char *s = strstr(out, "order in space (error ~ h^p, vs refine): method optimization p = ");
   cr_expect_not_null(s, "the study summary should give the order in space:\n%s", out);
-  cr_expect(strstr(out, "4 runs (0 failed)") != NULL, "every level must converge:\n%s", out);
+  cr_expect(strstr(out, "4 runs (0 failed, 0 timed out)") != NULL, "every level must converge:\n%s", out);
+  /* the scene's quantity tip_y (mean y displacement of the xmax group): GCI of refine 1-3 */
+  const char *g = strstr(out, "tip_y along refine");
+  const char *x = g ? strstr(g, "Richardson extrapolated ") : NULL;
+  double ext = x ? atof(x + strlen("Richardson extrapolated ")) : NAN;
+  cr_expect(fabs(ext + 0.014802) < 2e-6, "the extrapolated tip deflection %.7g m, expected -0.014802:\n%s", ext, out);
+  cr_expect(g && strstr(g, "observed order p = 1.5"), "the observed order of refine 1-3 is 1.56:\n%s", out);
   free(out);
   double u[4];
   for (int r = 0; r < 4; r++) {
