@@ -294,13 +294,23 @@ static int osa_distance(const char *a, const char *b) {
   return d[na][nb];
 }
 
+/* Characters a and b share at their start. */
+static int common_prefix(const char *a, const char *b) {
+  int k = 0;
+  while (a[k] && a[k] == b[k]) k++;
+  return k;
+}
+
+/* The nearest candidate; of equally near ones, the one sharing the longest
+ * start with the word ("yx" is taken for "y", not "x"). */
 const char *bs_schema_nearest_(const char *word, const char *const *cands, int n) {
-  int len = (int)strlen(word), best = 1000;
+  int len = (int)strlen(word), best = 1000, best_prefix = -1;
   const char *pick = NULL;
   for (int i = 0; n >= 0 ? i < n : cands[i] != NULL; i++) {
-    int d = osa_distance(word, cands[i]);
-    if (d < best) {
+    int d = osa_distance(word, cands[i]), pre = common_prefix(word, cands[i]);
+    if (d < best || (d == best && pre > best_prefix)) {
       best = d;
+      best_prefix = pre;
       pick = cands[i];
     }
   }

@@ -179,7 +179,8 @@ static const char *const minimal_scene =
     " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2]},\n"
     "   \"material\": {\"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000},\n"
     "   \"initial_state\": {\"type\": \"rest\"}, \"scripted\": [{\"group\": \"ymin\", \"fixed\": true}]}],\n"
-    " \"obstacles\": [{\"shape\": \"plane\", \"keyframes\": [{\"t\": 0}]}]}\n";
+    " \"obstacles\": [{\"shape\": \"plane\", \"keyframes\": [{\"t\": 0}]}],\n"
+    " \"qoi\": [{\"name\": \"q\", \"quantity\": \"energy\"}]}\n";
 
 /* Every default of the table is the value a minimal scene resolves to. */
 Test(scene_write, defaults_agree_with_the_table) {
