@@ -94,7 +94,7 @@ typedef enum {
   BS_GCI_OK = 0,        /* monotone convergence: every field set                    */
   BS_GCI_OSCILLATORY,   /* e32 / e21 < 0: no order or extrapolation is fitted        */
   BS_GCI_DIVERGENT,     /* |e21| >= |e32|: the differences do not shrink            */
-  BS_GCI_CONVERGED,     /* e21 = e32 = 0 (to 1e-14): extrapolated = f0, GCI 0        */
+  BS_GCI_CONVERGED,     /* e21, e32 within 1e-12 of the values: extrapolated f0, GCI 0 */
   BS_GCI_NO_ORDER,      /* one difference 0, or the fixed point failed               */
   BS_GCI_BAD_INPUT      /* a non-finite value, h not positive and increasing         */
 } bs_gci_status;

@@ -58,7 +58,7 @@ bs_gci_status bs_study_gci(const double h[3], const double f[3], bs_gci *g) {
   if (!(h[0] < h[1] && h[1] < h[2])) return g->status = BS_GCI_BAD_INPUT;
   const double e21 = f[1] - f[0], e32 = f[2] - f[1];
   const double scale = fabs(f[0]) + fabs(f[1]) + fabs(f[2]);
-  if (fabs(e21) <= 1e-14 * scale && fabs(e32) <= 1e-14 * scale) {
+  if (fabs(e21) <= 1e-12 * scale && fabs(e32) <= 1e-12 * scale) {
     g->p = NAN;
     g->extrapolated = f[0];
     g->e_a = g->e_ext = g->gci_fine = g->gci_coarse = 0;
