@@ -150,6 +150,12 @@ void bs_obstacles_hooks(bs_obstacles *o, bs_step_hooks *hooks);
 void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, double tol, int32_t *count,
                               double *max_depth);
 
+/* Where post_solve records friction's velocity change (3 per vertex, m/s;
+ * the caller's array, which must outlive o; NULL stops it): zeroed at the
+ * start of each post_solve, then the sum over obstacles of what friction
+ * removed from each vertex's velocity (the postprocess push is not in it). */
+void bs_obstacles_friction_output(bs_obstacles *o, double *dv);
+
 /* The number of (obstacle, vertex) pairs labeled active by the last
  * register_active (0 after a step ends). */
 int32_t bs_obstacles_active_count(const bs_obstacles *o);

@@ -48,6 +48,7 @@ struct bs_obstacles {
   double last_time;
   int have_time;
   int32_t n_active;
+  double *friction_dv; /* 3 per vertex, the caller's: friction's velocity change */
 };
 
 static const char *mode_names[] = {"constraint", "penalty", "postprocess"};
@@ -410,7 +411,8 @@ void bs_obstacles_project_hessian(const double *x, const double *g, bs_bsr *H, v
 
 /* Coulomb friction on vertex p: the tangential velocity relative to the
  * obstacle (normal n) drops by dv = mu |f| dt / m, clamped at zero. */
-static void apply_friction(const obstacle *ob, double t, const double *xp, const double n[3], double dv, double *vp) {
+static void apply_friction(const obstacle *ob, double t, const double *xp, const double n[3], double dv, double *vp,
+                           double *dvp) {
   if (!(dv > 0)) return;
   double vo[3], vr[3];
   bs_levelset_velocity(ob->ls, t, xp, vo);
@@ -421,7 +423,11 @@ static void apply_friction(const obstacle *ob, double t, const double *xp, const
   if (!(st > 0)) return;
   double s = dv >= st ? 1.0 : dv / st;
   for (int k = 0; k < 3; k++) vp[k] -= s * vt[k];
+  if (dvp)
+    for (int k = 0; k < 3; k++) dvp[k] -= s * vt[k];
 }
+
+void bs_obstacles_friction_output(bs_obstacles *o, double *dv) { o->friction_dv = dv; }
 
 int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, double *v, double dt, void *ctx,
                             bs_error *err) {
@@ -431,6 +437,7 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
   const double t = o->step->time;
   const int32_t nv = o->nv;
   const double *mass = o->fem->mass;
+  if (o->friction_dv) memset(o->friction_dv, 0, sizeof(double) * 3 * (size_t)nv);
   for (int b = 0; b < o->n; b++) {
     const obstacle *ob = &o->obs[b];
     bs_levelset_frame f;
@@ -440,16 +447,17 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
     for (int32_t p = 0; p < nv; p++) {
       if (!o->mask[p]) continue;
       double *xp = x + 3 * (size_t)p, *vp = v + 3 * (size_t)p, n[3];
+      double *dvp = o->friction_dv ? o->friction_dv + 3 * (size_t)p : NULL;
       const double m = mass[p];
       double phi = bs_levelset_eval_frame(ob->ls, &f, xp, n, NULL);
       if (ob->mode == BS_COLLIDE_CONSTRAINT) {
         /* active at x^{n+1}: collision force n (g'.n), g'.n >= 0 */
         double gn = bs_dot3(g + 3 * (size_t)p, n);
-        if (fabs(phi) <= tol && gn >= 0 && m > 0) apply_friction(ob, t, xp, n, ob->mu * gn * dt / m, vp);
+        if (fabs(phi) <= tol && gn >= 0 && m > 0) apply_friction(ob, t, xp, n, ob->mu * gn * dt / m, vp, dvp);
       } else if (ob->mode == BS_COLLIDE_PENALTY) {
         if (phi < 0 && m > 0) {
           double fmag = 3 * ob->k * phi * phi;
-          apply_friction(ob, t, xp, n, ob->mu * fmag * dt / m, vp);
+          apply_friction(ob, t, xp, n, ob->mu * fmag * dt / m, vp, dvp);
         }
       } else if (phi < 0) { /* postprocess: push out, no inward velocity, friction m d / dt^2 */
         const double d = -phi;
@@ -461,7 +469,7 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
         if (vn < 0)
           for (int k = 0; k < 3; k++) vp[k] -= vn * n[k];
         /* mu |f| dt / m with |f| = m d / dt^2 */
-        apply_friction(ob, t, xp, n, ob->mu * d / dt, vp);
+        apply_friction(ob, t, xp, n, ob->mu * d / dt, vp, dvp);
       }
     }
   }

@@ -11,6 +11,11 @@
  *                                        the position (fixed or moving), else 0
  *               body            1   -    Int32: the body's index in `bodies`
  *                                        (also written as cell data)
+ *               elastic_force   3   N    -dPhi_e/dx (bs_forces.h)
+ *               contact_force   3   N    obstacles' and self-collision's force
+ *               friction_impulse 3  N s  m dv of Coulomb friction (applied
+ *                                        after the solve) in the last step;
+ *                                        zero when the scene has no friction
  *   cell data   material        1   -    Int32: the material's index within
  *                                        its body: 0 the body's "material",
  *                                        i >= 1 its "materials" entry i - 1
@@ -77,6 +82,7 @@ typedef enum bs_field {
   BS_FIELD_ENERGY_DENSITY,
   BS_FIELD_ELASTIC_FORCE,      /* point: -dPhi_e/dx (N), bs_forces.h          */
   BS_FIELD_CONTACT_FORCE,      /* point: obstacles and self-collision (N)     */
+  BS_FIELD_FRICTION_IMPULSE,   /* point: friction of the last step (N s)      */
   BS_FIELD_COUNT
 } bs_field;
 
@@ -109,6 +115,7 @@ typedef struct bs_fields {
   double *von_mises, *psi;     /* 1 per tet                                   */
   double *stretch;             /* 3 per tet                                   */
   double *f_elastic, *f_contact; /* 3 per vertex (N)                          */
+  double *friction;            /* 3 per vertex (N s)                          */
   /* the arrays handed to the VTU writer */
   int n_point_data, n_cell_data;
   bs_vtu_data point_data[6], cell_data[BS_FIELD_COUNT];

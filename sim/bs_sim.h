@@ -116,6 +116,10 @@ typedef struct bs_sim {
   bs_obstacles *obstacles; /* NULL when the scene has none                  */
   bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
   bs_step_hooks obstacle_hooks;
+  double *friction_impulse; /* 3n (N s): what Coulomb friction (obstacles and  */
+                          /* self-contact) gave each vertex in the last step,   */
+                          /* m_p dv_p; NULL when the scene has no friction      */
+  double *v_pre;          /* 3n work: velocities before self-contact friction */
   bs_step_data step;    /* filled by the integrator each step */
   bs_integrator *integrator;
   int frame;            /* frames completed                   */

@@ -16,7 +16,8 @@ const char *const bs_field_names_[BS_FIELD_COUNT + 1] = {
     [BS_FIELD_CAUCHY] = "cauchy",             [BS_FIELD_VON_MISES] = "von_mises",
     [BS_FIELD_GREEN_STRAIN] = "green_strain", [BS_FIELD_STRETCHES] = "stretches",
     [BS_FIELD_ENERGY_DENSITY] = "energy_density", [BS_FIELD_ELASTIC_FORCE] = "elastic_force",
-    [BS_FIELD_CONTACT_FORCE] = "contact_force",   [BS_FIELD_COUNT] = NULL};
+    [BS_FIELD_CONTACT_FORCE] = "contact_force",   [BS_FIELD_FRICTION_IMPULSE] = "friction_impulse",
+    [BS_FIELD_COUNT] = NULL};
 
 const char *bs_field_name(bs_field f) { return (unsigned)f < BS_FIELD_COUNT ? bs_field_names_[f] : "unknown"; }
 

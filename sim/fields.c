@@ -35,6 +35,7 @@ void bs_fields_destroy(bs_fields **pf) {
   free(f->stretch);
   free(f->f_elastic);
   free(f->f_contact);
+  free(f->friction);
   free(f);
   *pf = NULL;
 }
@@ -65,6 +66,7 @@ static int alloc_buffers(bs_fields *f, bs_error *err) {
   f->stretch = alloc_if(HAS(f, BS_FIELD_STRETCHES), 3 * nt, sizeof(double), &oom);
   f->f_elastic = alloc_if(HAS(f, BS_FIELD_ELASTIC_FORCE), 3 * nv, sizeof(double), &oom);
   f->f_contact = alloc_if(HAS(f, BS_FIELD_CONTACT_FORCE), 3 * nv, sizeof(double), &oom);
+  f->friction = alloc_if(HAS(f, BS_FIELD_FRICTION_IMPULSE), 3 * nv, sizeof(double), &oom);
   return oom ? bs_error_set(err, BS_ENOMEM, "out of memory for the output fields (%d tets)", f->n_tets) : 0;
 }
 
@@ -110,6 +112,7 @@ static void list_arrays(bs_fields *f) {
   add_array(f->point_data, &np, "body", BS_VTU_INT32, 1, f->point_body);
   add_array(f->point_data, &np, "elastic_force", BS_VTU_FLOAT64, 3, f->f_elastic);
   add_array(f->point_data, &np, "contact_force", BS_VTU_FLOAT64, 3, f->f_contact);
+  add_array(f->point_data, &np, "friction_impulse", BS_VTU_FLOAT64, 3, f->friction);
   add_array(f->cell_data, &nc, "body", BS_VTU_INT32, 1, HAS(f, BS_FIELD_BODY) ? f->cell_body : NULL);
   add_array(f->cell_data, &nc, "material", BS_VTU_INT32, 1, f->material);
   add_array(f->cell_data, &nc, "detF", BS_VTU_FLOAT64, 1, HAS(f, BS_FIELD_DETF) ? f->J : NULL);
@@ -176,6 +179,8 @@ int bs_fields_write_vtu(bs_fields *f, const bs_sim *s, const char *path, bs_erro
   int st = f->f_elastic ? bs_sim_force_elastic(s, f->f_elastic, err) : 0;
   if (!st && f->f_contact) st = bs_sim_force_contact(s, -1, f->f_contact, err);
   if (st) return st;
+  if (f->friction && s->friction_impulse)
+    memcpy(f->friction, s->friction_impulse, sizeof(double) * 3 * (size_t)f->n_vertices);
   bs_vtu_fields v = {.x = s->x,
                      .velocity = HAS(f, BS_FIELD_VELOCITY) ? s->v : NULL,
                      .custom_cells = 1,

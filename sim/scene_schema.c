@@ -160,7 +160,7 @@ const bs_schema_key bs_schema_keys_[] = {
     {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs_field_names_,
      .def = "[\"displacement\", \"velocity\", \"scripted\", \"body\", \"material\", \"detF\", \"inverted\", "
             "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\", \"elastic_force\", "
-            "\"contact_force\"]",
+            "\"contact_force\", \"friction_impulse\"]",
      .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
     {"output", "compress", BOOL, .def = "false", .doc = "zlib-compressed VTU frames and obstacle surfaces"},
     {"qoi[]", "name", STR, 1, .doc = "the qoi.csv column (unique, no comma)"},

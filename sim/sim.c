@@ -28,6 +28,8 @@ void bs_sim_destroy(bs_sim **ps) {
   free(s->v);
   free(s->vertex_offset);
   free(s->steps);
+  free(s->friction_impulse);
+  free(s->v_pre);
   bs_mesh_destroy(&s->mesh);
   free(s);
   *ps = NULL;
@@ -68,7 +70,7 @@ static int make_terms(bs_sim *s, bs_error *err) {
     if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err))) return st;
     s->terms[s->n_terms++] = s->self;
   }
-  return 0;
+  return bs_sim_make_friction_(s, err);
 }
 
 /* The integrator over the current terms, with the hooks. */

@@ -12,6 +12,9 @@ int bs_sim_make_bodies_(bs_sim *s, bs_error *err);
  * to s->terms); the hooks handed to the integrator; scripted positions. */
 int bs_sim_make_obstacles_(bs_sim *s, bs_error *err);
 void bs_sim_hooks_(bs_sim *s, bs_step_hooks *hooks);
+/* The friction impulse buffers (s->friction_impulse, s->v_pre) when a
+ * dynamic scene has friction; after the obstacles and self-collision. */
+int bs_sim_make_friction_(bs_sim *s, bs_error *err);
 void bs_sim_script_positions_(double t, double *x, void *ctx);
 
 #endif

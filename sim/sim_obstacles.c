@@ -37,8 +37,9 @@ void bs_sim_script_positions_(double t, double *x, void *ctx) {
   }
 }
 
-/* With self-collision, the hooks go through the sim so that post_solve can
- * apply the obstacles' friction and then self-contact friction. */
+/* With self-collision or friction, the hooks go through the sim so that
+ * post_solve can apply the obstacles' friction and then self-contact
+ * friction, and record the friction impulse. */
 static void sim_project(double *x, void *ctx) {
   bs_sim *s = ctx;
   s->obstacle_hooks.project(x, s->obstacle_hooks.ctx);
@@ -59,21 +60,41 @@ static int sim_post_solve(const double *x_n, double *x, const double *g, double 
                           bs_error *err) {
   bs_sim *s = ctx;
   int st = 0;
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  if (s->friction_impulse && !s->obstacle_hooks.post_solve) memset(s->friction_impulse, 0, sizeof(double) * n3);
   if (s->obstacle_hooks.post_solve && (st = s->obstacle_hooks.post_solve(x_n, x, g, v, dt, s->obstacle_hooks.ctx, err)))
     return st;
-  if (s->scene->self_friction > 0) {
+  if (s->self && s->scene->self_friction > 0) {
     int32_t n = 0;
-    st = bs_self_friction(s->self, x, s->scene->self_friction, dt, s->mask, v, &n, err);
+    memcpy(s->v_pre, v, sizeof(double) * n3);
+    if ((st = bs_self_friction(s->self, x, s->scene->self_friction, dt, s->mask, v, &n, err))) return st;
+    for (size_t i = 0; i < n3; i++) s->friction_impulse[i] += v[i] - s->v_pre[i];
   }
-  return st;
+  if (s->friction_impulse)
+    for (size_t i = 0; i < n3; i++) s->friction_impulse[i] *= s->fem->mass[i / 3];
+  return 0;
+}
+
+int bs_sim_make_friction_(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  const int self = sc->self_collision && sc->self_friction > 0;
+  int any = self;
+  for (int i = 0; i < sc->n_obstacles; i++) any |= sc->obstacles[i].friction > 0;
+  if (!any || sc->mode != BS_MODE_DYNAMIC) return 0;
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  s->friction_impulse = calloc(n3 ? n3 : 1, sizeof(double));
+  if (self) s->v_pre = malloc(sizeof(double) * (n3 ? n3 : 1));
+  if (!s->friction_impulse || (self && !s->v_pre)) return bs_error_set(err, BS_ENOMEM, "out of memory (friction)");
+  if (s->obstacles) bs_obstacles_friction_output(s->obstacles, s->friction_impulse);
+  return 0;
 }
 
 void bs_sim_hooks_(bs_sim *s, bs_step_hooks *hooks) {
   memset(hooks, 0, sizeof *hooks);
   if (s->obstacles) bs_obstacles_hooks(s->obstacles, &s->obstacle_hooks);
   *hooks = s->obstacle_hooks;
-  if (!s->self) return;
-  hooks->post_solve = sim_post_solve; /* friction of both kinds after the solve */
+  if (!s->self && !s->friction_impulse) return;
+  hooks->post_solve = sim_post_solve; /* friction of both kinds after the solve, its impulse */
   hooks->ctx = s;
   if (s->obstacle_hooks.project) hooks->project = sim_project;
   if (s->obstacle_hooks.register_active) hooks->register_active = sim_register_active;

@@ -75,7 +75,7 @@ Test(fields, bad_values_name_the_key) {
   const char *names[2] = {"cauchy", "stress"};
   cr_assert_eq(bs_fields_parse_names(2, names, &set, &err), BS_EINPUT);
   cr_assert(strstr(err.msg, "output.fields.1: unknown field \"stress\" (allowed: displacement, velocity") &&
-                strstr(err.msg, "energy_density, elastic_force, contact_force)"),
+                strstr(err.msg, "energy_density, elastic_force, contact_force, friction_impulse)"),
             "%s", err.msg);
   cr_assert_eq(parse("{\"compress\": 1}", &sc, &err), BS_EINPUT);
   cr_assert(strstr(err.msg, "output.compress"), "%s", err.msg);

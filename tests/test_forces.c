@@ -200,3 +200,68 @@ Test(forces, qoi_csv_rows_and_bad_qoi_keys) {
     bs_scene_destroy(&b);
   }
 }
+
+/* A box sliding at 2 m/s along x on a frictional floor (mu 0.3): in each
+ * step every touching vertex slides, so the friction impulse of the step is
+ * mu |contact force| dt per vertex, against the motion (its small z part is
+ * against the body's own vibration); nothing else acts along x, so its x
+ * part is also the step's change of x momentum. */
+static void sliding_box(const char *mode) {
+  char json[2048];
+  const double mu = 0.3, fps = 24;
+  snprintf(json, sizeof json,
+           "{\"time\": {\"fps\": %g, \"frames\": 3, \"steps_per_frame\": 1},\n"
+           " \"solver\": {\"linear\": \"cholmod\", \"tolerance\": 1e-9},\n"
+           " \"gravity\": [0, -9.8, 0],\n"
+           " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [3, 1, 3], \"size\": [0.3, 0.1, 0.3]},\n"
+           "   \"velocity\": [2, 0, 0],\n"
+           "   \"material\": {\"model\": \"neo_hookean\", \"youngs\": 1e6, \"poisson\": 0.3, \"density\": 1000}}],\n"
+           " \"obstacles\": [{\"shape\": \"plane\", \"normal\": [0, 1, 0], \"offset\": 0, \"collision\": \"%s\",\n"
+           "   \"stiffness\": 1e8, \"friction\": %g}]}\n",
+           fps, mode, mu);
+  bs_scene *sc;
+  bs_error err;
+  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, &sc, &err), 0, "%s", err.msg);
+  bs_sim *s = NULL;
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  cr_assert_not_null(s->friction_impulse, "%s: the scene has friction", mode);
+  const int32_t n = s->mesh->n_vertices;
+  double *fc = malloc(sizeof(double) * 3 * (size_t)n);
+  for (int frame = 1; frame <= 3; frame++) {
+    double p0 = 0, p1 = 0, J[3] = {0, 0, 0}, C = 0, Jabs = 0;
+    for (int32_t v = 0; v < n; v++) p0 += s->fem->mass[v] * s->v[3 * v];
+    bs_frame_stats fs;
+    cr_assert_eq(bs_sim_advance_frame(s, &fs, &err), 0, "%s", err.msg);
+    cr_assert_eq(fs.failed, 0, "%s: frame %d failed", mode, frame);
+    cr_assert_eq(bs_sim_force_contact(s, -1, fc, &err), 0, "%s", err.msg);
+    for (int32_t v = 0; v < n; v++) {
+      const double *jv = s->friction_impulse + 3 * v, *cv = fc + 3 * v;
+      p1 += s->fem->mass[v] * s->v[3 * v];
+      for (int k = 0; k < 3; k++) J[k] += jv[k];
+      Jabs += sqrt(jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]);
+      C += sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
+    }
+    const double want = mu * C / fps;
+    cr_expect_gt(C, 0.5 * 9.8 * 9.0, "%s: frame %d: the floor carries the box (%g N)", mode, frame, C);
+    cr_expect(fabs(Jabs - want) <= 1e-9 * want, "%s: frame %d: sum |friction impulse| %.12g N s, mu sum|f| dt %.12g",
+              mode, frame, Jabs, want);
+    cr_expect(J[0] < -0.999 * Jabs && J[1] == 0, "%s: frame %d: J = (%g, %g, %g) is against the motion", mode, frame,
+              J[0], J[1], J[2]);
+    cr_expect(fabs((p1 - p0) - J[0]) <= 1e-6 * want, "%s: frame %d: momentum change %.12g, impulse %.12g", mode,
+              frame, p1 - p0, J[0]);
+  }
+  free(fc);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+Test(forces, friction_impulse_of_a_sliding_box_penalty) { sliding_box("penalty"); }
+Test(forces, friction_impulse_of_a_sliding_box_constraint) { sliding_box("constraint"); }
+
+Test(forces, no_friction_no_impulse_buffer) {
+  bs_scene *sc;
+  bs_sim *s = static_beam("", &sc);
+  cr_expect_null(s->friction_impulse);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
