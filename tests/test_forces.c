@@ -22,6 +22,15 @@
 #include "bs_scene.h"
 #include "bs_sim.h"
 
+/* The simulation of a scene given as JSON text; the scene goes to *sc. */
+static bs_sim *sim_of_json(const char *json, bs_scene **sc) {
+  bs_error err;
+  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, sc, &err), 0, "%s", err.msg);
+  bs_sim *s = NULL;
+  cr_assert_eq(bs_sim_create(*sc, &s, &err), 0, "%s", err.msg);
+  return s;
+}
+
 /* A static 1 x 0.1 x 0.1 m beam (10 x 2 x 2 cells) clamped at xmin, solved
  * exactly (CHOLMOD) to a tight tolerance; `extra` is more JSON at the top. */
 static bs_sim *static_beam(const char *extra, bs_scene **sc) {
@@ -36,9 +45,7 @@ static bs_sim *static_beam(const char *extra, bs_scene **sc) {
            "   \"scripted\": [{\"group\": \"xmin\", \"fixed\": true}]}]%s}\n",
            extra);
   bs_error err;
-  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, sc, &err), 0, "%s", err.msg);
-  bs_sim *s = NULL;
-  cr_assert_eq(bs_sim_create(*sc, &s, &err), 0, "%s", err.msg);
+  bs_sim *s = sim_of_json(json, sc);
   bs_frame_stats fs;
   cr_assert_eq(bs_sim_statics(s, &fs, &err), 0, "%s", err.msg);
   cr_assert_eq(fs.failed, 0, "the static solve failed");
@@ -137,9 +144,7 @@ static void stretched_bar(const char *model, double P11_over_E) {
            L, model, E, e * L);
   bs_scene *sc;
   bs_error err;
-  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, &sc, &err), 0, "%s", err.msg);
-  bs_sim *s = NULL;
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_sim *s = sim_of_json(json, &sc);
   bs_frame_stats fs;
   cr_assert_eq(bs_sim_statics(s, &fs, &err), 0, "%s", err.msg);
   bs_qoi *q = NULL;
@@ -177,9 +182,7 @@ static void quasi_static_cube(const char *model, double P11_over_E, double *rel)
            model, E, e);
   bs_scene *sc;
   bs_error err;
-  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, &sc, &err), 0, "%s", err.msg);
-  bs_sim *s = NULL;
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_sim *s = sim_of_json(json, &sc);
   for (int f = 0; f < sc->frames; f++) {
     bs_frame_stats fs;
     cr_assert_eq(bs_sim_advance_frame(s, &fs, &err), 0, "%s", err.msg);
@@ -276,9 +279,7 @@ static void sliding_box(const char *mode) {
            fps, mode, mu);
   bs_scene *sc;
   bs_error err;
-  cr_assert_eq(bs_scene_parse(json, NULL, 0, NULL, &sc, &err), 0, "%s", err.msg);
-  bs_sim *s = NULL;
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_sim *s = sim_of_json(json, &sc);
   cr_assert_not_null(s->friction_impulse, "%s: the scene has friction", mode);
   const int32_t n = s->mesh->n_vertices;
   double *fc = malloc(sizeof(double) * 3 * (size_t)n);
