@@ -40,6 +40,17 @@ static inline void bs_cross3(const double *a, const double *b, double *o) {
 /* |a| = sqrt(a . a), no scaling against overflow (as bs_dot3). */
 static inline double bs_norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 
+/* |a| scaled by the largest component, so that neither overflows nor
+ * underflows for any finite a (1e200 or 1e-200 components); inf or NaN in a
+ * gives inf or NaN. */
+static inline double bs_norm3_scaled(const double *a) {
+  if (!isfinite(a[0]) || !isfinite(a[1]) || !isfinite(a[2])) return fabs(a[0]) + fabs(a[1]) + fabs(a[2]);
+  const double m = fmax(fabs(a[0]), fmax(fabs(a[1]), fabs(a[2])));
+  if (m == 0) return 0;
+  const double b[3] = {a[0] / m, a[1] / m, a[2] / m};
+  return m * bs_norm3(b);
+}
+
 #ifdef __cplusplus
 }
 #endif

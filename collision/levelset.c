@@ -114,10 +114,13 @@ static int check_pos(const char *name, double v, bs_error *err) {
 static int check_axis(const char *name, const double a[3], double unit[3], bs_error *err) {
   int st = check_vec(name, a, err);
   if (st) return st;
-  double n = bs_norm3(a);
-  if (!(n > 0))
+  /* Scaled by the largest component first: (1e200, 0, 0) squares to inf and
+   * (1e-200, 0, 0) to 0, both of which would normalize to a zero vector. */
+  const double m = fmax(fabs(a[0]), fmax(fabs(a[1]), fabs(a[2])));
+  if (!(m > 0))
     return bs_error_set(err, BS_EINPUT, "%s = (%g, %g, %g): must be nonzero", name, a[0], a[1], a[2]);
-  for (int k = 0; k < 3; k++) unit[k] = a[k] / n;
+  const double b[3] = {a[0] / m, a[1] / m, a[2] / m}, n = bs_norm3(b);
+  for (int k = 0; k < 3; k++) unit[k] = b[k] / n;
   return 0;
 }
 
@@ -139,7 +142,7 @@ int bs_levelset_create_halfspace(const double normal[3], double offset, bs_level
   int st = check_axis("normal", normal, n, err);
   if (st) return st;
   if (!isfinite(offset)) return bs_error_set(err, BS_EINPUT, "offset = %g: must be finite (m)", offset);
-  double c = offset / bs_norm3(normal), c0[3] = {c * n[0], c * n[1], c * n[2]};
+  double c = offset / bs_norm3_scaled(normal), c0[3] = {c * n[0], c * n[1], c * n[2]};
   if ((st = new_levelset(BS_LS_HALFSPACE, c0, out, err))) return st;
   rot_z_to(n, (*out)->Q0);
   return 0;

@@ -57,6 +57,17 @@ extern "C" {
 
 #define BS_MAX_NAME 256
 #define BS_MAX_PATH 1024
+/* Limits of a scene that can run (refused above them, naming the key):
+ * time.fps in [BS_SCENE_MIN_FPS, BS_SCENE_MAX_FPS]; time.steps_per_frame (or
+ * the count a time.dt gives) at most BS_SCENE_MAX_STEPS_PER_FRAME; frames x
+ * steps_per_frame at most BS_SCENE_MAX_STEPS time steps in one run; a
+ * rotation (bodies[].rotate, obstacles[].keyframes[].rotate) at most
+ * BS_SCENE_MAX_ANGLE degrees. */
+#define BS_SCENE_MIN_FPS 1e-9
+#define BS_SCENE_MAX_FPS 1e9
+#define BS_SCENE_MAX_STEPS_PER_FRAME 1000000
+#define BS_SCENE_MAX_STEPS 1000000000LL
+#define BS_SCENE_MAX_ANGLE 1e9
 /* solver.cg_sigma_scale's default: c in the CG tolerance of cg_sigma "auto",
  * min(1/2, c sqrt(max(||grad E||, tau) / ||grad E_0||)). Smaller values cut
  * Newton iterations on the paper's scenes but slow the recovery from tangled

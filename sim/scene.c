@@ -590,6 +590,9 @@ static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
     if (!(dt > 0)) return fail(c, "time.dt", "must be > 0, got %g", dt);
     if (cJSON_HasObjectItem(t, "steps_per_frame")) return fail(c, "time.dt", "give either dt or steps_per_frame, not both");
     double spf = 1.0 / (s->fps * dt);
+    if (!(spf <= BS_SCENE_MAX_STEPS_PER_FRAME + 0.5))
+      return fail(c, "time.dt", "%g s is %.3g steps per frame at %g fps, above the limit of %d", dt, spf, s->fps,
+                  BS_SCENE_MAX_STEPS_PER_FRAME);
     if (fabs(spf - floor(spf + 0.5)) > 1e-9 * spf || floor(spf + 0.5) < 1)
       return fail(c, "time.dt", "1/(fps*dt) must be a whole number of steps per frame, got %g", spf);
     s->steps_per_frame = (int)floor(spf + 0.5);

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "bs_scene.h"
+#include "bs_vec3.h"
 
 static int bad(const bs_scene *s, bs_error *err, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -48,6 +49,14 @@ static int check_script(const bs_scene *s, const bs_scene_script *sc, const char
   return check_keys_increase(s, sc->n_keys, sc->key_t, w, err);
 }
 
+/* A rotation vector (axis x angle, degrees): finite, at most the limit. */
+static int check_rotation(const bs_scene *s, const double r[3], const char *where, bs_error *err) {
+  const double a = bs_norm3_scaled(r);
+  if (!(a <= BS_SCENE_MAX_ANGLE))
+    return bad(s, err, "%s: a rotation of %g degrees, above the limit of %g", where, a, BS_SCENE_MAX_ANGLE);
+  return 0;
+}
+
 static int check_body(const bs_scene *s, const bs_scene_body *b, int i, bs_error *err) {
   char w[600];
   int st;
@@ -62,6 +71,8 @@ static int check_body(const bs_scene *s, const bs_scene_body *b, int i, bs_error
   if (b->refine < 0 || b->refine > 6) return bad(s, err, "bodies.%d.refine: must be an integer in [0, 6], got %d", i, b->refine);
   for (int k = 0; k < 3; k++)
     if (!(b->scale[k] > 0) || !isfinite(b->scale[k])) return bad(s, err, "bodies.%d.scale: must be positive and finite", i);
+  snprintf(w, sizeof w, "bodies.%d.rotate", i);
+  if ((st = check_rotation(s, b->rotate, w, err))) return st;
   if (b->n_materials < 1 || !b->materials)
     return bad(s, err, "bodies.%d.material: missing (an object with model, youngs, poisson, density is required)", i);
   for (int m = 0; m < b->n_materials; m++) {
@@ -90,6 +101,11 @@ static int check_obstacle(const bs_scene *s, const bs_scene_obstacle *o, int i, 
   if (!(o->friction >= 0)) return bad(s, err, "obstacles.%d.friction: must be >= 0, got %g", i, o->friction);
   if (!(o->grid_h >= 0)) return bad(s, err, "obstacles.%d.grid_h: must be > 0, got %g", i, o->grid_h);
   char w[64];
+  for (int k = 0; k < o->n_keys; k++) {
+    snprintf(w, sizeof w, "obstacles.%d.keyframes.%d.rotate", i, k);
+    int st = check_rotation(s, o->key_rotate + 3 * k, w, err);
+    if (st) return st;
+  }
   snprintf(w, sizeof w, "obstacles.%d.keyframes", i);
   return o->n_keys > 0 ? check_keys_increase(s, o->n_keys, o->key_t, w, err) : 0;
 }
@@ -106,12 +122,23 @@ static int check_solver(const bs_scene *s, bs_error *err) {
   return 0;
 }
 
+static int check_time(const bs_scene *s, bs_error *err) {
+  if (!(s->fps >= BS_SCENE_MIN_FPS && s->fps <= BS_SCENE_MAX_FPS))
+    return bad(s, err, "time.fps: must be in [%g, %g], got %g", BS_SCENE_MIN_FPS, BS_SCENE_MAX_FPS, s->fps);
+  if (s->frames < 0) return bad(s, err, "time.frames: must be an integer in [0, 10000000], got %d", s->frames);
+  if (s->steps_per_frame < 1 || s->steps_per_frame > BS_SCENE_MAX_STEPS_PER_FRAME)
+    return bad(s, err, "time.steps_per_frame: must be an integer in [1, %d], got %d", BS_SCENE_MAX_STEPS_PER_FRAME,
+               s->steps_per_frame);
+  const long long steps = (long long)s->frames * s->steps_per_frame;
+  if (steps > BS_SCENE_MAX_STEPS)
+    return bad(s, err, "time: %d frames x %d steps per frame = %lld time steps, above the limit of %lld", s->frames,
+               s->steps_per_frame, steps, BS_SCENE_MAX_STEPS);
+  return 0;
+}
+
 int bs_scene_check(const bs_scene *s, bs_error *err) {
   int st;
-  if (!(s->fps > 0) || !isfinite(s->fps)) return bad(s, err, "time.fps: must be > 0, got %g", s->fps);
-  if (s->frames < 0) return bad(s, err, "time.frames: must be an integer in [0, 10000000], got %d", s->frames);
-  if (s->steps_per_frame < 1)
-    return bad(s, err, "time.steps_per_frame: must be an integer in [1, 1000000], got %d", s->steps_per_frame);
+  if ((st = check_time(s, err))) return st;
   if (s->dt != 1.0 / (s->fps * s->steps_per_frame))
     return bad(s, err, "time.dt: must be 1 / (fps * steps_per_frame) = %g, got %g (bs_scene_validate sets it)",
                1.0 / (s->fps * s->steps_per_frame), s->dt);

@@ -35,7 +35,7 @@ const bs_schema_key bs_schema_keys_[] = {
     {"", "qoi", BS_SCHEMA_ARRAY, .sub = "qoi[]", .doc = "quantities of interest, written per frame to qoi.csv"},
 
     /* ---- time ---- */
-    {"time", "fps", NUM, .range = "(0, )", .def = "24", .doc = "frames per second"},
+    {"time", "fps", NUM, .range = "[1e-9, 1e9]", .def = "24", .doc = "frames per second"},
     {"time", "frames", INT, .range = "[0, 10000000]", .def = "24", .doc = "frames to simulate"},
     {"time", "steps_per_frame", INT, .range = "[1, 1000000]", .def = "1", .doc = "time steps per frame"},
     {"time", "dt", NUM, .range = "(0, )",

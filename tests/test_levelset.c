@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "bs_levelset.h"
+#include "bs_vec3.h"
 
 /* ---- helpers ------------------------------------------------------------ */
 
@@ -1066,4 +1067,32 @@ Test(levelset, finite_on_degenerate_points) {
     }
     bs_levelset_destroy(&ls);
   }
+}
+
+/* A normal or an axis of components near 1e154 and beyond (their squares
+ * overflow) or near 1e-200 (they underflow) is the same direction as (0, 1,
+ * 0): the plane y >= 0.5 and the cylinder about y, not a zero vector. */
+Test(levelset, huge_and_tiny_directions_normalize) {
+  const double dirs[][3] = {{0, 1e155, 0}, {0, 1e300, 0}, {0, 1e-200, 0}, {0, 4e-320, 0}, {1e-310, 1e300, 0}};
+  const double x[3] = {0.3, 2.0, -0.4}, c[3] = {0, 0, 0};
+  bs_error err;
+  for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++) {
+    bs_levelset *ls = NULL;
+    const double len = bs_norm3_scaled(dirs[i]);
+    cr_assert_eq(bs_levelset_create_halfspace(dirs[i], 0.5 * len, &ls, &err), 0, "%zu: %s", i, err.msg);
+    double g[3];
+    double phi = bs_levelset_eval(ls, 0, x, g, NULL);
+    cr_expect(fabs(phi - 1.5) < 1e-14 && fabs(g[1] - 1) < 1e-14, "direction %zu: phi %.17g grad (%g, %g, %g)", i, phi,
+              g[0], g[1], g[2]);
+    bs_levelset_destroy(&ls);
+    cr_assert_eq(bs_levelset_create_cylinder(c, dirs[i], 1, 10, &ls, &err), 0, "%zu: %s", i, err.msg);
+    phi = bs_levelset_eval(ls, 0, x, g, NULL);
+    cr_expect(fabs(phi - (hypot(0.3, 0.4) - 1)) < 1e-14, "cylinder %zu: phi %.17g", i, phi);
+    bs_levelset_destroy(&ls);
+  }
+  const double inf3[3] = {0, INFINITY, 0};
+  bs_levelset *ls = NULL;
+  cr_expect_eq(bs_levelset_create_halfspace(inf3, 0, &ls, &err), BS_EINPUT);
+  cr_expect(fabs(bs_norm3_scaled((const double[3]){3e200, 4e200, 0}) / 5e200 - 1) < 1e-15);
+  cr_expect_eq(bs_norm3_scaled((const double[3]){0, 0, 0}), 0);
 }

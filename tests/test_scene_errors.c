@@ -4,6 +4,7 @@
  * lists them and guesses; malformed JSON gives the file, line and column. */
 #define _POSIX_C_SOURCE 200809L
 #include <criterion/criterion.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -156,4 +157,44 @@ Test(scene_errors, malformed_file_is_named) {
   snprintf(want, sizeof want, "%s: line 3, column 4: malformed JSON: expected a key in double quotes, found ']'", path);
   cr_expect_str_eq(err.msg, want);
   unlink(path);
+}
+
+/* Values that would make the run impossible (a step count beyond the integer
+ * range, a run of more steps than the limit, a rotation whose angle is not a
+ * number any more) are refused with the key and the limit. */
+Test(scene_errors, impossible_time_and_rotation_are_refused) {
+  EXPECT("time.fps=1e-300", "good.json: time.fps: must be in [1e-09, 1e+09], got 1e-300");
+  EXPECT("time.steps_per_frame=1000001", "time.steps_per_frame: must be an integer in [1, 1000000]");
+  EXPECT("bodies.0.rotate=[1e300, 0, 0]", "bodies.0.rotate: a rotation of 1e+300 degrees, above the limit of 1e+09");
+  EXPECT("bodies.0.rotate=[1e154, 1e154, 0]", "bodies.0.rotate: a rotation of 1.41421e+154 degrees");
+  const char *dt_scenes[] = {"1e-20", "3e-10"};
+  for (int i = 0; i < 2; i++) {
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"time\": {\"fps\": 24, \"frames\": 2, \"dt\": %s},\n"
+             " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]},\n"
+             "   \"material\": {\"model\": \"neo_hookean\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n",
+             dt_scenes[i]);
+    bs_scene *s = NULL;
+    bs_error err;
+    cr_expect_eq(bs_scene_parse(json, "dt.json", 0, NULL, &s, &err), BS_EINPUT, "dt %s loaded", dt_scenes[i]);
+    cr_expect(strstr(err.msg, "dt.json: time.dt: ") && strstr(err.msg, "steps per frame at 24 fps, above the limit"),
+              "%s", err.msg);
+    bs_scene_destroy(&s);
+  }
+}
+
+Test(scene_errors, limits_apply_to_scenes_built_in_c) {
+  bs_scene *sc = bs_test_box_scene(2, 24, 1);
+  bs_error err;
+  sc->frames = 2000000;
+  sc->steps_per_frame = 1000;
+  cr_expect_eq(bs_scene_validate(sc, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "2000000 frames x 1000 steps per frame = 2000000000 time steps"), "%s", err.msg);
+  sc->frames = 2;
+  sc->steps_per_frame = 1;
+  sc->bodies[0].rotate[2] = INFINITY;
+  cr_expect_eq(bs_scene_validate(sc, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "bodies.0.rotate: a rotation of inf degrees"), "%s", err.msg);
+  bs_scene_destroy(&sc);
 }
