@@ -250,6 +250,7 @@ static int start_run(const bs_study *S, bs_study_run *r, slot *sl, const char *o
   argv[a++] = (char *)S->scene_path;
   argv[a++] = "--quiet";
   argv[a++] = "--replace"; /* a run that is not reused is run again from scratch */
+  if (bs_mesh_geo_system_calls()) argv[a++] = "--allow-geo-system";
   for (int i = 0; i < r->n_sets; i++) {
     argv[a++] = "--set";
     argv[a++] = r->sets[i];

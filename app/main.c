@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "bs_mesh.h"
 
 #ifndef BS_VERSION
 #define BS_VERSION "unknown"
@@ -20,9 +21,24 @@ static const char *main_help =
     "  schema                             the scene schema as a JSON Schema (for editors)\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
-    "  bigstep --version        the version\n";
+    "  bigstep --version        the version\n"
+    "\n"
+    "  --allow-geo-system       (with any command) let Gmsh scripts (.geo) run programs\n"
+    "                           (SystemCall, NonBlockingSystemCall, OnelabRun); refused\n"
+    "                           by default: only give it for files you trust\n";
+
+/* Takes --allow-geo-system out of argv (anywhere after the command). */
+static int take_geo_flag(int argc, char **argv) {
+  int n = 0;
+  for (int i = 0; i < argc; i++)
+    if (!strcmp(argv[i], "--allow-geo-system")) bs_mesh_set_geo_system_calls(1);
+    else argv[n++] = argv[i];
+  argv[n] = NULL;
+  return n;
+}
 
 int main(int argc, char **argv) {
+  argc = take_geo_flag(argc, argv);
   if (argc < 2) {
     fputs(main_help, stderr);
     return BS_EXIT_USAGE;

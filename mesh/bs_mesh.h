@@ -90,6 +90,15 @@ typedef struct bs_mesh_read_opts {
  * type and count. opts may be NULL (defaults). */
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
+/* The security rule for Gmsh scripts: a .geo file (with what it includes or
+ * merges, and FILE.opt beside it) that runs a program (SystemCall,
+ * NonBlockingSystemCall, OnelabRun) or includes a computed file name is
+ * refused by bs_mesh_read (BS_EINPUT naming the file and line) unless the
+ * process allows it: bs_mesh_set_geo_system_calls(1), which the command line
+ * does for --allow-geo-system only. Process-wide (default 0). */
+void bs_mesh_set_geo_system_calls(int allow);
+int bs_mesh_geo_system_calls(void);
+
 /* Builds a mesh from raw arrays (copied): vertices, tets (any orientation:
  * they are reoriented) and optional groups (may be NULL / 0). Derives the
  * boundary, edges and adjacency; drops unused vertices. */

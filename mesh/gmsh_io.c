@@ -715,6 +715,9 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   int rc;
   if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
 
+  static const char *const script[] = {"geo", NULL};
+  if (ext_is(file_ext(path), script) && (rc = bs__geo_check(path, err))) return rc;
+
   bs_mesh *m = NULL;
   if ((rc = gmsh_begin(path, err))) goto out;
   int ierr = 0;

@@ -24,6 +24,10 @@ static inline int bs__group_elem_size(int dim) { return dim < 3 ? dim + 1 : 1; }
 /* Frees every group's name, elems and vertices, then the array (g may be NULL). */
 void bs__groups_free(bs_group *g, int n);
 
+/* Refuses a Gmsh script (.geo) that runs programs, unless the process allows
+ * them (geo_guard.c has the rule). BS_EINPUT naming the file and line. */
+int bs__geo_check(const char *path, bs_error *err);
+
 /* Deep copy of n groups into a new array *out (NULL when n == 0). A NULL
  * name is copied as "". Vertex sets are copied as they are (possibly NULL). */
 int bs__groups_copy(const bs_group *src, int n, bs_group **out, bs_error *err);
