@@ -122,11 +122,11 @@ static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
 static void print_header(const run_args *a, const bs_sim *s) {
   const bs_scene *sc = s->scene;
   printf("bigstep run %s: %d vertices, %d tets, %ld dofs (%d scripted vertices), method %s, linear %s, "
-         "%d frames at %g fps, %d steps/frame (dt %.6g s), tolerance %g\n",
+         "%d frames at %g fps, %d steps/frame (dt %.6g s), tolerance %g, memory estimate %.0f MiB\n",
          a->scene, s->mesh->n_vertices, s->mesh->n_tets, bs_sim_dofs(s), s->mesh->n_vertices - s->n_free,
          bs_method_name(sc->solver.method),
          sc->solver.method == BS_METHOD_OPTIMIZATION ? bs_lin_kind_name(sc->solver.min.linear) : "minres", sc->frames,
-         sc->fps, sc->steps_per_frame, sc->dt, sc->solver.min.tol);
+         sc->fps, sc->steps_per_frame, sc->dt, sc->solver.min.tol, s->memory_bytes / 1048576.0);
   fflush(stdout);
 }
 

@@ -10,6 +10,7 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 void bs_error_clear(bs_error *err) {
   if (!err) return;
@@ -74,6 +75,11 @@ size_t bs_peak_rss(void) {
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
   return (size_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
+}
+
+double bs_machine_memory(void) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  return pages > 0 && page > 0 ? (double)pages * (double)page : 0.0;
 }
 
 void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err) {

@@ -68,6 +68,9 @@ const char *bs_version(void);
 /* Peak resident memory of this process in bytes (0 if unknown). */
 size_t bs_peak_rss(void);
 
+/* Physical memory of this machine in bytes (sysconf; 0 if unknown). */
+double bs_machine_memory(void);
+
 /* calloc that records a BS_ENOMEM message naming `what` on failure. */
 void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err);
 

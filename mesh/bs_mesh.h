@@ -82,7 +82,19 @@ typedef struct bs_mesh_read_opts {
   double size;   /* target mesh size for geometry inputs (.geo, .step, .stl,
                     ...); <= 0 means the file's own settings            */
   int refine;    /* uniform 1->8 refinements after reading (>= 0)        */
+  int64_t max_tets; /* refuse (BS_EINPUT, before allocating) a mesh, a
+                    refinement or a Gmsh size that would make more tets;
+                    <= 0: bs_mesh_max_tets's default                      */
 } bs_mesh_read_opts;
+
+/* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
+ * refinement multiplies by 8), and by default no more than this machine's
+ * memory holds at BS_MESH_BYTES_PER_TET (Gmsh's peak while meshing, 600 to
+ * 800 bytes a tet for 0.15M-0.7M tets, plus the mesh itself). */
+#define BS_MESH_MAX_TETS (INT32_MAX / 8)
+#define BS_MESH_BYTES_PER_TET 1000.0
+/* opts->max_tets when > 0, else min(BS_MESH_MAX_TETS, memory / BS_MESH_BYTES_PER_TET). */
+double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
 
 /* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep,
  * .stl and .off (closed surfaces are meshed into a volume) through Gmsh. Only

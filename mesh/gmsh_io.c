@@ -395,10 +395,32 @@ done:
 }
 
 /* Meshes the volume bounded by the model's surfaces (see the file comment). */
-static int surface_to_volume(const char *path, double size, bs_error *err) {
+/* The volume (m^3) of the model's 3-D entities (OpenCASCADE's mass), or of
+ * its bounding box when it has none or the kernel cannot say; 0 if unknown. */
+static double model_volume(void) {
+  int ierr = 0, *dt = NULL;
+  size_t n = 0;
+  double v = 0;
+  gmshModelGetEntities(&dt, &n, 3, &ierr);
+  for (size_t i = 0; !ierr && i + 1 < n; i += 2) {
+    double m = 0;
+    gmshModelOccGetMass(3, dt[i + 1], &m, &ierr);
+    v += m;
+  }
+  gmshFree(dt);
+  if (!ierr && v > 0 && isfinite(v)) return v;
+  double lo[3], hi[3];
+  ierr = 0;
+  gmshModelGetBoundingBox(-1, -1, &lo[0], &lo[1], &lo[2], &hi[0], &hi[1], &hi[2], &ierr);
+  v = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  return !ierr && isfinite(v) && v > 0 ? v : 0;
+}
+
+static int surface_to_volume(const char *path, double size, const bs_mesh_read_opts *opts, bs_error *err) {
   int ierr = 0, rc = BS_OK;
   int *dt = NULL, *tags = NULL;
   size_t ndt = 0;
+  if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) return rc;
   if (size > 0) {
     gmshModelMeshClassifySurfaces(40.0 * BS_PI / 180.0, 1, 1, BS_PI, 0, &ierr);
     if (ierr) return gmsh_fail(err, BS_EGMSH, path, "classify the surface into patches");
@@ -734,6 +756,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
       break;
     }
     gmsh_quiet();
+    if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) break;
     if (size > 0) {
       gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
       gmshOptionSetNumber("Mesh.MeshSizeMax", size, &ierr);
@@ -747,11 +770,11 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
       rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
       break;
     }
-    rc = surface_to_volume(path, size, err);
+    rc = surface_to_volume(path, size, opts, err);
     break;
   case IN_SOUP:
     rc = add_discrete_surface(path, pts, np, tris, ntri, err);
-    if (!rc) rc = surface_to_volume(path, size, err);
+    if (!rc) rc = surface_to_volume(path, size, opts, err);
     break;
   case IN_UNKNOWN:
     break;
@@ -760,6 +783,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (!rc) rc = model_to_mesh(path, &m, err);
   gmsh_end();
 
+  if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
   for (int level = 0; level < refine && !rc; level++) {
     bs_mesh *fine = NULL;
     rc = bs_mesh_refine(m, &fine, err);

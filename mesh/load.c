@@ -6,14 +6,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_mesh.h"
+#include "mesh_internal.h"
 
 int bs_mesh_create_box_refined(const double size[3], const int cells[3], int refine, bs_mesh **out,
                                bs_error *err) {
   *out = NULL;
   const double lo[3] = {0, 0, 0};
   bs_mesh *m = NULL;
-  int st = bs_mesh_create_box(lo, size, cells[0], cells[1], cells[2], &m, err);
+  char what[96];
+  snprintf(what, sizeof what, "box of %d x %d x %d cells", cells[0], cells[1], cells[2]);
+  int st = bs__check_refined_count(6.0 * cells[0] * cells[1] * cells[2], refine, NULL, what, err);
+  if (st) return st;
+  st = bs_mesh_create_box(lo, size, cells[0], cells[1], cells[2], &m, err);
   for (int r = 0; !st && r < refine; r++) {
     bs_mesh *f = NULL;
     st = bs_mesh_refine(m, &f, err);

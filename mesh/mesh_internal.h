@@ -28,6 +28,13 @@ void bs__groups_free(bs_group *g, int n);
  * them (geo_guard.c has the rule). BS_EINPUT naming the file and line. */
 int bs__geo_check(const char *path, bs_error *err);
 
+/* mesh_limits.c: BS_EINPUT (the message starts with `what`) when n_tets
+ * refined `refine` times, or a Gmsh mesh of `volume` (m^3) at `size` (m),
+ * would make more tets than bs_mesh_max_tets(opts). */
+int bs__check_refined_count(double n_tets, int refine, const bs_mesh_read_opts *opts, const char *what,
+                            bs_error *err);
+int bs__check_mesh_size(double volume, double size, const bs_mesh_read_opts *opts, const char *what, bs_error *err);
+
 /* Deep copy of n groups into a new array *out (NULL when n == 0). A NULL
  * name is copied as "". Vertex sets are copied as they are (possibly NULL). */
 int bs__groups_copy(const bs_group *src, int n, bs_group **out, bs_error *err);

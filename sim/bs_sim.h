@@ -102,6 +102,7 @@ typedef struct bs_sim {
   int32_t *vertex_offset; /* n_bodies + 1: body b's vertices start here */
   double *x0;           /* 3n: positions at t = 0 (transformed rest) */
   double size;          /* m: diagonal of the bounding box of x0 */
+  double memory_bytes;  /* the run's estimated peak memory (bs_memory.h) */
   double *x, *v;        /* 3n: current state                   */
   uint8_t *mask;        /* n: 1 free, 0 scripted               */
   int32_t n_free;       /* free vertices (dofs = 3 n_free)     */

@@ -97,7 +97,11 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
   s->scene = sc;
   s->steps = calloc((size_t)sc->steps_per_frame, sizeof *s->steps);
   if (!s->steps) st = bs_error_set(err, BS_ENOMEM, "out of memory (%d steps per frame)", sc->steps_per_frame);
+  bs_memory_estimate me;
+  if (!st) st = bs_scene_memory_estimate(sc, &me, err);
   if (!st) st = bs_sim_make_bodies_(s, err);
+  if (!st) st = bs_memory_check(sc, s->mesh->n_vertices, s->mesh->n_tets, &me, err);
+  if (!st) s->memory_bytes = me.bytes;
   if (!st) st = bs_fem_create(s->mesh, s->n_materials, s->materials, s->tet_material, &s->fem, err);
   if (!st) st = make_terms(s, err);
   if (!st) st = make_integrator(s, err);

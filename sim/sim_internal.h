@@ -2,6 +2,7 @@
 #ifndef BS_SIM_INTERNAL_H
 #define BS_SIM_INTERNAL_H
 
+#include "bs_memory.h"
 #include "bs_sim.h"
 
 /* sim_bodies.c: the merged, transformed mesh and per-vertex state, the
