@@ -83,7 +83,11 @@ static inline double bs_sum_parts(int count, const double *part) {
 static inline double bs_sum_dot(int64_t n, const double *a, const double *b, int64_t par_min) {
   double part[BS_SUM_CHUNKS];
   const bs_sum_plan P = bs_sum_plan_of(n);
+#ifdef _OPENMP /* (a file compiled without OpenMP gets the same bits, serially) */
 #pragma omp parallel for schedule(static) if (n > par_min)
+#else
+  (void)par_min;
+#endif
   for (int c = 0; c < P.count; ++c) {
     double s = 0.0;
     for (int64_t i = bs_sum_lo(P, c); i < bs_sum_hi(P, c); ++i) s += a[i] * b[i];

@@ -206,74 +206,77 @@ static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, do
   return bs_sum_parts(P.count, part);
 }
 
-/* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
- * row is in registers; with extra blocks y changes afterwards, so the dot is
- * then a separate pass). */
-static inline __attribute__((always_inline)) double mul_impl(const bs_bsr *A, const uint8_t *mask,
-                                                             const double *x, double *y, const int dot) {
-  const int32_t n = A->n;
+/* Row i of y = A x; returns x_i . y_i. */
+static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, const double *x, double *y,
+                                                              int32_t i) {
   const int32_t *rp = A->row_ptr, *col = A->col;
   const double *val = A->val;
+  double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+  for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+    const double *a = val + 9 * (int64_t)s;
+    const double *xj = x + 3 * (int64_t)col[s];
+    const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+    y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
+    y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
+    y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
+  }
+  y[3 * (int64_t)i] = y0;
+  y[3 * (int64_t)i + 1] = y1;
+  y[3 * (int64_t)i + 2] = y2;
+  return x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
+}
+
+/* The same, masked: written without data-dependent branches (selects
+ * instead), because a mispredicted branch on a scattered mask flushes the
+ * loads in flight and halves the bandwidth; constrained rows are computed and
+ * then dropped. Selects (not multiplications by 0/1) keep the contract exact:
+ * the blocks of constrained columns never enter the sum, even if they hold
+ * NaN. Returns 0 for a constrained row (0 * x_i is NaN for a non-finite x_i). */
+static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, const uint8_t *mask, const double *x,
+                                                               double *y, int32_t i) {
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const double *val = A->val;
+  double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+  for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+    const int32_t j = col[s];
+    const double *a = val + 9 * (int64_t)s;
+    const double *xj = x + 3 * (int64_t)j;
+    const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+    const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
+    const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
+    const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
+    const int f = mask[j] != 0;
+    y0 = f ? y0 + t0 : y0;
+    y1 = f ? y1 + t1 : y1;
+    y2 = f ? y2 + t2 : y2;
+  }
+  const int f = mask[i] != 0;
+  y0 = f ? y0 : 0.0;
+  y1 = f ? y1 : 0.0;
+  y2 = f ? y2 : 0.0;
+  y[3 * (int64_t)i] = y0;
+  y[3 * (int64_t)i + 1] = y1;
+  y[3 * (int64_t)i + 2] = y2;
+  return f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
+}
+
+/* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
+ * row is in registers, summed as in bs_sum.h; with extra blocks y changes
+ * afterwards, so the dot is then a separate pass). */
+static double mul_impl(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, const int dot) {
+  const int32_t n = A->n;
   const int fuse = dot && A->n_extra == 0;
-  double part[BS_SUM_CHUNKS]; /* the fused dot, summed as in bs_sum.h */
+  double part[BS_SUM_CHUNKS];
   const bs_sum_plan P = bs_sum_plan_of(n);
-  if (!mask) {
 #pragma omp parallel for schedule(static) if (n > 4096)
-    for (int c = 0; c < P.count; ++c) {
-      double xy = 0.0;
-      for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {
-        double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-        for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-          const double *a = val + 9 * (int64_t)s;
-          const double *xj = x + 3 * (int64_t)col[s];
-          const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-          y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
-          y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
-          y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
-        }
-        y[3 * (int64_t)i] = y0;
-        y[3 * (int64_t)i + 1] = y1;
-        y[3 * (int64_t)i + 2] = y2;
-        if (fuse) xy += x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
-      }
-      part[c] = xy;
+  for (int c = 0; c < P.count; ++c) {
+    const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
+    double xy = 0.0;
+    for (int32_t i = lo; i < hi; ++i) {
+      const double d = mask ? row_masked(A, mask, x, y, i) : row_plain(A, x, y, i);
+      if (fuse) xy += d;
     }
-  } else {
-  /* Masked: written without data-dependent branches (selects instead), because
-   * a mispredicted branch on a scattered mask flushes the loads in flight and
-   * halves the bandwidth; constrained rows are computed and then dropped.
-   * Selects (not multiplications by 0/1) keep the contract exact: the blocks of
-   * constrained columns never enter the sum, even if they hold NaN. */
-#pragma omp parallel for schedule(static) if (n > 4096)
-    for (int c = 0; c < P.count; ++c) {
-      double xy = 0.0;
-      for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {
-        double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-        for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-          const int32_t j = col[s];
-          const double *a = val + 9 * (int64_t)s;
-          const double *xj = x + 3 * (int64_t)j;
-          const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-          const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
-          const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
-          const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
-          const int f = mask[j] != 0;
-          y0 = f ? y0 + t0 : y0;
-          y1 = f ? y1 + t1 : y1;
-          y2 = f ? y2 + t2 : y2;
-        }
-        const int f = mask[i] != 0;
-        y0 = f ? y0 : 0.0;
-        y1 = f ? y1 : 0.0;
-        y2 = f ? y2 : 0.0;
-        y[3 * (int64_t)i] = y0;
-        y[3 * (int64_t)i + 1] = y1;
-        y[3 * (int64_t)i + 2] = y2;
-        /* a constrained row adds 0 * x_i, which is NaN for a non-finite x_i: drop it */
-        if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
-      }
-      part[c] = xy;
-    }
+    part[c] = xy;
   }
   if (!dot) {
     if (A->n_extra > 0) mul_extra(A, mask, x, y);
@@ -300,7 +303,7 @@ double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, dou
 
 int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
 
-/* The row loop over blocks, masked or not (selects as in mul_impl), with
+/* The row loop over blocks, masked or not (selects as in row_masked), with
  * BLOCK(s, j, t0, t1, t2) computing the block's product into t0..t2. */
 #define BS_ROWS32(BLOCK)                                                                               \
   const int32_t n = A->n;                                                                              \

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_sum.h"
 #include "sim_util.h"
 
 #define SCENES BS_SOURCE_DIR "/data/scenes/"
@@ -163,4 +164,48 @@ Test(threads, box_cholmod, .timeout = 600) {
 Test(threads, box_amg, .timeout = 600) {
   (void)same_with_1_and_2("box 18^3 amg", SCENES "cube_stretch.json",
                     FEW_NEWTON "bodies.0.box.cells=[18,18,18] solver.linear=amg", NULL);
+}
+
+/* bs_sum.h: the cut covers [0, n) in at most BS_SUM_CHUNKS chunks of at least
+ * BS_SUM_MIN_LEN indices (but the last), and a dot product has the same bits
+ * with 1 to 4 threads and in the serial branch of its `if` clause. */
+Test(threads, sum_plan_and_dot) {
+  const int64_t sizes[] = {0, 1, 63, 64, 65, 1000, 16385, 65537, 100003, 1 << 20, 3000001};
+  const int64_t nmax = 3000001;
+  double *a = malloc(sizeof *a * nmax), *b = malloc(sizeof *b * nmax);
+  cr_assert(a && b);
+  uint64_t r = 88172645463325252ull;
+  for (int64_t i = 0; i < nmax; i++) { /* xorshift: values of mixed signs and magnitudes */
+    r ^= r << 13, r ^= r >> 7, r ^= r << 17;
+    a[i] = ((double)(r >> 11) / 9007199254740992.0 - 0.5) * exp2((double)(r % 40) - 20);
+    b[i] = ((double)((r >> 3) & 0xffff) - 32768.0) / 1024.0;
+  }
+  const int saved = omp_get_max_threads();
+  for (size_t k = 0; k < sizeof sizes / sizeof *sizes; k++) {
+    const int64_t n = sizes[k];
+    const bs_sum_plan P = bs_sum_plan_of(n);
+    cr_assert_leq(P.count, BS_SUM_CHUNKS, "n %lld: %d chunks", (long long)n, P.count);
+    cr_assert_eq(P.count == 0, n == 0);
+    int64_t next = 0;
+    for (int c = 0; c < P.count; c++) {
+      cr_assert_eq(bs_sum_lo(P, c), next);
+      cr_assert_gt(bs_sum_hi(P, c), bs_sum_lo(P, c));
+      cr_assert(c == P.count - 1 || bs_sum_hi(P, c) - bs_sum_lo(P, c) >= BS_SUM_MIN_LEN);
+      next = bs_sum_hi(P, c);
+    }
+    cr_assert_eq(next, n, "n %lld: the chunks end at %lld", (long long)n, (long long)next);
+    const double serial = bs_sum_dot(n, a, b, INT64_MAX);
+    long double ref = 0, mag = 0;
+    for (int64_t i = 0; i < n; i++) ref += (long double)a[i] * b[i], mag += fabsl((long double)a[i] * b[i]);
+    cr_assert_leq(fabsl(serial - ref), 1e-13L * mag + 1e-300L, "n %lld: %.17g vs %.17Lg", (long long)n, serial, ref);
+    for (int t = 1; t <= 4; t++) {
+      omp_set_num_threads(t);
+      const double par = bs_sum_dot(n, a, b, 0);
+      cr_assert(memcmp(&par, &serial, sizeof par) == 0, "n %lld, %d threads: %.17g vs serial %.17g", (long long)n, t,
+                par, serial);
+    }
+  }
+  omp_set_num_threads(saved);
+  free(a);
+  free(b);
 }
