@@ -206,9 +206,9 @@ static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, do
   return bs_sum_parts(P.count, part);
 }
 
-/* Row i of y = A x; returns x_i . y_i. */
+/* Row i of y = A x; returns x_i . y_i when fuse, else 0. */
 static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, const double *x, double *y,
-                                                              int32_t i) {
+                                                              int fuse, int32_t i) {
   const int32_t *rp = A->row_ptr, *col = A->col;
   const double *val = A->val;
   double y0 = 0.0, y1 = 0.0, y2 = 0.0;
@@ -223,6 +223,7 @@ static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, c
   y[3 * (int64_t)i] = y0;
   y[3 * (int64_t)i + 1] = y1;
   y[3 * (int64_t)i + 2] = y2;
+  if (!fuse) return 0.0;
   return x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
 }
 
@@ -233,7 +234,7 @@ static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, c
  * the blocks of constrained columns never enter the sum, even if they hold
  * NaN. Returns 0 for a constrained row (0 * x_i is NaN for a non-finite x_i). */
 static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, const uint8_t *mask, const double *x,
-                                                               double *y, int32_t i) {
+                                                               double *y, int fuse, int32_t i) {
   const int32_t *rp = A->row_ptr, *col = A->col;
   const double *val = A->val;
   double y0 = 0.0, y1 = 0.0, y2 = 0.0;
@@ -257,6 +258,7 @@ static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, 
   y[3 * (int64_t)i] = y0;
   y[3 * (int64_t)i + 1] = y1;
   y[3 * (int64_t)i + 2] = y2;
+  if (!fuse) return 0.0;
   return f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
 }
 
@@ -272,10 +274,10 @@ static double mul_impl(const bs_bsr *A, const uint8_t *mask, const double *x, do
   for (int c = 0; c < P.count; ++c) {
     const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
     double xy = 0.0;
-    for (int32_t i = lo; i < hi; ++i) {
-      const double d = mask ? row_masked(A, mask, x, y, i) : row_plain(A, x, y, i);
-      if (fuse) xy += d;
-    }
+    if (!mask)
+      for (int32_t i = lo; i < hi; ++i) xy += row_plain(A, x, y, fuse, i);
+    else
+      for (int32_t i = lo; i < hi; ++i) xy += row_masked(A, mask, x, y, fuse, i);
     part[c] = xy;
   }
   if (!dot) {
