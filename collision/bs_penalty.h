@@ -18,10 +18,9 @@
  * Units: k in J/m^3 (N/m^2), phi in m, energy in J, force in N.
  *
  * Threads: OpenMP over vertices; each gradient entry and diagonal block is
- * written by one thread; the energy is summed in fixed chunks of vertices and
- * the chunk sums added in order, so results do not depend on the thread
- * count. A term keeps a small chunk-sum buffer: do not evaluate one penalty
- * term from several threads at once.
+ * written by one thread; the energy is summed in the fixed order of bs_sum.h
+ * (chunks of vertices cut by their number only, the chunk sums added in
+ * order), so results are bitwise the same with any thread count.
  *
  * Ownership: the term (free with bs_term_destroy) keeps pointers to the fem,
  * the step data and the level set, which must outlive it; it copies the

@@ -5,40 +5,38 @@
 #include <string.h>
 
 #include "bs_penalty.h"
-
-enum { CHUNK = 1024 }; /* vertices per energy partial sum */
+#include "bs_sum.h"
 
 typedef struct penalty_data {
   const bs_levelset *ls;
   double k;
   int32_t n;        /* vertices in the set                          */
   int32_t *verts;   /* the set; NULL: all, vertex i is entry i      */
-  int32_t n_chunks; /* ceil(n / CHUNK)                              */
-  double *partial;  /* n_chunks energy partial sums                 */
 } penalty_data;
 
 static void penalty_free(void *p) {
   penalty_data *d = p;
   if (!d) return;
   free(d->verts);
-  free(d->partial);
   free(d);
 }
 
 static double step_time(const bs_term *t) { return t->step ? t->step->time : 0.0; }
 static int32_t vertex_of(const penalty_data *d, int32_t i) { return d->verts ? d->verts[i] : i; }
 
-/* Energy of all vertices, gradient added into g when non-NULL. */
+/* Energy of all vertices (summed as in bs_sum.h: the same bits with any
+ * thread count), gradient added into g when non-NULL. */
 static double penalty_eval(const bs_term *t, const double *x, double *g) {
   penalty_data *d = t->data;
   bs_levelset_frame f;
   bs_levelset_frame_at(d->ls, step_time(t), &f);
   const double k = d->k;
-#pragma omp parallel for schedule(static)
-  for (int32_t c = 0; c < d->n_chunks; c++) {
-    int64_t end = ((int64_t)c + 1) * CHUNK < d->n ? ((int64_t)c + 1) * CHUNK : d->n;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(d->n);
+#pragma omp parallel for schedule(static) if (d->n > 4096)
+  for (int c = 0; c < P.count; c++) {
     double E = 0;
-    for (int32_t i = c * (int32_t)CHUNK; i < end; i++) {
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); i++) {
       int32_t v = vertex_of(d, i);
       double grad[3];
       double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, g ? grad : NULL, NULL);
@@ -47,11 +45,9 @@ static double penalty_eval(const bs_term *t, const double *x, double *g) {
       if (g)
         for (int a = 0; a < 3; a++) g[3 * (size_t)v + a] -= 3 * k * phi * phi * grad[a];
     }
-    d->partial[c] = E;
+    part[c] = E;
   }
-  double E = 0;
-  for (int32_t c = 0; c < d->n_chunks; c++) E += d->partial[c];
-  return E;
+  return bs_sum_parts(P.count, part);
 }
 
 /* Defined for every x: a vertex where phi is NaN (a NaN position) adds
@@ -115,11 +111,6 @@ int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, c
         seen[v] = 1, d->verts[i] = v;
     }
     free(seen);
-  }
-  if (!st) {
-    d->n_chunks = (d->n + CHUNK - 1) / CHUNK;
-    d->partial = bs_calloc((size_t)d->n_chunks + 1, sizeof(double), "the penalty partial sums", err);
-    if (!d->partial) st = BS_ENOMEM;
   }
   bs_term *t = NULL;
   if (!st) {

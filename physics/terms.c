@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bs_element.h"
+#include "bs_sum.h"
 #include "bs_terms.h"
 
 int bs_term_create(const char *name, const bs_term_ops *ops, const bs_fem *fem, const bs_step_data *step, void *data,
@@ -58,17 +59,22 @@ static void add_mass_diagonal(const bs_fem *fem, double c, bs_bsr *H) {
 
 /* c/2 Σ m_v |x_v − y_v|², gradient c m_v (x_v − y_v). */
 static double mass_quadratic(const bs_fem *fem, double c, const double *x, const double *y, double *g) {
-  double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_vertices > 8192)
-  for (int32_t v = 0; v < fem->n_vertices; v++) {
-    double cm = c * fem->mass[v];
-    for (int k = 0; k < 3; k++) {
-      double d = x[3 * v + k] - y[3 * v + k];
-      E += 0.5 * cm * d * d;
-      if (g) g[3 * v + k] += cm * d;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(fem->n_vertices);
+#pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
+  for (int ch = 0; ch < P.count; ch++) {
+    double E = 0;
+    for (int32_t v = (int32_t)bs_sum_lo(P, ch); v < (int32_t)bs_sum_hi(P, ch); v++) {
+      double cm = c * fem->mass[v];
+      for (int k = 0; k < 3; k++) {
+        double d = x[3 * v + k] - y[3 * v + k];
+        E += 0.5 * cm * d * d;
+        if (g) g[3 * v + k] += cm * d;
+      }
     }
+    part[ch] = E;
   }
-  return E;
+  return bs_sum_parts(P.count, part);
 }
 
 /* ---- inertia ---------------------------------------------------------- */
@@ -101,11 +107,16 @@ static int gravity_value(const bs_term *t, const double *x, double *Eout) {
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
-  double E = 0;
-#pragma omp parallel for schedule(static) reduction(+ : E) if (fem->n_vertices > 8192)
-  for (int32_t v = 0; v < fem->n_vertices; v++)
-    E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
-  *Eout = E;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(fem->n_vertices);
+#pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
+  for (int c = 0; c < P.count; c++) {
+    double E = 0;
+    for (int32_t v = (int32_t)bs_sum_lo(P, c); v < (int32_t)bs_sum_hi(P, c); v++)
+      E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
+    part[c] = E;
+  }
+  *Eout = bs_sum_parts(P.count, part);
   return BS_TERM_OK;
 }
 static int gravity_gradient(const bs_term *t, const double *x, double *E, double *grad) {

@@ -1,6 +1,7 @@
 /* amg.c — hypre BoomerAMG (one V-cycle) as a preconditioner on the free dofs
  * of a 3x3 block CSR matrix (see bs_amg.h). */
 #include "bs_amg.h"
+#include "bs_sum.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -338,14 +339,20 @@ int bs_amg_apply(bs_amg *amg, const double *r, double *z, double *rz, bs_error *
   if (code & ~HYPRE_ERROR_CONV)
     return bs_error_set(err, BS_EINTERNAL, "amg: hypre BoomerAMG cycle failed (hypre error flag %d)",
                         (int)code);
-  double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (nf > 4096)
-  for (int32_t f = 0; f < nf; ++f)
-    for (int a = 0; a < 3; ++a) {
-      const int64_t m = 3 * (int64_t)fv[f] + a;
-      z[m] = buf[3 * f + a];
-      s += r[m] * z[m];
-    }
-  if (rz) *rz = s;
+  /* r . z summed as in bs_sum.h: the same bits with any thread count */
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(nf);
+#pragma omp parallel for schedule(static) if (nf > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int32_t f = (int32_t)bs_sum_lo(P, c); f < (int32_t)bs_sum_hi(P, c); ++f)
+      for (int a = 0; a < 3; ++a) {
+        const int64_t m = 3 * (int64_t)fv[f] + a;
+        z[m] = buf[3 * f + a];
+        s += r[m] * z[m];
+      }
+    part[c] = s;
+  }
+  if (rz) *rz = bs_sum_parts(P.count, part);
   return BS_OK;
 }

@@ -37,7 +37,8 @@
  *
  * Threads: bs_bsr_mul and bs_bsr_zero use OpenMP over rows with a static
  * schedule; each output entry is computed by one thread in a fixed order, so the
- * product is bitwise independent of the thread count.
+ * product is bitwise independent of the thread count; the dots of the _dot
+ * products are summed in the fixed order of bs_sum.h, so they are too.
  */
 #ifndef BS_BSR_H
 #define BS_BSR_H

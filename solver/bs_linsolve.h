@@ -53,8 +53,15 @@
  * bs_bsr with the same pattern may be passed to solve). The caller owns the
  * workspace and frees it with bs_linsolve_destroy (accepts NULL, nulls).
  * A workspace is not thread-safe: one solve at a time (each solve is itself
- * parallel through OpenMP; results do not depend on the thread count beyond
- * round-off, reductions use static schedules).
+ * parallel through OpenMP).
+ *
+ * Threads: results are bitwise the same with any number of OpenMP threads
+ * (iterates, iteration counts, exits): every inner product and norm is summed
+ * in the fixed order of bs_sum.h. CHOLMOD's solve sets OpenBLAS (when it is
+ * the BLAS) to one thread for its duration and puts the count back after,
+ * since OpenBLAS's kernels change their last bits with its thread count; a
+ * process that calls OpenBLAS from another thread at the same time sees that
+ * setting. hypre's BoomerAMG here is serial.
  *
  * Status: 0 when the solver ran (converged or not: see stats.converged,
  * stats.indefinite, stats.not_pd); BS_ENUMERIC when b or A holds a NaN/Inf in

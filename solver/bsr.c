@@ -1,5 +1,6 @@
 /* bsr.c — 3x3 block CSR matrices: pattern from a graph, product, checker. */
 #include "bs_bsr.h"
+#include "bs_sum.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -194,77 +195,96 @@ static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, do
   if (A->n_extra == 0) return xy;
   mul_extra(A, mask, x, y);
   const int64_t N = 3 * (int64_t)A->n;
-  xy = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (N > 16384)
-  for (int64_t m = 0; m < N; ++m) xy += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
-  return xy;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(N);
+#pragma omp parallel for schedule(static) if (N > 16384)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int64_t m = bs_sum_lo(P, c); m < bs_sum_hi(P, c); ++m) s += (mask && !mask[m / 3]) ? 0.0 : x[m] * y[m];
+    part[c] = s;
+  }
+  return bs_sum_parts(P.count, part);
+}
+
+/* Row i of y = A x; returns x_i . y_i when fuse, else 0. */
+static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, const double *x, double *y,
+                                                              int fuse, int32_t i) {
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const double *val = A->val;
+  double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+  for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+    const double *a = val + 9 * (int64_t)s;
+    const double *xj = x + 3 * (int64_t)col[s];
+    const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+    y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
+    y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
+    y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
+  }
+  y[3 * (int64_t)i] = y0;
+  y[3 * (int64_t)i + 1] = y1;
+  y[3 * (int64_t)i + 2] = y2;
+  if (!fuse) return 0.0;
+  return x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
+}
+
+/* The same, masked: written without data-dependent branches (selects
+ * instead), because a mispredicted branch on a scattered mask flushes the
+ * loads in flight and halves the bandwidth; constrained rows are computed and
+ * then dropped. Selects (not multiplications by 0/1) keep the contract exact:
+ * the blocks of constrained columns never enter the sum, even if they hold
+ * NaN. Returns 0 for a constrained row (0 * x_i is NaN for a non-finite x_i). */
+static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, const uint8_t *mask, const double *x,
+                                                               double *y, int fuse, int32_t i) {
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const double *val = A->val;
+  double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+  for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+    const int32_t j = col[s];
+    const double *a = val + 9 * (int64_t)s;
+    const double *xj = x + 3 * (int64_t)j;
+    const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
+    const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
+    const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
+    const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
+    const int f = mask[j] != 0;
+    y0 = f ? y0 + t0 : y0;
+    y1 = f ? y1 + t1 : y1;
+    y2 = f ? y2 + t2 : y2;
+  }
+  const int f = mask[i] != 0;
+  y0 = f ? y0 : 0.0;
+  y1 = f ? y1 : 0.0;
+  y2 = f ? y2 : 0.0;
+  y[3 * (int64_t)i] = y0;
+  y[3 * (int64_t)i + 1] = y1;
+  y[3 * (int64_t)i + 2] = y2;
+  if (!fuse) return 0.0;
+  return f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
 }
 
 /* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
- * row is in registers; with extra blocks y changes afterwards, so the dot is
- * then a separate pass). */
-static inline __attribute__((always_inline)) double mul_impl(const bs_bsr *A, const uint8_t *mask,
-                                                             const double *x, double *y, const int dot) {
+ * row is in registers, summed as in bs_sum.h; with extra blocks y changes
+ * afterwards, so the dot is then a separate pass). */
+static double mul_impl(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, const int dot) {
   const int32_t n = A->n;
-  const int32_t *rp = A->row_ptr, *col = A->col;
-  const double *val = A->val;
   const int fuse = dot && A->n_extra == 0;
-  double xy = 0.0;
-  if (!mask) {
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
-    for (int32_t i = 0; i < n; ++i) {
-      double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-        const double *a = val + 9 * (int64_t)s;
-        const double *xj = x + 3 * (int64_t)col[s];
-        const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-        y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
-        y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
-        y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
-      }
-      y[3 * (int64_t)i] = y0;
-      y[3 * (int64_t)i + 1] = y1;
-      y[3 * (int64_t)i + 2] = y2;
-      if (fuse) xy += x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2;
-    }
-  } else {
-  /* Masked: written without data-dependent branches (selects instead), because
-   * a mispredicted branch on a scattered mask flushes the loads in flight and
-   * halves the bandwidth; constrained rows are computed and then dropped.
-   * Selects (not multiplications by 0/1) keep the contract exact: the blocks of
-   * constrained columns never enter the sum, even if they hold NaN. */
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
-    for (int32_t i = 0; i < n; ++i) {
-      double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-        const int32_t j = col[s];
-        const double *a = val + 9 * (int64_t)s;
-        const double *xj = x + 3 * (int64_t)j;
-        const double x0 = xj[0], x1 = xj[1], x2 = xj[2];
-        const double t0 = a[0] * x0 + a[1] * x1 + a[2] * x2;
-        const double t1 = a[3] * x0 + a[4] * x1 + a[5] * x2;
-        const double t2 = a[6] * x0 + a[7] * x1 + a[8] * x2;
-        const int f = mask[j] != 0;
-        y0 = f ? y0 + t0 : y0;
-        y1 = f ? y1 + t1 : y1;
-        y2 = f ? y2 + t2 : y2;
-      }
-      const int f = mask[i] != 0;
-      y0 = f ? y0 : 0.0;
-      y1 = f ? y1 : 0.0;
-      y2 = f ? y2 : 0.0;
-      y[3 * (int64_t)i] = y0;
-      y[3 * (int64_t)i + 1] = y1;
-      y[3 * (int64_t)i + 2] = y2;
-      /* a constrained row adds 0 * x_i, which is NaN for a non-finite x_i: drop it */
-      if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
-    }
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
+    double xy = 0.0;
+    if (!mask)
+      for (int32_t i = lo; i < hi; ++i) xy += row_plain(A, x, y, fuse, i);
+    else
+      for (int32_t i = lo; i < hi; ++i) xy += row_masked(A, mask, x, y, fuse, i);
+    part[c] = xy;
   }
   if (!dot) {
     if (A->n_extra > 0) mul_extra(A, mask, x, y);
     return 0.0;
   }
-  return mul_tail(A, mask, x, y, xy);
+  return mul_tail(A, mask, x, y, fuse ? bs_sum_parts(P.count, part) : 0.0);
 }
 
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) { (void)mul_impl(A, mask, x, y, 0); }
@@ -285,35 +305,40 @@ double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, dou
 
 int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
 
-/* The row loop over blocks, masked or not (selects as in mul_impl), with
+/* The row loop over blocks, masked or not (selects as in row_masked), with
  * BLOCK(s, j, t0, t1, t2) computing the block's product into t0..t2. */
 #define BS_ROWS32(BLOCK)                                                                               \
   const int32_t n = A->n;                                                                              \
   const int32_t *rp = A->row_ptr, *col = A->col;                                                       \
   const int fuse = A->n_extra == 0;                                                                    \
-  double xy = 0.0;                                                                                     \
-  _Pragma("omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)")                         \
-  for (int32_t i = 0; i < n; ++i) {                                                                    \
-    double y0 = 0.0, y1 = 0.0, y2 = 0.0;                                                               \
-    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {                                                      \
-      const int32_t j = col[s];                                                                        \
-      double t0, t1, t2;                                                                               \
-      BLOCK(s, j, t0, t1, t2);                                                                         \
-      const int f = !mask || mask[j] != 0;                                                             \
-      y0 = f ? y0 + t0 : y0;                                                                           \
-      y1 = f ? y1 + t1 : y1;                                                                           \
-      y2 = f ? y2 + t2 : y2;                                                                           \
+  double part[BS_SUM_CHUNKS];                                                                          \
+  const bs_sum_plan P = bs_sum_plan_of(n);                                                             \
+  _Pragma("omp parallel for schedule(static) if (n > 4096)")                                           \
+  for (int c = 0; c < P.count; ++c) {                                                                  \
+    double xy = 0.0;                                                                                   \
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {                    \
+      double y0 = 0.0, y1 = 0.0, y2 = 0.0;                                                             \
+      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {                                                    \
+        const int32_t j = col[s];                                                                      \
+        double t0, t1, t2;                                                                             \
+        BLOCK(s, j, t0, t1, t2);                                                                       \
+        const int f = !mask || mask[j] != 0;                                                           \
+        y0 = f ? y0 + t0 : y0;                                                                         \
+        y1 = f ? y1 + t1 : y1;                                                                         \
+        y2 = f ? y2 + t2 : y2;                                                                         \
+      }                                                                                                \
+      const int f = !mask || mask[i] != 0;                                                             \
+      y0 = f ? y0 : 0.0;                                                                               \
+      y1 = f ? y1 : 0.0;                                                                               \
+      y2 = f ? y2 : 0.0;                                                                               \
+      y[3 * (int64_t)i] = y0;                                                                          \
+      y[3 * (int64_t)i + 1] = y1;                                                                      \
+      y[3 * (int64_t)i + 2] = y2;                                                                      \
+      if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0; \
     }                                                                                                  \
-    const int f = !mask || mask[i] != 0;                                                               \
-    y0 = f ? y0 : 0.0;                                                                                 \
-    y1 = f ? y1 : 0.0;                                                                                 \
-    y2 = f ? y2 : 0.0;                                                                                 \
-    y[3 * (int64_t)i] = y0;                                                                            \
-    y[3 * (int64_t)i + 1] = y1;                                                                        \
-    y[3 * (int64_t)i + 2] = y2;                                                                        \
-    if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0; \
+    part[c] = xy;                                                                                      \
   }                                                                                                    \
-  return mul_tail(A, mask, x, y, xy)
+  return mul_tail(A, mask, x, y, fuse ? bs_sum_parts(P.count, part) : 0.0)
 
 /* double values, rounded into val32 on the way */
 #define BS_BLOCK_ROUND(s, j, t0, t1, t2)                                                               \
@@ -345,48 +370,60 @@ static double mul32_scalar(const bs_bsr *A, const float *val32, const uint8_t *m
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
+/* Row i of the product into y; returns x_i . y_i (0 when not fuse or row i is
+ * constrained). */
+__attribute__((target("avx2,fma"), always_inline)) static inline double row32_avx2(const bs_bsr *A, const float *val32,
+                                                                                 const uint8_t *mask, const double *x,
+                                                                                 double *y, int fuse, int32_t i) {
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  __m256d acc = _mm256_setzero_pd();
+  if (!mask) {
+    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+      const float *c = val32 + 9 * (int64_t)s;
+      const double *xj = x + 3 * (int64_t)col[s];
+      acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj), acc);
+      acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), acc);
+      acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), acc);
+    }
+  } else {
+    for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+      const int32_t j = col[s];
+      const float *c = val32 + 9 * (int64_t)s;
+      const double *xj = x + 3 * (int64_t)j;
+      __m256d t = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj));
+      t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), t);
+      t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), t);
+      const __m256d keep = _mm256_castsi256_pd(_mm256_set1_epi64x(mask[j] ? -1 : 0));
+      acc = _mm256_add_pd(acc, _mm256_and_pd(t, keep));
+    }
+  }
+  double yi[4];
+  _mm256_storeu_pd(yi, acc);
+  const int f = !mask || mask[i] != 0;
+  const double y0 = f ? yi[0] : 0.0, y1 = f ? yi[1] : 0.0, y2 = f ? yi[2] : 0.0;
+  y[3 * (int64_t)i] = y0;
+  y[3 * (int64_t)i + 1] = y1;
+  y[3 * (int64_t)i + 2] = y2;
+  return fuse && f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
+}
+
 /* The same with AVX2 and FMA: lanes 0-2 of acc are y_i's three entries. The
  * mask select is an and with all-ones or all-zeros lanes (a NaN of a
  * constrained column's block never enters). */
 __attribute__((target("avx2,fma"))) static double mul32_avx2(const bs_bsr *A, const float *val32,
                                                              const uint8_t *mask, const double *x, double *y) {
   const int32_t n = A->n;
-  const int32_t *rp = A->row_ptr, *col = A->col;
   const int fuse = A->n_extra == 0;
-  double xy = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : xy) if (n > 4096)
-  for (int32_t i = 0; i < n; ++i) {
-    __m256d acc = _mm256_setzero_pd();
-    if (!mask) {
-      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-        const float *c = val32 + 9 * (int64_t)s;
-        const double *xj = x + 3 * (int64_t)col[s];
-        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj), acc);
-        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), acc);
-        acc = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), acc);
-      }
-    } else {
-      for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
-        const int32_t j = col[s];
-        const float *c = val32 + 9 * (int64_t)s;
-        const double *xj = x + 3 * (int64_t)j;
-        __m256d t = _mm256_mul_pd(_mm256_cvtps_pd(_mm_loadu_ps(c)), _mm256_broadcast_sd(xj));
-        t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 3)), _mm256_broadcast_sd(xj + 1), t);
-        t = _mm256_fmadd_pd(_mm256_cvtps_pd(_mm_loadu_ps(c + 6)), _mm256_broadcast_sd(xj + 2), t);
-        const __m256d keep = _mm256_castsi256_pd(_mm256_set1_epi64x(mask[j] ? -1 : 0));
-        acc = _mm256_add_pd(acc, _mm256_and_pd(t, keep));
-      }
-    }
-    double yi[4];
-    _mm256_storeu_pd(yi, acc);
-    const int f = !mask || mask[i] != 0;
-    const double y0 = f ? yi[0] : 0.0, y1 = f ? yi[1] : 0.0, y2 = f ? yi[2] : 0.0;
-    y[3 * (int64_t)i] = y0;
-    y[3 * (int64_t)i + 1] = y1;
-    y[3 * (int64_t)i + 2] = y2;
-    if (fuse) xy += f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double xy = 0.0;
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i)
+      xy += row32_avx2(A, val32, mask, x, y, fuse, i);
+    part[c] = xy;
   }
-  return mul_tail(A, mask, x, y, xy);
+  return mul_tail(A, mask, x, y, fuse ? bs_sum_parts(P.count, part) : 0.0);
 }
 #endif
 

@@ -3,12 +3,19 @@
  *
  * Masking: every work vector is kept zero on the constrained dofs (the masked
  * right-hand side is zero there and bs_bsr_mul with the mask writes zeros
- * there), so plain dot products over all 3n entries are the masked ones. */
+ * there), so plain dot products over all 3n entries are the masked ones.
+ *
+ * Every inner product and norm is summed in the fixed order of bs_sum.h
+ * (chunks cut by the length only), so iterates, iteration counts and exits
+ * are bitwise the same with any thread count. */
+#define _GNU_SOURCE /* dlsym's RTLD_DEFAULT */
 #include "bs_linsolve.h"
 
 #include "bs_amg.h"
+#include "bs_sum.h"
 
 #include <cholmod.h>
+#include <dlfcn.h>
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -62,13 +69,21 @@ int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err) {
                       "unknown linear solver \"%s\" (expected cg, pcg, amg, cholmod or minres)", name);
 }
 
-/* ---- vector kernels (OpenMP, static schedules) ------------------------- */
+/* ---- vector kernels (OpenMP, static schedules, bs_sum.h sums) ----------- */
 
-static double vdot(int64_t N, const double *a, const double *b) {
-  double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-  for (int64_t k = 0; k < N; ++k) s += a[k] * b[k];
-  return s;
+static double vdot(int64_t N, const double *a, const double *b) { return bs_sum_dot(N, a, b, 16384); }
+
+/* ||r - q||^2 */
+static double resid2(int64_t N, const double *r, const double *q) {
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(N);
+#pragma omp parallel for schedule(static) if (N > 16384)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int64_t m = bs_sum_lo(P, c); m < bs_sum_hi(P, c); ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
+    part[c] = s;
+  }
+  return bs_sum_parts(P.count, part);
 }
 
 static void vcopy(int64_t N, const double *a, double *b) {
@@ -84,24 +99,29 @@ static void vzero(int64_t N, double *a) {
 /* r = b on the free dofs, 0 on the constrained ones; returns ||r||^2 and the
  * number of non-finite free entries of b in *bad. */
 static double load_rhs(int32_t n, const uint8_t *mask, const double *b, double *r, int64_t *bad) {
-  double s = 0.0;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
   int64_t nb = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s, nb) if (n > 4096)
-  for (int32_t i = 0; i < n; ++i) {
-    const int free_i = !mask || mask[i];
-    for (int a = 0; a < 3; ++a) {
-      const double bi = free_i ? b[3 * (int64_t)i + a] : 0.0;
-      if (!isfinite(bi)) {
-        ++nb;
-        r[3 * (int64_t)i + a] = 0.0;
-      } else {
-        r[3 * (int64_t)i + a] = bi;
-        s += bi * bi;
+#pragma omp parallel for schedule(static) reduction(+ : nb) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {
+      const int free_i = !mask || mask[i];
+      for (int a = 0; a < 3; ++a) {
+        const double bi = free_i ? b[3 * (int64_t)i + a] : 0.0;
+        if (!isfinite(bi)) {
+          ++nb;
+          r[3 * (int64_t)i + a] = 0.0;
+        } else {
+          r[3 * (int64_t)i + a] = bi;
+          s += bi * bi;
+        }
       }
     }
+    part[c] = s;
   }
   *bad = nb;
-  return s;
+  return bs_sum_parts(P.count, part);
 }
 
 static int rhs_error(int32_t n, const uint8_t *mask, const double *b, bs_error *err) {
@@ -223,16 +243,54 @@ static inline double block_jacobi_row(const double *M, double r0, double r1, dou
 
 /* z = M^-1 r; returns r . z. */
 static double apply_block_jacobi(int32_t n, const double *minv, const double *r, double *z) {
-  double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (n > 4096)
-  for (int32_t i = 0; i < n; ++i) {
-    const double *ri = r + 3 * (int64_t)i;
-    s += block_jacobi_row(minv + 9 * (int64_t)i, ri[0], ri[1], ri[2], z + 3 * (int64_t)i);
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {
+      const double *ri = r + 3 * (int64_t)i;
+      s += block_jacobi_row(minv + 9 * (int64_t)i, ri[0], ri[1], ri[2], z + 3 * (int64_t)i);
+    }
+    part[c] = s;
   }
-  return s;
+  return bs_sum_parts(P.count, part);
 }
 
 /* ---- CG / PCG ----------------------------------------------------------- */
+
+/* One pass of a CG iteration: x += alpha p, r -= alpha q; returns ||r||^2
+ * and sets *xx = ||x||^2; with minv (block Jacobi) also z = M^-1 r and
+ * *rz = r . z (z is wasted only on the last iteration). */
+static double cg_update(int32_t n, double alpha, const double *p, const double *q, const double *minv, double *x,
+                        double *r, double *z, double *xx, double *rz) {
+  double part_r[BS_SUM_CHUNKS], part_x[BS_SUM_CHUNKS], part_z[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0, sx = 0.0, sz = 0.0;
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i) {
+      const int64_t m = 3 * (int64_t)i;
+      const double x0 = x[m] + alpha * p[m], x1 = x[m + 1] + alpha * p[m + 1], x2 = x[m + 2] + alpha * p[m + 2];
+      x[m] = x0;
+      x[m + 1] = x1;
+      x[m + 2] = x2;
+      sx += x0 * x0 + x1 * x1 + x2 * x2;
+      const double r0 = r[m] - alpha * q[m], r1 = r[m + 1] - alpha * q[m + 1], r2 = r[m + 2] - alpha * q[m + 2];
+      r[m] = r0;
+      r[m + 1] = r1;
+      r[m + 2] = r2;
+      s += r0 * r0 + r1 * r1 + r2 * r2;
+      if (minv) sz += block_jacobi_row(minv + 9 * (int64_t)i, r0, r1, r2, z + m);
+    }
+    part_r[c] = s;
+    part_x[c] = sx;
+    part_z[c] = sz;
+  }
+  *xx = bs_sum_parts(P.count, part_x);
+  if (minv) *rz = bs_sum_parts(P.count, part_z);
+  return bs_sum_parts(P.count, part_r);
+}
 
 /* run_cg's answer when the single-precision values overflowed (a value beyond
  * FLT_MAX): the caller solves again in double. Positive, so never a bs status. */
@@ -285,10 +343,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     st->precond_failed = 1;
     vcopy(N, r, x);
     bs_bsr_mul(A, mask, x, q);
-    double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-    for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
-    st->rel_residual = sqrt(s) / bnorm;
+    st->rel_residual = sqrt(resid2(N, r, q)) / bnorm;
     return BS_OK;
   }
   vcopy(N, z, p);
@@ -314,45 +369,14 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
         /* No iterate yet: return the right-hand side (r still holds masked b). */
         vcopy(N, r, x);
         bs_bsr_mul(A, mask, x, q);
-        double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-        for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
-        rr = s;
+        rr = resid2(N, r, q);
       }
       break;
     }
     const double alpha = rz / pq;
-    double s = 0.0, rz_new = 0.0, xx = 0.0;
+    double rz_new = 0.0, xx = 0.0;
     const double rr_k = rr;
-    if (precond == PC_BLOCK_JACOBI) {
-      /* one pass: the updates, ||r||^2, z = M^-1 r and r . z (z is wasted only
-         on the last iteration) */
-      const double *minv = ls->minv;
-#pragma omp parallel for schedule(static) reduction(+ : s, rz_new, xx) if (n > 4096)
-      for (int32_t i = 0; i < n; ++i) {
-        const int64_t m = 3 * (int64_t)i;
-        const double x0 = x[m] + alpha * p[m], x1 = x[m + 1] + alpha * p[m + 1], x2 = x[m + 2] + alpha * p[m + 2];
-        x[m] = x0;
-        x[m + 1] = x1;
-        x[m + 2] = x2;
-        xx += x0 * x0 + x1 * x1 + x2 * x2;
-        const double r0 = r[m] - alpha * q[m], r1 = r[m + 1] - alpha * q[m + 1], r2 = r[m + 2] - alpha * q[m + 2];
-        r[m] = r0;
-        r[m + 1] = r1;
-        r[m + 2] = r2;
-        s += r0 * r0 + r1 * r1 + r2 * r2;
-        rz_new += block_jacobi_row(minv + 9 * (int64_t)i, r0, r1, r2, z + m);
-      }
-    } else {
-#pragma omp parallel for schedule(static) reduction(+ : s, xx) if (N > 16384)
-      for (int64_t m = 0; m < N; ++m) {
-        x[m] += alpha * p[m];
-        r[m] -= alpha * q[m];
-        s += r[m] * r[m];
-        xx += x[m] * x[m];
-      }
-    }
-    rr = s;
+    rr = cg_update(n, alpha, p, q, precond == PC_BLOCK_JACOBI ? ls->minv : NULL, x, r, z, &xx, &rz_new);
     st->iterations = k + 1;
     if (!isfinite(rr)) return matrix_error(A, mask, name, err);
     bx += alpha * rz;
@@ -395,6 +419,41 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
 }
 
 /* ---- MINRES --------------------------------------------------------------- */
+
+/* y -= f r; returns ||y||^2. */
+static double sub_norm2(int64_t N, double f, const double *r, double *y) {
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(N);
+#pragma omp parallel for schedule(static) if (N > 16384)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int64_t m = bs_sum_lo(P, c); m < bs_sum_hi(P, c); ++m) {
+      y[m] -= f * r[m];
+      s += y[m] * y[m];
+    }
+    part[c] = s;
+  }
+  return bs_sum_parts(P.count, part);
+}
+
+/* r = b - y on the free dofs, 0 on the constrained ones; returns ||r||^2. */
+static double masked_residual(int32_t n, const uint8_t *mask, const double *b, const double *y, double *r) {
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(n);
+#pragma omp parallel for schedule(static) if (n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0;
+    for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); ++i)
+      for (int a = 0; a < 3; ++a) {
+        const int64_t m = 3 * (int64_t)i + a;
+        const double ri = (!mask || mask[i]) ? b[m] - y[m] : 0.0;
+        r[m] = ri;
+        s += ri * ri;
+      }
+    part[c] = s;
+  }
+  return bs_sum_parts(P.count, part);
+}
 
 /* MINRES of Paige and Saunders (1975) for symmetric A, following the
  * reference implementation's recurrences: Lanczos vectors v_k, a QR
@@ -449,13 +508,7 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
       first = 0;
       const double alfa = vdot(N, v, y);
       if (!isfinite(alfa)) return matrix_error(A, mask, "minres", err);
-      const double f2 = alfa / beta;
-      double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-      for (int64_t m = 0; m < N; ++m) {
-        y[m] -= f2 * r2[m];
-        s += y[m] * y[m];
-      }
+      const double s = sub_norm2(N, alfa / beta, r2, y);
       /* r1 <- r2, r2 <- y; the old r1 becomes the next y buffer. */
       double *t = r1;
       r1 = r2;
@@ -491,16 +544,7 @@ static int run_minres(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
     }
     /* True residual into r1. */
     bs_bsr_mul(A, mask, x, y);
-    double s = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (n > 4096)
-    for (int32_t i = 0; i < n; ++i)
-      for (int a = 0; a < 3; ++a) {
-        const int64_t m = 3 * (int64_t)i + a;
-        const double ri = (!mask || mask[i]) ? b[m] - y[m] : 0.0;
-        r1[m] = ri;
-        s += ri * ri;
-      }
-    rnorm = sqrt(s);
+    rnorm = sqrt(masked_residual(n, mask, b, y, r1));
     if (!isfinite(rnorm)) return matrix_error(A, mask, "minres", err);
   }
   st->iterations = its;
@@ -650,15 +694,44 @@ static int run_cholmod(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, co
     for (int a = 0; a < 3; ++a) x[3 * (int64_t)ls->fvert[f] + a] = Xx[3 * f + a];
   /* Residual of the direct solve (one product). */
   bs_bsr_mul(A, mask, x, ls->q);
-  double s = 0.0;
-  const double *r = ls->r, *q = ls->q;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > 16384)
-  for (int64_t m = 0; m < N; ++m) s += (r[m] - q[m]) * (r[m] - q[m]);
-  st->rel_residual = sqrt(s) / bnorm;
+  st->rel_residual = sqrt(resid2(N, ls->r, ls->q)) / bnorm;
   if (!isfinite(st->rel_residual))
     return bs_error_set(err, BS_ENUMERIC, "cholmod: non-finite solution (A nearly singular?)");
   st->converged = 1;
   return BS_OK;
+}
+
+/* OpenBLAS (the usual BLAS under CHOLMOD on Debian) splits some kernels of
+ * the supernodal factorization by its own thread count (OPENBLAS_NUM_THREADS,
+ * else OMP_NUM_THREADS at load), which changes the factor's last bits (seen:
+ * 2e-16 m in x, 5e-15 m/s in v after one frame of a 16^3 box with 1 and 2
+ * BLAS threads). So CHOLMOD runs with one BLAS thread, and the count is put
+ * back afterwards. Found by name at run time (no link dependency): a BLAS
+ * without these entries is left alone. Returns the count to restore (0:
+ * nothing to restore). */
+typedef int (*blas_get_fn)(void);
+typedef void (*blas_set_fn)(int);
+
+static blas_set_fn blas_setter(void) {
+  blas_set_fn set = NULL;
+  *(void **)(&set) = dlsym(RTLD_DEFAULT, "openblas_set_num_threads");
+  return set;
+}
+
+static int blas_one_thread(void) {
+  blas_get_fn get = NULL;
+  *(void **)(&get) = dlsym(RTLD_DEFAULT, "openblas_get_num_threads");
+  blas_set_fn set = blas_setter();
+  if (!get || !set) return 0;
+  const int n = get();
+  if (n <= 1) return 0;
+  set(1);
+  return n;
+}
+
+static void blas_restore_threads(int n) {
+  blas_set_fn set = n > 1 ? blas_setter() : NULL;
+  if (set) set(n);
 }
 
 /* ---- create / destroy / solve ------------------------------------------ */
@@ -789,9 +862,12 @@ int bs_linsolve_solve(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, con
   case BS_LIN_MINRES:
     rc = run_minres(ls, A, mask, b, rel_tol, max_iter, x, st, err);
     break;
-  case BS_LIN_CHOLMOD:
+  case BS_LIN_CHOLMOD: {
+    const int blas_threads = blas_one_thread();
     rc = run_cholmod(ls, A, mask, b, x, st, err);
+    blas_restore_threads(blas_threads);
     break;
+  }
   }
   st->seconds = bs_seconds() - t0;
   return rc;

@@ -9,18 +9,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_sum.h"
 #include "minimize_impl.h"
 
 /* ---- small shared helpers ------------------------------------------------ */
 
 #define BS_PAR_MIN 16384 /* below this many doubles, vector kernels run serially */
 
-double bs__dot(int64_t N, const double *a, const double *b) {
-  double s = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (N > BS_PAR_MIN)
-  for (int64_t i = 0; i < N; ++i) s += a[i] * b[i];
-  return s;
-}
+/* in the fixed order of bs_sum.h: the same bits with any thread count */
+double bs__dot(int64_t N, const double *a, const double *b) { return bs_sum_dot(N, a, b, BS_PAR_MIN); }
 
 void bs__mask_copy(int32_t n, const uint8_t *mask, const double *src, double *dst) {
 #pragma omp parallel for schedule(static) if (3 * (int64_t)n > BS_PAR_MIN)
