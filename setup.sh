@@ -2,11 +2,18 @@
 # bigstep set-up on Debian 12 (as root): installs what is missing, builds, and
 #   bash setup.sh run    runs the main job on the default scene
 #   bash setup.sh test   runs the whole test suite (CTest)
+#   bash setup.sh sanitize  builds with -fsanitize=address,undefined (Debug, in
+#                        build-asan) and runs the suite's "sanitize" subset
 #   bash setup.sh build  only installs and builds
 # Environment: BUILD_DIR (default build), BUILD_TYPE (default Release), JOBS.
 set -euo pipefail
 cd "$(dirname "$0")"
 mode=${1:-run}
+if [ "$mode" = sanitize ]; then
+  BUILD_DIR=${BUILD_DIR:-build-asan}
+  BUILD_TYPE=${BUILD_TYPE:-Debug}
+  CMAKE_ARGS="${CMAKE_ARGS:-} -DBS_SANITIZE=ON"
+fi
 BUILD_DIR=${BUILD_DIR:-build}
 BUILD_TYPE=${BUILD_TYPE:-Release}
 JOBS=${JOBS:-$(nproc)}
@@ -50,5 +57,6 @@ case "$mode" in
   build) ;;
   run)  "$BUILD_DIR/app/bigstep" run data/scenes/cube_stretch.json --replace ;;
   test) ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$JOBS" ;;
-  *) echo "usage: bash setup.sh run|test|build" >&2; exit 2 ;;
+  sanitize) ctest --test-dir "$BUILD_DIR" -L sanitize --output-on-failure -j "$JOBS" ;;
+  *) echo "usage: bash setup.sh run|test|sanitize|build" >&2; exit 2 ;;
 esac
