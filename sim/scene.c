@@ -650,6 +650,7 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
       (st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol)) || (st = parse_sigma(c, so, s)) ||
       (st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill)) ||
       (st = get_int(c, so, "solver", "solver", "max_iterations", &s->solver.min.max_iter)) ||
+      (st = get_int(c, so, "solver", "solver", "newton_max_iterations", &s->solver.min.newton_max_iter)) ||
       (st = get_int(c, so, "solver", "solver", "cg_max_iterations", &s->solver.min.cg_max_iter)) ||
       (st = get_int(c, so, "solver", "solver", "newton_k", &s->solver.newton_k)) ||
       (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||

@@ -48,6 +48,8 @@ const bs_schema_key bs_schema_keys_[] = {
      .doc = "linear solver of the Newton steps"},
     {"solver", "tolerance", NUM, .range = "(0, )", .def = "0.001", .doc = "tau on ||grad E|| (N)"},
     {"solver", "max_iterations", INT, .range = "[1, 100000000]", .def = "500", .doc = "Newton iterations per step"},
+    {"solver", "newton_max_iterations", INT, .range = "[1, 100000000]", .def = "50",
+     .doc = "method newton: iterations per step (it also stops as soon as it diverges)"},
     {"solver", "cg_max_iterations", INT, .range = "[0, 100000000]", .def = "0",
      .doc = "Krylov iterations per solve; 0: 2 x free dofs + 100"},
     {"solver", "newton_k", INT, .range = "[1, 1000000]", .def = "1",

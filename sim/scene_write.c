@@ -67,6 +67,7 @@ static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
   str(w, o, "linear", bs_lin_kind_name(m->linear));
   num(w, o, "tolerance", m->tol);
   num(w, o, "max_iterations", m->max_iter);
+  num(w, o, "newton_max_iterations", m->newton_max_iter);
   num(w, o, "cg_max_iterations", m->cg_max_iter);
   num(w, o, "newton_k", s->solver.newton_k);
   str(w, o, "mode", choice("solver", "mode", s->mode == BS_MODE_STATIC));

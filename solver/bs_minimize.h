@@ -82,9 +82,14 @@
  * The hooks, when given, are applied as in bs_minimize (projection of the
  * initial guess and of every iterate, registration, projected gradient); pass
  * them NULL for the pure root-finder. It stops when ||g|| < tol (converged),
- * after max_iter iterations (BS_MIN_MAX_ITER), or when an iterate, E or the
- * gradient becomes non-finite (BS_MIN_NONFINITE; x keeps the last finite
- * iterate). With k_steps > 0 it takes exactly k_steps iterations (the "k
+ * after newton_max_iter iterations (BS_MIN_MAX_ITER), when an iterate, E or
+ * the gradient becomes non-finite (BS_MIN_NONFINITE; x keeps the last finite
+ * iterate), or as soon as it diverges (BS_MIN_DIVERGED, x the last iterate):
+ * ||g|| more than BS_NEWTON_GROWTH times the smallest ||g|| of the solve, or
+ * the smallest ||g|| not halved over BS_NEWTON_WINDOW iterations. MINRES
+ * takes at most cg_max_iter iterations, or by default min(2 N + 100,
+ * 100 + 20 sqrt(N)) for N free dofs: a solve that needs more than that is
+ * not converging and the Newton step takes its best iterate. With k_steps > 0 it takes exactly k_steps iterations (the "k
  * Newton steps and stop" variant) and reports BS_MIN_CONVERGED if ||g|| < tol
  * after them, else BS_MIN_STEPS_DONE with grad_norm: not reaching tol is
  * by design there and is not a max-iteration failure.
@@ -249,6 +254,8 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
                        /* is replaced by the last CG iterate that passed it (step 5);      */
                        /* 0: the paper's rule (-g when neither dx nor -dx passes)          */
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
+  int newton_max_iter;  /* bs_newton's iteration cap, default 50 (the paper's baseline takes */
+                       /* 15-50; >= 1); max_iter is the optimization integrator's           */
   int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
                        /* step predicts, |g.d|, is below the rounding level of E            */
                        /* (64 eps |E|) and a = 1 fails sufficient decrease, search on the   */
@@ -273,10 +280,15 @@ typedef enum {
   BS_MIN_STALLED,       /* an accepted step left every free dof unchanged (no progress)     */
   BS_MIN_LINE_SEARCH,   /* no trial point decreased E within max_ls (x unchanged)          */
   BS_MIN_NONFINITE,     /* E, grad E or H not finite / not evaluable at an iterate         */
-  BS_MIN_STEPS_DONE     /* bs_newton with k_steps > 0 took its k steps, ||g|| >= tol        */
+  BS_MIN_STEPS_DONE,    /* bs_newton with k_steps > 0 took its k steps, ||g|| >= tol        */
+  BS_MIN_DIVERGED       /* bs_newton: ||g|| grew BS_NEWTON_GROWTH-fold, or did not halve    */
+                        /* over BS_NEWTON_WINDOW iterations                                 */
 } bs_min_reason;
+#define BS_NEWTON_GROWTH 1e4
+#define BS_NEWTON_WINDOW 20
 
-/* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done". */
+/* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done",
+ * "diverged". */
 const char *bs_min_reason_name(bs_min_reason r);
 
 /* iterations: accepted steps (Newton steps for bs_newton); cg_iterations: Krylov

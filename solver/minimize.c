@@ -100,6 +100,7 @@ const char *bs_min_reason_name(bs_min_reason r) {
   case BS_MIN_LINE_SEARCH: return "line_search";
   case BS_MIN_NONFINITE: return "nonfinite";
   case BS_MIN_STEPS_DONE: return "steps_done";
+  case BS_MIN_DIVERGED: return "diverged";
   }
   return "unknown";
 }
@@ -129,6 +130,7 @@ void bs_minimize_opts_default(bs_minimize_opts *o) {
   memset(o, 0, sizeof *o);
   o->tol = 1e-3;
   o->max_iter = 500;
+  o->newton_max_iter = 50;
   o->sigma = 1.0;
   o->kappa = 1e-2;
   o->clamp = 1e3;
@@ -151,6 +153,8 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
     return bs_error_set(err, BS_EINPUT, "minimizer option tol must be finite and >= 0, got %g", o->tol);
   if (o->max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
+  if (o->newton_max_iter < 1)
+    return bs_error_set(err, BS_EINPUT, "minimizer option newton_max_iter must be >= 1, got %d", o->newton_max_iter);
   if (!(o->sigma > 0) || !isfinite(o->sigma))
     return bs_error_set(err, BS_EINPUT, "minimizer option sigma must be finite and > 0, got %g", o->sigma);
   if (!(o->kappa >= 0 && o->kappa < 1))

@@ -1380,7 +1380,8 @@ Test(newton, fails_where_the_minimizer_succeeds) {
   double x[3] = {3.0, -2.0, 5.0};
   bs_minimize_stats st;
   cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
-  cr_assert(st.reason == BS_MIN_MAX_ITER || st.reason == BS_MIN_NONFINITE, "%s", st.reason_text);
+  cr_assert(st.reason == BS_MIN_MAX_ITER || st.reason == BS_MIN_NONFINITE || st.reason == BS_MIN_DIVERGED, "%s",
+            st.reason_text);
   cr_assert(!(st.grad_norm < o.tol), "Newton ended away from the root: %s", st.reason_text);
   for (int k = 0; k < 3; ++k) cr_assert(isfinite(x[k]), "x keeps the last finite iterate");
 
@@ -1398,6 +1399,96 @@ Test(newton, fails_where_the_minimizer_succeeds) {
   double r[3] = {-1.2, 1.0, 0.0};
   cr_assert_eq(bs_newton(m, &obj, 0, r, &st, &err), 0, "%s", err.msg);
   if (st.reason == BS_MIN_CONVERGED) cr_assert_lt(st.grad_norm, o.tol);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* E = |u|^p per dof: Newton's step is u <- u (p - 2) / (p - 1), which
+ * diverges for p < 1.5 (p = 1.2: u grows 4-fold, |g| 1.32-fold per step)
+ * and converges only linearly for large p (p = 20: u shrinks by 18/19). */
+static int ev_pow(fx *f, const double *u, double *E, double *g, bs_bsr *H, double p) {
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    const double a = fabs(u[k]);
+    e += pow(a, p);
+    if (g) g[k] = (u[k] < 0 ? -1 : 1) * p * pow(a, p - 1);
+    if (H) hadd(H, k, k, p * (p - 1) * pow(a, p - 2));
+  }
+  *E = e;
+  return 0;
+}
+static int ev_pow12(fx *f, const double *u, double *E, double *g, bs_bsr *H) { return ev_pow(f, u, E, g, H, 1.2); }
+static int ev_pow20(fx *f, const double *u, double *E, double *g, bs_bsr *H) { return ev_pow(f, u, E, g, H, 20); }
+
+/* The baseline stops a diverging solve early with the reason (not at the
+ * iteration cap), and lets a slow but converging one run to convergence. */
+Test(newton, stops_when_it_diverges_not_when_it_is_slow) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_pow12);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-12;
+  o.newton_max_iter = 200;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {1, -1, 0.5};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_expect_eq(st.reason, BS_MIN_DIVERGED, "%s", st.reason_text);
+  cr_expect_leq(st.iterations, BS_NEWTON_WINDOW, "%d iterations: %s", st.iterations, st.reason_text);
+  cr_expect(strstr(st.reason_text, "did not halve over 20 iterations") != NULL, "%s", st.reason_text);
+  cr_expect_str_eq(bs_min_reason_name(st.reason), "diverged");
+
+  fx_init(&f, 1, ev_pow20);
+  double y[3] = {1, -1, 0.9};
+  cr_assert_eq(bs_newton(m, &obj, 0, y, &st, &err), 0, "%s", err.msg);
+  cr_expect_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_expect_gt(st.iterations, BS_NEWTON_WINDOW, "the slow solve took %d iterations: not slow", st.iterations);
+  /* u_k = (18/19)^k u_0: with two dofs at u_0 = 1, |g| = sqrt(2) 20 u^19 < 1e-12
+   * first at k = 31. */
+  cr_expect_eq(st.iterations, 31, "%d", st.iterations);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* A sudden blow-up of |g| (by BS_NEWTON_GROWTH) ends the solve at once. */
+static int ev_cliff(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  /* E = u^2/2 + 1e9 (u - 1)^4 for u > 1: Newton's first step from 0.5 on the
+   * understated Hessian (scaled by 1e-3 below) jumps past the cliff at 1. */
+  const int64_t N = 3 * (int64_t)f->n;
+  double e = 0;
+  for (int64_t k = 0; k < N; ++k) {
+    const double d = u[k] > 1 ? u[k] - 1 : 0;
+    e += 0.5 * u[k] * u[k] + 1e9 * d * d * d * d;
+    if (g) g[k] = u[k] + 4e9 * d * d * d;
+    if (H) hadd(H, k, k, 1 + 12e9 * d * d);
+  }
+  *E = e;
+  return 0;
+}
+
+Test(newton, a_blow_up_of_the_gradient_ends_the_solve_at_once) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_cliff);
+  f.hess_scale = 1e-3; /* a Hessian 1000x too soft: the step overshoots */
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[3] = {0.5, 0.5, 0.5};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  cr_expect_eq(st.reason, BS_MIN_DIVERGED, "%s", st.reason_text);
+  cr_expect_leq(st.iterations, 2, "%d iterations: %s", st.iterations, st.reason_text);
+  cr_expect(strstr(st.reason_text, "its smallest") != NULL, "%s", st.reason_text);
   bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
 }

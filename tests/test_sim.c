@@ -298,3 +298,26 @@ Test(sim, shape_names_round_trip) {
   cr_expect_eq(bs_shape_parse("cone", &s, &err), BS_EINPUT);
   cr_expect(strstr(err.msg, "cone") != NULL, "%s", err.msg);
 }
+
+/* The Newton baseline on the stretched cube (each face pulled 0.5 m in one
+ * 24 Hz step) diverges: it must stop within a couple of dozen iterations
+ * with the reason "diverged" or "nonfinite", a failed step, instead of
+ * running its cap of MINRES solves (the issue: 500 iterations, 468 s). */
+Test(sim, newton_baseline_stops_when_it_diverges) {
+  bs_scene *sc = NULL;
+  bs_error err;
+  const char *set[] = {"solver.method=\"newton\"", "time.frames=1"}; /* 12^3 cells; at 6^3 Newton converges */
+  cr_assert_eq(bs_scene_load(BS_SOURCE_DIR "/data/scenes/cube_stretch.json", 2, set, &sc, &err), 0, "%s", err.msg);
+  bs_sim *s = NULL;
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_frame_stats fs;
+  cr_assert_eq(bs_sim_advance_frame(s, &fs, &err), 0, "%s", err.msg);
+  cr_expect_eq(fs.failed, 1);
+  const bs_min_reason r = fs.steps[0].st.min.reason;
+  cr_expect(r == BS_MIN_DIVERGED || r == BS_MIN_NONFINITE, "%s: %s", bs_min_reason_name(r), fs.steps[0].reason);
+  cr_expect_leq(fs.iterations, BS_NEWTON_WINDOW + 1, "%ld iterations: %s", fs.iterations, fs.steps[0].reason);
+  fprintf(stderr, "newton baseline on the stretched cube: %ld iterations, %ld MINRES, %s\n", fs.iterations,
+          fs.cg_iterations, fs.steps[0].reason);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
