@@ -9,32 +9,29 @@
 #include "bs_obstacle_output.h"
 #include "bs_qoi.h"
 #include "bs_runfolder.h"
+#include "outfile.h"
 
 struct bs_runfolder {
   char dir[BS_MAX_PATH];
-  FILE *frames, *stats, *state;
+  bs_outfile frames, stats, state; /* open when .f is not NULL */
   int n_vtu, cap_vtu;
   char **vtu_names;
   double *vtu_times;
   bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
   bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
-  FILE *qoi_csv;     /* qoi.csv, when the scene names quantities      */
+  bs_outfile qoi_csv; /* qoi.csv, when the scene names quantities     */
   bs_qoi *qoi;
   double *qoi_values;
 };
 
-static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
-  char p[BS_MAX_PATH + 64];
-  snprintf(p, sizeof p, "%s/%s", rf->dir, name);
-  *f = fopen(p, mode);
-  return *f ? 0 : bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-}
-
 /* state.bin's header (bs_runfolder.h). */
-static int write_state_header(FILE *f, int32_t n) {
+static int write_state_header(bs_outfile *f, int32_t n, bs_error *err) {
   uint32_t version = BS_STATE_VERSION;
   int32_t hdr[2] = {n, 0};
-  return fwrite("BSST", 1, 4, f) == 4 && fwrite(&version, 4, 1, f) == 1 && fwrite(hdr, 4, 2, f) == 2 ? 0 : -1;
+  bs_outfile_write(f, "BSST", 1, 4);
+  bs_outfile_write(f, &version, 4, 1);
+  bs_outfile_write(f, hdr, 4, 2);
+  return bs_outfile_flush(f, err);
 }
 
 int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
@@ -44,11 +41,16 @@ int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs
 static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   int st = 0;
-  if (sc->stats_csv && !(st = open_file(rf, "stats.csv", "w", &rf->stats, err))) fprintf(rf->stats, "%s\n", BS_STATS_CSV_HEADER);
-  if (!st && !(st = open_file(rf, "frames.csv", "w", &rf->frames, err))) fprintf(rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
-  if (!st && sc->states && !(st = open_file(rf, "state.bin", "wb", &rf->state, err)) &&
-      write_state_header(rf->state, s->mesh->n_vertices))
-    st = bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
+  if (sc->stats_csv && !(st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "w", err))) {
+    bs_outfile_printf(&rf->stats, "%s\n", BS_STATS_CSV_HEADER);
+    st = bs_outfile_flush(&rf->stats, err);
+  }
+  if (!st && !(st = bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "w", err))) {
+    bs_outfile_printf(&rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
+    st = bs_outfile_flush(&rf->frames, err);
+  }
+  if (!st && sc->states && !(st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "wb", err)))
+    st = write_state_header(&rf->state, s->mesh->n_vertices, err);
   return st;
 }
 
@@ -57,23 +59,22 @@ static int open_qoi(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
   int st = bs_qoi_create(s, &rf->qoi, err);
   if (!st && !(rf->qoi_values = calloc((size_t)s->scene->n_qoi, sizeof(double))))
     st = bs_error_set(err, BS_ENOMEM, "out of memory");
-  if (!st) st = open_file(rf, "qoi.csv", "w", &rf->qoi_csv, err);
+  if (!st) st = bs_outfile_open(&rf->qoi_csv, rf->dir, "qoi.csv", "w", err);
   if (st) return st;
-  fprintf(rf->qoi_csv, "frame,time");
-  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%s", s->scene->qoi[i].name);
-  fputc('\n', rf->qoi_csv);
-  return 0;
+  bs_outfile_printf(&rf->qoi_csv, "frame,time");
+  for (int i = 0; i < s->scene->n_qoi; i++) bs_outfile_printf(&rf->qoi_csv, ",%s", s->scene->qoi[i].name);
+  bs_outfile_printf(&rf->qoi_csv, "\n");
+  return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
 /* The frame's row of qoi.csv (format: bs_runfolder.h). */
 static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
   int st = bs_qoi_eval(rf->qoi, s, rf->qoi_values, err);
   if (st) return st;
-  fprintf(rf->qoi_csv, "%d,%.17g", frame, s->time);
-  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%.17g", rf->qoi_values[i]);
-  fputc('\n', rf->qoi_csv);
-  if (fflush(rf->qoi_csv) || ferror(rf->qoi_csv)) return bs_error_set(err, BS_EIO, "cannot write '%s/qoi.csv'", rf->dir);
-  return 0;
+  bs_outfile_printf(&rf->qoi_csv, "%d,%.17g", frame, s->time);
+  for (int i = 0; i < s->scene->n_qoi; i++) bs_outfile_printf(&rf->qoi_csv, ",%.17g", rf->qoi_values[i]);
+  bs_outfile_printf(&rf->qoi_csv, "\n");
+  return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
@@ -104,31 +105,33 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   return 0;
 }
 
-static void write_stats_rows(FILE *f, const bs_frame_stats *fs) {
+static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *err) {
   for (int k = 0; k < fs->n_steps; k++) {
     const bs_step_stats *st = &fs->steps[k].st;
-    fprintf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", fs->frame, k,
+    bs_outfile_printf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", fs->frame, k,
             fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations, st->min.ls_evaluations,
             st->min.indefinite_exits, st->min.fallback_neg_dx, st->min.fallback_neg_grad, st->min.clamps,
             st->min.cholmod_fallbacks, st->min.alpha_min, st->min.alpha_max, st->min.grad_norm, st->min.E,
             st->min.reason_text ? st->min.reason_text : "", fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly,
             st->min.t_linear, st->min.t_line_search, st->seconds);
   }
-  fflush(f);
+  return bs_outfile_flush(f, err);
 }
 
-static void write_frame_row(FILE *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m) {
-  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m->kinetic,
+static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
+                           bs_error *err) {
+  bs_outfile_printf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m->kinetic,
           m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations, fs->cg_iterations, fs->failed,
           fs->seconds, m->penetrating, m->max_depth, (long long)m->self_intersections);
-  fflush(f);
+  return bs_outfile_flush(f, err);
 }
 
-static int write_state(FILE *f, const bs_sim *s) {
+static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
   size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  int ok = fwrite(&s->time, sizeof(double), 1, f) == 1 && fwrite(s->x, sizeof(double), n3, f) == n3 &&
-           fwrite(s->v, sizeof(double), n3, f) == n3;
-  return fflush(f) == 0 && ok ? 0 : -1;
+  bs_outfile_write(f, &s->time, sizeof(double), 1);
+  bs_outfile_write(f, s->x, sizeof(double), n3);
+  bs_outfile_write(f, s->v, sizeof(double), n3);
+  return bs_outfile_flush(f, err);
 }
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
@@ -171,12 +174,10 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err) {
-  if (rf->stats) write_stats_rows(rf->stats, fs);
-  write_frame_row(rf->frames, s, fs, m);
-  if (ferror(rf->frames)) return bs_error_set(err, BS_EIO, "cannot write '%s/frames.csv'", rf->dir);
-  if (rf->stats && ferror(rf->stats)) return bs_error_set(err, BS_EIO, "cannot write '%s/stats.csv'", rf->dir);
-  if (rf->state && write_state(rf->state, s)) return bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
-  int st = rf->qoi_csv ? write_qoi_row(rf, s, fs->frame, err) : 0;
+  int st = rf->stats.f ? write_stats_rows(&rf->stats, fs, err) : 0;
+  if (!st) st = write_frame_row(&rf->frames, s, fs, m, err);
+  if (!st && rf->state.f) st = write_state(&rf->state, s, err);
+  if (!st && rf->qoi_csv.f) st = write_qoi_row(rf, s, fs->frame, err);
   if (st) return st;
   const int every = s->scene->vtu_every;
   if (every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
@@ -185,28 +186,27 @@ int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *
 }
 
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {
-  char p[BS_MAX_PATH + 64];
-  if (!summary) return 0;
-  snprintf(p, sizeof p, "%s/summary.txt", rf->dir);
-  FILE *f = fopen(p, "w");
-  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-  int ok = fputs(summary, f) >= 0;
-  if (fclose(f) || !ok) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-  return 0;
+  int st = summary ? bs_outfile_replace_text(rf->dir, "summary.txt", summary, err) : 0;
+  bs_outfile *files[] = {&rf->frames, &rf->stats, &rf->state, &rf->qoi_csv};
+  for (int i = 0; i < 4; i++) {
+    int c = bs_outfile_close(files[i], st ? NULL : err);
+    if (!st) st = c;
+  }
+  return st;
 }
 
 void bs_runfolder_destroy(bs_runfolder **prf) {
   if (!prf || !*prf) return;
   bs_runfolder *rf = *prf;
-  if (rf->frames) fclose(rf->frames);
-  if (rf->stats) fclose(rf->stats);
-  if (rf->state) fclose(rf->state);
+  bs_outfile_abandon(&rf->frames);
+  bs_outfile_abandon(&rf->stats);
+  bs_outfile_abandon(&rf->state);
   bs_fields_destroy(&rf->fields);
   bs_obstacle_output_destroy(&rf->obstacles);
   for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
   free(rf->vtu_names);
   free(rf->vtu_times);
-  if (rf->qoi_csv) fclose(rf->qoi_csv);
+  bs_outfile_abandon(&rf->qoi_csv);
   bs_qoi_destroy(&rf->qoi);
   free(rf->qoi_values);
   free(rf);

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "bs_runfolder.h"
+#include "outfile.h"
 
 static int has_suffix(const char *s, const char *suf) {
   size_t n = strlen(s), m = strlen(suf);
@@ -64,18 +65,16 @@ int bs_runfolder_prepare(const char *dir, int replace, int *n_removed, bs_error 
 }
 
 int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err) {
-  char p[BS_MAX_PATH + 16], stamp[64] = "?";
-  snprintf(p, sizeof p, "%s/run.txt", dir);
+  char stamp[64] = "?";
   time_t now = time(NULL);
   struct tm tm;
   if (gmtime_r(&now, &tm)) strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &tm);
   char cwd[BS_MAX_PATH];
   if (!getcwd(cwd, sizeof cwd)) snprintf(cwd, sizeof cwd, "?");
-  FILE *f = fopen(p, "w");
-  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s': %s", p, strerror(errno));
-  int ok = fprintf(f, "version: bigstep %s\ncommand: %s\ncwd: %s\nstarted: %s\n", bs_version(),
-                   command_line ? command_line : "(library call)", cwd, stamp) > 0;
-  int eno = errno;
-  if (fclose(f) || !ok) return bs_error_set(err, BS_EIO, "cannot write '%s': %s", p, strerror(ok ? errno : eno));
-  return 0;
+  bs_outfile o;
+  int st = bs_outfile_open_replace(&o, dir, "run.txt", err);
+  if (st) return st;
+  bs_outfile_printf(&o, "version: bigstep %s\ncommand: %s\ncwd: %s\nstarted: %s\n", bs_version(),
+                    command_line ? command_line : "(library call)", cwd, stamp);
+  return bs_outfile_close(&o, err);
 }

@@ -1,0 +1,107 @@
+/* Write failures of a run folder (sim/bs_runfolder.h): every output file
+ * pointed at /dev/full ends the run with BS_EIO and a message naming the file
+ * and the OS reason. Appended files (frames.csv, stats.csv, state.bin,
+ * qoi.csv) are opened by bs_runfolder_open: their descriptor is then swapped
+ * for /dev/full (dup2). Replaced files (VTU frames, obstacle frames, the PVD
+ * collections, summary.txt) are written as NAME.tmp and renamed: NAME.tmp is
+ * made a symbolic link to /dev/full; the final NAME must then not appear. */
+#define _GNU_SOURCE
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bs_runfolder.h"
+#include "bs_scene.h"
+#include "bs_sim.h"
+#include "scene_fixture.h"
+
+static char dir[] = "/tmp/bs_runfolder_io_XXXXXX";
+
+static void setup(void) { cr_assert_not_null(mkdtemp(dir)); }
+static void teardown(void) {
+  char cmd[256];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
+}
+
+/* The box falling for 2 frames onto a plane with friction, every output on:
+ * stats, states, a VTU frame per frame, a quantity of interest. */
+static bs_scene *all_outputs(void) {
+  bs_scene *sc = bs_test_box_scene(2, 24.0, 1);
+  bs_error err;
+  bs_scene_obstacle *o = NULL;
+  bs_scene_qoi *q = NULL;
+  cr_assert_eq(bs_scene_add_obstacle(sc, BS_SHAPE_PLANE, &o, &err), 0, "%s", err.msg);
+  o->offset = -0.01;
+  o->friction = 0.3;
+  cr_assert_eq(bs_scene_add_qoi(sc, "ke", BS_QOI_ENERGY, &q, &err), 0, "%s", err.msg);
+  q->energy = BS_QOI_KINETIC;
+  sc->gravity[1] = -9.8;
+  sc->states = 1;
+  sc->stats_csv = 1;
+  sc->vtu_every = 1;
+  cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
+  return sc;
+}
+
+/* Points the descriptor this process holds on path at /dev/full. */
+static void swap_for_dev_full(const char *path) {
+  DIR *d = opendir("/proc/self/fd");
+  cr_assert_not_null(d);
+  int found = 0;
+  for (struct dirent *e; (e = readdir(d));) {
+    char link[300], target[1024];
+    snprintf(link, sizeof link, "/proc/self/fd/%s", e->d_name);
+    ssize_t n = readlink(link, target, sizeof target - 1);
+    if (n <= 0) continue;
+    target[n] = 0;
+    if (strcmp(target, path)) continue;
+    int full = open("/dev/full", O_WRONLY);
+    cr_assert(full >= 0);
+    cr_assert(dup2(full, atoi(e->d_name)) >= 0);
+    close(full);
+    found = 1;
+  }
+  closedir(d);
+  cr_assert(found, "no descriptor on %s", path);
+}
+
+/* Runs the scene into dir/NAME-run with `name` failing; returns the status and the message. */
+static int run_failing(const char *name, int appended, char *msg, size_t n) {
+  bs_scene *sc = all_outputs();
+  bs_sim *s = NULL;
+  bs_runfolder *rf = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  char out[512], p[700];
+  snprintf(out, sizeof out, "%s/%s-run", dir, name);
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_runfolder_open(out, s, NULL, &rf, &err), 0, "%s", err.msg);
+  snprintf(p, sizeof p, "%s/%s%s", out, name, appended ? "" : ".tmp");
+  if (appended) swap_for_dev_full(p);
+  else cr_assert_eq(symlink("/dev/full", p), 0, "%s", p);
+  int st = bs_sim_run(s, bs_runfolder_frame, rf, NULL, &err);
+  if (!st) st = bs_runfolder_finish(rf, "summary\n", &err);
+  snprintf(msg, n, "%s", err.msg);
+  bs_runfolder_destroy(&rf);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+  return st;
+}
+
+static void expect_failure(const char *name, int appended) {
+  char msg[BS_ERROR_MSG];
+  int st = run_failing(name, appended, msg, sizeof msg);
+  cr_expect_eq(st, BS_EIO, "%s: status %d (%s)", name, st, msg);
+  cr_expect_not_null(strstr(msg, name), "%s: the message does not name it: %s", name, msg);
+  cr_expect_not_null(strstr(msg, "No space left on device"), "%s: no OS reason: %s", name, msg);
+}
+
+Test(runfolder_io, appended_files_on_a_full_disk, .init = setup, .fini = teardown) {
+  static const char *const names[] = {"frames.csv", "stats.csv", "state.bin", "qoi.csv"};
+  for (int i = 0; i < 4; i++) expect_failure(names[i], 1);
+}
