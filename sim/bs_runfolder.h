@@ -12,16 +12,30 @@
  *                header "BSST" (4 bytes), uint32 version (2), int32
  *                n_vertices, int32 0; then per frame: time, x (3n), v (3n).
  *                Version 1 ("BSST1\0\0\0", int32 n, int32 0) is read too;
- *   summary.txt  the closing summary in the columns of the paper's Figure 11
- *                (bs_summary_format), read back by bs_summary_read;
+ *   summary.txt  the summary in the columns of the paper's Figure 11
+ *                (bs_summary_format), read back by bs_summary_read: written
+ *                after every frame, of the frames so far and marked partial
+ *                (a last line "partial: N of M frames (...)"), and at the end
+ *                by bs_runfolder_finish with the caller's text;
  *   frame_NNNNN.vtu and frames.pvd  the frames for ParaView (mesh/ writes
- *                the VTU and PVD files); frames.pvd is rewritten (through a
- *                temporary file and a rename) after every VTU frame, so an
- *                interrupted run leaves a readable series;
+ *                the VTU and PVD files); frames.pvd is rewritten after every
+ *                VTU frame; obstacle_K[_NNNNN].vtu|vti and obstacles_K.pvd
+ *                the obstacles (bs_obstacle_output.h);
  *   scene.json   the resolved scene (bs_scene_write_json: every key, the
  *                defaults filled in, absolute paths), which loads again;
  *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
  *                "cwd: ...", "started: ISO 8601 UTC".
+ *
+ * Consistency: every file whose content is replaced (the VTU and VTI frames,
+ * the PVD collections, summary.txt, scene.json, run.txt) is written to
+ * NAME.tmp in the folder and renamed over NAME; the appended files
+ * (frames.csv, stats.csv, state.bin, qoi.csv) are flushed after every frame.
+ * After every frame, then, the folder is consistent: the rows of every frame
+ * so far, frames.pvd listing exactly the complete VTU files, a partial
+ * summary. A kill leaves at most a NAME.tmp (a run file, removed with the
+ * run's files) and a last row or state record cut short (bs_state_open skips
+ * a partial record). Every write is checked: a failure is BS_EIO naming the
+ * file and the OS reason (strerror).
  *
  * Writing: bs_runfolder_open makes the folder, refuses it when it holds an
  * earlier run (any file named above; BS_EINPUT naming the folder and a file)
@@ -105,10 +119,17 @@ void bs_runfolder_destroy(bs_runfolder **rf);
 
 /* ---- the summary ---------------------------------------------------------- */
 
+/* Whether the summary is of a whole run: complete; running (written after
+ * every frame; left so when the run was killed); interrupted (stopped on a
+ * request, e.g. Ctrl-C: bigstep run --resume continues it). */
+typedef enum { BS_SUMMARY_COMPLETE = 0, BS_SUMMARY_RUNNING, BS_SUMMARY_INTERRUPTED } bs_summary_state;
+
 typedef struct bs_summary {
   char method[32];
+  bs_summary_state partial;  /* not complete: a last line "partial: N of M frames (...)" */
+  int frames, frames_total;  /* frames done (statics: 1) and the scene's       */
   int steps_per_frame;
-  double s_per_frame;        /* wall seconds per frame                         */
+  double s_per_frame;        /* wall seconds per frame done                    */
   long dofs;
   double solves_per_step;    /* Newton iterations per step                      */
   long failed;               /* steps that did not converge                     */
@@ -122,15 +143,24 @@ typedef struct bs_summary {
   double peak_mib;           /* peak resident memory (MiB)                      */
 } bs_summary;
 
-/* Fills a summary from a finished run: totals, wall seconds, the sim's last state. */
+/* Fills a summary from the run so far: totals, wall seconds, the sim's
+ * current state (measured here: bs_sim_measure with intersections); partial
+ * is BS_SUMMARY_RUNNING when s->frame is short of the scene's frames (the
+ * caller may set BS_SUMMARY_INTERRUPTED). */
 void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_seconds, bs_summary *out);
 
-/* The summary as text (four lines, the first a header); returns the length. */
+/* The same with the current state's measures given. */
+void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall_seconds, const bs_sim_measures *m,
+                              bs_summary *out);
+
+/* The summary as text (four lines, the first a header, and the partial line
+ * when not complete); returns the length. */
 int bs_summary_format(const bs_summary *sum, char *buf, size_t n);
 
 /* Reads the summary row (method, steps_per_frame, s_per_frame and, when
- * present, dofs, solves_per_step, failed) and peak_mib (NAN when absent) back
- * from dir/summary.txt. BS_EINPUT when the row has not its first three. */
+ * present, dofs, solves_per_step, failed), peak_mib (NAN when absent) and the
+ * partial line (partial, frames, frames_total; 0 when absent) back from
+ * dir/summary.txt. BS_EINPUT when the row has not its first three. */
 int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
 
 /* ---- reading frames.csv --------------------------------------------------- */

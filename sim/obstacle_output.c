@@ -8,6 +8,7 @@
 
 #include "bs_ls_surface.h"
 #include "bs_obstacle_output.h"
+#include "outfile.h"
 
 typedef struct obs_out {
   const bs_levelset *ls;
@@ -104,7 +105,7 @@ static int write_surface(const bs_obstacle_output *w, const obs_out *o, double t
 }
 
 /* Appends (t, name) to obstacle k's collection and rewrites obstacles_K.pvd
- * through a temporary file (named obstacles_K.tmp.pvd, a run file too). */
+ * through a temporary file (obstacles_K.pvd.tmp, a run file too). */
 static int write_pvd(const bs_obstacle_output *w, int k, obs_out *o, double t, const char *name, bs_error *err) {
   if (o->n == o->cap) {
     int cap = o->cap ? 2 * o->cap : 64;
@@ -117,12 +118,11 @@ static int write_pvd(const bs_obstacle_output *w, int k, obs_out *o, double t, c
   }
   if (!(o->files[o->n] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
   o->times[o->n++] = t;
-  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/obstacles_%d.pvd", w->dir, k);
-  snprintf(tmp, sizeof tmp, "%s/obstacles_%d.tmp.pvd", w->dir, k);
+  bs_tmp_path(tmp, sizeof tmp, p);
   int st = bs_pvd_write(tmp, o->n, o->times, (const char *const *)o->files, err);
-  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
-  return st;
+  return st ? st : bs_tmp_commit(tmp, p, err);
 }
 
 int bs_obstacle_output_frame(bs_obstacle_output *w, const bs_sim *s, int frame, bs_error *err) {
@@ -130,13 +130,16 @@ int bs_obstacle_output_frame(bs_obstacle_output *w, const bs_sim *s, int frame, 
   for (int k = 0; k < w->n; k++) {
     obs_out *o = &w->o[k];
     const char *ext = o->grid ? "vti" : "vtu";
-    char name[64], path[BS_MAX_PATH + 64];
+    char name[64], path[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
     if (o->moving) snprintf(name, sizeof name, "obstacle_%d_%05d.%s", k, frame, ext);
     else snprintf(name, sizeof name, "obstacle_%d.%s", k, ext);
     snprintf(path, sizeof path, "%s/%s", w->dir, name);
+    bs_tmp_path(tmp, sizeof tmp, path);
     int st = 0;
-    if (o->moving || !o->written)
-      st = o->grid ? write_grid(o, s->time, path, err) : write_surface(w, o, s->time, path, err);
+    if (o->moving || !o->written) {
+      st = o->grid ? write_grid(o, s->time, tmp, err) : write_surface(w, o, s->time, tmp, err);
+      if (!st) st = bs_tmp_commit(tmp, path, err);
+    }
     if (!st) st = write_pvd(w, k, o, s->time, name, err);
     if (st) {
       bs_error_prefix(err, "obstacle %d", k);

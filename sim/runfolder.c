@@ -22,6 +22,8 @@ struct bs_runfolder {
   bs_outfile qoi_csv; /* qoi.csv, when the scene names quantities     */
   bs_qoi *qoi;
   double *qoi_values;
+  bs_run_totals totals; /* of the frames written (for the partial summary)   */
+  double t_open;        /* bs_seconds() at the open                          */
 };
 
 /* state.bin's header (bs_runfolder.h). */
@@ -89,6 +91,7 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   bs_runfolder *rf = calloc(1, sizeof *rf);
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
+  rf->t_open = bs_seconds();
   st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
@@ -137,12 +140,11 @@ static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
 /* frames.pvd of the frames written so far, through a temporary file renamed
  * over the old one: the collection is valid after every frame. */
 static int write_pvd(const bs_runfolder *rf, bs_error *err) {
-  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
-  snprintf(tmp, sizeof tmp, "%s/frames.pvd.tmp", rf->dir);
+  bs_tmp_path(tmp, sizeof tmp, p);
   int st = bs_pvd_write(tmp, rf->n_vtu, rf->vtu_times, (const char *const *)rf->vtu_names, err);
-  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
-  return st;
+  return st ? st : bs_tmp_commit(tmp, p, err);
 }
 
 static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
@@ -155,10 +157,12 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
     rf->vtu_times = tt;
     rf->cap_vtu = cap;
   }
-  char path[BS_MAX_PATH + 64], name[64];
+  char path[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72], name[64];
   snprintf(name, sizeof name, "frame_%05d.vtu", frame);
   snprintf(path, sizeof path, "%s/%s", rf->dir, name);
-  int st = bs_fields_write_vtu(rf->fields, s, path, err);
+  bs_tmp_path(tmp, sizeof tmp, path);
+  int st = bs_fields_write_vtu(rf->fields, s, tmp, err);
+  if (!st) st = bs_tmp_commit(tmp, path, err);
   if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
   if (st) return st;
   if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
@@ -172,17 +176,28 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
   return bs_runfolder_write(ctx, s, fs, &m, err);
 }
 
+/* summary.txt of the frames so far, marked partial (bs_runfolder.h). */
+static int write_partial_summary(bs_runfolder *rf, const bs_sim *s, const bs_sim_measures *m, bs_error *err) {
+  bs_summary u;
+  char text[2048];
+  bs_summary_make_measured(s, &rf->totals, bs_seconds() - rf->t_open, m, &u);
+  u.partial = BS_SUMMARY_RUNNING;
+  bs_summary_format(&u, text, sizeof text);
+  return bs_outfile_replace_text(rf->dir, "summary.txt", text, err);
+}
+
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err) {
   int st = rf->stats.f ? write_stats_rows(&rf->stats, fs, err) : 0;
   if (!st) st = write_frame_row(&rf->frames, s, fs, m, err);
   if (!st && rf->state.f) st = write_state(&rf->state, s, err);
   if (!st && rf->qoi_csv.f) st = write_qoi_row(rf, s, fs->frame, err);
-  if (st) return st;
   const int every = s->scene->vtu_every;
-  if (every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
-    return write_vtu(rf, s, fs->frame, err);
-  return 0;
+  if (!st && every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
+    st = write_vtu(rf, s, fs->frame, err);
+  bs_run_totals_add(&rf->totals, fs);
+  if (!st) st = write_partial_summary(rf, s, m, err);
+  return st;
 }
 
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {

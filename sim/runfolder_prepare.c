@@ -17,15 +17,23 @@ static int has_suffix(const char *s, const char *suf) {
 }
 
 int bs_runfolder_is_run_file(const char *name) {
-  static const char *const fixed[] = {"frames.csv", "stats.csv", "state.bin", "summary.txt", "frames.pvd",
-                                      "qoi.csv",    "run.txt",   "scene.json", NULL};
+  static const char *const fixed[] = {"frames.csv", "stats.csv", "state.bin",  "summary.txt",    "frames.pvd",
+                                      "qoi.csv",    "run.txt",   "scene.json", "checkpoint.bin", NULL};
+  const size_t n = strlen(name), nt = strlen(BS_TMP_SUFFIX);
+  if (n > nt && has_suffix(name, BS_TMP_SUFFIX)) { /* a temporary: NAME.tmp of a run file NAME */
+    char stem[300];
+    if (n - nt >= sizeof stem) return 0;
+    memcpy(stem, name, n - nt);
+    stem[n - nt] = 0;
+    return bs_runfolder_is_run_file(stem);
+  }
   for (int i = 0; fixed[i]; i++)
     if (!strcmp(name, fixed[i])) return 1;
   if (!strncmp(name, "frame_", 6) && has_suffix(name, ".vtu")) return 1;
   if (!strncmp(name, "obstacle", 8))
     return has_suffix(name, ".vtu") || has_suffix(name, ".pvd") || has_suffix(name, ".vti") ||
            has_suffix(name, ".vtm");
-  return has_suffix(name, ".tmp") && !strncmp(name, "frames.pvd", 10);
+  return 0;
 }
 
 /* Counts (and with remove, unlinks) the run files of dir; *first gets the

@@ -17,6 +17,7 @@
 #include "bs_runfolder.h"
 #include "bs_scene.h"
 #include "bs_sim.h"
+#include "bs_vtu_read.h"
 #include "scene_fixture.h"
 
 static char dir[] = "/tmp/bs_runfolder_io_XXXXXX";
@@ -104,4 +105,73 @@ static void expect_failure(const char *name, int appended) {
 Test(runfolder_io, appended_files_on_a_full_disk, .init = setup, .fini = teardown) {
   static const char *const names[] = {"frames.csv", "stats.csv", "state.bin", "qoi.csv"};
   for (int i = 0; i < 4; i++) expect_failure(names[i], 1);
+}
+
+/* The replaced files: the error names the file, and a failed VTU frame is
+ * not left under its final name. */
+Test(runfolder_io, replaced_files_on_a_full_disk, .init = setup, .fini = teardown) {
+  static const char *const names[] = {"frame_00000.vtu", "obstacle_0.vtu", "frames.pvd", "obstacles_0.pvd",
+                                      "summary.txt"};
+  for (int i = 0; i < 5; i++) expect_failure(names[i], 0);
+  char p[600];
+  snprintf(p, sizeof p, "%s/frame_00000.vtu-run/frame_00000.vtu", dir);
+  cr_expect_neq(access(p, F_OK), 0, "%s was left after its write failed", p);
+  snprintf(p, sizeof p, "%s/frame_00000.vtu-run/frame_00000.vtu.tmp", dir);
+  cr_expect_neq(access(p, F_OK), 0, "%s was left after its write failed", p);
+}
+
+/* The folder after frame fs->frame: no temporary file; frames.pvd names
+ * exactly the VTU frames there, each one readable; summary.txt is partial,
+ * of the frames so far. */
+static void check_consistent(const char *out, const bs_frame_stats *fs) {
+  DIR *d = opendir(out);
+  cr_assert_not_null(d);
+  int n_vtu = 0;
+  for (struct dirent *e; (e = readdir(d));) {
+    const size_t n = strlen(e->d_name);
+    cr_expect(n < 4 || strcmp(e->d_name + n - 4, ".tmp"), "frame %d: %s is left", fs->frame, e->d_name);
+    n_vtu += !strncmp(e->d_name, "frame_", 6);
+  }
+  closedir(d);
+  char p[600];
+  bs_error err;
+  snprintf(p, sizeof p, "%s/frames.pvd", out);
+  bs_pvd *pvd = NULL;
+  cr_assert_eq(bs_pvd_read(p, &pvd, &err), 0, "frame %d: %s", fs->frame, err.msg);
+  cr_expect_eq(pvd->n, n_vtu, "frame %d: %d entries, %d VTU files", fs->frame, pvd->n, n_vtu);
+  for (int i = 0; i < pvd->n; i++) {
+    bs_vtu *v = NULL;
+    cr_expect_eq(bs_vtu_read(pvd->files[i], &v, &err), 0, "frame %d: %s", fs->frame, err.msg);
+    bs_vtu_destroy(&v);
+  }
+  bs_pvd_destroy(&pvd);
+  bs_summary u;
+  cr_assert_eq(bs_summary_read(out, &u, &err), 0, "frame %d: %s", fs->frame, err.msg);
+  cr_expect_eq(u.partial, BS_SUMMARY_RUNNING, "frame %d", fs->frame);
+  cr_expect_eq(u.frames, fs->frame);
+  cr_expect_eq(u.frames_total, 2);
+}
+
+static int consistent_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
+  int st = bs_runfolder_frame(s, fs, ctx, err);
+  char out[512];
+  snprintf(out, sizeof out, "%s/run", dir);
+  if (!st) check_consistent(out, fs);
+  return st;
+}
+
+Test(runfolder_io, consistent_after_every_frame, .init = setup, .fini = teardown) {
+  bs_scene *sc = all_outputs();
+  bs_sim *s = NULL;
+  bs_runfolder *rf = NULL;
+  bs_error err;
+  char out[512];
+  snprintf(out, sizeof out, "%s/run", dir);
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_runfolder_open(out, s, NULL, &rf, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_run(s, consistent_frame, rf, NULL, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_runfolder_finish(rf, NULL, &err), 0, "%s", err.msg);
+  bs_runfolder_destroy(&rf);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
 }
