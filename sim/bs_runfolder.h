@@ -37,7 +37,9 @@
  * a partial record). Every write is checked: a failure is BS_EIO naming the
  * file and the OS reason (strerror).
  *
- * Writing: bs_runfolder_open makes the folder, refuses it when it holds an
+ * Writing: bs_runfolder_open makes the folder, takes its lock (one run per
+ * folder: a second run into a folder in use is refused at once, naming the
+ * folder and the holder's pid; see bs_runfolder_lock), refuses it when it holds an
  * earlier run (any file named above; BS_EINPUT naming the folder and a file)
  * unless opts->replace, in which case those files (and only those) are
  * removed first, writes scene.json and run.txt and opens the files the scene's output
@@ -98,6 +100,18 @@ int bs_runfolder_is_run_file(const char *name);
 /* Refuses dir when it holds a run's files (BS_EINPUT), or with replace
  * removes them (*n_removed: how many; may be NULL). A missing dir is fine. */
 int bs_runfolder_prepare(const char *dir, int replace, int *n_removed, bs_error *err);
+
+/* The lock file of a run folder (not a run file: it stays, empty, after the run). */
+#define BS_RUNFOLDER_LOCK ".bigstep.lock"
+
+/* Takes dir's lock: dir/.bigstep.lock, created if missing, flock'ed
+ * exclusively without waiting, holding this process's pid; *fd is the open
+ * descriptor that holds the lock until bs_runfolder_unlock (or the process's
+ * end: a killed run leaves no stale lock). BS_EINPUT naming the folder and
+ * the holder's pid when another process holds it; BS_EIO when the file cannot
+ * be made. bs_runfolder_open takes it first, for the whole run. */
+int bs_runfolder_lock(const char *dir, int *fd, bs_error *err);
+void bs_runfolder_unlock(int *fd);
 
 /* Writes dir/run.txt (see the top). */
 int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err);

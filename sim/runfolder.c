@@ -24,6 +24,7 @@ struct bs_runfolder {
   double *qoi_values;
   bs_run_totals totals; /* of the frames written (for the partial summary)   */
   double t_open;        /* bs_seconds() at the open                          */
+  int lock_fd;          /* holds the folder's lock (bs_runfolder_lock)       */
 };
 
 /* state.bin's header (bs_runfolder.h). */
@@ -85,14 +86,15 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   const bs_runfolder_opts none = {0};
   if (!o) o = &none;
   if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
-  int st = bs_mkdir_p(dir, err);
-  if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
-  if (st) return st;
   bs_runfolder *rf = calloc(1, sizeof *rf);
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  rf->lock_fd = -1;
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
   rf->t_open = bs_seconds();
-  st = bs_runfolder_write_record(dir, o->command_line, err);
+  int st = bs_mkdir_p(dir, err);
+  if (!st) st = bs_runfolder_lock(dir, &rf->lock_fd, err);
+  if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
+  if (!st) st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
@@ -224,6 +226,7 @@ void bs_runfolder_destroy(bs_runfolder **prf) {
   bs_outfile_abandon(&rf->qoi_csv);
   bs_qoi_destroy(&rf->qoi);
   free(rf->qoi_values);
+  bs_runfolder_unlock(&rf->lock_fd);
   free(rf);
   *prf = NULL;
 }

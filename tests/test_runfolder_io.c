@@ -175,3 +175,31 @@ Test(runfolder_io, consistent_after_every_frame, .init = setup, .fini = teardown
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
 }
+
+/* One run per folder: while the folder's lock is held (here by the test,
+ * through a descriptor of its own), bs_runfolder_open refuses it naming the
+ * folder and the holder's pid; once released the folder opens. */
+Test(runfolder_io, a_folder_in_use_is_refused, .init = setup, .fini = teardown) {
+  bs_scene *sc = all_outputs();
+  bs_sim *s = NULL;
+  bs_runfolder *rf = NULL, *second = NULL;
+  bs_error err;
+  char out[512], pid[32];
+  snprintf(out, sizeof out, "%s/run", dir);
+  snprintf(pid, sizeof pid, "pid %ld", (long)getpid());
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_runfolder_open(out, s, NULL, &rf, &err), 0, "%s", err.msg);
+  cr_expect_eq(bs_runfolder_open(out, s, &(bs_runfolder_opts){.replace = 1}, &second, &err), BS_EINPUT);
+  cr_expect_null(second);
+  cr_expect_not_null(strstr(err.msg, "is in use by another run"), "%s", err.msg);
+  cr_expect_not_null(strstr(err.msg, out), "the message does not name the folder: %s", err.msg);
+  cr_expect_not_null(strstr(err.msg, pid), "the message does not name the holder (%s): %s", pid, err.msg);
+  char p[600];
+  snprintf(p, sizeof p, "%s/frames.csv", out);
+  cr_expect_eq(access(p, F_OK), 0, "the refused open removed the first run's files");
+  bs_runfolder_destroy(&rf);
+  cr_expect_eq(bs_runfolder_open(out, s, &(bs_runfolder_opts){.replace = 1}, &second, &err), 0, "%s", err.msg);
+  bs_runfolder_destroy(&second);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
