@@ -1,5 +1,6 @@
 /* bigstep run SCENE — one simulation: parse, loop, print. The library does
  * the work (bs_sim.h: stepping; bs_runfolder.h: the output folder). */
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,9 +17,12 @@ static const char *run_help =
     "\n"
     "Runs a scene (JSON; see README.md, 'Scenes'). Prints a line per frame and a\n"
     "summary in the columns of the paper's Figure 11; writes VTU/PVD files and a\n"
-    "per-step stats CSV into the output folder. Exit status 1 when a step failed.\n"
-    "On a terminal the frame lines update one progress line (frames, elapsed time,\n"
-    "s/frame, ETA); otherwise each frame prints its own line.\n"
+    "per-step stats CSV into the output folder. On a terminal the frame lines\n"
+    "update one progress line (frames, elapsed time, s/frame, ETA); otherwise each\n"
+    "frame prints its own line. Ctrl-C (SIGINT) or SIGTERM stops the run after the\n"
+    "current step: the frames done so far are written as after every frame (rows\n"
+    "flushed, frames.pvd, a summary.txt marked interrupted); a second Ctrl-C ends\n"
+    "the program at once. One run per output folder (a lock, .bigstep.lock).\n"
     "  --method M            optimization | newton | newton_k (solver.method)\n"
     "  --steps-per-frame N   time.steps_per_frame\n"
     "  --frames N            time.frames\n"
@@ -27,7 +31,11 @@ static const char *run_help =
     "  --replace             replace an earlier run's files in the output folder\n"
     "                        (without it such a folder is refused)\n"
     "  --quiet               no per-frame lines\n"
-    "  --trace               one line per solver iteration on stderr (to follow a slow step)\n";
+    "  --trace               one line per solver iteration on stderr (to follow a slow step)\n"
+    "\n"
+    "Exit status: 0 every step converged; 1 a step did not converge, or an error\n"
+    "(bad scene, a file that cannot be written, a folder in use or holding an\n"
+    "earlier run); 2 a usage error; 130 stopped by SIGINT, 143 by SIGTERM.\n";
 
 typedef struct run_args {
   const char *scene;
@@ -130,6 +138,53 @@ static void print_header(const run_args *a, const bs_sim *s) {
   fflush(stdout);
 }
 
+/* The signal that asked the run to stop (0: none). The handlers only set it;
+ * SA_RESETHAND puts the default back, so a second Ctrl-C ends the program at
+ * once. */
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_stop_signal(int sig) { stop_signal = sig; }
+
+static void install_stop_handlers(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+/* The summary (printed, and written into the folder, marked interrupted when
+ * the run stopped early); the exit status. */
+static int finish(const run_args *a, run_ctx *c, const bs_sim *s, const bs_run_totals *T, int stopped, double wall,
+                  bs_error *err) {
+  bs_summary u;
+  char summary[2048];
+  bs_summary_make(s, T, wall, &u);
+  if (stopped) u.partial = BS_SUMMARY_INTERRUPTED;
+  bs_summary_format(&u, summary, sizeof summary);
+  printf("\n%s", summary);
+  int rc = 0;
+  if (c->folder && bs_runfolder_finish(c->folder, summary, err)) {
+    fprintf(stderr, "bigstep run: %s\n", err->msg);
+    rc = BS_EXIT_FAIL;
+  }
+  if (stopped) {
+    const int sig = stop_signal;
+    fprintf(stderr, "bigstep run: interrupted (%s) at frame %d of %d%s%s%s\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+            s->frame, s->scene->frames, c->folder ? "; continue it with: bigstep run " : "", c->folder ? a->scene : "",
+            c->folder ? " --resume" : "");
+    return rc ? rc : 128 + (sig == SIGTERM ? SIGTERM : SIGINT);
+  }
+  if (!rc && T->failed) {
+    fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T->failed,
+            T->steps, T->first_fail_frame, T->first_fail_step, T->first_fail_reason);
+    rc = BS_EXIT_FAIL;
+  }
+  return rc;
+}
+
 /* The loop and the summary; the exit status. */
 static int run_scene(const run_args *a, bs_sim *s) {
   bs_error err;
@@ -137,31 +192,22 @@ static int run_scene(const run_args *a, bs_sim *s) {
   run_ctx c = {a, NULL, bs_seconds(), isatty(fileno(stdout))};
   const bs_scene *sc = s->scene;
   const bs_runfolder_opts fo = {.replace = a->replace, .command_line = a->command};
+  install_stop_handlers(); /* from here a Ctrl-C stops between steps, leaving a consistent folder */
   if (sc->out_dir[0] && bs_runfolder_open(sc->out_dir, s, &fo, &c.folder, &err)) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
   bs_run_totals T;
   double t0 = bs_seconds();
-  int rc = bs_sim_run(s, on_frame, &c, &T, &err) ? BS_EXIT_FAIL : 0;
-  if (rc) fprintf(stderr, "bigstep run: %s\n", err.msg);
-  char summary[2048] = "";
-  if (!rc) {
-    bs_summary u;
-    bs_summary_make(s, &T, bs_seconds() - t0, &u);
-    bs_summary_format(&u, summary, sizeof summary);
-    printf("\n%s", summary);
-  }
-  if (c.folder && bs_runfolder_finish(c.folder, rc ? NULL : summary, &err)) {
+  const bs_sim_run_opts ro = {.on_frame = on_frame, .ctx = &c, .stop = &stop_signal};
+  int st = bs_sim_run_with(s, &ro, &T, &err), rc = 0;
+  if (st < 0) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     rc = BS_EXIT_FAIL;
+  } else {
+    rc = finish(a, &c, s, &T, st == BS_SIM_STOPPED, bs_seconds() - t0, &err);
   }
   bs_runfolder_destroy(&c.folder);
-  if (!rc && T.failed) {
-    fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
-            T.steps, T.first_fail_frame, T.first_fail_step, T.first_fail_reason);
-    rc = BS_EXIT_FAIL;
-  }
   return rc;
 }
 
