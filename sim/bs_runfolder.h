@@ -24,7 +24,10 @@
  *   scene.json   the resolved scene (bs_scene_write_json: every key, the
  *                defaults filled in, absolute paths), which loads again;
  *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
- *                "cwd: ...", "started: ISO 8601 UTC".
+ *                "cwd: ...", "started: ISO 8601 UTC", and a line "resumed:
+ *                ISO 8601 UTC at frame K: COMMAND" per continuation;
+ *   checkpoint.bin  the state the run continues from (see below);
+ *   .bigstep.lock   the folder's lock (BS_RUNFOLDER_LOCK; not a run file).
  *
  * Consistency: every file whose content is replaced (the VTU and VTI frames,
  * the PVD collections, summary.txt, scene.json, run.txt) is written to
@@ -126,7 +129,30 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err);
 
-/* Writes summary.txt (when summary is not NULL). */
+/* Writes checkpoint.bin of s now (as after a frame when output.checkpoint_every
+ * says so): for a run stopped on request. A static scene: nothing, 0. */
+int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err);
+
+/* Wall seconds of the run so far (a resumed run's earlier part included). */
+double bs_runfolder_wall(const bs_runfolder *rf);
+
+/* Continues the run in dir (bigstep run --resume) for the simulation s, made
+ * from the same scene: takes the folder's lock; refuses (BS_EINPUT, naming
+ * the file and the first difference) a scene whose resolved content, less
+ * output.dir and description, is not that of dir/scene.json, a static scene,
+ * and one that no checkpoint repeats bit for bit (see checkpoint.bin); reads
+ * the checkpoint (bs_checkpoint_read: every check) and puts s at its frame
+ * (bs_sim_restore); cuts frames.csv, stats.csv, qoi.csv and state.bin after
+ * the checkpoint's frame (BS_EINPUT when one holds fewer rows than that) and
+ * removes the later VTU and obstacle frames and any NAME.tmp; opens those
+ * files at their end, rewrites the PVD collections of the frames kept, adds
+ * a "resumed:" line to run.txt. *totals gets the run's totals up to the
+ * checkpoint, for bs_sim_run_with (opts.resume). opts: command_line only. */
+int bs_runfolder_resume(const char *dir, bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
+                        bs_run_totals *totals, bs_error *err);
+
+/* Writes summary.txt (when summary is not NULL) and closes the appended files
+ * (checked: BS_EIO naming one that cannot be written). */
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err);
 
 void bs_runfolder_destroy(bs_runfolder **rf);
@@ -176,6 +202,51 @@ int bs_summary_format(const bs_summary *sum, char *buf, size_t n);
  * partial line (partial, frames, frames_total; 0 when absent) back from
  * dir/summary.txt. BS_EINPUT when the row has not its first three. */
 int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
+
+/* ---- checkpoint.bin ---------------------------------------------------------
+ * The state a run continues from (bigstep run --resume; bs_runfolder_resume):
+ * written after a frame's other files every output.checkpoint_every frames,
+ * at frame 0 and the last frame, and when a run stops on request
+ * (bs_runfolder_checkpoint), through checkpoint.bin.tmp and a rename, so the
+ * file always holds one whole checkpoint. Native (little-endian) layout,
+ * version BS_CHECKPOINT_VERSION:
+ *   "BSCK", uint32 version, int32 n_vertices, int32 frame, double time
+ *   (= frame / fps), uint64 scene hash (FNV-1a of the resolved scene without
+ *   output.dir and description), double wall seconds of the run so far,
+ *   int32 the scene's frames, int32 0 (48 bytes);
+ *   the run's totals so far: 11 int64 (steps, failed, iterations, cg, ls,
+ *   indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill), 2 doubles
+ *   (seconds, max_grad), 2 int32 (first failed frame and step), the first
+ *   failure's reason (256 bytes);
+ *   x (3n doubles), v (3n doubles); a uint64 FNV-1a of every byte before.
+ * x, v and the time are everything the next step reads: the lagged Rayleigh
+ * damping, the initial guesses and x̂ are made from xⁿ, vⁿ; scripted
+ * vertices and obstacles move as functions of time; the obstacles' active
+ * sets start empty every step; the self-collision caches (the last detection,
+ * search hints) only spare work, and the minimizer starts every solve afresh.
+ * One exception: solver.linear "amg" with solver.amg_matrix "current" builds
+ * its preconditioner at an earlier iterate, which no checkpoint holds:
+ * bs_runfolder_resume refuses such a scene. */
+#define BS_CHECKPOINT_VERSION 1
+
+typedef struct bs_checkpoint {
+  int frame;
+  double time, wall_seconds;
+  bs_run_totals totals;
+  double *x, *v;             /* 3n each (one allocation, freed by bs_checkpoint_free) */
+} bs_checkpoint;
+
+/* Writes dir/checkpoint.bin of s at its current frame. */
+int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T, double wall_seconds,
+                        uint64_t scene_hash, bs_error *err);
+
+/* Reads and checks dir/checkpoint.bin for the simulation s of the scene with
+ * this hash: BS_EIO when missing, BS_EINPUT (naming the file and what is
+ * wrong) for another magic or version, a vertex count or scene hash not s's,
+ * a size not the one of its counts (truncated), a bad checksum, a frame
+ * outside the scene or at another time, non-finite values. */
+int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs_checkpoint *ck, bs_error *err);
+void bs_checkpoint_free(bs_checkpoint *ck);
 
 /* ---- reading frames.csv --------------------------------------------------- */
 

@@ -179,6 +179,7 @@ typedef struct bs_scene {
   double self_stiffness, self_friction;
   char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
   int vtu_every;           /* frames between VTU files (0: none)               */
+  int checkpoint_every;    /* frames between checkpoints (0: none; bs_runfolder.h) */
   int stats_csv;
   int states;              /* write state.bin (x, v every frame)                */
   uint32_t out_fields;     /* output.fields: a set of bs_field bits (bs_fields.h) */

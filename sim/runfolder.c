@@ -8,24 +8,8 @@
 #include "bs_fields.h"
 #include "bs_obstacle_output.h"
 #include "bs_qoi.h"
-#include "bs_runfolder.h"
 #include "outfile.h"
-
-struct bs_runfolder {
-  char dir[BS_MAX_PATH];
-  bs_outfile frames, stats, state; /* open when .f is not NULL */
-  int n_vtu, cap_vtu;
-  char **vtu_names;
-  double *vtu_times;
-  bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
-  bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
-  bs_outfile qoi_csv; /* qoi.csv, when the scene names quantities     */
-  bs_qoi *qoi;
-  double *qoi_values;
-  bs_run_totals totals; /* of the frames written (for the partial summary)   */
-  double t_open;        /* bs_seconds() at the open                          */
-  int lock_fd;          /* holds the folder's lock (bs_runfolder_lock)       */
-};
+#include "runfolder_internal.h"
 
 /* state.bin's header (bs_runfolder.h). */
 static int write_state_header(bs_outfile *f, int32_t n, bs_error *err) {
@@ -41,9 +25,16 @@ int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   return bs_runfolder_open(dir, s, NULL, out, err);
 }
 
-static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+/* The appended files, new (with their headers) or, append, opened at their end. */
+static int open_files(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   const bs_scene *sc = s->scene;
   int st = 0;
+  if (append) {
+    if (sc->stats_csv) st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "ab", err);
+    if (!st) st = bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "ab", err);
+    if (!st && sc->states) st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "ab", err);
+    return st;
+  }
   if (sc->stats_csv && !(st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "w", err))) {
     bs_outfile_printf(&rf->stats, "%s\n", BS_STATS_CSV_HEADER);
     st = bs_outfile_flush(&rf->stats, err);
@@ -57,13 +48,13 @@ static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
   return st;
 }
 
-/* qoi.csv and the quantities resolved on s (bs_qoi.h). */
-static int open_qoi(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+/* qoi.csv (new with its header, or append) and the quantities resolved on s (bs_qoi.h). */
+static int open_qoi(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   int st = bs_qoi_create(s, &rf->qoi, err);
   if (!st && !(rf->qoi_values = calloc((size_t)s->scene->n_qoi, sizeof(double))))
     st = bs_error_set(err, BS_ENOMEM, "out of memory");
-  if (!st) st = bs_outfile_open(&rf->qoi_csv, rf->dir, "qoi.csv", "w", err);
-  if (st) return st;
+  if (!st) st = bs_outfile_open(&rf->qoi_csv, rf->dir, "qoi.csv", append ? "ab" : "w", err);
+  if (st || append) return st;
   bs_outfile_printf(&rf->qoi_csv, "frame,time");
   for (int i = 0; i < s->scene->n_qoi; i++) bs_outfile_printf(&rf->qoi_csv, ",%s", s->scene->qoi[i].name);
   bs_outfile_printf(&rf->qoi_csv, "\n");
@@ -80,34 +71,51 @@ static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error 
   return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
-int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
-                      bs_error *err) {
+int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
   *out = NULL;
-  const bs_runfolder_opts none = {0};
-  if (!o) o = &none;
   if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
   bs_runfolder *rf = calloc(1, sizeof *rf);
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
   rf->lock_fd = -1;
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
   rf->t_open = bs_seconds();
-  int st = bs_mkdir_p(dir, err);
+  char *id = NULL;
+  int st = bs_scene_identity_(s->scene, &id, err);
+  if (!st) rf->scene_hash = bs_fnv1a_(BS_FNV_SEED, id, strlen(id));
+  free(id);
+  if (!st && s->scene->checkpoint_every < 0)
+    st = bs_error_set(err, BS_EINPUT, "output.checkpoint_every: must be an integer in [0, 1000000], got %d",
+                      s->scene->checkpoint_every);
+  if (!st) st = bs_mkdir_p(dir, err);
   if (!st) st = bs_runfolder_lock(dir, &rf->lock_fd, err);
+  if (st) bs_runfolder_destroy(&rf);
+  *out = rf;
+  return st;
+}
+
+int bs_runfolder_outputs_(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
+  int st = open_files(rf, s, append, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(rf->dir, s, &rf->obstacles, err);
+  if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, append, err);
+  return st;
+}
+
+int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
+                      bs_error *err) {
+  const bs_runfolder_opts none = {0};
+  if (!o) o = &none;
+  bs_runfolder *rf = NULL;
+  int st = bs_runfolder_begin_(dir, s, &rf, err);
   if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
   if (!st) st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
-  if (!st) st = open_files(rf, s, err);
-  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
-  if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(dir, s, &rf->obstacles, err);
-  if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, err);
-  if (st) {
-    bs_runfolder_destroy(&rf);
-    return st;
-  }
+  if (!st) st = bs_runfolder_outputs_(rf, s, 0, err);
+  if (st) bs_runfolder_destroy(&rf);
   *out = rf;
-  return 0;
+  return st;
 }
 
 static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *err) {
@@ -141,7 +149,7 @@ static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
  * over the old one: the collection is valid after every frame. */
-static int write_pvd(const bs_runfolder *rf, bs_error *err) {
+int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err) {
   char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
   bs_tmp_path(tmp, sizeof tmp, p);
@@ -149,7 +157,7 @@ static int write_pvd(const bs_runfolder *rf, bs_error *err) {
   return st ? st : bs_tmp_commit(tmp, p, err);
 }
 
-static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
+int bs_runfolder_add_vtu_(bs_runfolder *rf, const char *name, double t, bs_error *err) {
   if (rf->n_vtu == rf->cap_vtu) {
     int cap = rf->cap_vtu ? 2 * rf->cap_vtu : 64;
     char **nn = realloc(rf->vtu_names, sizeof(char *) * (size_t)cap);
@@ -159,6 +167,12 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
     rf->vtu_times = tt;
     rf->cap_vtu = cap;
   }
+  if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  rf->vtu_times[rf->n_vtu++] = t;
+  return 0;
+}
+
+static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
   char path[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72], name[64];
   snprintf(name, sizeof name, "frame_%05d.vtu", frame);
   snprintf(path, sizeof path, "%s/%s", rf->dir, name);
@@ -166,10 +180,8 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   int st = bs_fields_write_vtu(rf->fields, s, tmp, err);
   if (!st) st = bs_tmp_commit(tmp, path, err);
   if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
-  if (st) return st;
-  if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
-  rf->vtu_times[rf->n_vtu++] = s->time;
-  return write_pvd(rf, err);
+  if (!st) st = bs_runfolder_add_vtu_(rf, name, s->time, err);
+  return st ? st : bs_runfolder_write_pvd_(rf, err);
 }
 
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
@@ -182,7 +194,7 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 static int write_partial_summary(bs_runfolder *rf, const bs_sim *s, const bs_sim_measures *m, bs_error *err) {
   bs_summary u;
   char text[2048];
-  bs_summary_make_measured(s, &rf->totals, bs_seconds() - rf->t_open, m, &u);
+  bs_summary_make_measured(s, &rf->totals, bs_runfolder_wall(rf), m, &u);
   u.partial = BS_SUMMARY_RUNNING;
   bs_summary_format(&u, text, sizeof text);
   return bs_outfile_replace_text(rf->dir, "summary.txt", text, err);
@@ -199,8 +211,18 @@ int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *
     st = write_vtu(rf, s, fs->frame, err);
   bs_run_totals_add(&rf->totals, fs);
   if (!st) st = write_partial_summary(rf, s, m, err);
+  const int ck = s->scene->checkpoint_every;
+  if (!st && ck > 0 && s->scene->mode == BS_MODE_DYNAMIC && (fs->frame % ck == 0 || fs->frame == s->scene->frames))
+    st = bs_runfolder_checkpoint(rf, s, err);
   return st;
 }
+
+int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+  if (s->scene->mode != BS_MODE_DYNAMIC) return 0;
+  return bs_checkpoint_write(rf->dir, s, &rf->totals, bs_runfolder_wall(rf), rf->scene_hash, err);
+}
+
+double bs_runfolder_wall(const bs_runfolder *rf) { return bs_seconds() - rf->t_open; }
 
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {
   int st = summary ? bs_outfile_replace_text(rf->dir, "summary.txt", summary, err) : 0;

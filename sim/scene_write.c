@@ -213,6 +213,7 @@ static void write_tail(writer *w, cJSON *root, const bs_scene *s) {
   if (out) {
     str(w, out, "dir", s->out_dir);
     num(w, out, "vtu_every", s->vtu_every);
+    num(w, out, "checkpoint_every", s->checkpoint_every);
     boolean(w, out, "stats", s->stats_csv);
     boolean(w, out, "states", s->states);
     const char *names[BS_FIELD_COUNT];

@@ -3,7 +3,7 @@
  * and the OS reason. Appended files (frames.csv, stats.csv, state.bin,
  * qoi.csv) are opened by bs_runfolder_open: their descriptor is then swapped
  * for /dev/full (dup2). Replaced files (VTU frames, obstacle frames, the PVD
- * collections, summary.txt) are written as NAME.tmp and renamed: NAME.tmp is
+ * collections, summary.txt, checkpoint.bin) are written as NAME.tmp and renamed: NAME.tmp is
  * made a symbolic link to /dev/full; the final NAME must then not appear. */
 #define _GNU_SOURCE
 #include <criterion/criterion.h>
@@ -110,9 +110,9 @@ Test(runfolder_io, appended_files_on_a_full_disk, .init = setup, .fini = teardow
 /* The replaced files: the error names the file, and a failed VTU frame is
  * not left under its final name. */
 Test(runfolder_io, replaced_files_on_a_full_disk, .init = setup, .fini = teardown) {
-  static const char *const names[] = {"frame_00000.vtu", "obstacle_0.vtu", "frames.pvd", "obstacles_0.pvd",
-                                      "summary.txt"};
-  for (int i = 0; i < 5; i++) expect_failure(names[i], 0);
+  static const char *const names[] = {"frame_00000.vtu", "obstacle_0.vtu",  "frames.pvd",
+                                      "obstacles_0.pvd", "summary.txt", "checkpoint.bin"};
+  for (int i = 0; i < 6; i++) expect_failure(names[i], 0);
   char p[600];
   snprintf(p, sizeof p, "%s/frame_00000.vtu-run/frame_00000.vtu", dir);
   cr_expect_neq(access(p, F_OK), 0, "%s was left after its write failed", p);
