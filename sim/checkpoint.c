@@ -173,8 +173,8 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
     memcpy(ck->x, b + CK_HEADER + CK_TOTALS, sizeof(double) * 2 * n3);
     for (size_t i = 0; i < 2 * n3 && !st; i++)
       if (!isfinite(ck->x[i]))
-        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p, i < n3 ? "position" : "velocity",
-                          (i % n3) / 3);
+        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p,
+                          i < n3 ? "position" : "velocity", (i % n3) / 3);
   }
   free(b);
   if (st) bs_checkpoint_free(ck);

@@ -121,21 +121,23 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
 static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *err) {
   for (int k = 0; k < fs->n_steps; k++) {
     const bs_step_stats *st = &fs->steps[k].st;
-    bs_outfile_printf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", fs->frame, k,
-            fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations, st->min.ls_evaluations,
-            st->min.indefinite_exits, st->min.fallback_neg_dx, st->min.fallback_neg_grad, st->min.clamps,
-            st->min.cholmod_fallbacks, st->min.alpha_min, st->min.alpha_max, st->min.grad_norm, st->min.E,
-            st->min.reason_text ? st->min.reason_text : "", fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly,
-            st->min.t_linear, st->min.t_line_search, st->seconds);
+    bs_outfile_printf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n",
+                      fs->frame, k, fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations,
+                      st->min.ls_evaluations, st->min.indefinite_exits, st->min.fallback_neg_dx,
+                      st->min.fallback_neg_grad, st->min.clamps, st->min.cholmod_fallbacks, st->min.alpha_min,
+                      st->min.alpha_max, st->min.grad_norm, st->min.E, st->min.reason_text ? st->min.reason_text : "",
+                      fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly, st->min.t_linear,
+                      st->min.t_line_search, st->seconds);
   }
   return bs_outfile_flush(f, err);
 }
 
 static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                            bs_error *err) {
-  bs_outfile_printf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m->kinetic,
-          m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations, fs->cg_iterations, fs->failed,
-          fs->seconds, m->penetrating, m->max_depth, (long long)m->self_intersections);
+  bs_outfile_printf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time,
+                    m->kinetic, m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations,
+                    fs->cg_iterations, fs->failed, fs->seconds, m->penetrating, m->max_depth,
+                    (long long)m->self_intersections);
   return bs_outfile_flush(f, err);
 }
 

@@ -48,7 +48,8 @@ static int same_scene(const char *dir, const bs_scene *sc, bs_error *err) {
 
 static int resumable(const char *dir, const bs_scene *sc, bs_error *err) {
   if (sc->mode != BS_MODE_DYNAMIC)
-    return bs_error_set(err, BS_EINPUT, "cannot continue the run in '%s': a static scene has no frames to continue", dir);
+    return bs_error_set(err, BS_EINPUT, "cannot continue the run in '%s': a static scene has no frames to continue",
+                        dir);
   if (sc->solver.method == BS_METHOD_OPTIMIZATION && sc->solver.min.linear == BS_LIN_AMG && !sc->solver.amg_at_rest)
     return bs_error_set(err, BS_EINPUT,
                         "cannot continue the run in '%s': with solver.amg_matrix \"current\" the preconditioner is "

@@ -77,7 +77,8 @@ int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) { return 
 int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err) {
   const bs_scene *sc = s->scene;
   const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  if (sc->mode != BS_MODE_DYNAMIC) return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frame to restore", sc->path);
+  if (sc->mode != BS_MODE_DYNAMIC)
+    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frame to restore", sc->path);
   if (frame < 0 || frame > sc->frames)
     return bs_error_set(err, BS_EINPUT, "%s: frame %d is outside the scene's 0..%d", sc->path, frame, sc->frames);
   for (size_t i = 0; i < n3; i++)
