@@ -327,3 +327,20 @@ Test(cli_resume, a_full_disk_ends_the_run_with_status_1, .init = setup, .fini = 
   cr_expect_not_null(strstr(out, "No space left on device"), "%s", out);
   free(out);
 }
+
+/* SIGTERM stops the run as SIGINT does, with status 143; --resume=DIR finishes it. */
+Test(cli_resume, sigterm_exits_143_and_resume_equals_finishes, .init = setup, .fini = teardown) {
+  char dir[160], arg[200], *out = NULL;
+  AT(dir, "term");
+  pid_t pid = start(dir);
+  cr_assert(wait_for_frame(pid, dir, 1), "the run ended before SIGTERM");
+  kill(pid, SIGTERM);
+  cr_expect_eq(finish_child(pid), 143);
+  snprintf(arg, sizeof arg, "--resume=%s", dir);
+  cr_expect_eq(run("/nowhere", arg, &out), 0, "%s", out);
+  free(out);
+  cr_expect_eq(bs_frames_csv_lines(dir), FRAMES + 2);
+  cr_expect_eq(run(dir, "--resume=", &out), 2, "%s", out);
+  cr_expect_not_null(strstr(out, "--resume= needs a folder"), "%s", out);
+  free(out);
+}
