@@ -88,9 +88,11 @@ typedef struct bs_runfolder_opts {
   const char *command_line; /* for run.txt; NULL: "(library call)"                  */
 } bs_runfolder_opts;
 
-/* Makes dir (and its parents), checks it (see the top), writes run.txt and
- * opens frames.csv, stats.csv (scene output.stats) and state.bin
- * (output.states) for the simulation s. opts NULL: all zero. */
+/* Makes dir (and its parents), takes its lock, checks it (see the top),
+ * writes run.txt and scene.json and opens frames.csv, stats.csv (scene
+ * output.stats), state.bin (output.states) and qoi.csv for the simulation s.
+ * opts NULL: all zero. BS_EINPUT for a folder in use or holding an earlier
+ * run, or a negative output.checkpoint_every. */
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
                       bs_error *err);
 
@@ -119,9 +121,11 @@ void bs_runfolder_unlock(int *fd);
 /* Writes dir/run.txt (see the top). */
 int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err);
 
-/* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state
- * and, every output.vtu_every frames, frame_NNNNN.vtu. ctx is the
- * bs_runfolder (so that it can be handed to bs_sim_run). */
+/* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state,
+ * its qoi.csv row and, every output.vtu_every frames, frame_NNNNN.vtu (with
+ * the obstacles and frames.pvd); then summary.txt of the frames so far and,
+ * when due (output.checkpoint_every, frame 0, the last frame), checkpoint.bin.
+ * ctx is the bs_runfolder (so that it can be handed to bs_sim_run). */
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err);
 
 /* The same with the frame's measures given (m: bs_sim_measure of the current
