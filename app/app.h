@@ -3,7 +3,8 @@
  *
  * Exit statuses of every subcommand: 0 success, 1 the job failed (bad input
  * file, failed steps, findings of `check`), 2 a usage error (wrong flag or
- * value), reported as one line on stderr. */
+ * value), reported as one line on stderr; `run` also 128 + the signal when
+ * stopped by SIGINT (130) or SIGTERM (143). */
 #ifndef BS_APP_H
 #define BS_APP_H
 

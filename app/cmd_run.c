@@ -1,8 +1,10 @@
 /* bigstep run SCENE — one simulation: parse, loop, print. The library does
  * the work (bs_sim.h: stepping; bs_runfolder.h: the output folder). */
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "app.h"
@@ -13,12 +15,16 @@
 static const char *run_help =
     "usage: bigstep run SCENE [--method M] [--steps-per-frame N] [--frames N]\n"
     "                         [--set key.path=value]... [--out DIR] [--replace] [--quiet] [--trace]\n"
+    "                         [--resume [DIR]]\n"
     "\n"
     "Runs a scene (JSON; see README.md, 'Scenes'). Prints a line per frame and a\n"
     "summary in the columns of the paper's Figure 11; writes VTU/PVD files and a\n"
-    "per-step stats CSV into the output folder. Exit status 1 when a step failed.\n"
-    "On a terminal the frame lines update one progress line (frames, elapsed time,\n"
-    "s/frame, ETA); otherwise each frame prints its own line.\n"
+    "per-step stats CSV into the output folder. On a terminal the frame lines\n"
+    "update one progress line (frames, elapsed time, s/frame, ETA); otherwise each\n"
+    "frame prints its own line. Ctrl-C (SIGINT) or SIGTERM stops the run after the\n"
+    "current step: the frames done so far are written as after every frame (rows\n"
+    "flushed, frames.pvd, a summary.txt marked interrupted); a second Ctrl-C ends\n"
+    "the program at once. One run per output folder (a lock, .bigstep.lock).\n"
     "  --method M            optimization | newton | newton_k (solver.method)\n"
     "  --steps-per-frame N   time.steps_per_frame\n"
     "  --frames N            time.frames\n"
@@ -26,12 +32,23 @@ static const char *run_help =
     "  --out DIR             output.dir\n"
     "  --replace             replace an earlier run's files in the output folder\n"
     "                        (without it such a folder is refused)\n"
+    "  --resume [DIR]        continue the stopped run in DIR (default: the scene's\n"
+    "                        output.dir) from its last checkpoint (checkpoint.bin,\n"
+    "                        every output.checkpoint_every frames): the frames after\n"
+    "                        it are removed and made again, the same bit for bit; the\n"
+    "                        scene must be the one the folder was run with\n"
     "  --quiet               no per-frame lines\n"
-    "  --trace               one line per solver iteration on stderr (to follow a slow step)\n";
+    "  --trace               one line per solver iteration on stderr (to follow a slow step)\n"
+    "\n"
+    "Exit status: 0 every step converged; 1 a step did not converge, or an error\n"
+    "(bad scene, a file that cannot be written, a folder in use or holding an\n"
+    "earlier run; --resume: no checkpoint, a bad one, another scene); 2 a usage\n"
+    "error; 130 stopped by SIGINT, 143 by SIGTERM (--resume continues it). A\n"
+    "resumed run returns the same statuses, for the whole run.\n";
 
 typedef struct run_args {
   const char *scene;
-  int quiet, trace, replace;
+  int quiet, trace, replace, resume;
   char *command;  /* the command line, for run.txt */
   bs_app_sets sets;
 } run_args;
@@ -46,6 +63,23 @@ static const char *flag_key(const char *flag, int *is_count) {
   return NULL;
 }
 
+static int is_dir(const char *p) {
+  struct stat sb;
+  return stat(p, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+/* --resume, --resume=DIR or --resume DIR (DIR: an existing folder); DIR
+ * becomes output.dir. 0, or the usage status. */
+static int parse_resume(int argc, char **argv, int *i, run_args *a) {
+  const char *arg = argv[*i], *dir = NULL;
+  a->resume = 1;
+  if (arg[8] == '=') dir = arg + 9;
+  else if (*i + 1 < argc && argv[*i + 1][0] != '-' && is_dir(argv[*i + 1])) dir = argv[++*i];
+  if (dir && !dir[0]) return bs_app_usage_error("run", "--resume= needs a folder");
+  if (dir && bs_app_sets_add(&a->sets, "output.dir", dir, 1)) return bs_app_usage_error("run", "out of memory");
+  return 0;
+}
+
 /* 0 to run, -1 after --help, else the usage status. */
 static int parse_args(int argc, char **argv, run_args *a) {
   for (int i = 1; i < argc; i++) {
@@ -56,6 +90,11 @@ static int parse_args(int argc, char **argv, run_args *a) {
     }
     if (!strcmp(arg, "--quiet") || !strcmp(arg, "--trace") || !strcmp(arg, "--replace")) {
       *(arg[2] == 'q' ? &a->quiet : arg[2] == 't' ? &a->trace : &a->replace) = 1;
+      continue;
+    }
+    if (!strcmp(arg, "--resume") || !strncmp(arg, "--resume=", 9)) {
+      int rc = parse_resume(argc, argv, &i, a);
+      if (rc) return rc;
       continue;
     }
     if (strncmp(arg, "--", 2)) {
@@ -76,6 +115,7 @@ static int parse_args(int argc, char **argv, run_args *a) {
       return bs_app_usage_error("run", "%s must be a positive integer, got '%s'", flag, val);
     if (bs_app_sets_add(&a->sets, key, val, !is_count)) return bs_app_usage_error("run", "out of memory");
   }
+  if (a->resume && a->replace) return bs_app_usage_error("run", "--resume and --replace exclude each other");
   return a->scene ? 0 : bs_app_usage_error("run", "missing SCENE");
 }
 
@@ -83,12 +123,13 @@ typedef struct run_ctx {
   const run_args *args;
   bs_runfolder *folder; /* NULL: no output folder */
   double t0;            /* wall clock at the start of the run */
+  int first;            /* the frame the run (or its resumption) started from */
   int tty;              /* stdout is a terminal: one updating line */
 } run_ctx;
 
 /* The progress part of a frame line: frames done, elapsed, s/frame, ETA. */
 static void print_progress(const run_ctx *c, const bs_sim *s, int frame) {
-  double el = bs_seconds() - c->t0, per = el / frame;
+  double el = bs_seconds() - c->t0, per = el / (frame > c->first ? frame - c->first : 1);
   printf("  [%d/%d, %.1f s, %.3g s/frame, ETA %.0f s]", frame, s->scene->frames, el, per,
          per * (s->scene->frames - frame));
 }
@@ -130,38 +171,97 @@ static void print_header(const run_args *a, const bs_sim *s) {
   fflush(stdout);
 }
 
+/* The signal that asked the run to stop (0: none). The handlers only set it;
+ * SA_RESETHAND puts the default back, so a second Ctrl-C ends the program at
+ * once. */
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_stop_signal(int sig) { stop_signal = sig; }
+
+static void install_stop_handlers(void) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND | SA_RESTART; /* no EINTR from a write to a pipe or terminal */
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+}
+
+/* The summary (printed, and written into the folder, marked interrupted when
+ * the run stopped early); the exit status. */
+static int finish(run_ctx *c, const bs_sim *s, const bs_run_totals *T, int stopped, double wall,
+                  bs_error *err) {
+  bs_summary u;
+  char summary[2048];
+  bs_summary_make(s, T, wall, &u);
+  if (stopped) u.partial = BS_SUMMARY_INTERRUPTED;
+  bs_summary_format(&u, summary, sizeof summary);
+  printf("\n%s", summary);
+  int rc = 0;
+  if (c->folder && bs_runfolder_finish(c->folder, summary, err)) {
+    fprintf(stderr, "bigstep run: %s\n", err->msg);
+    rc = BS_EXIT_FAIL;
+  }
+  if (stopped) {
+    const int sig = stop_signal;
+    fprintf(stderr, "bigstep run: interrupted (%s) at frame %d of %d%s%s%s\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+            s->frame, s->scene->frames, c->folder ? "; continue it with the same command and --resume '" : "",
+            c->folder ? s->scene->out_dir : "", c->folder ? "'" : "");
+    return rc ? rc : 128 + (sig == SIGTERM ? SIGTERM : SIGINT);
+  }
+  if (!rc && T->failed) {
+    fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T->failed,
+            T->steps, T->first_fail_frame, T->first_fail_step, T->first_fail_reason);
+    rc = BS_EXIT_FAIL;
+  }
+  return rc;
+}
+
+/* The output folder: a new run's, or the stopped run's to continue (then *T
+ * holds its totals so far). 0, or BS_EXIT_FAIL after the message. */
+static int open_folder(const run_args *a, run_ctx *c, bs_sim *s, bs_run_totals *T) {
+  bs_error err;
+  bs_error_clear(&err);
+  const bs_scene *sc = s->scene;
+  const bs_runfolder_opts fo = {.replace = a->replace, .command_line = a->command};
+  int st = 0;
+  if (a->resume && !sc->out_dir[0])
+    st = bs_error_set(&err, BS_EINPUT, "--resume: the scene has no output.dir (give --resume DIR)");
+  else if (a->resume)
+    st = bs_runfolder_resume(sc->out_dir, s, &fo, &c->folder, T, &err);
+  else if (sc->out_dir[0])
+    st = bs_runfolder_open(sc->out_dir, s, &fo, &c->folder, &err);
+  if (st) {
+    fprintf(stderr, "bigstep run: %s\n", err.msg);
+    return BS_EXIT_FAIL;
+  }
+  c->first = s->frame;
+  if (a->resume && !a->quiet) printf("continuing '%s' from frame %d of %d\n", sc->out_dir, s->frame, sc->frames);
+  return 0;
+}
+
 /* The loop and the summary; the exit status. */
 static int run_scene(const run_args *a, bs_sim *s) {
   bs_error err;
   bs_error_clear(&err);
-  run_ctx c = {a, NULL, bs_seconds(), isatty(fileno(stdout))};
-  const bs_scene *sc = s->scene;
-  const bs_runfolder_opts fo = {.replace = a->replace, .command_line = a->command};
-  if (sc->out_dir[0] && bs_runfolder_open(sc->out_dir, s, &fo, &c.folder, &err)) {
-    fprintf(stderr, "bigstep run: %s\n", err.msg);
-    return BS_EXIT_FAIL;
-  }
+  run_ctx c = {.args = a, .t0 = bs_seconds(), .tty = isatty(fileno(stdout))};
   bs_run_totals T;
-  double t0 = bs_seconds();
-  int rc = bs_sim_run(s, on_frame, &c, &T, &err) ? BS_EXIT_FAIL : 0;
-  if (rc) fprintf(stderr, "bigstep run: %s\n", err.msg);
-  char summary[2048] = "";
-  if (!rc) {
-    bs_summary u;
-    bs_summary_make(s, &T, bs_seconds() - t0, &u);
-    bs_summary_format(&u, summary, sizeof summary);
-    printf("\n%s", summary);
-  }
-  if (c.folder && bs_runfolder_finish(c.folder, rc ? NULL : summary, &err)) {
+  memset(&T, 0, sizeof T);
+  install_stop_handlers(); /* from here a Ctrl-C stops between steps, leaving a consistent folder */
+  if (open_folder(a, &c, s, &T)) return BS_EXIT_FAIL;
+  const bs_sim_run_opts ro = {.on_frame = on_frame, .ctx = &c, .stop = &stop_signal, .resume = a->resume};
+  int st = bs_sim_run_with(s, &ro, &T, &err), rc = 0;
+  if (st == BS_SIM_STOPPED && c.folder && s->scene->checkpoint_every > 0 && bs_runfolder_checkpoint(c.folder, s, &err))
+    st = err.code;
+  if (st < 0) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     rc = BS_EXIT_FAIL;
+  } else {
+    double wall = c.folder ? bs_runfolder_wall(c.folder) : bs_seconds() - c.t0;
+    rc = finish(&c, s, &T, st == BS_SIM_STOPPED, wall, &err);
   }
   bs_runfolder_destroy(&c.folder);
-  if (!rc && T.failed) {
-    fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
-            T.steps, T.first_fail_frame, T.first_fail_step, T.first_fail_reason);
-    rc = BS_EXIT_FAIL;
-  }
   return rc;
 }
 

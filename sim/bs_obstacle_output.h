@@ -49,6 +49,13 @@ int bs_obstacle_output_create(const char *dir, const bs_sim *s, bs_obstacle_outp
 /* Writes every obstacle at s->time (the files of frame `frame`) and the PVDs. */
 int bs_obstacle_output_frame(bs_obstacle_output *o, const bs_sim *s, int frame, bs_error *err);
 
+/* For a run continued after frame `frame` (bigstep run --resume): records
+ * frame's files, which the earlier run wrote, at time t without writing them
+ * (nor the PVDs); call for every VTU frame up to the checkpoint, then
+ * bs_obstacle_output_write_pvds. */
+int bs_obstacle_output_skip(bs_obstacle_output *o, int frame, double t, bs_error *err);
+int bs_obstacle_output_write_pvds(bs_obstacle_output *o, bs_error *err);
+
 void bs_obstacle_output_destroy(bs_obstacle_output **o);
 
 #ifdef __cplusplus

@@ -12,18 +12,37 @@
  *                header "BSST" (4 bytes), uint32 version (2), int32
  *                n_vertices, int32 0; then per frame: time, x (3n), v (3n).
  *                Version 1 ("BSST1\0\0\0", int32 n, int32 0) is read too;
- *   summary.txt  the closing summary in the columns of the paper's Figure 11
- *                (bs_summary_format), read back by bs_summary_read;
+ *   summary.txt  the summary in the columns of the paper's Figure 11
+ *                (bs_summary_format), read back by bs_summary_read: written
+ *                after every frame, of the frames so far and marked partial
+ *                (a last line "partial: N of M frames (...)"), and at the end
+ *                by bs_runfolder_finish with the caller's text;
  *   frame_NNNNN.vtu and frames.pvd  the frames for ParaView (mesh/ writes
- *                the VTU and PVD files); frames.pvd is rewritten (through a
- *                temporary file and a rename) after every VTU frame, so an
- *                interrupted run leaves a readable series;
+ *                the VTU and PVD files); frames.pvd is rewritten after every
+ *                VTU frame; obstacle_K[_NNNNN].vtu|vti and obstacles_K.pvd
+ *                the obstacles (bs_obstacle_output.h);
  *   scene.json   the resolved scene (bs_scene_write_json: every key, the
  *                defaults filled in, absolute paths), which loads again;
  *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
- *                "cwd: ...", "started: ISO 8601 UTC".
+ *                "cwd: ...", "started: ISO 8601 UTC", and a line "resumed:
+ *                ISO 8601 UTC at frame K: COMMAND" per continuation;
+ *   checkpoint.bin  the state the run continues from (see below);
+ *   .bigstep.lock   the folder's lock (BS_RUNFOLDER_LOCK; not a run file).
  *
- * Writing: bs_runfolder_open makes the folder, refuses it when it holds an
+ * Consistency: every file whose content is replaced (the VTU and VTI frames,
+ * the PVD collections, summary.txt, scene.json, run.txt) is written to
+ * NAME.tmp in the folder and renamed over NAME; the appended files
+ * (frames.csv, stats.csv, state.bin, qoi.csv) are flushed after every frame.
+ * After every frame, then, the folder is consistent: the rows of every frame
+ * so far, frames.pvd listing exactly the complete VTU files, a partial
+ * summary. A kill leaves at most a NAME.tmp (a run file, removed with the
+ * run's files) and a last row or state record cut short (bs_state_open skips
+ * a partial record). Every write is checked: a failure is BS_EIO naming the
+ * file and the OS reason (strerror).
+ *
+ * Writing: bs_runfolder_open makes the folder, takes its lock (one run per
+ * folder: a second run into a folder in use is refused at once, naming the
+ * folder and the holder's pid; see bs_runfolder_lock), refuses it when it holds an
  * earlier run (any file named above; BS_EINPUT naming the folder and a file)
  * unless opts->replace, in which case those files (and only those) are
  * removed first, writes scene.json and run.txt and opens the files the scene's output
@@ -69,9 +88,11 @@ typedef struct bs_runfolder_opts {
   const char *command_line; /* for run.txt; NULL: "(library call)"                  */
 } bs_runfolder_opts;
 
-/* Makes dir (and its parents), checks it (see the top), writes run.txt and
- * opens frames.csv, stats.csv (scene output.stats) and state.bin
- * (output.states) for the simulation s. opts NULL: all zero. */
+/* Makes dir (and its parents), takes its lock, checks it (see the top),
+ * writes run.txt and scene.json and opens frames.csv, stats.csv (scene
+ * output.stats), state.bin (output.states) and qoi.csv for the simulation s.
+ * opts NULL: all zero. BS_EINPUT for a folder in use or holding an earlier
+ * run, or a negative output.checkpoint_every. */
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
                       bs_error *err);
 
@@ -85,12 +106,26 @@ int bs_runfolder_is_run_file(const char *name);
  * removes them (*n_removed: how many; may be NULL). A missing dir is fine. */
 int bs_runfolder_prepare(const char *dir, int replace, int *n_removed, bs_error *err);
 
+/* The lock file of a run folder (not a run file: it stays, empty, after the run). */
+#define BS_RUNFOLDER_LOCK ".bigstep.lock"
+
+/* Takes dir's lock: dir/.bigstep.lock, created if missing, flock'ed
+ * exclusively without waiting, holding this process's pid; *fd is the open
+ * descriptor that holds the lock until bs_runfolder_unlock (or the process's
+ * end: a killed run leaves no stale lock). BS_EINPUT naming the folder and
+ * the holder's pid when another process holds it; BS_EIO when the file cannot
+ * be made. bs_runfolder_open takes it first, for the whole run. */
+int bs_runfolder_lock(const char *dir, int *fd, bs_error *err);
+void bs_runfolder_unlock(int *fd);
+
 /* Writes dir/run.txt (see the top). */
 int bs_runfolder_write_record(const char *dir, const char *command_line, bs_error *err);
 
-/* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state
- * and, every output.vtu_every frames, frame_NNNNN.vtu. ctx is the
- * bs_runfolder (so that it can be handed to bs_sim_run). */
+/* Writes frame fs of s: its stats.csv rows, its frames.csv row, its state,
+ * its qoi.csv row and, every output.vtu_every frames, frame_NNNNN.vtu (with
+ * the obstacles and frames.pvd); then summary.txt of the frames so far and,
+ * when due (output.checkpoint_every, frame 0, the last frame), checkpoint.bin.
+ * ctx is the bs_runfolder (so that it can be handed to bs_sim_run). */
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err);
 
 /* The same with the frame's measures given (m: bs_sim_measure of the current
@@ -98,17 +133,47 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err);
 
-/* Writes summary.txt (when summary is not NULL). */
+/* Writes checkpoint.bin of s now (as after a frame when output.checkpoint_every
+ * says so): for a run stopped on request. A static scene: nothing, 0. */
+int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err);
+
+/* Wall seconds of the run so far (a resumed run's earlier part included). */
+double bs_runfolder_wall(const bs_runfolder *rf);
+
+/* Continues the run in dir (bigstep run --resume) for the simulation s, made
+ * from the same scene: takes the folder's lock; refuses (BS_EINPUT, naming
+ * the file and the first difference) a scene whose resolved content, less
+ * output.dir and description, is not that of dir/scene.json, a static scene,
+ * and one that no checkpoint repeats bit for bit (see checkpoint.bin); reads
+ * the checkpoint (bs_checkpoint_read: every check) and puts s at its frame
+ * (bs_sim_restore); cuts frames.csv, stats.csv, qoi.csv and state.bin after
+ * the checkpoint's frame (BS_EINPUT when one holds fewer rows than that) and
+ * removes the later VTU and obstacle frames and any NAME.tmp; opens those
+ * files at their end, rewrites the PVD collections of the frames kept, adds
+ * a "resumed:" line to run.txt. *totals gets the run's totals up to the
+ * checkpoint, for bs_sim_run_with (opts.resume). opts: command_line only. */
+int bs_runfolder_resume(const char *dir, bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
+                        bs_run_totals *totals, bs_error *err);
+
+/* Writes summary.txt (when summary is not NULL) and closes the appended files
+ * (checked: BS_EIO naming one that cannot be written). */
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err);
 
 void bs_runfolder_destroy(bs_runfolder **rf);
 
 /* ---- the summary ---------------------------------------------------------- */
 
+/* Whether the summary is of a whole run: complete; running (written after
+ * every frame; left so when the run was killed); interrupted (stopped on a
+ * request, e.g. Ctrl-C: bigstep run --resume continues it). */
+typedef enum { BS_SUMMARY_COMPLETE = 0, BS_SUMMARY_RUNNING, BS_SUMMARY_INTERRUPTED } bs_summary_state;
+
 typedef struct bs_summary {
   char method[32];
+  bs_summary_state partial;  /* not complete: a last line "partial: N of M frames (...)" */
+  int frames, frames_total;  /* frames done (statics: 1) and the scene's       */
   int steps_per_frame;
-  double s_per_frame;        /* wall seconds per frame                         */
+  double s_per_frame;        /* wall seconds per frame done                    */
   long dofs;
   double solves_per_step;    /* Newton iterations per step                      */
   long failed;               /* steps that did not converge                     */
@@ -122,16 +187,70 @@ typedef struct bs_summary {
   double peak_mib;           /* peak resident memory (MiB)                      */
 } bs_summary;
 
-/* Fills a summary from a finished run: totals, wall seconds, the sim's last state. */
+/* Fills a summary from the run so far: totals, wall seconds, the sim's
+ * current state (measured here: bs_sim_measure with intersections); partial
+ * is BS_SUMMARY_RUNNING when s->frame is short of the scene's frames (the
+ * caller may set BS_SUMMARY_INTERRUPTED). */
 void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_seconds, bs_summary *out);
 
-/* The summary as text (four lines, the first a header); returns the length. */
+/* The same with the current state's measures given. */
+void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall_seconds, const bs_sim_measures *m,
+                              bs_summary *out);
+
+/* The summary as text (four lines, the first a header, and the partial line
+ * when not complete); returns the length. */
 int bs_summary_format(const bs_summary *sum, char *buf, size_t n);
 
 /* Reads the summary row (method, steps_per_frame, s_per_frame and, when
- * present, dofs, solves_per_step, failed) and peak_mib (NAN when absent) back
- * from dir/summary.txt. BS_EINPUT when the row has not its first three. */
+ * present, dofs, solves_per_step, failed), peak_mib (NAN when absent) and the
+ * partial line (partial, frames, frames_total; 0 when absent) back from
+ * dir/summary.txt. BS_EINPUT when the row has not its first three. */
 int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
+
+/* ---- checkpoint.bin ---------------------------------------------------------
+ * The state a run continues from (bigstep run --resume; bs_runfolder_resume):
+ * written after a frame's other files every output.checkpoint_every frames,
+ * at frame 0 and the last frame, and when a run stops on request
+ * (bs_runfolder_checkpoint), through checkpoint.bin.tmp and a rename, so the
+ * file always holds one whole checkpoint. Native (little-endian) layout,
+ * version BS_CHECKPOINT_VERSION:
+ *   "BSCK", uint32 version, int32 n_vertices, int32 frame, double time
+ *   (= frame / fps), uint64 scene hash (FNV-1a of the resolved scene without
+ *   output.dir and description), double wall seconds of the run so far,
+ *   int32 the scene's frames, int32 0 (48 bytes);
+ *   the run's totals so far: 11 int64 (steps, failed, iterations, cg, ls,
+ *   indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill), 2 doubles
+ *   (seconds, max_grad), 2 int32 (first failed frame and step), the first
+ *   failure's reason (256 bytes);
+ *   x (3n doubles), v (3n doubles); a uint64 FNV-1a of every byte before.
+ * x, v and the time are everything the next step reads: the lagged Rayleigh
+ * damping, the initial guesses and x̂ are made from xⁿ, vⁿ; scripted
+ * vertices and obstacles move as functions of time; the obstacles' active
+ * sets start empty every step; the self-collision caches (the last detection,
+ * search hints) only spare work, and the minimizer starts every solve afresh.
+ * One exception: solver.linear "amg" with solver.amg_matrix "current" builds
+ * its preconditioner at an earlier iterate, which no checkpoint holds:
+ * bs_runfolder_resume refuses such a scene. */
+#define BS_CHECKPOINT_VERSION 1
+
+typedef struct bs_checkpoint {
+  int frame;
+  double time, wall_seconds;
+  bs_run_totals totals;
+  double *x, *v;             /* 3n each (one allocation, freed by bs_checkpoint_free) */
+} bs_checkpoint;
+
+/* Writes dir/checkpoint.bin of s at its current frame. */
+int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T, double wall_seconds,
+                        uint64_t scene_hash, bs_error *err);
+
+/* Reads and checks dir/checkpoint.bin for the simulation s of the scene with
+ * this hash: BS_EIO when missing, BS_EINPUT (naming the file and what is
+ * wrong) for another magic or version, a vertex count or scene hash not s's,
+ * a size not the one of its counts (truncated), a bad checksum, a frame
+ * outside the scene or at another time, non-finite values. */
+int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs_checkpoint *ck, bs_error *err);
+void bs_checkpoint_free(bs_checkpoint *ck);
 
 /* ---- reading frames.csv --------------------------------------------------- */
 

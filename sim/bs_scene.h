@@ -190,6 +190,7 @@ typedef struct bs_scene {
   double self_stiffness, self_friction;
   char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
   int vtu_every;           /* frames between VTU files (0: none)               */
+  int checkpoint_every;    /* frames between checkpoints (0: none; bs_runfolder.h) */
   int stats_csv;
   int states;              /* write state.bin (x, v every frame)                */
   uint32_t out_fields;     /* output.fields: a set of bs_field bits (bs_fields.h) */
@@ -266,8 +267,9 @@ int bs_scene_schema_json(char **out, bs_error *err);
  * ending in a newline. 0, or BS_ENOMEM. */
 int bs_scene_write_json(const bs_scene *s, char **out, bs_error *err);
 
-/* The same written to the file `path` (replaced): 0, BS_ENOMEM, or BS_EIO
- * naming the file. */
+/* The same written to the file `path`, replaced through a temporary file
+ * (path.tmp, renamed over path: the old file or the new one, never a part):
+ * 0, BS_ENOMEM, or BS_EIO naming the file and the reason. */
 int bs_scene_write_json_file(const bs_scene *s, const char *path, bs_error *err);
 
 #ifdef __cplusplus

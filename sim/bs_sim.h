@@ -42,6 +42,7 @@
 #ifndef BS_SIM_H
 #define BS_SIM_H
 
+#include <signal.h>
 #include <stdint.h>
 
 #include "bs_fem.h"
@@ -151,6 +152,33 @@ typedef int (*bs_frame_fn)(const bs_sim *s, const bs_frame_stats *fs, void *ctx,
 /* Every frame of the scene (or its static solve), with on_frame (may be
  * NULL) after each; totals (may be NULL) summed over the run. */
 int bs_sim_run(bs_sim *s, bs_frame_fn on_frame, void *ctx, bs_run_totals *totals, bs_error *err);
+
+/* bs_sim_run with a way to be asked to stop and to continue a run. */
+typedef struct bs_sim_run_opts {
+  bs_frame_fn on_frame;        /* may be NULL                                         */
+  void *ctx;
+  /* NULL, or a flag (a signal handler's, say) read before every step: when it is
+     nonzero the run stops there and returns BS_SIM_STOPPED, with the simulation
+     at the end of its last complete frame (a frame cut short is undone: x, v and
+     time are put back as they were at its start; on_frame has seen every
+     complete frame). The library installs no signal handler. */
+  volatile sig_atomic_t *stop;
+  /* 1: continue from s->frame (after bs_sim_restore): no on_frame call for the
+     current frame, and totals added to rather than cleared. */
+  int resume;
+} bs_sim_run_opts;
+
+/* Returned by bs_sim_run_with when it stopped on opts->stop (not an error). */
+#define BS_SIM_STOPPED 1
+
+int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *opts, bs_run_totals *totals, bs_error *err);
+
+/* Puts the simulation at the end of frame `frame` of a dynamic scene, at time
+ * frame / fps, with positions x and velocities v (3n each, copied): to
+ * continue a run from a saved state (bs_runfolder.h, checkpoint.bin).
+ * BS_EINPUT when the frame is outside [0, frames], the scene is static or a
+ * value is not finite; before the first frame only or between frames. */
+int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err);
 
 /* What a frame row records of the current state. */
 typedef struct bs_sim_measures {

@@ -8,6 +8,7 @@
 
 #include "bs_ls_surface.h"
 #include "bs_obstacle_output.h"
+#include "outfile.h"
 
 typedef struct obs_out {
   const bs_levelset *ls;
@@ -103,9 +104,8 @@ static int write_surface(const bs_obstacle_output *w, const obs_out *o, double t
   return st;
 }
 
-/* Appends (t, name) to obstacle k's collection and rewrites obstacles_K.pvd
- * through a temporary file (named obstacles_K.tmp.pvd, a run file too). */
-static int write_pvd(const bs_obstacle_output *w, int k, obs_out *o, double t, const char *name, bs_error *err) {
+/* Appends (t, name) to an obstacle's collection. */
+static int add_entry(obs_out *o, double t, const char *name, bs_error *err) {
   if (o->n == o->cap) {
     int cap = o->cap ? 2 * o->cap : 64;
     char **nf = realloc(o->files, sizeof(char *) * (size_t)cap);
@@ -117,32 +117,61 @@ static int write_pvd(const bs_obstacle_output *w, int k, obs_out *o, double t, c
   }
   if (!(o->files[o->n] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
   o->times[o->n++] = t;
-  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+  return 0;
+}
+
+/* Rewrites obstacles_K.pvd through a temporary file (obstacles_K.pvd.tmp, a
+ * run file too). */
+static int write_pvd(const bs_obstacle_output *w, int k, const obs_out *o, bs_error *err) {
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/obstacles_%d.pvd", w->dir, k);
-  snprintf(tmp, sizeof tmp, "%s/obstacles_%d.tmp.pvd", w->dir, k);
+  bs_tmp_path(tmp, sizeof tmp, p);
   int st = bs_pvd_write(tmp, o->n, o->times, (const char *const *)o->files, err);
-  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
+  return st ? st : bs_tmp_commit(tmp, p, err);
+}
+
+/* The file name of obstacle k at frame `frame`. */
+static void file_name(const obs_out *o, int k, int frame, char *name, size_t n) {
+  const char *ext = o->grid ? "vti" : "vtu";
+  if (o->moving) snprintf(name, n, "obstacle_%d_%05d.%s", k, frame, ext);
+  else snprintf(name, n, "obstacle_%d.%s", k, ext);
+}
+
+/* Frame `frame` of obstacle k: its file (with write), its entry. */
+static int obstacle_frame(bs_obstacle_output *w, int k, int frame, double t, int write, bs_error *err) {
+  obs_out *o = &w->o[k];
+  char name[64], path[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
+  file_name(o, k, frame, name, sizeof name);
+  snprintf(path, sizeof path, "%s/%s", w->dir, name);
+  bs_tmp_path(tmp, sizeof tmp, path);
+  int st = 0;
+  if (write && (o->moving || !o->written)) {
+    st = o->grid ? write_grid(o, t, tmp, err) : write_surface(w, o, t, tmp, err);
+    if (!st) st = bs_tmp_commit(tmp, path, err);
+  }
+  if (!st) st = add_entry(o, t, name, err);
+  if (!st && write) st = write_pvd(w, k, o, err);
+  if (st) bs_error_prefix(err, "obstacle %d", k);
+  else o->written = 1;
   return st;
 }
 
 int bs_obstacle_output_frame(bs_obstacle_output *w, const bs_sim *s, int frame, bs_error *err) {
   if (!w) return 0;
-  for (int k = 0; k < w->n; k++) {
-    obs_out *o = &w->o[k];
-    const char *ext = o->grid ? "vti" : "vtu";
-    char name[64], path[BS_MAX_PATH + 64];
-    if (o->moving) snprintf(name, sizeof name, "obstacle_%d_%05d.%s", k, frame, ext);
-    else snprintf(name, sizeof name, "obstacle_%d.%s", k, ext);
-    snprintf(path, sizeof path, "%s/%s", w->dir, name);
-    int st = 0;
-    if (o->moving || !o->written)
-      st = o->grid ? write_grid(o, s->time, path, err) : write_surface(w, o, s->time, path, err);
-    if (!st) st = write_pvd(w, k, o, s->time, name, err);
-    if (st) {
-      bs_error_prefix(err, "obstacle %d", k);
-      return st;
-    }
-    o->written = 1;
-  }
-  return 0;
+  int st = 0;
+  for (int k = 0; k < w->n && !st; k++) st = obstacle_frame(w, k, frame, s->time, 1, err);
+  return st;
+}
+
+int bs_obstacle_output_skip(bs_obstacle_output *w, int frame, double t, bs_error *err) {
+  if (!w) return 0;
+  int st = 0;
+  for (int k = 0; k < w->n && !st; k++) st = obstacle_frame(w, k, frame, t, 0, err);
+  return st;
+}
+
+int bs_obstacle_output_write_pvds(bs_obstacle_output *w, bs_error *err) {
+  int st = 0;
+  for (int k = 0; w && k < w->n && !st; k++) st = write_pvd(w, k, &w->o[k], err);
+  return st;
 }

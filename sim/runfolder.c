@@ -8,141 +8,158 @@
 #include "bs_fields.h"
 #include "bs_obstacle_output.h"
 #include "bs_qoi.h"
-#include "bs_runfolder.h"
-
-struct bs_runfolder {
-  char dir[BS_MAX_PATH];
-  FILE *frames, *stats, *state;
-  int n_vtu, cap_vtu;
-  char **vtu_names;
-  double *vtu_times;
-  bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
-  bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
-  FILE *qoi_csv;     /* qoi.csv, when the scene names quantities      */
-  bs_qoi *qoi;
-  double *qoi_values;
-};
-
-static int open_file(const bs_runfolder *rf, const char *name, const char *mode, FILE **f, bs_error *err) {
-  char p[BS_MAX_PATH + 64];
-  snprintf(p, sizeof p, "%s/%s", rf->dir, name);
-  *f = fopen(p, mode);
-  return *f ? 0 : bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-}
+#include "outfile.h"
+#include "runfolder_internal.h"
 
 /* state.bin's header (bs_runfolder.h). */
-static int write_state_header(FILE *f, int32_t n) {
+static int write_state_header(bs_outfile *f, int32_t n, bs_error *err) {
   uint32_t version = BS_STATE_VERSION;
   int32_t hdr[2] = {n, 0};
-  return fwrite("BSST", 1, 4, f) == 4 && fwrite(&version, 4, 1, f) == 1 && fwrite(hdr, 4, 2, f) == 2 ? 0 : -1;
+  bs_outfile_write(f, "BSST", 1, 4);
+  bs_outfile_write(f, &version, 4, 1);
+  bs_outfile_write(f, hdr, 4, 2);
+  return bs_outfile_flush(f, err);
 }
 
 int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
   return bs_runfolder_open(dir, s, NULL, out, err);
 }
 
-static int open_files(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+/* The appended files, new (with their headers) or, append, opened at their end. */
+static int open_files(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   const bs_scene *sc = s->scene;
   int st = 0;
-  if (sc->stats_csv && !(st = open_file(rf, "stats.csv", "w", &rf->stats, err))) fprintf(rf->stats, "%s\n", BS_STATS_CSV_HEADER);
-  if (!st && !(st = open_file(rf, "frames.csv", "w", &rf->frames, err))) fprintf(rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
-  if (!st && sc->states && !(st = open_file(rf, "state.bin", "wb", &rf->state, err)) &&
-      write_state_header(rf->state, s->mesh->n_vertices))
-    st = bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
+  if (append) {
+    if (sc->stats_csv) st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "ab", err);
+    if (!st) st = bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "ab", err);
+    if (!st && sc->states) st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "ab", err);
+    return st;
+  }
+  if (sc->stats_csv && !(st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "w", err))) {
+    bs_outfile_printf(&rf->stats, "%s\n", BS_STATS_CSV_HEADER);
+    st = bs_outfile_flush(&rf->stats, err);
+  }
+  if (!st && !(st = bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "w", err))) {
+    bs_outfile_printf(&rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
+    st = bs_outfile_flush(&rf->frames, err);
+  }
+  if (!st && sc->states && !(st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "wb", err)))
+    st = write_state_header(&rf->state, s->mesh->n_vertices, err);
   return st;
 }
 
-/* qoi.csv and the quantities resolved on s (bs_qoi.h). */
-static int open_qoi(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+/* qoi.csv (new with its header, or append) and the quantities resolved on s (bs_qoi.h). */
+static int open_qoi(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   int st = bs_qoi_create(s, &rf->qoi, err);
   if (!st && !(rf->qoi_values = calloc((size_t)s->scene->n_qoi, sizeof(double))))
     st = bs_error_set(err, BS_ENOMEM, "out of memory");
-  if (!st) st = open_file(rf, "qoi.csv", "w", &rf->qoi_csv, err);
-  if (st) return st;
-  fprintf(rf->qoi_csv, "frame,time");
-  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%s", s->scene->qoi[i].name);
-  fputc('\n', rf->qoi_csv);
-  return 0;
+  if (!st) st = bs_outfile_open(&rf->qoi_csv, rf->dir, "qoi.csv", append ? "ab" : "w", err);
+  if (st || append) return st;
+  bs_outfile_printf(&rf->qoi_csv, "frame,time");
+  for (int i = 0; i < s->scene->n_qoi; i++) bs_outfile_printf(&rf->qoi_csv, ",%s", s->scene->qoi[i].name);
+  bs_outfile_printf(&rf->qoi_csv, "\n");
+  return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
 /* The frame's row of qoi.csv (format: bs_runfolder.h). */
 static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
   int st = bs_qoi_eval(rf->qoi, s, rf->qoi_values, err);
   if (st) return st;
-  fprintf(rf->qoi_csv, "%d,%.17g", frame, s->time);
-  for (int i = 0; i < s->scene->n_qoi; i++) fprintf(rf->qoi_csv, ",%.17g", rf->qoi_values[i]);
-  fputc('\n', rf->qoi_csv);
-  if (fflush(rf->qoi_csv) || ferror(rf->qoi_csv)) return bs_error_set(err, BS_EIO, "cannot write '%s/qoi.csv'", rf->dir);
-  return 0;
+  bs_outfile_printf(&rf->qoi_csv, "%d,%.17g", frame, s->time);
+  for (int i = 0; i < s->scene->n_qoi; i++) bs_outfile_printf(&rf->qoi_csv, ",%.17g", rf->qoi_values[i]);
+  bs_outfile_printf(&rf->qoi_csv, "\n");
+  return bs_outfile_flush(&rf->qoi_csv, err);
+}
+
+int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
+  *out = NULL;
+  if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
+  bs_runfolder *rf = calloc(1, sizeof *rf);
+  if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  rf->lock_fd = -1;
+  snprintf(rf->dir, sizeof rf->dir, "%s", dir);
+  rf->t_open = bs_seconds();
+  char *id = NULL;
+  int st = bs_scene_identity_(s->scene, &id, err);
+  if (!st) rf->scene_hash = bs_fnv1a_(BS_FNV_SEED, id, strlen(id));
+  free(id);
+  if (!st && s->scene->checkpoint_every < 0)
+    st = bs_error_set(err, BS_EINPUT, "output.checkpoint_every: must be an integer in [0, 1000000], got %d",
+                      s->scene->checkpoint_every);
+  if (!st) st = bs_mkdir_p(dir, err);
+  if (!st) st = bs_runfolder_lock(dir, &rf->lock_fd, err);
+  if (st) bs_runfolder_destroy(&rf);
+  *out = rf;
+  return st;
+}
+
+int bs_runfolder_outputs_(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
+  int st = open_files(rf, s, append, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
+  if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(rf->dir, s, &rf->obstacles, err);
+  if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, append, err);
+  return st;
 }
 
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
                       bs_error *err) {
-  *out = NULL;
   const bs_runfolder_opts none = {0};
   if (!o) o = &none;
-  if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
-  int st = bs_mkdir_p(dir, err);
+  bs_runfolder *rf = NULL;
+  int st = bs_runfolder_begin_(dir, s, &rf, err);
   if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
-  if (st) return st;
-  bs_runfolder *rf = calloc(1, sizeof *rf);
-  if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
-  snprintf(rf->dir, sizeof rf->dir, "%s", dir);
-  st = bs_runfolder_write_record(dir, o->command_line, err);
+  if (!st) st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
-  if (!st) st = open_files(rf, s, err);
-  if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
-  if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(dir, s, &rf->obstacles, err);
-  if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, err);
-  if (st) {
-    bs_runfolder_destroy(&rf);
-    return st;
-  }
+  if (!st) st = bs_runfolder_outputs_(rf, s, 0, err);
+  if (st) bs_runfolder_destroy(&rf);
   *out = rf;
-  return 0;
+  return st;
 }
 
-static void write_stats_rows(FILE *f, const bs_frame_stats *fs) {
+static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *err) {
   for (int k = 0; k < fs->n_steps; k++) {
     const bs_step_stats *st = &fs->steps[k].st;
-    fprintf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", fs->frame, k,
-            fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations, st->min.ls_evaluations,
-            st->min.indefinite_exits, st->min.fallback_neg_dx, st->min.fallback_neg_grad, st->min.clamps,
-            st->min.cholmod_fallbacks, st->min.alpha_min, st->min.alpha_max, st->min.grad_norm, st->min.E,
-            st->min.reason_text ? st->min.reason_text : "", fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly,
-            st->min.t_linear, st->min.t_line_search, st->seconds);
+    bs_outfile_printf(f, "%d,%d,%.9g,%d,%d,%d,%d,%d,%d,%d,%d,%d,%.6g,%.6g,%.6e,%.9e,%s,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n",
+                      fs->frame, k, fs->steps[k].time, st->guess, st->min.iterations, st->min.cg_iterations,
+                      st->min.ls_evaluations, st->min.indefinite_exits, st->min.fallback_neg_dx,
+                      st->min.fallback_neg_grad, st->min.clamps, st->min.cholmod_fallbacks, st->min.alpha_min,
+                      st->min.alpha_max, st->min.grad_norm, st->min.E, st->min.reason_text ? st->min.reason_text : "",
+                      fs->steps[k].inverted, st->min.t_eval, st->min.t_assembly, st->min.t_linear,
+                      st->min.t_line_search, st->seconds);
   }
-  fflush(f);
+  return bs_outfile_flush(f, err);
 }
 
-static void write_frame_row(FILE *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m) {
-  fprintf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time, m->kinetic,
-          m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations, fs->cg_iterations, fs->failed,
-          fs->seconds, m->penetrating, m->max_depth, (long long)m->self_intersections);
-  fflush(f);
+static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
+                           bs_error *err) {
+  bs_outfile_printf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time,
+                    m->kinetic, m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations,
+                    fs->cg_iterations, fs->failed, fs->seconds, m->penetrating, m->max_depth,
+                    (long long)m->self_intersections);
+  return bs_outfile_flush(f, err);
 }
 
-static int write_state(FILE *f, const bs_sim *s) {
+static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
   size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  int ok = fwrite(&s->time, sizeof(double), 1, f) == 1 && fwrite(s->x, sizeof(double), n3, f) == n3 &&
-           fwrite(s->v, sizeof(double), n3, f) == n3;
-  return fflush(f) == 0 && ok ? 0 : -1;
+  bs_outfile_write(f, &s->time, sizeof(double), 1);
+  bs_outfile_write(f, s->x, sizeof(double), n3);
+  bs_outfile_write(f, s->v, sizeof(double), n3);
+  return bs_outfile_flush(f, err);
 }
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
  * over the old one: the collection is valid after every frame. */
-static int write_pvd(const bs_runfolder *rf, bs_error *err) {
-  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 64];
+int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err) {
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
-  snprintf(tmp, sizeof tmp, "%s/frames.pvd.tmp", rf->dir);
+  bs_tmp_path(tmp, sizeof tmp, p);
   int st = bs_pvd_write(tmp, rf->n_vtu, rf->vtu_times, (const char *const *)rf->vtu_names, err);
-  if (!st && rename(tmp, p)) st = bs_error_set(err, BS_EIO, "cannot rename '%s' to '%s': %s", tmp, p, strerror(errno));
-  return st;
+  return st ? st : bs_tmp_commit(tmp, p, err);
 }
 
-static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
+int bs_runfolder_add_vtu_(bs_runfolder *rf, const char *name, double t, bs_error *err) {
   if (rf->n_vtu == rf->cap_vtu) {
     int cap = rf->cap_vtu ? 2 * rf->cap_vtu : 64;
     char **nn = realloc(rf->vtu_names, sizeof(char *) * (size_t)cap);
@@ -152,15 +169,21 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
     rf->vtu_times = tt;
     rf->cap_vtu = cap;
   }
-  char path[BS_MAX_PATH + 64], name[64];
+  if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  rf->vtu_times[rf->n_vtu++] = t;
+  return 0;
+}
+
+static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err) {
+  char path[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72], name[64];
   snprintf(name, sizeof name, "frame_%05d.vtu", frame);
   snprintf(path, sizeof path, "%s/%s", rf->dir, name);
-  int st = bs_fields_write_vtu(rf->fields, s, path, err);
+  bs_tmp_path(tmp, sizeof tmp, path);
+  int st = bs_fields_write_vtu(rf->fields, s, tmp, err);
+  if (!st) st = bs_tmp_commit(tmp, path, err);
   if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
-  if (st) return st;
-  if (!(rf->vtu_names[rf->n_vtu] = strdup(name))) return bs_error_set(err, BS_ENOMEM, "out of memory");
-  rf->vtu_times[rf->n_vtu++] = s->time;
-  return write_pvd(rf, err);
+  if (!st) st = bs_runfolder_add_vtu_(rf, name, s->time, err);
+  return st ? st : bs_runfolder_write_pvd_(rf, err);
 }
 
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
@@ -169,46 +192,65 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
   return bs_runfolder_write(ctx, s, fs, &m, err);
 }
 
-int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
-                       bs_error *err) {
-  if (rf->stats) write_stats_rows(rf->stats, fs);
-  write_frame_row(rf->frames, s, fs, m);
-  if (ferror(rf->frames)) return bs_error_set(err, BS_EIO, "cannot write '%s/frames.csv'", rf->dir);
-  if (rf->stats && ferror(rf->stats)) return bs_error_set(err, BS_EIO, "cannot write '%s/stats.csv'", rf->dir);
-  if (rf->state && write_state(rf->state, s)) return bs_error_set(err, BS_EIO, "cannot write '%s/state.bin'", rf->dir);
-  int st = rf->qoi_csv ? write_qoi_row(rf, s, fs->frame, err) : 0;
-  if (st) return st;
-  const int every = s->scene->vtu_every;
-  if (every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
-    return write_vtu(rf, s, fs->frame, err);
-  return 0;
+/* summary.txt of the frames so far, marked partial (bs_runfolder.h). */
+static int write_partial_summary(bs_runfolder *rf, const bs_sim *s, const bs_sim_measures *m, bs_error *err) {
+  bs_summary u;
+  char text[2048];
+  bs_summary_make_measured(s, &rf->totals, bs_runfolder_wall(rf), m, &u);
+  u.partial = BS_SUMMARY_RUNNING;
+  bs_summary_format(&u, text, sizeof text);
+  return bs_outfile_replace_text(rf->dir, "summary.txt", text, err);
 }
 
+int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
+                       bs_error *err) {
+  int st = rf->stats.f ? write_stats_rows(&rf->stats, fs, err) : 0;
+  if (!st) st = write_frame_row(&rf->frames, s, fs, m, err);
+  if (!st && rf->state.f) st = write_state(&rf->state, s, err);
+  if (!st && rf->qoi_csv.f) st = write_qoi_row(rf, s, fs->frame, err);
+  const int every = s->scene->vtu_every;
+  if (!st && every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
+    st = write_vtu(rf, s, fs->frame, err);
+  bs_run_totals_add(&rf->totals, fs);
+  if (!st) st = write_partial_summary(rf, s, m, err);
+  const int ck = s->scene->checkpoint_every;
+  if (!st && ck > 0 && s->scene->mode == BS_MODE_DYNAMIC && (fs->frame % ck == 0 || fs->frame == s->scene->frames))
+    st = bs_runfolder_checkpoint(rf, s, err);
+  return st;
+}
+
+int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err) {
+  if (s->scene->mode != BS_MODE_DYNAMIC) return 0;
+  return bs_checkpoint_write(rf->dir, s, &rf->totals, bs_runfolder_wall(rf), rf->scene_hash, err);
+}
+
+double bs_runfolder_wall(const bs_runfolder *rf) { return bs_seconds() - rf->t_open; }
+
 int bs_runfolder_finish(bs_runfolder *rf, const char *summary, bs_error *err) {
-  char p[BS_MAX_PATH + 64];
-  if (!summary) return 0;
-  snprintf(p, sizeof p, "%s/summary.txt", rf->dir);
-  FILE *f = fopen(p, "w");
-  if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-  int ok = fputs(summary, f) >= 0;
-  if (fclose(f) || !ok) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
-  return 0;
+  int st = summary ? bs_outfile_replace_text(rf->dir, "summary.txt", summary, err) : 0;
+  bs_outfile *files[] = {&rf->frames, &rf->stats, &rf->state, &rf->qoi_csv};
+  for (int i = 0; i < 4; i++) {
+    int c = bs_outfile_close(files[i], st ? NULL : err);
+    if (!st) st = c;
+  }
+  return st;
 }
 
 void bs_runfolder_destroy(bs_runfolder **prf) {
   if (!prf || !*prf) return;
   bs_runfolder *rf = *prf;
-  if (rf->frames) fclose(rf->frames);
-  if (rf->stats) fclose(rf->stats);
-  if (rf->state) fclose(rf->state);
+  bs_outfile_abandon(&rf->frames);
+  bs_outfile_abandon(&rf->stats);
+  bs_outfile_abandon(&rf->state);
   bs_fields_destroy(&rf->fields);
   bs_obstacle_output_destroy(&rf->obstacles);
   for (int i = 0; i < rf->n_vtu; i++) free(rf->vtu_names[i]);
   free(rf->vtu_names);
   free(rf->vtu_times);
-  if (rf->qoi_csv) fclose(rf->qoi_csv);
+  bs_outfile_abandon(&rf->qoi_csv);
   bs_qoi_destroy(&rf->qoi);
   free(rf->qoi_values);
+  bs_runfolder_unlock(&rf->lock_fd);
   free(rf);
   *prf = NULL;
 }

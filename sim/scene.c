@@ -736,6 +736,7 @@ static int parse_output(ctx *c, const cJSON *root, bs_scene *s) {
   if ((st = check_keys(c, out, "output", "output")) ||
       (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
       (st = get_int(c, out, "output", "output", "vtu_every", &s->vtu_every)) ||
+      (st = get_int(c, out, "output", "output", "checkpoint_every", &s->checkpoint_every)) ||
       (st = get_bool(c, out, "output", "stats", &s->stats_csv)) || (st = get_bool(c, out, "output", "states", &s->states)) ||
       (st = get_bool(c, out, "output", "compress", &s->out_compress)) ||
       (st = bs_fields_parse_json_(cJSON_GetObjectItemCaseSensitive(out, "fields"), c->file, &s->out_fields, c->err)))

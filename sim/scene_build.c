@@ -41,6 +41,7 @@ void bs_scene_defaults_(bs_scene *s) {
   s->gravity[2] = 0;
   s->drag = 0;
   s->vtu_every = 1;
+  s->checkpoint_every = 1;
   s->stats_csv = 1;
   s->out_fields = BS_FIELDS_DEFAULT;
   s->out_compress = 0; /* raw: faster to write (README, Output fields) */

@@ -157,6 +157,8 @@ const bs_schema_key bs_schema_keys_[] = {
 
     {"output", "dir", STR, .def = "\"\"", .doc = "output folder (empty: no files)"},
     {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", .doc = "frames between VTU files (0: none)"},
+    {"output", "checkpoint_every", INT, .range = "[0, 1000000]", .def = "1",
+     .doc = "frames between checkpoints (checkpoint.bin, for bigstep run --resume; 0: none)"},
     {"output", "stats", BOOL, .def = "true", .doc = "write stats.csv"},
     {"output", "states", BOOL, .def = "false", .doc = "write state.bin (time, x, v of every frame)"},
     {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs_field_names_,

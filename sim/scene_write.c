@@ -11,6 +11,7 @@
 #include "bs_fields.h"
 #include "bs_scene.h"
 #include "json_print.h"
+#include "outfile.h"
 #include "scene_schema.h"
 
 /* Adding members; a failed allocation sets oom (checked once at the end). */
@@ -213,6 +214,7 @@ static void write_tail(writer *w, cJSON *root, const bs_scene *s) {
   if (out) {
     str(w, out, "dir", s->out_dir);
     num(w, out, "vtu_every", s->vtu_every);
+    num(w, out, "checkpoint_every", s->checkpoint_every);
     boolean(w, out, "stats", s->stats_csv);
     boolean(w, out, "states", s->states);
     const char *names[BS_FIELD_COUNT];
@@ -252,13 +254,8 @@ int bs_scene_write_json_file(const bs_scene *s, const char *file, bs_error *err)
   char *text;
   int st = bs_scene_write_json(s, &text, err);
   if (st) return st;
-  FILE *f = fopen(file, "wb");
-  if (!f) {
-    free(text);
-    return bs_error_set(err, BS_EIO, "cannot write the resolved scene '%s'", file);
-  }
-  size_t n = strlen(text), put_n = fwrite(text, 1, n, f);
+  st = bs_outfile_replace_text(NULL, file, text, err);
   free(text);
-  if (fclose(f) != 0 || put_n != n) return bs_error_set(err, BS_EIO, "cannot write the resolved scene '%s'", file);
-  return 0;
+  if (st) bs_error_prefix(err, "the resolved scene");
+  return st;
 }

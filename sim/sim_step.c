@@ -2,7 +2,9 @@
  * run with a callback per frame, and the run's totals. Time is advanced here
  * only: step k of frame f ends at (f - 1)/fps + (k + 1) dt, and the frame at
  * exactly f/fps. */
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "sim_internal.h"
@@ -33,11 +35,28 @@ static void record(const bs_sim *s, bs_sim_step *rec) {
   rec->st.min.reason_text = rec->reason;
 }
 
-int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
+/* One frame, checking *stop (may be NULL) before every step; a frame cut
+ * short is undone from the snapshot (6n doubles: x then v; NULL when no stop
+ * can come) and BS_SIM_STOPPED returned. */
+static int advance_frame(bs_sim *s, volatile sig_atomic_t *stop, double *snap, bs_frame_stats *fs, bs_error *err) {
   const bs_scene *sc = s->scene;
   const int f = s->frame + 1;
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
   if (sc->mode != BS_MODE_DYNAMIC) return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
+  const double t0 = s->time;
+  if (snap) {
+    memcpy(snap, s->x, sizeof(double) * n3);
+    memcpy(snap + n3, s->v, sizeof(double) * n3);
+  }
   for (int k = 0; k < sc->steps_per_frame; k++) {
+    if (stop && *stop) {
+      if (snap && k > 0) {
+        memcpy(s->x, snap, sizeof(double) * n3);
+        memcpy(s->v, snap + n3, sizeof(double) * n3);
+      }
+      s->time = t0;
+      return BS_SIM_STOPPED;
+    }
     bs_sim_step *rec = &s->steps[k];
     int st = bs_integrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
     if (st) {
@@ -50,6 +69,25 @@ int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
   s->time = f / sc->fps;
   s->frame = f;
   frame_sums(s, sc->steps_per_frame, fs);
+  return 0;
+}
+
+int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) { return advance_frame(s, NULL, NULL, fs, err); }
+
+int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  if (sc->mode != BS_MODE_DYNAMIC)
+    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frame to restore", sc->path);
+  if (frame < 0 || frame > sc->frames)
+    return bs_error_set(err, BS_EINPUT, "%s: frame %d is outside the scene's 0..%d", sc->path, frame, sc->frames);
+  for (size_t i = 0; i < n3; i++)
+    if (!isfinite(x[i]) || !isfinite(v[i]))
+      return bs_error_set(err, BS_EINPUT, "%s: the state to restore is not finite at vertex %zu", sc->path, i / 3);
+  memcpy(s->x, x, sizeof(double) * n3);
+  memcpy(s->v, v, sizeof(double) * n3);
+  s->frame = frame;
+  s->time = frame / sc->fps;
   return 0;
 }
 
@@ -92,23 +130,45 @@ void bs_run_totals_add(bs_run_totals *T, const bs_frame_stats *fs) {
 }
 
 int bs_sim_run(bs_sim *s, bs_frame_fn on_frame, void *ctx, bs_run_totals *totals, bs_error *err) {
+  const bs_sim_run_opts o = {.on_frame = on_frame, .ctx = ctx};
+  return bs_sim_run_with(s, &o, totals, err);
+}
+
+/* The frames from s->frame to the scene's last; snap: advance_frame's. */
+static int run_frames(bs_sim *s, const bs_sim_run_opts *o, double *snap, bs_run_totals *totals, bs_error *err) {
+  bs_frame_stats fs;
+  while (s->frame < s->scene->frames) {
+    int st = advance_frame(s, o->stop, snap, &fs, err);
+    if (st) return st;
+    bs_run_totals_add(totals, &fs);
+    if (o->on_frame && (st = o->on_frame(s, &fs, o->ctx, err))) return st;
+  }
+  return 0;
+}
+
+int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, bs_error *err) {
   const bs_scene *sc = s->scene;
   bs_frame_stats fs;
   bs_run_totals local;
   if (!totals) totals = &local;
-  memset(totals, 0, sizeof *totals);
-  frame_sums(s, 0, &fs);
-  int st = on_frame ? on_frame(s, &fs, ctx, err) : 0;
-  if (st) return st;
+  if (!o->resume || totals == &local) memset(totals, 0, sizeof *totals);
+  int st = 0;
+  if (!o->resume) {
+    frame_sums(s, 0, &fs);
+    if (o->on_frame && (st = o->on_frame(s, &fs, o->ctx, err))) return st;
+  }
   if (sc->mode == BS_MODE_STATIC) {
+    if (o->resume) return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
+    if (o->stop && *o->stop) return BS_SIM_STOPPED;
     if ((st = bs_sim_statics(s, &fs, err))) return st;
     bs_run_totals_add(totals, &fs);
-    return on_frame ? on_frame(s, &fs, ctx, err) : 0;
+    return o->on_frame ? o->on_frame(s, &fs, o->ctx, err) : 0;
   }
-  while (s->frame < sc->frames) {
-    if ((st = bs_sim_advance_frame(s, &fs, err))) return st;
-    bs_run_totals_add(totals, &fs);
-    if (on_frame && (st = on_frame(s, &fs, ctx, err))) return st;
-  }
-  return 0;
+  double *snap = NULL;
+  if (o->stop && sc->steps_per_frame > 1 &&
+      !(snap = bs_calloc(6 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
+    return BS_ENOMEM;
+  st = run_frames(s, o, snap, totals, err);
+  free(snap);
+  return st;
 }

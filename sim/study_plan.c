@@ -136,6 +136,7 @@ static int build_sets(const bs_study *S, bs_study_run *r) {
   int cap = 8 + S->n_user + S->n_knobs * (S->n_bodies + 1), oom = 0;
   if (!(r->sets = calloc((size_t)cap, sizeof(char *)))) return -1;
   add_set(r, xstrdup("output.vtu_every=0"), &oom);
+  add_set(r, xstrdup("output.checkpoint_every=0"), &oom); /* a study's runs are measured, never resumed */
   for (int i = 0; i < S->n_user; i++) add_set(r, xstrdup(S->user_sets[i]), &oom);
   char name[512] = "";
   for (int k = 0; k < S->n_knobs; k++) {

@@ -8,23 +8,30 @@
 #include "bs_runfolder.h"
 
 void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall, bs_summary *out) {
+  bs_sim_measures m;
+  bs_sim_measure(s, 1, &m);
+  bs_summary_make_measured(s, T, wall, &m, out);
+}
+
+void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall, const bs_sim_measures *m,
+                              bs_summary *out) {
   const bs_scene *sc = s->scene;
   memset(out, 0, sizeof *out);
   snprintf(out->method, sizeof out->method, "%s", bs_method_name(sc->solver.method));
   out->steps_per_frame = sc->steps_per_frame;
-  double frames = sc->mode == BS_MODE_STATIC ? 1 : (sc->frames ? sc->frames : 1);
-  out->s_per_frame = wall / frames;
+  out->frames = sc->mode == BS_MODE_STATIC ? 1 : s->frame;
+  out->frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
+  out->partial = out->frames < out->frames_total ? BS_SUMMARY_RUNNING : BS_SUMMARY_COMPLETE;
+  out->s_per_frame = wall / (out->frames > 0 ? out->frames : 1);
   out->dofs = bs_sim_dofs(s);
   out->solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
   out->failed = T->failed;
   out->max_grad = T->max_grad;
-  bs_sim_measures m;
-  bs_sim_measure(s, 1, &m);
-  out->inverted = m.inverted;
-  out->self_intersections = m.self_intersections;
+  out->inverted = m->inverted;
+  out->self_intersections = m->self_intersections;
   out->obstacles = s->obstacles != NULL;
-  out->penetrating = m.penetrating;
-  out->max_depth = m.max_depth;
+  out->penetrating = m->penetrating;
+  out->max_depth = m->max_depth;
   out->totals = *T;
   out->peak_mib = bs_peak_rss() / 1048576.0;
 }
@@ -47,6 +54,12 @@ int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
                   "fallbacks; peak memory %.1f MiB\n",
                   T->cg, T->iterations ? (double)T->cg / T->iterations : 0.0, T->ls, T->indefinite, T->downhill,
                   T->fb_dx, T->fb_grad, T->clamps, T->chol_fb, u->peak_mib);
+  if (u->partial == BS_SUMMARY_RUNNING)
+    len += snprintf(REST, "partial: %d of %d frames (the run has not finished, or was killed)\n", u->frames,
+                    u->frames_total);
+  if (u->partial == BS_SUMMARY_INTERRUPTED)
+    len += snprintf(REST, "partial: %d of %d frames (interrupted; bigstep run --resume continues it)\n", u->frames,
+                    u->frames_total);
 #undef REST
   return len;
 }
@@ -67,6 +80,8 @@ int bs_summary_read(const char *dir, bs_summary *out, bs_error *err) {
       got = 1;
     const char *pk = strstr(line, "peak memory ");
     if (pk) out->peak_mib = atof(pk + 12);
+    if (!strncmp(line, "partial: ", 9) && sscanf(line + 9, "%d of %d", &out->frames, &out->frames_total) == 2)
+      out->partial = strstr(line, "(interrupted") ? BS_SUMMARY_INTERRUPTED : BS_SUMMARY_RUNNING;
   }
   fclose(f);
   return got ? 0 : bs_error_set(err, BS_EINPUT, "'%s': no summary row (method, steps, s/frame, ...)", p);

@@ -282,7 +282,8 @@ Test(study_plan, cross_product_names_and_reference) {
     cr_expect_str_eq(r->dir, d);
     snprintf(od, sizeof od, "output.dir=%s", d);
     cr_expect(has_set(r, od) && has_set(r, "output.states=true") && has_set(r, "output.stats=true") &&
-                  has_set(r, "output.vtu_every=0") && has_set(r, "time.frames=2"),
+                  has_set(r, "output.vtu_every=0") && has_set(r, "output.checkpoint_every=0") &&
+                  has_set(r, "time.frames=2"),
               "run %d: the output and user settings", i);
     cr_expect(has_set(r, i < 3 ? "time.steps_per_frame=1" : "time.steps_per_frame=2"), "run %d", i);
     cr_expect_eq(r->spf, i < 3 ? 1 : 2, "run %d: steps per frame from its scene", i);

@@ -1,0 +1,187 @@
+/* checkpoint.c — checkpoint.bin, the state a run continues from (format:
+ * bs_runfolder.h): written through a temporary file, read back with every
+ * check. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "outfile.h"
+#include "runfolder_internal.h"
+
+#define CK_MAGIC "BSCK"
+#define CK_HEADER 48 /* magic, version, n, frame, time, scene hash, wall, frames, 0 */
+#define CK_TOTALS (11 * 8 + 2 * 8 + 2 * 4 + 256)
+
+uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n) {
+  const unsigned char *b = p;
+  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ULL;
+  return h;
+}
+
+int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err) {
+  bs_scene *c = malloc(sizeof *c);
+  if (!c) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  *c = *sc; /* a shallow copy, only written out */
+  c->out_dir[0] = 0;
+  c->description = NULL;
+  int st = bs_scene_write_json(c, text, err);
+  free(c);
+  return st;
+}
+
+/* The totals as 11 int64, 2 doubles, 2 int32 and the reason (256 bytes). */
+static void pack_totals(const bs_run_totals *T, unsigned char *b) {
+  const long L[11] = {T->steps, T->failed, T->iterations, T->cg,     T->ls,      T->indefinite,
+                      T->fb_dx, T->fb_grad, T->clamps,    T->chol_fb, T->downhill};
+  for (int i = 0; i < 11; i++) {
+    int64_t v = L[i];
+    memcpy(b + 8 * i, &v, 8);
+  }
+  memcpy(b + 88, &T->seconds, 8);
+  memcpy(b + 96, &T->max_grad, 8);
+  int32_t f[2] = {T->first_fail_frame, T->first_fail_step};
+  memcpy(b + 104, f, 8);
+  memcpy(b + 112, T->first_fail_reason, 256);
+}
+
+static void unpack_totals(const unsigned char *b, bs_run_totals *T) {
+  long *L[11] = {&T->steps, &T->failed, &T->iterations, &T->cg,     &T->ls,      &T->indefinite,
+                 &T->fb_dx, &T->fb_grad, &T->clamps,    &T->chol_fb, &T->downhill};
+  for (int i = 0; i < 11; i++) {
+    int64_t v;
+    memcpy(&v, b + 8 * i, 8);
+    *L[i] = (long)v;
+  }
+  memcpy(&T->seconds, b + 88, 8);
+  memcpy(&T->max_grad, b + 96, 8);
+  int32_t f[2];
+  memcpy(f, b + 104, 8);
+  T->first_fail_frame = f[0];
+  T->first_fail_step = f[1];
+  memcpy(T->first_fail_reason, b + 112, 256);
+  T->first_fail_reason[255] = 0;
+}
+
+static void pack_header(const bs_sim *s, uint64_t scene_hash, double wall, unsigned char *b) {
+  const uint32_t version = BS_CHECKPOINT_VERSION;
+  const int32_t i3[3] = {s->mesh->n_vertices, s->frame, s->scene->frames}, zero = 0;
+  memcpy(b, CK_MAGIC, 4);
+  memcpy(b + 4, &version, 4);
+  memcpy(b + 8, i3, 8);
+  memcpy(b + 16, &s->time, 8);
+  memcpy(b + 24, &scene_hash, 8);
+  memcpy(b + 32, &wall, 8);
+  memcpy(b + 40, &i3[2], 4);
+  memcpy(b + 44, &zero, 4);
+}
+
+int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T, double wall, uint64_t scene_hash,
+                        bs_error *err) {
+  unsigned char head[CK_HEADER + CK_TOTALS];
+  pack_header(s, scene_hash, wall, head);
+  pack_totals(T, head + CK_HEADER);
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  uint64_t h = bs_fnv1a_(BS_FNV_SEED, head, sizeof head);
+  h = bs_fnv1a_(h, s->x, sizeof(double) * n3);
+  h = bs_fnv1a_(h, s->v, sizeof(double) * n3);
+  bs_outfile o;
+  int st = bs_outfile_open_replace(&o, dir, "checkpoint.bin", err);
+  if (st) return st;
+  bs_outfile_write(&o, head, 1, sizeof head);
+  bs_outfile_write(&o, s->x, sizeof(double), n3);
+  bs_outfile_write(&o, s->v, sizeof(double), n3);
+  bs_outfile_write(&o, &h, 8, 1);
+  return bs_outfile_close(&o, err);
+}
+
+/* The whole file into memory (it was written whole): *buf, *n. */
+static int slurp(const char *p, unsigned char **buf, size_t *n, bs_error *err) {
+  *buf = NULL;
+  FILE *f = fopen(p, "rb");
+  struct stat sb;
+  if (!f || fstat(fileno(f), &sb) != 0) {
+    if (f) fclose(f);
+    return bs_error_set(err, BS_EIO, "no checkpoint to continue from: cannot open '%s'", p);
+  }
+  *n = (size_t)sb.st_size;
+  *buf = malloc(*n ? *n : 1);
+  int ok = *buf && fread(*buf, 1, *n, f) == *n;
+  fclose(f);
+  if (!ok) {
+    free(*buf);
+    *buf = NULL;
+    return bs_error_set(err, BS_EIO, "cannot read '%s'", p);
+  }
+  return 0;
+}
+
+/* Header checks against the simulation and the scene: 0 or BS_EINPUT. */
+static int check_header(const char *p, const unsigned char *b, size_t n, const bs_sim *s, uint64_t scene_hash,
+                        bs_checkpoint *ck, bs_error *err) {
+  if (n < 4 || memcmp(b, CK_MAGIC, 4))
+    return bs_error_set(err, BS_EINPUT, "'%s' is not a bigstep checkpoint (no BSCK magic)", p);
+  if (n < CK_HEADER + CK_TOTALS + 8)
+    return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, shorter than a checkpoint's header: truncated", p, n);
+  uint32_t version;
+  int32_t i3[2];
+  uint64_t hash;
+  memcpy(&version, b + 4, 4);
+  memcpy(i3, b + 8, 8);
+  memcpy(&ck->time, b + 16, 8);
+  memcpy(&hash, b + 24, 8);
+  memcpy(&ck->wall_seconds, b + 32, 8);
+  ck->frame = i3[1];
+  if (version != BS_CHECKPOINT_VERSION)
+    return bs_error_set(err, BS_EINPUT, "'%s': checkpoint version %u; this bigstep reads version %d", p, version,
+                        BS_CHECKPOINT_VERSION);
+  if (i3[0] != s->mesh->n_vertices)
+    return bs_error_set(err, BS_EINPUT, "'%s' holds %d vertices, the scene's mesh %d: a checkpoint of another scene", p,
+                        i3[0], s->mesh->n_vertices);
+  const size_t want = CK_HEADER + CK_TOTALS + 48 * (size_t)i3[0] + 8;
+  if (n != want)
+    return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, a checkpoint of %d vertices %zu: truncated or damaged", p,
+                        n, i3[0], want);
+  if (hash != scene_hash)
+    return bs_error_set(err, BS_EINPUT, "'%s' is a checkpoint of another scene (its scene hash differs)", p);
+  const bs_scene *sc = s->scene;
+  if (ck->frame < 0 || ck->frame > sc->frames || ck->time != ck->frame / sc->fps || !isfinite(ck->wall_seconds))
+    return bs_error_set(err, BS_EINPUT, "'%s': frame %d at time %.17g does not fit the scene (%d frames at %g fps)", p,
+                        ck->frame, ck->time, sc->frames, sc->fps);
+  return 0;
+}
+
+int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs_checkpoint *ck, bs_error *err) {
+  memset(ck, 0, sizeof *ck);
+  char p[BS_MAX_PATH + 32];
+  snprintf(p, sizeof p, "%s/checkpoint.bin", dir);
+  unsigned char *b;
+  size_t n = 0;
+  int st = slurp(p, &b, &n, err);
+  if (st) return st;
+  st = check_header(p, b, n, s, scene_hash, ck, err);
+  uint64_t h = 0;
+  if (!st) memcpy(&h, b + n - 8, 8);
+  if (!st && h != bs_fnv1a_(BS_FNV_SEED, b, n - 8))
+    st = bs_error_set(err, BS_EINPUT, "'%s': the checksum does not match: a damaged checkpoint", p);
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  if (!st && !(ck->x = malloc(sizeof(double) * (2 * n3 + 1)))) st = bs_error_set(err, BS_ENOMEM, "out of memory");
+  if (!st) {
+    unpack_totals(b + CK_HEADER, &ck->totals);
+    ck->v = ck->x + n3;
+    memcpy(ck->x, b + CK_HEADER + CK_TOTALS, sizeof(double) * 2 * n3);
+    for (size_t i = 0; i < 2 * n3 && !st; i++)
+      if (!isfinite(ck->x[i]))
+        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p,
+                          i < n3 ? "position" : "velocity", (i % n3) / 3);
+  }
+  free(b);
+  if (st) bs_checkpoint_free(ck);
+  return st;
+}
+
+void bs_checkpoint_free(bs_checkpoint *ck) {
+  free(ck->x);
+  ck->x = ck->v = NULL;
+}

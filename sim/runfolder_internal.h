@@ -1,0 +1,48 @@
+/* runfolder_internal.h — what the run folder's files share (not installed). */
+#ifndef BS_RUNFOLDER_INTERNAL_H
+#define BS_RUNFOLDER_INTERNAL_H
+
+#include <stdint.h>
+
+#include "bs_fields.h"
+#include "bs_obstacle_output.h"
+#include "bs_qoi.h"
+#include "bs_runfolder.h"
+#include "outfile.h"
+
+struct bs_runfolder {
+  char dir[BS_MAX_PATH];
+  bs_outfile frames, stats, state; /* open when .f is not NULL */
+  int n_vtu, cap_vtu;              /* the VTU frames of frames.pvd */
+  char **vtu_names;
+  double *vtu_times;
+  bs_fields *fields; /* the VTU frames' fields (buffers made once)   */
+  bs_obstacle_output *obstacles; /* the obstacles beside the VTU frames */
+  bs_outfile qoi_csv; /* qoi.csv, when the scene names quantities     */
+  bs_qoi *qoi;
+  double *qoi_values;
+  bs_run_totals totals; /* of the frames written (the partial summary, checkpoints) */
+  double t_open;        /* bs_seconds() at the open, less a resumed run's earlier wall time */
+  int lock_fd;          /* holds the folder's lock (bs_runfolder_lock)       */
+  uint64_t scene_hash;  /* of bs_scene_identity_ (checkpoints)               */
+};
+
+/* runfolder.c: a writer for dir with the folder made and locked and s's
+ * scene hash (BS_EINPUT for a negative output.checkpoint_every); the outputs
+ * of s opened (append: the files of a resumed run, at their end; else new,
+ * with their headers); a VTU frame added to frames.pvd's list; frames.pvd. */
+int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
+int bs_runfolder_outputs_(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err);
+int bs_runfolder_add_vtu_(bs_runfolder *rf, const char *name, double t, bs_error *err);
+int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err);
+
+/* The scene as the run folder compares it: its resolved JSON
+ * (bs_scene_write_json) without output.dir and description, which may differ
+ * between a run and its resumption. *text is malloc'd. */
+int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err);
+
+/* 64-bit FNV-1a of n bytes, continuing from h (start: BS_FNV_SEED). */
+#define BS_FNV_SEED 1469598103934665603ULL
+uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n);
+
+#endif

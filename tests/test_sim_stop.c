@@ -1,0 +1,129 @@
+/* Stopping a run on request (bs_sim_run_with, opts.stop): the flag is read
+ * before every step; a frame cut short is undone, so that the simulation is
+ * at the end of its last complete frame, bit for bit; and the run continued
+ * from there (opts.resume) ends in the state of a run never stopped. */
+#define _POSIX_C_SOURCE 200809L
+#include <criterion/criterion.h>
+#include <math.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_sim.h"
+#include "bs_terms.h"
+#include "scene_fixture.h"
+
+static volatile sig_atomic_t stop_flag;
+static int steps_begun, stop_at;
+
+/* A term of zero energy that raises the stop flag when step stop_at begins. */
+static int zero_value(const bs_term *t, const double *x, double *E) {
+  (void)t, (void)x;
+  *E = 0;
+  return 0;
+}
+static int zero_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  (void)t, (void)x, (void)g;
+  *E = 0;
+  return 0;
+}
+static int zero_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  (void)t, (void)x, (void)H;
+  return 0;
+}
+static int count_step(bs_term *t, bs_error *err) {
+  (void)t, (void)err;
+  if (++steps_begun == stop_at) stop_flag = 1;
+  return 0;
+}
+static const bs_term_ops stopper_ops = {zero_value, zero_gradient, zero_hessian, count_step, NULL};
+
+/* The end of frame 1 as the frame callback saw it. */
+typedef struct seen {
+  int frame;
+  double time, *x, *v;
+} seen;
+
+static int remember(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
+  (void)err;
+  seen *w = ctx;
+  size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  w->frame = fs->frame;
+  w->time = s->time;
+  memcpy(w->x, s->x, sizeof(double) * n3);
+  memcpy(w->v, s->v, sizeof(double) * n3);
+  return 0;
+}
+
+static bs_sim *make_sim(bs_scene *sc) {
+  bs_sim *s = NULL;
+  bs_term *t = NULL;
+  bs_error err;
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_term_create("stopper", &stopper_ops, s->fem, &s->step, NULL, &t, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_add_term(s, t, &err), 0, "%s", err.msg);
+  return s;
+}
+
+Test(sim_stop, a_frame_cut_short_is_undone_and_the_run_continues_bit_for_bit) {
+  bs_scene *sc = bs_test_box_scene(3, 24.0, 3);
+  bs_error err;
+  sc->gravity[1] = -9.8;
+  cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
+  /* the run never stopped */
+  bs_sim *ref = make_sim(sc);
+  stop_flag = 0, steps_begun = 0, stop_at = -1;
+  bs_run_totals Tref, T;
+  cr_assert_eq(bs_sim_run(ref, NULL, NULL, &Tref, &err), 0, "%s", err.msg);
+  /* stopped while frame 2 runs: step 5 of 9 raises the flag, step 6 is not taken */
+  bs_sim *s = make_sim(sc);
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  seen w = {.x = calloc(n3, sizeof(double)), .v = calloc(n3, sizeof(double))};
+  stop_flag = 0, steps_begun = 0, stop_at = 5;
+  bs_sim_run_opts o = {.on_frame = remember, .ctx = &w, .stop = &stop_flag};
+  cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), BS_SIM_STOPPED);
+  cr_expect_eq(steps_begun, 5);
+  cr_expect_eq(s->frame, 1);
+  cr_expect_eq(w.frame, 1, "the callback saw frame %d last", w.frame);
+  cr_expect_eq(s->time, w.time);
+  cr_expect_eq(memcmp(s->x, w.x, sizeof(double) * n3), 0, "x is not frame 1's");
+  cr_expect_eq(memcmp(s->v, w.v, sizeof(double) * n3), 0, "v is not frame 1's");
+  cr_expect_eq(T.steps, 3);
+  /* continued: the same end state, bit for bit, and the totals of the whole run */
+  stop_flag = 0;
+  o.resume = 1;
+  cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->frame, 3);
+  cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs from the run never stopped");
+  cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
+  cr_expect_eq(T.steps, Tref.steps);
+  cr_expect_eq(T.iterations, Tref.iterations);
+  free(w.x);
+  free(w.v);
+  bs_sim_destroy(&s);
+  bs_sim_destroy(&ref);
+  bs_scene_destroy(&sc);
+}
+
+Test(sim_stop, restore_checks_its_input) {
+  bs_scene *sc = bs_test_box_scene(3, 24.0, 1);
+  bs_sim *s = make_sim(sc);
+  bs_error err;
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3), *v = calloc(n3, sizeof(double));
+  memcpy(x, s->x0, sizeof(double) * n3);
+  cr_expect_eq(bs_sim_restore(s, 4, x, v, &err), BS_EINPUT);
+  cr_expect_not_null(strstr(err.msg, "frame 4 is outside"), "%s", err.msg);
+  v[7] = NAN;
+  cr_expect_eq(bs_sim_restore(s, 2, x, v, &err), BS_EINPUT);
+  cr_expect_not_null(strstr(err.msg, "not finite at vertex 2"), "%s", err.msg);
+  v[7] = 0.25;
+  cr_expect_eq(bs_sim_restore(s, 2, x, v, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->frame, 2);
+  cr_expect_eq(s->time, 2 / 24.0);
+  cr_expect_eq(s->v[7], 0.25);
+  free(x);
+  free(v);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
