@@ -82,7 +82,7 @@
  * The hooks, when given, are applied as in bs_minimize (projection of the
  * initial guess and of every iterate, registration, projected gradient); pass
  * them NULL for the pure root-finder. It stops when ||g|| < tol (converged),
- * after newton_max_iter iterations (BS_MIN_MAX_ITER), when an iterate, E or
+ * after min(newton_max_iter, max_iter) iterations (BS_MIN_MAX_ITER), when an iterate, E or
  * the gradient becomes non-finite (BS_MIN_NONFINITE; x keeps the last finite
  * iterate), or as soon as it diverges (BS_MIN_DIVERGED, x the last iterate):
  * ||g|| more than BS_NEWTON_GROWTH times the smallest ||g|| of the solve, or

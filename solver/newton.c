@@ -53,7 +53,7 @@ static int stop_here(bs_minimizer *m, bs_minimize_stats *st, watch *w, int k_ste
                    w->g_min, BS_NEWTON_WINDOW);
     return 1;
   }
-  if (it >= o->newton_max_iter) {
+  if (it >= o->newton_max_iter || it >= o->max_iter) {
     bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d Newton iterations", gnorm, o->tol, it);
     return 1;
   }

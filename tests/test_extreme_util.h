@@ -39,7 +39,7 @@ static inline void ext_run_free(ext_run *r) { (void)r; }
 
 /* The reason names of bs_min_reason (solver/bs_minimize.h) that end a failed step. */
 static inline int ext_failure_reason(const char *s) {
-  static const char *const names[] = {"max_iter:", "stalled:", "line_search:", "nonfinite:", "steps_done:"};
+  static const char *const names[] = {"max_iter:", "stalled:", "line_search:", "nonfinite:", "steps_done:", "diverged:"};
   for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
     if (!strncmp(s, names[i], strlen(names[i]))) return 1;
   return 0;
