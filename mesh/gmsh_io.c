@@ -797,6 +797,10 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     bs_mesh *fine = NULL;
     rc = bs_mesh_refine(m, &fine, err);
     if (rc) bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
+    if (!rc) {
+      fine->n_coincident = m->n_coincident;
+      fine->coincident_merged = m->coincident_merged;
+    }
     bs_mesh_destroy(&m);
     m = fine;
   }

@@ -190,7 +190,9 @@ static int tags_alloc(msh_in *in, tag_set *s, int64_t n) {
 static int tags_sort_unique(msh_in *in, tag_set *s, const char *what) {
   qsort(s->t, s->n, sizeof *s->t, cmp_i64);
   for (size_t i = 1; i < s->n; i++)
-    if (s->t[i] == s->t[i - 1]) return bad(in, "%s tag %lld is defined twice", what, (long long)s->t[i]);
+    if (s->t[i] == s->t[i - 1])
+      return bs_error_set(in->err, BS_EINPUT, "%s: $%s: %s tag %lld is defined twice", in->path, in->sect, what,
+                          (long long)s->t[i]);
   return 0;
 }
 
