@@ -89,8 +89,10 @@ int header(off_in &in, long long &nv, long long &nf) {
       return bad(in, "unknown OFF header", h);
     if (in.tok.size() > 1 && in.tok[1] == "BINARY") return bad(in, "binary OFF is not read (save it as text)", "");
     first = 1;
-    if (in.tok.size() == 1 && !next_line(in)) return bad(in, "the file ends before the counts", "");
-    if (in.tok.size() == 1) first = 0;
+    if (in.tok.size() == 1) { // the counts on the next line
+      if (!next_line(in)) return bad(in, "the file ends before the counts", "");
+      first = 0;
+    }
   }
   if (in.tok.size() < first + 2) return bad(in, "expected the counts 'vertices faces [edges]'", "");
   if (!parse_int(in.tok[first], 0, BS_MAX_SURFACE_POINTS, nv))
