@@ -9,7 +9,7 @@
 // 0 <= i < nv. '#' starts a comment; blank lines are skipped; text after the
 // last face is ignored. The counts are checked against bs_limits.h and
 // against the bytes left (a vertex line takes at least 6 bytes, a face line
-// 8) before anything is reserved.
+// 2) before anything is reserved.
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -100,7 +100,7 @@ int header(off_in &in, long long &nv, long long &nf) {
   if (!parse_int(in.tok[first + 1], 0, BS_MAX_SURFACE_FACES, nf))
     return bad(in, "the face count must be an integer in [0, 2e8] (bigstep's limit), not", in.tok[first + 1]);
   std::size_t rest = in.b.size() > in.pos ? in.b.size() - in.pos : 0;
-  if ((unsigned long long)(6 * nv + 8 * nf) > rest)
+  if ((unsigned long long)(6 * nv + 2 * nf) > rest)
     return bs_error_set(in.err, BS_EINPUT,
                         "%s: line %zu: %lld vertices and %lld faces cannot fit in the %zu bytes left in the file",
                         in.path, in.line, nv, nf, rest);
@@ -125,13 +125,16 @@ int faces(off_in &in, long long nv, long long nf, std::vector<Polygon> &polygons
   for (long long f = 0; f < nf; f++) {
     if (!next_line(in)) return bad(in, "the file ends before all the faces", "");
     long long k, v;
+    std::string face = "polygon " + std::to_string(f) + ": ";
     if (!parse_int(in.tok[0], 3, BS_MAX_POLYGON_VERTICES, k))
-      return bad(in, "a face's vertex count must be an integer in [3, 65536], not", in.tok[0]);
-    if ((long long)in.tok.size() < 1 + k) return bad(in, "the face lists fewer vertices than its count", in.tok[0]);
+      return bad(in, (face + "its vertex count must be an integer in [3, 65536], not").c_str(), in.tok[0]);
+    if ((long long)in.tok.size() < 1 + k)
+      return bad(in, (face + "it lists fewer vertices than its count").c_str(), in.tok[0]);
     Polygon p((std::size_t)k);
     for (long long j = 0; j < k; j++) {
       if (!parse_int(in.tok[(std::size_t)(1 + j)], 0, nv - 1, v))
-        return bad(in, "a face's vertex index must be an integer in [0, vertices - 1], not", in.tok[(std::size_t)(1 + j)]);
+        return bad(in, (face + "a vertex index must be an integer in [0, vertices - 1], not").c_str(),
+                   in.tok[(std::size_t)(1 + j)]);
       p[(std::size_t)j] = (std::size_t)v;
     }
     polygons.push_back(std::move(p));

@@ -244,6 +244,7 @@ Test(reader_limits, off_read_by_bigstep) {
   bs_shim_free(tris);
   off_fails("huge.off", "OFF\n4 1e30 0\n" TET_OFF_VERTS, "line 2: the face count", "'1e30'");
   off_fails("big.off", "OFF\n4 190000000 0\n" TET_OFF_VERTS TET_OFF_FACES, "190000000 faces cannot fit", NULL);
+  off_fails("few.off", "OFF\n4 2 0\n" TET_OFF_VERTS "3 0 1 2\n2 0 1\n", "line 8: polygon 1: its vertex count", "not '2'");
   off_fails("over.off", "OFF 300000000 4 0\n", "the vertex count must be an integer in [0, 1e8]", "'300000000'");
   off_fails("short.off", "OFF\n4 2 6\n0.25 0.25 0.25\n1.25 0.25 0.25\n0.25 1.25 0.25\n0.25 0.25 1.25\n3 0 2 1\n",
             "the file ends before all the faces", NULL);
@@ -251,9 +252,9 @@ Test(reader_limits, off_read_by_bigstep) {
             "a vertex coordinate must be a finite number, not 'nan'");
   off_fails("overflow.off", "OFF\n4 4 6\n0 0 0\n1 1e999 0\n0 1 0\n0 0 1\n" TET_OFF_FACES, "line 4", "'1e999'");
   off_fails("index.off", "OFF\n4 4 6\n" TET_OFF_VERTS "3 0 2 1\n3 0 1 3\n3 0 3 4\n3 1 2 3\n", "line 9",
-            "vertex index must be an integer in [0, vertices - 1], not '4'");
+            "polygon 2: a vertex index must be an integer in [0, vertices - 1], not '4'");
   off_fails("negative.off", "OFF\n4 1 6\n" TET_OFF_VERTS "3 0 2 -1\n", "not '-1'", NULL);
-  off_fails("ngon.off", "OFF\n4 1 6\n" TET_OFF_VERTS "9999999999 0 1 2\n", "vertex count must be an integer in [3, 65536]",
+  off_fails("ngon.off", "OFF\n4 1 6\n" TET_OFF_VERTS "9999999999 0 1 2\n", "polygon 0: its vertex count must be an integer in [3, 65536]",
             NULL);
   off_fails("binary.off", "OFF BINARY\n4 4 6\n", "binary OFF is not read", NULL);
   off_fails("dim4.off", "4OFF\n4 4 6\n", "only 3-D OFF files", NULL);
