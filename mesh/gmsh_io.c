@@ -716,6 +716,24 @@ done:
 
 /* ---- bs_mesh_read ------------------------------------------------------- */
 
+/* Refines the mesh read from path `refine` times (what the read found out
+ * about coincident nodes is carried over). */
+static int refine_read(const char *path, int refine, bs_mesh **m, bs_error *err) {
+  for (int level = 0; level < refine; level++) {
+    bs_mesh *fine = NULL;
+    int rc = bs_mesh_refine(*m, &fine, err);
+    if (rc) {
+      bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
+      return rc;
+    }
+    fine->n_coincident = (*m)->n_coincident;
+    fine->coincident_merged = (*m)->coincident_merged;
+    bs_mesh_destroy(m);
+    *m = fine;
+  }
+  return BS_OK;
+}
+
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
@@ -793,17 +811,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
 
-  for (int level = 0; level < refine && !rc; level++) {
-    bs_mesh *fine = NULL;
-    rc = bs_mesh_refine(m, &fine, err);
-    if (rc) bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
-    if (!rc) {
-      fine->n_coincident = m->n_coincident;
-      fine->coincident_merged = m->coincident_merged;
-    }
-    bs_mesh_destroy(&m);
-    m = fine;
-  }
+  if (!rc) rc = refine_read(path, refine, &m, err);
 out:
   bs_shim_free(pts);
   bs_shim_free(tris);

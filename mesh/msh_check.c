@@ -1,15 +1,23 @@
 /* msh_check.c — a .msh file checked before Gmsh parses it (bs__msh_check).
  *
- * Why: Gmsh's own .msh readers trust the file. Fuzzing bs_mesh_read (issue
- * 20, tests/fuzz/fuzz_msh.c) found, inside Gmsh (libgmsh 4.11, GModelIO_MSH2
- * and GModelIO_MSH4), allocations of 2^40 .. 2^62 bytes sized straight from
- * the node / element counts of a corrupted header, out-of-bounds accesses
- * when a node tag lies outside the [minNodeTag, maxNodeTag] range that a 4.1
- * header states (Gmsh indexes a table of maxNodeTag entries with it), when a
- * v2 element lists more partitions than tags, or when an element type is
- * unknown, and duplicate node tags resolved silently (the last one wins).
- * Those are guarded here: Gmsh only ever sees a file whose every count has
- * been checked against the bytes that follow and against bs_limits.h.
+ * Why: Gmsh's own .msh readers (libgmsh 4.8.4, Debian 12) trust the file.
+ * Found by feeding inputs straight to gmshOpen (no check before it): in two
+ * runs of 3000 mutations of the seeds of tests/data/fuzz/msh (tests/fuzz/
+ * driver.c; 4 and 5 seed files), 13 and 12 inputs crashed INSIDE Gmsh with
+ * SIGSEGV: an element referring to a node tag that $Nodes does not define
+ * (7 and 5; v2 ASCII, v4 ASCII and binary), a v2 binary element block
+ * claiming more elements than the bytes left (2 and 3), a v2 element whose
+ * partition count (its third tag) exceeds the tags that follow (2, 0), a v4
+ * element tag outside [minElementTag, maxElementTag] (1, 1), a v4 node tag
+ * outside [minNodeTag, maxNodeTag] (1, 0), a $PhysicalNames dimension
+ * outside 0..3 (0, 2), v2 element lines whose tag count does not match the
+ * line (0, 1). Two allocations sized by a count happen inside Gmsh too (the
+ * MSH4 reader): 8 bytes per node of a node block's numNodesInBlock and 16
+ * bytes per element of the $Elements header's numElements (4e12 gives 32 TB
+ * and 64 TB requests). A duplicate node tag is resolved silently (one
+ * definition is kept). Every one of those inputs is refused here, before
+ * Gmsh opens the file; none of the accepted inputs crashed Gmsh. Examples
+ * are kept as regression inputs in tests/data/fuzz/msh/gmsh_*.msh.
  *
  * What is accepted: MeshFormat 2.x (2.0, 2.1, 2.2) or 4.1, ASCII or binary
  * (little-endian, 8-byte doubles and size_t); the sections MeshFormat (first),
@@ -155,11 +163,13 @@ static int rd_f64(msh_in *in, const char *what, double *out) {
 /* A count that must fit in the bytes left (each item at least `min_bytes`)
  * and under `limit`. */
 static int rd_count(msh_in *in, int width, const char *what, size_t min_bytes, int64_t limit, int64_t *out) {
-  int rc = rd_int(in, width, what, 0, INT64_MAX, out);
+  int64_t v;
+  int rc = rd_int(in, width, what, 0, INT64_MAX, &v);
   if (rc) return rc;
-  if (*out > limit) return bad(in, "%s = %lld exceeds bigstep's limit of %lld", what, (long long)*out, (long long)limit);
-  if ((uint64_t)*out > left(in) / min_bytes)
-    return bad(in, "%s = %lld cannot fit in the %zu bytes left in the file", what, (long long)*out, left(in));
+  if (v > limit) return bad(in, "%s = %lld exceeds bigstep's limit of %lld", what, (long long)v, (long long)limit);
+  if ((uint64_t)v > left(in) / min_bytes)
+    return bad(in, "%s = %lld cannot fit in the %zu bytes left in the file", what, (long long)v, left(in));
+  *out = v; /* set only when valid: callers size loops with it */
   return 0;
 }
 
@@ -261,7 +271,7 @@ static int mesh_format(msh_in *in) {
 static int physical_names(msh_in *in) {
   int binary = in->binary, rc;
   in->binary = 0;
-  int64_t n, dim, tag;
+  int64_t n = 0, dim = 0, tag = 0;
   rc = rd_count(in, 8, "number of physical names", 7, BS_MAX_MSH_PHYSICALS, &n);
   for (int64_t i = 0; i < n && !rc; i++) {
     rc = rd_int(in, 4, "physical dimension", 0, 3, &dim);
@@ -305,7 +315,7 @@ static int element_type(msh_in *in, int64_t *type) {
 /* ---- version 4.1 ---------------------------------------------------------- */
 
 static int entity4(msh_in *in, int d) {
-  int64_t tag, np, nb, v;
+  int64_t tag = 0, np = 0, nb = 0, v = 0;
   double x;
   int rc = rd_int(in, 4, "entity tag", 1, INT32_MAX, &tag);
   for (int k = 0; k < (d == 0 ? 3 : 6) && !rc; k++) rc = rd_f64(in, "entity coordinate", &x);
@@ -325,7 +335,7 @@ static int entity4(msh_in *in, int d) {
 }
 
 static int entities4(msh_in *in) {
-  int64_t cnt[4];
+  int64_t cnt[4] = {0};
   int rc = 0;
   for (int d = 0; d < 4 && !rc; d++) rc = rd_count(in, 8, "number of entities", 8, BS_MAX_MSH_ENTITIES, &cnt[d]);
   for (int d = 0; d < 4 && !rc; d++) {
@@ -369,13 +379,14 @@ static int node_block4(msh_in *in, int64_t nn, int64_t lo, int64_t hi) {
   if (!rc && k > nn - (int64_t)in->nodes.n) rc = bad(in, "the blocks hold more nodes than the header's %lld", (long long)nn);
   for (int64_t i = 0; i < k && !rc; i++)
     if (!(rc = rd_int(in, 8, "node tag (in the header's range)", lo, hi, &t))) in->nodes.t[in->nodes.n++] = t;
-  int nc = 3 + (par ? (int)dim : 0);
-  for (int64_t i = 0; i < k * nc && !rc; i++) rc = rd_f64(in, "node coordinate", &x);
+  int64_t nc = 3 + (par ? dim : 0);
+  for (int64_t i = 0; i < k && !rc; i++)
+    for (int64_t c = 0; c < nc && !rc; c++) rc = rd_f64(in, "node coordinate", &x);
   return rc;
 }
 
 static int nodes4(msh_in *in) {
-  int64_t nb, nn, lo, hi;
+  int64_t nb = 0, nn = 0, lo = 0, hi = 0;
   int rc = block_header4(in, "nodes", BS_MAX_VERTICES, &nb, &nn, &lo, &hi);
   if (!rc) rc = tags_alloc(in, &in->nodes, nn);
   for (int64_t b = 0; b < nb && !rc; b++) rc = node_block4(in, nn, lo, hi);
@@ -386,7 +397,7 @@ static int nodes4(msh_in *in) {
 }
 
 static int element_block4(msh_in *in, tag_set *et, int64_t ne, int64_t lo, int64_t hi) {
-  int64_t dim, type, k, t;
+  int64_t dim = 0, type = 0, k = 0, t = 0;
   int rc = block_entity(in, &dim);
   if (!rc) rc = element_type(in, &type);
   if (!rc && elem_type[type].dim != dim)
@@ -402,7 +413,7 @@ static int element_block4(msh_in *in, tag_set *et, int64_t ne, int64_t lo, int64
 }
 
 static int elements4(msh_in *in) {
-  int64_t nb, ne, lo, hi;
+  int64_t nb = 0, ne = 0, lo = 0, hi = 0;
   tag_set et = {0};
   int rc = block_header4(in, "elements", BS_MAX_ELEMENTS, &nb, &ne, &lo, &hi);
   if (!rc) rc = tags_alloc(in, &et, ne);
@@ -416,7 +427,7 @@ static int elements4(msh_in *in) {
 /* ---- version 2 ------------------------------------------------------------- */
 
 static int nodes2(msh_in *in) {
-  int64_t nn, t;
+  int64_t nn = 0, t = 0;
   double x;
   int rc = ascii_count(in, "number of nodes", 8, BS_MAX_VERTICES, &nn);
   if (!rc) rc = tags_alloc(in, &in->nodes, nn);
@@ -451,7 +462,7 @@ static int element2(msh_in *in, tag_set *et, int64_t t, int64_t type, int64_t nt
 }
 
 static int elements2_ascii(msh_in *in, tag_set *et, int64_t ne) {
-  int64_t t, type, ntags;
+  int64_t t = 0, type = 0, ntags = 0;
   int rc = 0;
   for (int64_t i = 0; i < ne && !rc; i++) {
     rc = rd_int(in, 4, "element tag", 1, INT32_MAX, &t);
@@ -481,7 +492,7 @@ static int elements2_binary(msh_in *in, tag_set *et, int64_t ne) {
 }
 
 static int elements2(msh_in *in) {
-  int64_t ne;
+  int64_t ne = 0;
   tag_set et = {0};
   int rc = ascii_count(in, "number of elements", 4, BS_MAX_ELEMENTS, &ne);
   if (!rc) rc = tags_alloc(in, &et, ne);
