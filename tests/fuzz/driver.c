@@ -104,7 +104,7 @@ static void add_path(seeds *s, const char *path) {
     sprintf(names[n++], "%s/%s", path, e->d_name);
   }
   if (d) closedir(d);
-  qsort(names, (size_t)n, sizeof *names, cmp_str);
+  if (n) qsort(names, (size_t)n, sizeof *names, cmp_str);
   for (int i = 0; i < n; i++) {
     struct stat fs;
     if (stat(names[i], &fs) == 0 && S_ISREG(fs.st_mode)) add_seed(s, names[i]);

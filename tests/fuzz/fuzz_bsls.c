@@ -1,17 +1,15 @@
 /* fuzz_bsls.c — .bsls bytes through bs_levelset_grid_load. */
-#include <stdio.h>
-
 #include "bs_levelset.h"
 #include "fuzz_util.h"
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-  char path[64];
-  fuzz_write_temp(data, size, ".bsls", path, sizeof path);
+static int read_bsls(const char *path, bs_error *err) {
   bs_levelset *ls = NULL;
-  bs_error err = {0};
-  int rc = bs_levelset_grid_load(path, &ls, &err);
-  remove(path);
-  fuzz_check("bsls", rc, &err);
+  int rc = bs_levelset_grid_load(path, &ls, err);
   bs_levelset_destroy(&ls);
+  return rc;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  fuzz_file(data, size, ".bsls", "bsls", read_bsls);
   return 0;
 }

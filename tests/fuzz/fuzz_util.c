@@ -2,6 +2,8 @@
 #define _DEFAULT_SOURCE
 #include "fuzz_util.h"
 
+#include "bs_shim.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,4 +34,23 @@ void fuzz_check(const char *reader, int rc, const bs_error *err) {
   if (proper) return;
   fprintf(stderr, "fuzz %s: status %d (%s) with message \"%s\"\n", reader, rc, bs_status_name(rc), err->msg);
   abort();
+}
+
+void fuzz_file(const uint8_t *data, size_t size, const char *suffix, const char *name, fuzz_reader read) {
+  char path[64];
+  fuzz_write_temp(data, size, suffix, path, sizeof path);
+  bs_error err = {0};
+  int rc = read(path, &err);
+  remove(path);
+  fuzz_check(name, rc, &err);
+}
+
+int fuzz_read_surface(const char *path, bs_error *err) {
+  double *pts = NULL;
+  int32_t *tris = NULL;
+  int64_t np = 0, nt = 0;
+  int rc = bs_shim_read_surface(path, &pts, &np, &tris, &nt, err);
+  bs_shim_free(pts);
+  bs_shim_free(tris);
+  return rc;
 }

@@ -24,6 +24,18 @@ void fuzz_write_temp(const uint8_t *data, size_t size, const char *suffix, char 
  * negative status other than BS_EINTERNAL whose message is not empty. */
 void fuzz_check(const char *reader, int rc, const bs_error *err);
 
+/* Reads the file at path with a library reader, frees what it returned and
+ * returns its status (err filled). */
+typedef int (*fuzz_reader)(const char *path, bs_error *err);
+
+/* The whole of a harness whose reader takes a path: the bytes into a
+ * temporary file with the suffix, read(), the file removed, the status
+ * checked (fuzz_check, naming the reader `name`). */
+void fuzz_file(const uint8_t *data, size_t size, const char *suffix, const char *name, fuzz_reader read);
+
+/* fuzz_reader of bs_shim_read_surface (the format from the path's suffix). */
+int fuzz_read_surface(const char *path, bs_error *err);
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #endif
