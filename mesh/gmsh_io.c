@@ -768,6 +768,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
   if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;
+  if (kind == IN_STL && (rc = bs_shim_check_stl(path, err))) return rc;
 
   bs_mesh *m = NULL;
   if ((rc = gmsh_begin(path, err))) goto out;

@@ -132,6 +132,19 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
 
 extern "C" void bs_shim_free(void *p) { std::free(p); }
 
+extern "C" int bs_shim_check_stl(const char *path, bs_error *err) {
+  if (!path) return bs_error_set(err, BS_EINPUT, "bs_shim_check_stl: NULL path");
+  try {
+    std::string bytes;
+    int rc = bs_shim::read_bytes(path, bytes, err);
+    return rc ? rc : bs_shim::check_stl(path, bytes, err);
+  } catch (const std::bad_alloc &) {
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory while reading the surface", path);
+  } catch (...) {
+    return bs_error_set(err, BS_EINPUT, "%s: could not check the STL file", path);
+  }
+}
+
 extern "C" int bs_shim_read_surface(const char *path, double **points, int64_t *n_points, int32_t **tris,
                                     int64_t *n_tris, bs_error *err) {
   if (!path || !points || !n_points || !tris || !n_tris)

@@ -269,6 +269,10 @@ Test(reader_limits, stl_and_ply_counts_before_cgal) {
   n = 4000000000u; /* corrupted count: neither binary-consistent nor "solid" */
   memcpy(stl + 80, &n, 4);
   surface_fails("count.stl", stl, sizeof stl, "neither an ASCII STL", "134 bytes");
+  const char *path = put("gmsh.stl", stl, sizeof stl); /* the same check before Gmsh reads an .stl */
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  expect(bs_mesh_read(path, NULL, &m, &err), BS_EINPUT, &err, path, "neither an ASCII STL", NULL);
   n = 1;
   memcpy(stl + 80, &n, 4);
   v[7] = 0.0f / 0.0f;
