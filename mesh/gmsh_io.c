@@ -8,12 +8,16 @@
  * caller's setting is restored afterwards.
  *
  * Inputs, by extension (case-insensitive):
- *   .msh                              taken as is (v2 / v4, ASCII / binary);
+ *   .msh                              taken as is (v2 / v4, ASCII / binary), once
+ *                                     msh_check.c has checked it (Gmsh's .msh
+ *                                     readers trust their input);
  *   .geo .step .stp .brep .iges .igs  meshed in 3-D; STEP and IGES lengths are
  *                                     converted to metres (OCCTargetUnit "M");
- *   .stl                              a closed triangulated surface, merged by Gmsh;
- *   .off .obj .ply                    a closed surface read by CGAL (the shim) and
- *                                     handed to Gmsh as a discrete surface.
+ *   .stl                              a closed triangulated surface, merged by Gmsh
+ *                                     (after bs_shim_check_stl);
+ *   .off .obj .ply                    a closed surface read by the shim (OFF by its
+ *                                     own reader, OBJ / PLY by CGAL) and handed to
+ *                                     Gmsh as a discrete surface.
  * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
  * are kept as the boundary of the volume mesh; with size > 0 it is classified
  * into patches (40 degree feature angle), reparametrized and remeshed at that
@@ -27,7 +31,9 @@
  * triangles / lines / points of its entities as vertex tuples). A model with no
  * physical group at all gets default groups: (3, 1, "body") for a single volume
  * entity or (3, tag, "volume_<tag>") per volume entity when there are several,
- * and (2, tag, "surface_<tag>") per surface entity.
+ * and (2, tag, "surface_<tag>") per surface entity. Nodes at exactly the
+ * position of another node (distinct tags) are counted in n_coincident and,
+ * with opts->merge_coincident, mapped to the vertex of the smallest tag there.
  */
 #define _POSIX_C_SOURCE 200809L
 
