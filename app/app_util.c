@@ -25,7 +25,7 @@ int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_me
   else if (m && m->n_coincident)
     fprintf(stderr,
             "bigstep: warning: %s: %d nodes lie at the position of another node under a distinct tag; the body is "
-            "split into pieces there (--merge-coincident merges them)\n",
+            "split into pieces there (bigstep mesh ... --merge-coincident merges them)\n",
             spec, m->n_coincident);
   return st;
 }

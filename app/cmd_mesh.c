@@ -6,7 +6,7 @@
 #include "app.h"
 
 static const char *mesh_help =
-    "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm]\n"
+    "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm] [--merge-coincident]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
