@@ -1,6 +1,14 @@
 // shim_off.cpp — OFF text read into a polygon soup by bigstep itself
 // (bs_shim::read_off_soup, see shim_soup.hpp).
 //
+// Why not CGAL's OFF reader (CGAL 5.5, Debian 12): its File_scanner_OFF reads
+// facet sizes and vertex indices as doubles and converts them to size_t
+// (UBSan: "1e+30 is outside the range of representable values of type
+// 'unsigned long'" at File_scanner_OFF.h:718 for a facet size, :751 for an
+// index such as 1e20 or -2), and a file "OFF 4 1 0 ... 1e30 0 1 2" is even
+// read as a success; the issue's reports add signed overflow in its header
+// scanner and arrays reserved from a face count of 1e30.
+//
 // Accepted: an optional header keyword [ST][C][N]OFF (3-D; "4OFF", "nOFF" and
 // "OFF BINARY" are errors), the counts "nv nf [ne]" (on the header line or the
 // next), nv vertex lines whose first three numbers are the coordinates
