@@ -86,14 +86,22 @@ int ply_line(const char *path, std::size_t line, const std::string &text, int as
     if (elems.empty()) return bs_error_set(err, BS_EINPUT, "%s: line %zu: a property before any element", path, line);
     if (!(is >> a)) return bs_error_set(err, BS_EINPUT, "%s: line %zu: bad property line", path, line);
     int size = 0;
+    std::string name;
     if (a == "list") {
-      if (!(is >> b2 >> c) || (size = ply_type_size(b2)) == 0 || size > 2 || ply_type_size(c) == 0)
+      if (!(is >> b2 >> c >> name) || (size = ply_type_size(b2)) == 0 || size > 2 || ply_type_size(c) == 0)
         return bs_error_set(err, BS_EINPUT,
                             "%s: line %zu: list property '%.60s': the length type must be an 8- or 16-bit integer", path,
                             line, text.c_str());
-    } else if ((size = ply_type_size(a)) == 0) {
-      return bs_error_set(err, BS_EINPUT, "%s: line %zu: unknown property type '%.20s'", path, line, a.c_str());
+    } else if ((size = ply_type_size(a)) == 0 || !(is >> name)) {
+      return bs_error_set(err, BS_EINPUT, "%s: line %zu: bad property '%.60s'", path, line, text.c_str());
     }
+    /* CGAL reads a vertex's x, y, z as float or double without checking the
+     * type: another type is a null dereference in PLY_reader.h (fuzzing). */
+    const std::string &el = elems.back().name;
+    bool coord = (el == "vertex" || el == "vertices") && (name == "x" || name == "y" || name == "z");
+    if (coord && a != "float" && a != "float32" && a != "double" && a != "float64")
+      return bs_error_set(err, BS_EINPUT, "%s: line %zu: vertex coordinate '%s' must be float or double, not '%.20s'",
+                          path, line, name.c_str(), a.c_str());
     elems.back().min_bytes += ascii ? 2 : (unsigned long long)size;
   }
   return BS_OK;

@@ -285,6 +285,9 @@ Test(reader_limits, stl_and_ply_counts_before_cgal) {
   static const char ply_list[] = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
                                  "element face 1\nproperty list uint int vertex_indices\nend_header\n";
   surface_fails("list.ply", ply_list, strlen(ply_list), "line 6", "the length type must be an 8- or 16-bit integer");
+  static const char ply_int[] = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                "property uint32 z\nend_header\n0 0 0\n";
+  surface_fails("int.ply", ply_int, strlen(ply_int), "line 6: vertex coordinate 'z' must be float or double", NULL);
   static const char ply_over[] = "ply\nformat ascii 1.0\nelement face 300000000\nend_header\n";
   surface_fails("over.ply", ply_over, strlen(ply_over), "300000000 face elements exceed bigstep's limit", NULL);
 }
