@@ -76,8 +76,9 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
   if (points.empty() || polygons.empty())
     return bs_error_set(err, BS_EINPUT, "%s: the surface is empty (%zu points, %zu polygons)", path, points.size(),
                         polygons.size());
-  if (points.size() > (std::size_t)INT32_MAX)
-    return bs_error_set(err, BS_EINPUT, "%s: %zu points exceed the 32-bit index range", path, points.size());
+  if (points.size() > (std::size_t)BS_MAX_SURFACE_POINTS)
+    return bs_error_set(err, BS_EINPUT, "%s: %zu points exceed bigstep's limit of %ld", path, points.size(),
+                        (long)BS_MAX_SURFACE_POINTS);
 
   for (std::size_t i = 0; i < points.size(); i++) {
     const Point &p = points[i];
