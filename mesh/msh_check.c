@@ -12,15 +12,17 @@
  * outside [minNodeTag, maxNodeTag] (1, 0), a $PhysicalNames dimension
  * outside 0..3 (0, 2), v2 element lines whose tag count does not match the
  * line (0, 1); of the 552 inputs of a 200-second libFuzzer corpus, 10
- * crashed Gmsh (the same kinds) and one hung it (stopped after 20 s: a v4
- * binary entity claiming 721420288 physical tags in a 501-byte file). Two
+ * crashed Gmsh (the same kinds) and one kept it busy for more than 20 s on
+ * a loaded machine (a v4 binary entity claiming 721420288 physical tags in a
+ * 501-byte file: Gmsh loops over the count past the end of the file). Two
  * allocations sized by a count happen inside Gmsh too (the MSH4 reader): 8
  * bytes per node of a node block's numNodesInBlock and 16 bytes per element
  * of the $Elements header's numElements (4e12 gives 32 TB and 64 TB
  * requests). A duplicate node tag is resolved silently (one
  * definition is kept). Every one of those inputs is refused here, before
  * Gmsh opens the file; none of the accepted inputs crashed Gmsh. Examples
- * are kept as regression inputs in tests/data/fuzz/msh/gmsh_*.msh.
+ * are kept as regression inputs in tests/data/fuzz/msh/gmsh_*.msh; the
+ * diagnostic tests/fuzz/gmsh_bare.c replays inputs through bare Gmsh.
  *
  * What is accepted: MeshFormat 2.x (2.0, 2.1, 2.2) or 4.1, ASCII or binary
  * (little-endian, 8-byte doubles and size_t); the sections MeshFormat (first),
