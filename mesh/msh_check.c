@@ -146,8 +146,8 @@ static int rd_int(msh_in *in, int width, const char *what, int64_t lo, int64_t h
   return 0;
 }
 
-/* A finite double: an ASCII token or 8 binary bytes. */
-static int rd_f64(msh_in *in, const char *what, double *out) {
+/* A double, finite or not: an ASCII token or 8 binary bytes. */
+static int rd_f64_any(msh_in *in, const char *what, double *out) {
   double v;
   if (in->binary) {
     if (left(in) < 8) return bad(in, "%s: the file ends", what);
@@ -160,9 +160,28 @@ static int rd_f64(msh_in *in, const char *what, double *out) {
     v = strtod(t, &end);
     if (end != t + k) return bad(in, "%s = '%s' is not a number", what, t);
   }
-  if (!isfinite(v)) return bad(in, "%s = %g is not finite", what, v);
   *out = v;
   return 0;
+}
+
+/* A finite double. */
+static int rd_f64(msh_in *in, const char *what, double *out) {
+  int rc = rd_f64_any(in, what, out);
+  if (!rc && !isfinite(*out)) return bad(in, "%s = %g is not finite", what, *out);
+  return rc;
+}
+
+/* The coordinates of node `tag` (3, then `extra` parametric ones): a
+ * non-finite one is BS_ENUMERIC naming the node. */
+static int rd_node(msh_in *in, int64_t tag, int64_t extra) {
+  double x[3], u;
+  int rc = 0;
+  for (int k = 0; k < 3 && !rc; k++) rc = rd_f64_any(in, "node coordinate", &x[k]);
+  for (int64_t k = 0; k < extra && !rc; k++) rc = rd_f64(in, "parametric node coordinate", &u);
+  if (rc || (isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]))) return rc;
+  bad(in, "node %lld has a non-finite coordinate (%g, %g, %g)", (long long)tag, x[0], x[1], x[2]);
+  in->err->code = BS_ENUMERIC;
+  return BS_ENUMERIC;
 }
 
 /* A count that must fit in the bytes left (each item at least `min_bytes`)
@@ -377,16 +396,15 @@ static int block_header4(msh_in *in, const char *what, int64_t limit, int64_t *n
 
 static int node_block4(msh_in *in, int64_t nn, int64_t lo, int64_t hi) {
   int64_t dim, par = 0, k = 0, t;
-  double x;
   int rc = block_entity(in, &dim);
   if (!rc) rc = rd_int(in, 4, "parametric flag (1 only on curves and surfaces)", 0, (dim == 1 || dim == 2), &par);
   if (!rc) rc = rd_count(in, 8, "number of nodes in the block", 8, BS_MAX_VERTICES, &k);
   if (!rc && k > nn - (int64_t)in->nodes.n) rc = bad(in, "the blocks hold more nodes than the header's %lld", (long long)nn);
   for (int64_t i = 0; i < k && !rc; i++)
     if (!(rc = rd_int(in, 8, "node tag (in the header's range)", lo, hi, &t))) in->nodes.t[in->nodes.n++] = t;
-  int64_t nc = 3 + (par ? dim : 0);
-  for (int64_t i = 0; i < k && !rc; i++)
-    for (int64_t c = 0; c < nc && !rc; c++) rc = rd_f64(in, "node coordinate", &x);
+  if (rc) return rc;
+  const int64_t *tags = in->nodes.t + in->nodes.n - k; /* this block's, in file order */
+  for (int64_t i = 0; i < k && !rc; i++) rc = rd_node(in, tags[i], par ? dim : 0);
   return rc;
 }
 
@@ -433,13 +451,12 @@ static int elements4(msh_in *in) {
 
 static int nodes2(msh_in *in) {
   int64_t nn = 0, t = 0;
-  double x;
   int rc = ascii_count(in, "number of nodes", 8, BS_MAX_VERTICES, &nn);
   if (!rc) rc = tags_alloc(in, &in->nodes, nn);
   for (int64_t i = 0; i < nn && !rc; i++) {
     if ((rc = rd_int(in, 4, "node tag", 1, INT32_MAX, &t))) break;
     in->nodes.t[in->nodes.n++] = t;
-    for (int k = 0; k < 3 && !rc; k++) rc = rd_f64(in, "node coordinate", &x);
+    rc = rd_node(in, t, 0);
   }
   if (!rc) rc = tags_sort_unique(in, &in->nodes, "node");
   return rc ? rc : end_of_section(in);
