@@ -934,6 +934,11 @@ int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scen
   size_t got = fread(text, 1, (size_t)n, f);
   fclose(f);
   text[got] = '\0';
+  if (strlen(text) != got) { /* the parser would stop there and drop the rest */
+    size_t at = strlen(text);
+    free(text);
+    return bs_error_set(err, BS_EINPUT, "scene '%s': a NUL byte at offset %zu (not a JSON text file)", path, at);
+  }
   int st = bs_scene_parse(text, path, n_sets, sets, out, err);
   free(text);
   return st;

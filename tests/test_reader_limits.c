@@ -372,4 +372,6 @@ Test(reader_limits, scene_text) {
   free(big);
   expect(bs_scene_load(path, 0, NULL, &s, &err), BS_EINPUT, &err, path, "exceed bigstep's limit", NULL);
   expect(bs_scene_load(dir, 0, NULL, &s, &err), BS_EIO, &err, dir, "cannot read scene", NULL);
+  path = put("nul.json", "{\"time\": {}}\0{\"bodies\": 7}", 28);
+  expect(bs_scene_load(path, 0, NULL, &s, &err), BS_EINPUT, &err, path, "a NUL byte at offset 12", NULL);
 }
