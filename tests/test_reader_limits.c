@@ -102,7 +102,9 @@ Test(reader_limits, msh_v2_counts_values_and_indices) {
              "element 1 refers to node 99, which is not defined", NULL);
   msh2_fails("type.msh", TET_NODES "$Elements\n1\n1 99 2 1 1 1 2 3 4\n$EndElements\n", "element type", "= 99");
   msh2_fails("partitions.msh", TET_NODES "$Elements\n1\n1 4 3 1 1 7 1 2 3 4\n$EndElements\n",
-             "element 1: 7 partitions, but 0 tags follow", NULL);
+             "element 1 lists 7 partitions: partitioned meshes are not read", NULL);
+  msh2_fails("partition.msh", TET_NODES "$Elements\n1\n1 4 4 1 1 1 2 1 2 3 4\n$EndElements\n",
+             "element 1 lists 1 partitions", NULL);
   msh2_fails("dup.msh", "$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n2 5 5 5\n$EndNodes\n",
              "node tag 2 is defined twice", NULL);
   msh2_fails("section.msh", TET_NODES "$NodeData\n1\n$EndNodeData\n", "section $NodeData is not read by bigstep",
