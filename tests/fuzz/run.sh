@@ -4,6 +4,8 @@
 # BUILD_DIR was configured with CC=clang CXX=clang++ -DBS_FUZZ=ON. The corpus
 # grows in BUILD_DIR/fuzz/corpus/READER (seeded from tests/data/fuzz/READER
 # and the CMake seed list), crashes go to BUILD_DIR/fuzz/artifacts/READER/.
+# Extra flags come last and win (e.g. -rss_limit_mb=4096 for long msh runs:
+# Gmsh keeps ~27 KB per session, so the RSS grows by itself).
 # One process on one core (no -jobs/-workers: with them libFuzzer forks a
 # worker that logs to ./fuzz-0.log); run from the source tree, where the
 # scene harness resolves data/ paths.
