@@ -374,6 +374,7 @@ Test(reader_limits, scene_text) {
   free(big);
   expect(bs_scene_load(path, 0, NULL, &s, &err), BS_EINPUT, &err, path, "exceed bigstep's limit", NULL);
   expect(bs_scene_load(dir, 0, NULL, &s, &err), BS_EIO, &err, dir, "cannot read scene", NULL);
-  path = put("nul.json", "{\"time\": {}}\0{\"bodies\": 7}", 28);
+  static const char nul[] = "{\"time\": {}}\0{\"bodies\": 7}";
+  path = put("nul.json", nul, sizeof nul - 1);
   expect(bs_scene_load(path, 0, NULL, &s, &err), BS_EINPUT, &err, path, "a NUL byte at offset 12", NULL);
 }
