@@ -15,9 +15,19 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...) {
   return BS_EXIT_USAGE;
 }
 
-int bs_app_load_mesh(const char *spec, double size, int refine, bs_mesh **out, bs_error *err) {
-  bs_mesh_read_opts o = {.size = size, .refine = refine};
-  return bs_mesh_load(spec, &o, out, err);
+int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_mesh **out, bs_error *err) {
+  bs_mesh_read_opts o = {.size = size, .refine = refine, .merge_coincident = merge};
+  int st = bs_mesh_load(spec, &o, out, err);
+  const bs_mesh *m = st ? NULL : *out;
+  if (m && m->n_coincident && m->coincident_merged)
+    fprintf(stderr, "bigstep: note: %s: merged %d coincident nodes (same position as another node, distinct tags)\n",
+            spec, m->n_coincident);
+  else if (m && m->n_coincident)
+    fprintf(stderr,
+            "bigstep: warning: %s: %d nodes lie at the position of another node under a distinct tag; the body is "
+            "split into pieces there (bigstep mesh ... --merge-coincident merges them)\n",
+            spec, m->n_coincident);
+  return st;
 }
 
 int bs_app_sets_add(bs_app_sets *s, const char *key, const char *value, int quote) {

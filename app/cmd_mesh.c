@@ -6,7 +6,7 @@
 #include "app.h"
 
 static const char *mesh_help =
-    "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm]\n"
+    "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm] [--merge-coincident]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
@@ -18,7 +18,9 @@ static const char *mesh_help =
     "  --refine N     uniform 1->8 refinements after reading (info, convert)\n"
     "  --levels N     refinements to apply (refine; default 1)\n"
     "  --reorder M    renumber vertices (info): metis or rcm\n"
-    "  --method M     reordering method (reorder; default metis)\n";
+    "  --method M     reordering method (reorder; default metis)\n"
+    "  --merge-coincident  merge nodes of a .msh that share a position under\n"
+    "                 distinct tags (reported as a warning otherwise)\n";
 
 static int parse_order(const char *s, bs_order *o) {
   if (strcmp(s, "metis") == 0) *o = BS_ORDER_METIS;
@@ -70,7 +72,7 @@ typedef struct mesh_args {
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
   double size;
-  int refine, levels, have_order;
+  int refine, levels, have_order, merge;
   bs_order order;
 } mesh_args;
 
@@ -111,7 +113,9 @@ static int parse_args(int argc, char **argv, mesh_args *a) {
   else return bs_app_usage_error("mesh", "unknown subcommand '%s' (info, refine, reorder, convert)", sub);
   for (int i = 2; i < argc; i++) {
     const char *arg = argv[i];
-    if (strncmp(arg, "--", 2) == 0) {
+    if (strcmp(arg, "--merge-coincident") == 0) {
+      a->merge = 1;
+    } else if (strncmp(arg, "--", 2) == 0) {
       char fbuf[64];
       const char *flag, *val;
       if (bs_app_flag_value(argc, argv, &i, fbuf, sizeof fbuf, &flag, &val))
@@ -183,7 +187,7 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_error_clear(&err);
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
-  if (bs_app_load_mesh(a.pos[0], a.size, !strcmp(a.sub, "refine") ? a.levels : a.refine, &m, &err)) {
+  if (bs_app_load_mesh(a.pos[0], a.size, !strcmp(a.sub, "refine") ? a.levels : a.refine, a.merge, &m, &err)) {
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }

@@ -51,6 +51,7 @@
 #include <string.h>
 
 #include "bs_levelset.h"
+#include "bs_limits.h"
 
 #define HEADER_BYTES 56
 static const char MAGIC[8] = {'B', 'S', 'L', 'S', '1', 0, 0, 0};
@@ -459,6 +460,36 @@ int bs_levelset_grid_save(const bs_levelset *ls, const char *path, bs_error *err
   return 0;
 }
 
+/* The header's node count against BS_MAX_GRID_NODES and the file's size,
+ * before anything is allocated (a 56-byte file may claim 2^31 nodes). */
+static int check_file_size(FILE *fp, const char *path, const int32_t n[3], bs_error *err) {
+  uint64_t total = 1;
+  for (int k = 0; k < 3; k++) {
+    if (n[k] < 2)
+      return bs_error_set(err, BS_EINPUT, "level set file '%s': n[%d] = %d in the header: need at least 2 nodes per axis",
+                          path, k, (int)n[k]);
+    total *= (uint64_t)n[k]; /* < 2^93 would overflow: stop early */
+    if (total > (uint64_t)BS_MAX_GRID_NODES)
+      return bs_error_set(err, BS_EINPUT,
+                          "level set file '%s': the header's grid %d x %d x %d exceeds bigstep's limit of %ld nodes",
+                          path, (int)n[0], (int)n[1], (int)n[2], (long)BS_MAX_GRID_NODES);
+  }
+  long here = ftell(fp);
+  if (here < 0 || fseek(fp, 0, SEEK_END) != 0) return bs_error_set(err, BS_EIO, "level set file '%s': cannot seek", path);
+  long size = ftell(fp);
+  if (size < 0 || fseek(fp, here, SEEK_SET) != 0) return bs_error_set(err, BS_EIO, "level set file '%s': cannot seek", path);
+  uint64_t want = HEADER_BYTES + 8 * total;
+  if ((uint64_t)size < want)
+    return bs_error_set(err, BS_EIO,
+                        "level set file '%s': truncated: %ld bytes, but its header's grid %d x %d x %d needs %llu "
+                        "(%d + 8 per node)",
+                        path, size, (int)n[0], (int)n[1], (int)n[2], (unsigned long long)want, HEADER_BYTES);
+  if ((uint64_t)size > want)
+    return bs_error_set(err, BS_EINPUT, "level set file '%s': trailing bytes after %llu values (%ld bytes, %llu expected)",
+                        path, (unsigned long long)total, size, (unsigned long long)want);
+  return 0;
+}
+
 int bs_levelset_grid_load(const char *path, bs_levelset **out, bs_error *err) {
   if (!path) return bs_error_set(err, BS_EINPUT, "level set load: path is NULL");
   FILE *fp = fopen(path, "rb");
@@ -484,6 +515,7 @@ int bs_levelset_grid_load(const char *path, bs_levelset **out, bs_error *err) {
     origin[k] = get_f64(hdr + 24 + 8 * k);
   }
   h = get_f64(hdr + 48);
+  if ((st = check_file_size(fp, path, n, err))) goto done;
   if ((st = grid_new(origin, h, n, &ls, err))) {
     bs_error_prefix(err, "level set file '%s'", path);
     goto done;

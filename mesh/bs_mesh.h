@@ -72,7 +72,14 @@ typedef struct bs_mesh {
   int n_groups;
   bs_group *groups;
 
-  int32_t n_dropped;   /* vertices of the input that no tet used          */
+  int32_t n_dropped;   /* vertices of the input that no tet used (not
+                          counting merged coincident nodes)              */
+  int32_t n_coincident;/* bs_mesh_read: nodes of the input at exactly the
+                          position of another node with a different tag
+                          (0 in a sound mesh). Kept as distinct vertices,
+                          they split the body into pieces there, unless
+                          merged (bs_mesh_read_opts.merge_coincident)    */
+  int coincident_merged; /* 1: those nodes were merged into one vertex   */
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */
@@ -85,6 +92,10 @@ typedef struct bs_mesh_read_opts {
   int64_t max_tets; /* refuse (BS_EINPUT, before allocating) a mesh, a
                     refinement or a Gmsh size that would make more tets;
                     <= 0: bs_mesh_max_tets's default                      */
+  int merge_coincident; /* 1: nodes at exactly the same position (bitwise
+                    equal coordinates) under distinct tags become one
+                    vertex (the one of the smallest tag); 0: they are kept
+                    and only counted in bs_mesh.n_coincident           */
 } bs_mesh_read_opts;
 
 /* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
@@ -99,7 +110,17 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
 /* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep,
  * .stl and .off (closed surfaces are meshed into a volume) through Gmsh. Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
- * type and count. opts may be NULL (defaults). */
+ * type and count. opts may be NULL (defaults).
+ *
+ * A .msh file is checked before Gmsh parses it (mesh/msh_check.c): its
+ * format (2.x or 4.1, ASCII or binary, little-endian, 8-byte doubles), its
+ * sections (only MeshFormat, PhysicalNames, Entities, Nodes, Elements and
+ * Comments), every count against the bytes that follow it and against
+ * bs_limits.h, every node coordinate (finite), every node and element tag
+ * (in the range the header states; a node tag defined twice is an error
+ * naming it) and every element's nodes (defined). Coincident nodes under
+ * distinct tags are counted in m->n_coincident (a warning for the caller to
+ * print) and merged when opts->merge_coincident. */
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
 /* The security rule for Gmsh scripts: a .geo file (with what it includes or

@@ -8,12 +8,16 @@
  * caller's setting is restored afterwards.
  *
  * Inputs, by extension (case-insensitive):
- *   .msh                              taken as is (v2 / v4, ASCII / binary);
+ *   .msh                              taken as is (v2 / v4, ASCII / binary), once
+ *                                     msh_check.c has checked it (Gmsh's .msh
+ *                                     readers trust their input);
  *   .geo .step .stp .brep .iges .igs  meshed in 3-D; STEP and IGES lengths are
  *                                     converted to metres (OCCTargetUnit "M");
- *   .stl                              a closed triangulated surface, merged by Gmsh;
- *   .off .obj .ply                    a closed surface read by CGAL (the shim) and
- *                                     handed to Gmsh as a discrete surface.
+ *   .stl                              a closed triangulated surface, merged by Gmsh
+ *                                     (after bs_shim_check_stl);
+ *   .off .obj .ply                    a closed surface read by the shim (OFF by its
+ *                                     own reader, OBJ / PLY by CGAL) and handed to
+ *                                     Gmsh as a discrete surface.
  * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
  * are kept as the boundary of the volume mesh; with size > 0 it is classified
  * into patches (40 degree feature angle), reparametrized and remeshed at that
@@ -27,7 +31,9 @@
  * triangles / lines / points of its entities as vertex tuples). A model with no
  * physical group at all gets default groups: (3, 1, "body") for a single volume
  * entity or (3, tag, "volume_<tag>") per volume entity when there are several,
- * and (2, tag, "surface_<tag>") per surface entity.
+ * and (2, tag, "surface_<tag>") per surface entity. Nodes at exactly the
+ * position of another node (distinct tags) are counted in n_coincident and,
+ * with opts->merge_coincident, mapped to the vertex of the smallest tag there.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -176,6 +182,8 @@ typedef struct node_map {
   size_t *tags;   /* n, sorted ascending                */
   int32_t *dense; /* max tag + 1 entries (-1: no node) or NULL */
   size_t dense_n;
+  int32_t *rep;   /* n: the vertex each node maps to (merged coincident
+                     nodes), or NULL (node i is vertex i) */
 } node_map;
 
 typedef struct tag_pos {
@@ -191,18 +199,42 @@ static int cmp_tag_pos(const void *a, const void *b) {
 static void node_map_free(node_map *nm) {
   free(nm->tags);
   free(nm->dense);
+  free(nm->rep);
   memset(nm, 0, sizeof *nm);
 }
 
 static int32_t node_map_find(const node_map *nm, size_t tag) {
-  if (nm->dense) return tag < nm->dense_n ? nm->dense[tag] : -1;
-  size_t lo = 0, hi = nm->n;
-  while (lo < hi) {
-    size_t mid = lo + (hi - lo) / 2;
-    if (nm->tags[mid] < tag) lo = mid + 1;
-    else hi = mid;
+  int32_t i = -1;
+  if (nm->dense) {
+    i = tag < nm->dense_n ? nm->dense[tag] : -1;
+  } else {
+    size_t lo = 0, hi = nm->n;
+    while (lo < hi) {
+      size_t mid = lo + (hi - lo) / 2;
+      if (nm->tags[mid] < tag) lo = mid + 1;
+      else hi = mid;
+    }
+    if (lo < nm->n && nm->tags[lo] == tag) i = (int32_t)lo;
   }
-  return (lo < nm->n && nm->tags[lo] == tag) ? (int32_t)lo : -1;
+  return (i >= 0 && nm->rep) ? nm->rep[i] : i;
+}
+
+/* Counts the nodes at the position of another node (distinct tags: a tag
+ * is defined once, read_nodes checks it); with merge, maps each of them to
+ * the vertex of the smallest tag at its position. */
+static int coincident_nodes(const char *path, node_map *nm, const double *x, int merge, int32_t *count,
+                            bs_error *err) {
+  int32_t *rep = malloc((nm->n ? nm->n : 1) * sizeof *rep);
+  if (!rep) return bs_error_set(err, BS_ENOMEM, "%s: out of memory for %zu nodes", path, nm->n);
+  int64_t c = bs__coincident((int64_t)nm->n, x, rep, err);
+  if (c < 0) {
+    free(rep);
+    return BS_ENOMEM;
+  }
+  *count = (int32_t)c;
+  if (merge && c > 0) nm->rep = rep;
+  else free(rep);
+  return BS_OK;
 }
 
 /* All nodes of the model: *x (3 per vertex, tag order) and the map. */
@@ -636,8 +668,8 @@ static int check_zero_volume(const char *path, const double *x, const ivec *tets
   return BS_OK;
 }
 
-/* The current Gmsh model as a bs_mesh. */
-static int model_to_mesh(const char *path, bs_mesh **out, bs_error *err) {
+/* The current Gmsh model as a bs_mesh (coincident nodes merged with merge). */
+static int model_to_mesh(const char *path, int merge, bs_mesh **out, bs_error *err) {
   int rc, ierr = 0;
   node_map nm = {0};
   double *x = NULL;
@@ -647,9 +679,11 @@ static int model_to_mesh(const char *path, bs_mesh **out, bs_error *err) {
   ivec tets = {0};
   bs_group *groups = NULL;
   int n_groups = 0;
+  int32_t n_coincident = 0;
 
   if ((rc = check_volume_types(path, err))) goto done;
   if ((rc = read_nodes(path, &nm, &x, err))) goto done;
+  if ((rc = coincident_nodes(path, &nm, x, merge, &n_coincident, err))) goto done;
 
   gmshModelGetEntities(&vdt, &nvdt, 3, &ierr);
   if (ierr) {
@@ -692,6 +726,11 @@ static int model_to_mesh(const char *path, bs_mesh **out, bs_error *err) {
 
   rc = bs_mesh_create((int32_t)nm.n, x, (int32_t)(tets.n / 4), tets.a, n_groups, groups, out, err);
   if (rc) bs_error_prefix(err, "%s", path);
+  if (!rc) {
+    (*out)->n_coincident = n_coincident;
+    (*out)->coincident_merged = nm.rep != NULL;
+    if (nm.rep) (*out)->n_dropped -= n_coincident; /* the merged nodes are no tet's now */
+  }
 done:
   node_map_free(&nm);
   free(x);
@@ -704,6 +743,24 @@ done:
 }
 
 /* ---- bs_mesh_read ------------------------------------------------------- */
+
+/* Refines the mesh read from path `refine` times (what the read found out
+ * about coincident nodes is carried over). */
+static int refine_read(const char *path, int refine, bs_mesh **m, bs_error *err) {
+  for (int level = 0; level < refine; level++) {
+    bs_mesh *fine = NULL;
+    int rc = bs_mesh_refine(*m, &fine, err);
+    if (rc) {
+      bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
+      return rc;
+    }
+    fine->n_coincident = (*m)->n_coincident;
+    fine->coincident_merged = (*m)->coincident_merged;
+    bs_mesh_destroy(m);
+    *m = fine;
+  }
+  return BS_OK;
+}
 
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
@@ -736,6 +793,10 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   int64_t np = 0, ntri = 0;
   int rc;
   if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
+  /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
+   * found in them): only a file that passed the check reaches Gmsh. */
+  if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;
+  if (kind == IN_STL && (rc = bs_shim_check_stl(path, err))) return rc;
 
   static const char *const script[] = {"geo", NULL};
   if (ext_is(file_ext(path), script) && (rc = bs__geo_check(path, err))) return rc;
@@ -780,17 +841,11 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     break;
   }
   gmsh_quiet();
-  if (!rc) rc = model_to_mesh(path, &m, err);
+  if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
 
   if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
-  for (int level = 0; level < refine && !rc; level++) {
-    bs_mesh *fine = NULL;
-    rc = bs_mesh_refine(m, &fine, err);
-    if (rc) bs_error_prefix(err, "%s: refinement %d of %d", path, level + 1, refine);
-    bs_mesh_destroy(&m);
-    m = fine;
-  }
+  if (!rc) rc = refine_read(path, refine, &m, err);
 out:
   bs_shim_free(pts);
   bs_shim_free(tris);

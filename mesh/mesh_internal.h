@@ -47,6 +47,18 @@ int bs__group_update_vertices(const bs_mesh *m, bs_group *g, bs_error *err);
 /* Copy of a C string into malloc'ed memory ("" for NULL); NULL on ENOMEM. */
 char *bs__strdup(const char *s);
 
+/* Checks the .msh file at path before Gmsh parses it (msh_check.c): format,
+ * sections, every count against the file's bytes and bs_limits.h, tags,
+ * coordinates, element types and nodes. 0, or BS_EINPUT / BS_EIO / BS_ENOMEM
+ * naming the file, the line (or byte) and what is wrong. */
+int bs__msh_check(const char *path, bs_error *err);
+
+/* Coincident vertices: rep[i] = the smallest j with x[3 j .. 3 j + 2]
+ * bitwise equal to x[3 i .. 3 i + 2] (rep[i] = i for the first of each
+ * position). Returns the number of i with rep[i] != i, or -1 (BS_ENOMEM in
+ * err) when the work array cannot be allocated. */
+int64_t bs__coincident(int64_t n, const double *x, int32_t *rep, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

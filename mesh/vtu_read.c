@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_limits.h"
 #include "mesh_internal.h"
 #include "vtu_internal.h"
 
@@ -147,11 +148,11 @@ static void on_piece(xstate *st, const XML_Char **a) {
   }
   const char *np = att(a, "NumberOfPoints"), *nc = att(a, "NumberOfCells");
   uint64_t vp, vc;
-  const int bad_p = parse_count(np, INT32_MAX, &vp), bad_c = parse_count(nc, INT32_MAX, &vc);
+  const int bad_p = parse_count(np, BS_MAX_VERTICES, &vp), bad_c = parse_count(nc, BS_MAX_TETS, &vc);
   if (bad_p || bad_c) {
     const char *key = bad_p ? "NumberOfPoints" : "NumberOfCells", *val = bad_p ? np : nc;
-    fail(st, bs_error_set(st->err, BS_EINPUT, "'%s': <Piece> %s is '%s': expected an integer in [0, 2^31)",
-                          st->path, key, val ? val : "(none)"));
+    fail(st, bs_error_set(st->err, BS_EINPUT, "'%s': <Piece> %s is '%s': expected an integer in [0, %ld] (bigstep's limit)",
+                          st->path, key, val ? val : "(none)", bad_p ? (long)BS_MAX_VERTICES : (long)BS_MAX_TETS));
     return;
   }
   d->n_points = (int64_t)vp;

@@ -28,6 +28,12 @@ void bs_shim_free(void *p);
 int bs_shim_read_surface(const char *path, double **points, int64_t *n_points, int32_t **tris,
                          int64_t *n_tris, bs_error *err);
 
+/* Checks an STL file's layout before another reader (Gmsh) parses it: a
+ * binary STL's size must match its triangle count (at most
+ * BS_MAX_SURFACE_FACES) and its coordinates be finite; any other file must
+ * start with "solid". 0, or BS_EINPUT / BS_EIO naming the file. */
+int bs_shim_check_stl(const char *path, bs_error *err);
+
 
 /* ==========================================================================
  * Geometry (shim_geometry.cpp; helper "shim"): exact predicates, an AABB tree

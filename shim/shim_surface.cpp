@@ -1,16 +1,17 @@
 // shim_surface.cpp — triangulated surfaces read by CGAL, handed to C.
 //
-// CGAL::IO::read_polygon_soup reads the file as a polygon soup (points +
-// polygons of point indices, no topology), choosing the reader by extension
-// (.off, .obj, .ply, .stl, .ts). Polygons of k > 3 vertices are split into the
-// k - 2 triangles of a fan from their first vertex (exact for the convex,
-// planar faces that OFF/OBJ/PLY writers emit).
+// The file becomes a polygon soup (points + polygons of point indices, no
+// topology): .off through bigstep's own reader (shim_off.cpp), .obj, .ply,
+// .stl and .ts through CGAL::IO::read_polygon_soup, after shim_surface_check
+// has checked a .stl's or .ply's counts against the file's size (see
+// shim_soup.hpp for what CGAL's readers would do otherwise). Polygons of
+// k > 3 vertices are split into the k - 2 triangles of a fan from their first
+// vertex (exact for the convex, planar faces that OFF/OBJ/PLY writers emit).
 //
 // Every entry point catches every exception; nothing is printed (the readers
 // run with verbose = false).
 
 #include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
 #include <cctype>
@@ -23,13 +24,29 @@
 #include <string>
 #include <vector>
 
+#include "bs_limits.h"
 #include "bs_shim.h"
+#include "shim_soup.hpp"
 
 namespace {
 
-typedef CGAL::Simple_cartesian<double> Kernel;
-typedef Kernel::Point_3 Point;
-typedef std::vector<std::size_t> Polygon;
+using bs_shim::Point;
+using bs_shim::Polygon;
+
+// The soup of the file: OFF by bigstep, the rest by CGAL after the checks.
+int read_soup(const char *path, const std::string &ext, std::vector<Point> &points, std::vector<Polygon> &polygons,
+              bs_error *err) {
+  if (ext == "off") return bs_shim::read_off_soup(path, points, polygons, err);
+  if (ext == "stl" || ext == "ply") {
+    std::string bytes;
+    int rc = bs_shim::read_bytes(path, bytes, err);
+    if (!rc) rc = ext == "stl" ? bs_shim::check_stl(path, bytes, err) : bs_shim::check_ply(path, bytes, err);
+    if (rc) return rc;
+  }
+  bool ok = CGAL::IO::read_polygon_soup(std::string(path), points, polygons, CGAL::parameters::verbose(false));
+  if (!ok) return bs_error_set(err, BS_EINPUT, "%s: CGAL could not read the file as .%s", path, ext.c_str());
+  return BS_OK;
+}
 
 std::string lower_extension(const char *path) {
   std::string p(path);
@@ -54,13 +71,14 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
     return bs_error_set(err, BS_EINPUT,
                         "%s: unsupported surface format '.%s' (expected .off, .obj, .ply, .stl or .ts)", path,
                         ext.c_str());
-  bool ok = CGAL::IO::read_polygon_soup(std::string(path), points, polygons, CGAL::parameters::verbose(false));
-  if (!ok) return bs_error_set(err, BS_EINPUT, "%s: CGAL could not read the file as .%s", path, ext.c_str());
+  int rc = read_soup(path, ext, points, polygons, err);
+  if (rc) return rc;
   if (points.empty() || polygons.empty())
     return bs_error_set(err, BS_EINPUT, "%s: the surface is empty (%zu points, %zu polygons)", path, points.size(),
                         polygons.size());
-  if (points.size() > (std::size_t)INT32_MAX)
-    return bs_error_set(err, BS_EINPUT, "%s: %zu points exceed the 32-bit index range", path, points.size());
+  if (points.size() > (std::size_t)BS_MAX_SURFACE_POINTS)
+    return bs_error_set(err, BS_EINPUT, "%s: %zu points exceed bigstep's limit of %ld", path, points.size(),
+                        (long)BS_MAX_SURFACE_POINTS);
 
   for (std::size_t i = 0; i < points.size(); i++) {
     const Point &p = points[i];
@@ -70,15 +88,18 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
   std::size_t n_tris = 0;
   for (std::size_t i = 0; i < polygons.size(); i++) {
     const Polygon &poly = polygons[i];
-    if (poly.size() < 3)
-      return bs_error_set(err, BS_EINPUT, "%s: polygon %zu has %zu vertices (at least 3 needed)", path, i,
-                          poly.size());
+    if (poly.size() < 3 || poly.size() > (std::size_t)BS_MAX_POLYGON_VERTICES)
+      return bs_error_set(err, BS_EINPUT, "%s: polygon %zu has %zu vertices (3 to %ld accepted)", path, i,
+                          poly.size(), (long)BS_MAX_POLYGON_VERTICES);
     for (std::size_t k = 0; k < poly.size(); k++)
       if (poly[k] >= points.size())
         return bs_error_set(err, BS_EINPUT, "%s: polygon %zu refers to point %lld, but there are %zu points", path,
                             i, (long long)(int64_t)poly[k], points.size());
     n_tris += poly.size() - 2;
   }
+  if (n_tris > (std::size_t)BS_MAX_SURFACE_FACES)
+    return bs_error_set(err, BS_EINPUT, "%s: %zu triangles exceed bigstep's limit of %ld", path, n_tris,
+                        (long)BS_MAX_SURFACE_FACES);
 
   double *x = (double *)std::malloc(3 * points.size() * sizeof(double));
   int32_t *t = (int32_t *)std::malloc(3 * n_tris * sizeof(int32_t));
@@ -111,6 +132,19 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
 } // namespace
 
 extern "C" void bs_shim_free(void *p) { std::free(p); }
+
+extern "C" int bs_shim_check_stl(const char *path, bs_error *err) {
+  if (!path) return bs_error_set(err, BS_EINPUT, "bs_shim_check_stl: NULL path");
+  try {
+    std::string bytes;
+    int rc = bs_shim::read_bytes(path, bytes, err);
+    return rc ? rc : bs_shim::check_stl(path, bytes, err);
+  } catch (const std::bad_alloc &) {
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory while reading the surface", path);
+  } catch (...) {
+    return bs_error_set(err, BS_EINPUT, "%s: could not check the STL file", path);
+  }
+}
 
 extern "C" int bs_shim_read_surface(const char *path, double **points, int64_t *n_points, int32_t **tris,
                                     int64_t *n_tris, bs_error *err) {

@@ -2,14 +2,18 @@
  * scene_check.c (shared with scenes built in C). The keys allowed in each
  * object, the integer ranges and the allowed strings come from the schema
  * table (scene_schema.c). */
+#define _POSIX_C_SOURCE 200809L
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <cJSON.h>
 
+#include "bs_limits.h"
 #include "bs_scene.h"
 #include "fields_json.h"
 #include "json_locate.h"
@@ -912,14 +916,20 @@ int bs_scene_parse(const char *text, const char *name, int n_sets, const char *c
 
 int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scene **out, bs_error *err) {
   *out = NULL;
+  struct stat sb;
+  if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+    return bs_error_set(err, BS_EIO, "cannot read scene '%s': not a regular file", path);
   FILE *f = fopen(path, "rb");
   if (!f) return bs_error_set(err, BS_EIO, "cannot open scene '%s'", path);
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  if (n < 0) {
+  long n = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1; /* a folder gives -1 or LONG_MAX */
+  if (n < 0 || fseek(f, 0, SEEK_SET) != 0) {
     fclose(f);
-    return bs_error_set(err, BS_EIO, "cannot read scene '%s'", path);
+    return bs_error_set(err, BS_EIO, "cannot read scene '%s' (not a regular file?)", path);
+  }
+  if (n > BS_MAX_SCENE_BYTES) {
+    fclose(f);
+    return bs_error_set(err, BS_EINPUT, "scene '%s': %ld bytes exceed bigstep's limit of %ld for a scene file", path, n,
+                        (long)BS_MAX_SCENE_BYTES);
   }
   char *text = malloc((size_t)n + 1);
   if (!text) {
@@ -929,6 +939,11 @@ int bs_scene_load(const char *path, int n_sets, const char *const *sets, bs_scen
   size_t got = fread(text, 1, (size_t)n, f);
   fclose(f);
   text[got] = '\0';
+  if (strlen(text) != got) { /* the parser would stop there and drop the rest */
+    size_t at = strlen(text);
+    free(text);
+    return bs_error_set(err, BS_EINPUT, "scene '%s': a NUL byte at offset %zu (not a JSON text file)", path, at);
+  }
   int st = bs_scene_parse(text, path, n_sets, sets, out, err);
   free(text);
   return st;

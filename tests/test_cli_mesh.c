@@ -93,3 +93,27 @@ Test(cli_mesh, errors) {
   cr_expect(strstr(out, "explode") != NULL, "%s", out);
   free(out);
 }
+
+/* A .msh with three nodes at the position of others under distinct tags: a
+ * warning with the count, or merged with --merge-coincident. */
+Test(cli_mesh, coincident_nodes_warned_or_merged) {
+  const char *path = "/tmp/bs_cli_coincident.msh";
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  fputs("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n8\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 0 0\n6 0 1 0\n"
+        "7 0 0 1\n8 1 1 1\n$EndNodes\n$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 4 2 1 1 5 6 7 8\n$EndElements\n",
+        f);
+  fclose(f);
+  char *out = NULL;
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info /tmp/bs_cli_coincident.msh", &out), 0, "%s", out);
+  cr_expect(strstr(out, "warning: /tmp/bs_cli_coincident.msh: 3 nodes lie at the position of another node") != NULL,
+            "%s", out);
+  cr_expect(strstr(out, "vertices 8 (dofs 24), tets 2") != NULL, "%s", out);
+  free(out);
+  cr_assert_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info /tmp/bs_cli_coincident.msh --merge-coincident", &out), 0, "%s",
+               out);
+  cr_expect(strstr(out, "merged 3 coincident nodes") != NULL, "%s", out);
+  cr_expect(strstr(out, "vertices 5 (dofs 15), tets 2, boundary faces 6") != NULL, "%s", out);
+  free(out);
+  remove(path);
+}

@@ -89,7 +89,7 @@ static void bad_vertex(const char *token) {
           msh);
   fclose(f);
   int rc = sim_load_error(json, NULL, 0, &err);
-  snprintf(path, sizeof path, "vertex 7 has a non-finite coordinate (1, %s, 1)", token);
+  snprintf(path, sizeof path, "node 8 has a non-finite coordinate (1, %s, 1)", token); /* vertex 7 */
   cr_log_info("mesh vertex %s: %d: %s", token, rc, err.msg);
   cr_expect_eq(rc, BS_ENUMERIC, "status %d: %s", rc, err.msg);
   cr_expect(strstr(err.msg, msh) != NULL, "the error does not name %s: %s", msh, err.msg);

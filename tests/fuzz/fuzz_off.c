@@ -1,0 +1,7 @@
+/* fuzz_off.c — .off bytes through bs_shim_read_surface. */
+#include "fuzz_util.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  fuzz_file(data, size, ".off", "off", fuzz_read_surface);
+  return 0;
+}
