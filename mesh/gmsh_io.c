@@ -762,6 +762,41 @@ static int refine_read(const char *path, int refine, bs_mesh **m, bs_error *err)
   return BS_OK;
 }
 
+/* The file exists, is a regular readable file, and its extension is one
+ * bs_mesh_read takes (Gmsh silently accepts a missing file: check first). */
+static int input_file(const char *path, input_kind *kind, bs_error *err) {
+  struct stat st;
+  if (stat(path, &st) != 0)
+    return bs_error_set(err, BS_EIO, "%s: cannot open the mesh file: %s", path, strerror(errno));
+  if (!S_ISREG(st.st_mode)) return bs_error_set(err, BS_EIO, "%s: not a regular file", path);
+  FILE *f = fopen(path, "rb");
+  if (!f) return bs_error_set(err, BS_EIO, "%s: cannot read the mesh file: %s", path, strerror(errno));
+  fclose(f);
+  *kind = classify_input(path);
+  if (*kind == IN_UNKNOWN)
+    return bs_error_set(err, BS_EINPUT,
+                        "%s: unsupported mesh format '.%s' (expected .msh, .geo, .step, .stp, .brep, .iges, .igs, "
+                        ".stl, .off, .obj or .ply)",
+                        path, file_ext(path));
+  return 0;
+}
+
+/* Geometry (.geo, STEP, BREP, IGES) opened and meshed in 3-D at size (> 0:
+ * Mesh.MeshSizeMin = Max = size, after a check that the tets would fit). */
+static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts *opts, bs_error *err) {
+  int ierr = 0, rc;
+  gmshOpen(path, &ierr);
+  if (ierr) return gmsh_fail(err, BS_EGMSH, path, "read the file");
+  gmsh_quiet();
+  if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) return rc;
+  if (size > 0) {
+    gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
+    gmshOptionSetNumber("Mesh.MeshSizeMax", size, &ierr);
+  }
+  gmshModelMeshGenerate(3, &ierr);
+  return ierr ? gmsh_fail(err, BS_EGMSH, path, "mesh the geometry in 3-D") : 0;
+}
+
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
@@ -771,27 +806,14 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (!isfinite(size)) return bs_error_set(err, BS_EINPUT, "%s: mesh size %g is not finite", path, size);
   if (refine < 0) return bs_error_set(err, BS_EINPUT, "%s: refine = %d (must be >= 0)", path, refine);
 
-  /* Gmsh silently accepts a missing file: check first. */
-  struct stat st;
-  if (stat(path, &st) != 0)
-    return bs_error_set(err, BS_EIO, "%s: cannot open the mesh file: %s", path, strerror(errno));
-  if (!S_ISREG(st.st_mode)) return bs_error_set(err, BS_EIO, "%s: not a regular file", path);
-  FILE *f = fopen(path, "rb");
-  if (!f) return bs_error_set(err, BS_EIO, "%s: cannot read the mesh file: %s", path, strerror(errno));
-  fclose(f);
-
-  input_kind kind = classify_input(path);
-  if (kind == IN_UNKNOWN)
-    return bs_error_set(err, BS_EINPUT,
-                        "%s: unsupported mesh format '.%s' (expected .msh, .geo, .step, .stp, .brep, .iges, .igs, "
-                        ".stl, .off, .obj or .ply)",
-                        path, file_ext(path));
+  input_kind kind = IN_UNKNOWN;
+  int rc = input_file(path, &kind, err);
+  if (rc) return rc;
 
   /* Surfaces Gmsh does not read: CGAL reads them, before Gmsh is locked. */
   double *pts = NULL;
   int32_t *tris = NULL;
   int64_t np = 0, ntri = 0;
-  int rc;
   if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
@@ -811,19 +833,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
     break;
   case IN_GEOMETRY:
-    gmshOpen(path, &ierr);
-    if (ierr) {
-      rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
-      break;
-    }
-    gmsh_quiet();
-    if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) break;
-    if (size > 0) {
-      gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
-      gmshOptionSetNumber("Mesh.MeshSizeMax", size, &ierr);
-    }
-    gmshModelMeshGenerate(3, &ierr);
-    if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "mesh the geometry in 3-D");
+    rc = mesh_geometry(path, size, opts, err);
     break;
   case IN_STL:
     gmshOpen(path, &ierr);
