@@ -114,13 +114,12 @@ static int check_pos(const char *name, double v, bs_error *err) {
 static int check_axis(const char *name, const double a[3], double unit[3], bs_error *err) {
   int st = check_vec(name, a, err);
   if (st) return st;
-  /* Scaled by the largest component first: (1e200, 0, 0) squares to inf and
-   * (1e-200, 0, 0) to 0, both of which would normalize to a zero vector. */
-  const double m = fmax(fabs(a[0]), fmax(fabs(a[1]), fabs(a[2])));
-  if (!(m > 0))
+  /* Scaled (bs_norm3_scaled): (1e200, 0, 0) squares to inf and (1e-200, 0,
+   * 0) to 0, both of which would normalize to a zero vector. */
+  const double n = bs_norm3_scaled(a);
+  if (!(n > 0))
     return bs_error_set(err, BS_EINPUT, "%s = (%g, %g, %g): must be nonzero", name, a[0], a[1], a[2]);
-  const double b[3] = {a[0] / m, a[1] / m, a[2] / m}, n = bs_norm3(b);
-  for (int k = 0; k < 3; k++) unit[k] = b[k] / n;
+  for (int k = 0; k < 3; k++) unit[k] = a[k] / n;
   return 0;
 }
 

@@ -92,6 +92,19 @@ double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const 
 
 double bs__noise_level(double E) { return 64 * DBL_EPSILON * fabs(E); }
 
+int bs__solve_outcome(bs_minimizer *m, bs_minimize_stats *st, int rc, const bs_error *e2, int it, const char *who,
+                      const char *solver, bs_error *err) {
+  if (rc == BS_ENUMERIC) {
+    bs__set_reason(m, st, BS_MIN_NONFINITE, "Newton system not finite at iteration %d (%s)", it, e2->msg);
+    return 1;
+  }
+  if (rc) {
+    if (err) *err = *e2;
+    bs_error_prefix(err, "%s iteration %d: %s solve", who, it, solver);
+  }
+  return rc;
+}
+
 const char *bs_min_reason_name(bs_min_reason r) {
   switch (r) {
   case BS_MIN_CONVERGED: return "converged";
@@ -412,15 +425,7 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
     rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
   }
   st->t_linear += bs_seconds() - t;
-  if (rc == BS_ENUMERIC) {
-    bs__set_reason(m, st, BS_MIN_NONFINITE, "Newton system not finite at iteration %d (%s)", it, e2.msg);
-    return 1;
-  }
-  if (rc) {
-    if (err) *err = e2;
-    bs_error_prefix(err, "minimizer iteration %d: %s solve", it, bs_lin_kind_name(kind));
-    return rc;
-  }
+  if ((rc = bs__solve_outcome(m, st, rc, &e2, it, "minimizer", bs_lin_kind_name(kind), err))) return rc;
   st->cg_iterations += ls.iterations;
   st->indefinite_exits += ls.indefinite;
   st->downhill_iterates += ls.downhill_iterate > 0;

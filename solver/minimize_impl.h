@@ -39,6 +39,13 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err);
 /* Common argument checks of bs_minimize / bs_newton. */
 int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *x, bs_error *err);
 /* Sets reason and a formatted reason text (stored in m->text). */
+/* What a linear solve's status rc (its error in e2) means for iteration it:
+ * 0 go on; 1 the solve's system was not finite (reason BS_MIN_NONFINITE
+ * set); else rc itself (< 0), with err = e2 prefixed "WHO iteration IT:
+ * SOLVER solve". */
+int bs__solve_outcome(bs_minimizer *m, bs_minimize_stats *st, int rc, const bs_error *e2, int it, const char *who,
+                      const char *solver, bs_error *err);
+
 void bs__set_reason(bs_minimizer *m, bs_minimize_stats *st, bs_min_reason r, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))

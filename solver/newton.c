@@ -102,8 +102,8 @@ static void newton_trace(const bs_objective *obj, const bs_minimizer *m, int it,
 }
 
 /* One Newton step from x (m->g holds the gradient): H d = -g by MINRES, then
- * y = P(x + d). 0 with m->y set; 1 with the reason set (not finite); <0: the
- * status of an error, in err. */
+ * y = P(x + d). 0 with m->y set; 1 with the reason set (not finite); < 0 the
+ * status of an error (BS_E*), in err. */
 static int newton_step(bs_minimizer *m, const bs_objective *obj, const double *x, int it, int max_it, double gnorm,
                        bs_minimize_stats *st, int *lin_it, bs_error *err) {
   const int64_t N = m->n3;
@@ -123,15 +123,7 @@ static int newton_step(bs_minimizer *m, const bs_objective *obj, const double *x
   int rc = bs_linsolve_solve(m->lin[BS_LIN_MINRES], m->H, obj->mask, m->r, m->opts.newton_rel_tol, max_it, m->d, &ls,
                              &e2);
   st->t_linear += bs_seconds() - t;
-  if (rc == BS_ENUMERIC) {
-    bs__set_reason(m, st, BS_MIN_NONFINITE, "Newton system not finite at iteration %d (%s)", it, e2.msg);
-    return 1;
-  }
-  if (rc) {
-    if (err) *err = e2;
-    bs_error_prefix(err, "Newton iteration %d: minres solve", it);
-    return -rc;
-  }
+  if ((rc = bs__solve_outcome(m, st, rc, &e2, it, "Newton", "minres", err))) return rc;
   st->cg_iterations += ls.iterations;
   *lin_it = ls.iterations;
   for (int64_t i = 0; i < N; ++i) m->y[i] = x[i] + m->d[i];
@@ -170,7 +162,7 @@ int bs_newton(bs_minimizer *m, const bs_objective *obj, int k_steps, double *x, 
     int lin_it = 0;
     if (newton_gradient(m, obj, x, it, &gnorm, st) || stop_here(m, st, &w, k_steps, it, gnorm)) break;
     rc = newton_step(m, obj, x, it, max_it, gnorm, st, &lin_it, err);
-    if (rc < 0) return -rc;
+    if (rc < 0) return rc;
     if (rc > 0) break;
     if (obj->trace) newton_trace(obj, m, it, lin_it, gnorm, st->E, x);
     memcpy(x, m->y, sizeof(double) * (size_t)N);

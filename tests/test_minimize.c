@@ -1421,38 +1421,45 @@ static int ev_pow(fx *f, const double *u, double *E, double *g, bs_bsr *H, doubl
 static int ev_pow12(fx *f, const double *u, double *E, double *g, bs_bsr *H) { return ev_pow(f, u, E, g, H, 1.2); }
 static int ev_pow20(fx *f, const double *u, double *E, double *g, bs_bsr *H) { return ev_pow(f, u, E, g, H, 20); }
 
-/* The baseline stops a diverging solve early with the reason (not at the
- * iteration cap), and lets a slow but converging one run to convergence. */
-Test(newton, stops_when_it_diverges_not_when_it_is_slow) {
+/* bs_newton on a 1-vertex fixture (Hessian scaled by hess_scale) from x,
+ * at tolerance tol with the iteration cap newton_max_iter. */
+static void newton_1(fx_eval ev, double hess_scale, double tol, int newton_max_iter, double x[3],
+                     bs_minimize_stats *st) {
   bs_bsr *P = pattern_chain(1);
   fx f;
-  fx_init(&f, 1, ev_pow12);
+  fx_init(&f, 1, ev);
+  f.hess_scale = hess_scale;
   bs_minimize_opts o;
   bs_minimize_opts_default(&o);
-  o.tol = 1e-12;
-  o.newton_max_iter = 200;
+  o.tol = tol;
+  o.newton_max_iter = newton_max_iter;
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
   bs_objective obj = make_obj(&f, NULL);
+  cr_assert_eq(bs_newton(m, &obj, 0, x, st, &err), 0, "%s", err.msg);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* The baseline stops a diverging solve early with the reason (not at the
+ * iteration cap), and lets a slow but converging one run to convergence. */
+Test(newton, stops_when_it_diverges_not_when_it_is_slow) {
   double x[3] = {1, -1, 0.5};
   bs_minimize_stats st;
-  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  newton_1(ev_pow12, 1, 1e-12, 200, x, &st);
   cr_expect_eq(st.reason, BS_MIN_DIVERGED, "%s", st.reason_text);
   cr_expect_leq(st.iterations, BS_NEWTON_WINDOW, "%d iterations: %s", st.iterations, st.reason_text);
   cr_expect(strstr(st.reason_text, "did not halve over 20 iterations") != NULL, "%s", st.reason_text);
   cr_expect_str_eq(bs_min_reason_name(st.reason), "diverged");
 
-  fx_init(&f, 1, ev_pow20);
   double y[3] = {1, -1, 0.9};
-  cr_assert_eq(bs_newton(m, &obj, 0, y, &st, &err), 0, "%s", err.msg);
+  newton_1(ev_pow20, 1, 1e-12, 200, y, &st);
   cr_expect_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
   cr_expect_gt(st.iterations, BS_NEWTON_WINDOW, "the slow solve took %d iterations: not slow", st.iterations);
   /* u_k = (18/19)^k u_0: with two dofs at u_0 = 1, |g| = sqrt(2) 20 u^19 < 1e-12
    * first at k = 31. */
   cr_expect_eq(st.iterations, 31, "%d", st.iterations);
-  bs_minimizer_destroy(&m);
-  bs_bsr_destroy(&P);
 }
 
 /* A sudden blow-up of |g| (by BS_NEWTON_GROWTH) ends the solve at once. */
@@ -1472,25 +1479,12 @@ static int ev_cliff(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
 }
 
 Test(newton, a_blow_up_of_the_gradient_ends_the_solve_at_once) {
-  bs_bsr *P = pattern_chain(1);
-  fx f;
-  fx_init(&f, 1, ev_cliff);
-  f.hess_scale = 1e-3; /* a Hessian 1000x too soft: the step overshoots */
-  bs_minimize_opts o;
-  bs_minimize_opts_default(&o);
-  o.tol = 1e-10;
-  bs_minimizer *m = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-  bs_objective obj = make_obj(&f, NULL);
   double x[3] = {0.5, 0.5, 0.5};
   bs_minimize_stats st;
-  cr_assert_eq(bs_newton(m, &obj, 0, x, &st, &err), 0, "%s", err.msg);
+  newton_1(ev_cliff, 1e-3, 1e-10, 50, x, &st); /* a Hessian 1000x too soft: the step overshoots */
   cr_expect_eq(st.reason, BS_MIN_DIVERGED, "%s", st.reason_text);
   cr_expect_leq(st.iterations, 2, "%d iterations: %s", st.iterations, st.reason_text);
   cr_expect(strstr(st.reason_text, "its smallest") != NULL, "%s", st.reason_text);
-  bs_minimizer_destroy(&m);
-  bs_bsr_destroy(&P);
 }
 
 /* ---- the fixtures' derivatives (so that the tests above test the solver) ---- */
