@@ -929,6 +929,24 @@ static void free_classes(tet_classes *c) {
 }
 
 /* Builds the Gmsh model of m at positions x (inside a Gmsh session). */
+/* The elements of a 0-, 1- or 2-D group as Gmsh element tags (from
+ * *next_tag on) and 1-based node tags; BS_EINPUT for a vertex out of range. */
+static int group_elements(const bs_mesh *m, const bs_group *gr, size_t *etag, size_t *enodes, size_t *next_tag,
+                          const char *path, bs_error *err) {
+  const size_t nn = (size_t)gr->dim + 1, n = (size_t)gr->n_elems;
+  for (size_t e = 0; e < n; e++) {
+    etag[e] = (*next_tag)++;
+    for (size_t k = 0; k < nn; k++) {
+      int32_t v = gr->elems[nn * e + k];
+      if (v < 0 || v >= m->n_vertices)
+        return bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d) refers to vertex %d of %d", path,
+                            gr->name, gr->dim, gr->tag, v, m->n_vertices);
+      enodes[nn * e + k] = (size_t)v + 1;
+    }
+  }
+  return 0;
+}
+
 static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, const char *path, bs_error *err) {
   int ierr = 0, rc = BS_OK;
   size_t nv = (size_t)m->n_vertices, nt = (size_t)m->n_tets;
@@ -984,18 +1002,7 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
     } else if (pdim >= 0 && pdim < 3) {
       int ent = next_ent[pdim]++;
       size_t nn = (size_t)pdim + 1, n = (size_t)gr->n_elems;
-      for (size_t e = 0; e < n; e++) {
-        etag[e] = next_tag++;
-        for (size_t k = 0; k < nn; k++) {
-          int32_t v = gr->elems[nn * e + k];
-          if (v < 0 || v >= m->n_vertices) {
-            rc = bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d) refers to vertex %d of %d", path,
-                              gr->name, pdim, gr->tag, v, m->n_vertices);
-            goto done;
-          }
-          enodes[nn * e + k] = (size_t)v + 1;
-        }
-      }
+      if ((rc = group_elements(m, gr, etag, enodes, &next_tag, path, err))) goto done;
       gmshModelAddDiscreteEntity(pdim, ent, NULL, 0, &ierr);
       if (!ierr) gmshModelMeshAddElementsByType(ent, simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
       if (!ierr) gmshModelAddPhysicalGroup(pdim, &ent, 1, gr->tag, &ierr);
