@@ -168,6 +168,97 @@ static void amg_settings(HYPRE_Solver s) {
   HYPRE_BoomerAMGSetStrongThreshold(s, 0.5);
 }
 
+/* BS_ENUMERIC naming the first non-finite entry of a free-free block. */
+static int check_finite(const bs_amg *amg, const bs_bsr *P, const int32_t *fmap, bs_error *err) {
+  for (int32_t f = 0; f < amg->nfree; ++f) {
+    const int32_t i = amg->fvert[f];
+    for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) {
+      if (fmap[P->col[s]] < 0) continue;
+      for (int e = 0; e < 9; ++e)
+        if (!isfinite(P->val[9 * (int64_t)s + e]))
+          return bs_error_set(err, BS_ENUMERIC, "amg setup: matrix block (%d,%d) entry (%d,%d) is not finite",
+                              (int)i, (int)P->col[s], e / 3, e % 3);
+    }
+  }
+  return 0;
+}
+
+/* amg->idx filled and amg->A created and initialized with the row sizes of
+ * the free-free blocks of P (N = 3 free vertices); *maxrow: most free blocks
+ * in a row. */
+static int create_matrix(bs_amg *amg, const bs_bsr *P, const int32_t *fmap, HYPRE_Int N, int32_t *maxrow,
+                         bs_error *err) {
+  HYPRE_Int *diag_sizes = bs_calloc((size_t)N, sizeof *diag_sizes, "amg row sizes", err);
+  HYPRE_Int *offd_sizes = bs_calloc((size_t)N, sizeof *offd_sizes, "amg row sizes", err);
+  if (!diag_sizes || !offd_sizes) {
+    free(diag_sizes);
+    free(offd_sizes);
+    return BS_ENOMEM;
+  }
+  for (HYPRE_Int k = 0; k < N; ++k) amg->idx[k] = k;
+  for (int32_t f = 0; f < amg->nfree; ++f) {
+    const int32_t i = amg->fvert[f];
+    int32_t c = 0;
+    for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) c += fmap[P->col[s]] >= 0;
+    for (int a = 0; a < 3; ++a) diag_sizes[3 * f + a] = 3 * c;
+    if (c > *maxrow) *maxrow = c;
+  }
+  HYPRE_ClearAllErrors();
+  HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, N - 1, 0, N - 1, &amg->A);
+  HYPRE_IJMatrixSetObjectType(amg->A, HYPRE_PARCSR);
+  HYPRE_IJMatrixSetDiagOffdSizes(amg->A, diag_sizes, offd_sizes);
+  HYPRE_IJMatrixInitialize(amg->A);
+  free(diag_sizes);
+  free(offd_sizes);
+  return HYPRE_GetError() ? hypre_fail(amg, "matrix creation", err) : 0;
+}
+
+/* The free-free blocks of P into the initialized amg->A, one vertex (three
+ * scalar rows) per SetValues call; maxrow: most free blocks in a row. */
+static int fill_matrix(bs_amg *amg, const bs_bsr *P, const int32_t *fmap, int32_t maxrow, bs_error *err) {
+  HYPRE_Int ncols[3];
+  HYPRE_BigInt rows[3];
+  HYPRE_BigInt *cols = malloc(sizeof *cols * 9 * (size_t)(maxrow > 0 ? maxrow : 1));
+  double *vals = malloc(sizeof *vals * 9 * (size_t)(maxrow > 0 ? maxrow : 1));
+  if (!cols || !vals) {
+    free(cols);
+    free(vals);
+    return bs_error_set(err, BS_ENOMEM, "amg setup: out of memory (row buffers)");
+  }
+  for (int32_t f = 0; f < amg->nfree; ++f) {
+    const int32_t i = amg->fvert[f];
+    int k = 0;
+    for (int a = 0; a < 3; ++a) {
+      rows[a] = 3 * f + a;
+      ncols[a] = 0;
+      for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) {
+        const int32_t fj = fmap[P->col[s]];
+        if (fj < 0) continue;
+        const double *blk = P->val + 9 * (int64_t)s;
+        for (int b = 0; b < 3; ++b) {
+          cols[k] = 3 * (HYPRE_BigInt)fj + b;
+          vals[k] = blk[3 * a + b];
+          ++k;
+          ++ncols[a];
+        }
+      }
+    }
+    HYPRE_IJMatrixSetValues(amg->A, 3, ncols, rows, cols, vals);
+  }
+  free(cols);
+  free(vals);
+  return 0;
+}
+
+/* A zero hypre vector of N entries (errors: HYPRE_GetError). */
+static void make_vector(HYPRE_Int N, HYPRE_IJVector *v, HYPRE_ParVector *pv) {
+  HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, N - 1, v);
+  HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
+  HYPRE_IJVectorInitialize(*v);
+  HYPRE_IJVectorAssemble(*v);
+  HYPRE_IJVectorGetObject(*v, (void **)pv);
+}
+
 int bs_amg_setup(bs_amg *amg, const bs_bsr *P, const uint8_t *mask, bs_error *err) {
   if (!amg || !P) return bs_error_set(err, BS_EINPUT, "bs_amg_setup: NULL argument");
   const double t0 = bs_seconds();
@@ -191,21 +282,11 @@ int bs_amg_setup(bs_amg *amg, const bs_bsr *P, const uint8_t *mask, bs_error *er
   }
   amg->n = n;
   amg->nfree = nf;
-  /* Finite values on the free-free blocks. */
-  for (int32_t f = 0; f < nf; ++f) {
-    const int32_t i = amg->fvert[f];
-    for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) {
-      if (fmap[P->col[s]] < 0) continue;
-      for (int e = 0; e < 9; ++e)
-        if (!isfinite(P->val[9 * (int64_t)s + e])) {
-          free(fmap);
-          const int32_t j = P->col[s];
-          free_hierarchy(amg);
-          return bs_error_set(err, BS_ENUMERIC,
-                              "amg setup: matrix block (%d,%d) entry (%d,%d) is not finite",
-                              (int)i, (int)j, e / 3, e % 3);
-        }
-    }
+  int rc = check_finite(amg, P, fmap, err);
+  if (rc) {
+    free(fmap);
+    free_hierarchy(amg);
+    return rc;
   }
   if (nf == 0) {
     free(fmap);
@@ -224,83 +305,25 @@ int bs_amg_setup(bs_amg *amg, const bs_bsr *P, const uint8_t *mask, bs_error *er
   const HYPRE_Int N = (HYPRE_Int)(3 * nf);
   amg->idx = bs_calloc((size_t)N, sizeof *amg->idx, "amg indices", err);
   amg->buf = bs_calloc((size_t)N, sizeof *amg->buf, "amg vector", err);
-  HYPRE_Int *diag_sizes = bs_calloc((size_t)N, sizeof *diag_sizes, "amg row sizes", err);
-  HYPRE_Int *offd_sizes = bs_calloc((size_t)N, sizeof *offd_sizes, "amg row sizes", err);
-  if (!amg->idx || !amg->buf || !diag_sizes || !offd_sizes) {
-    free(fmap);
-    free(diag_sizes);
-    free(offd_sizes);
-    free_hierarchy(amg);
-    return BS_ENOMEM;
-  }
-  for (HYPRE_Int k = 0; k < N; ++k) amg->idx[k] = k;
   int32_t maxrow = 0; /* most free blocks in a row */
-  for (int32_t f = 0; f < nf; ++f) {
-    const int32_t i = amg->fvert[f];
-    int32_t c = 0;
-    for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) c += fmap[P->col[s]] >= 0;
-    for (int a = 0; a < 3; ++a) diag_sizes[3 * f + a] = 3 * c;
-    if (c > maxrow) maxrow = c;
-  }
-  HYPRE_ClearAllErrors();
-  HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, N - 1, 0, N - 1, &amg->A);
-  HYPRE_IJMatrixSetObjectType(amg->A, HYPRE_PARCSR);
-  HYPRE_IJMatrixSetDiagOffdSizes(amg->A, diag_sizes, offd_sizes);
-  HYPRE_IJMatrixInitialize(amg->A);
-  free(diag_sizes);
-  free(offd_sizes);
-  if (HYPRE_GetError()) {
-    free(fmap);
-    return hypre_fail(amg, "matrix creation", err);
-  }
-  /* One vertex (three scalar rows) per SetValues call. */
-  HYPRE_Int ncols[3];
-  HYPRE_BigInt rows[3];
-  HYPRE_BigInt *cols = malloc(sizeof *cols * 9 * (size_t)(maxrow > 0 ? maxrow : 1));
-  double *vals = malloc(sizeof *vals * 9 * (size_t)(maxrow > 0 ? maxrow : 1));
-  if (!cols || !vals) {
-    free(cols);
-    free(vals);
+  if (!amg->idx || !amg->buf) rc = BS_ENOMEM;
+  else rc = create_matrix(amg, P, fmap, N, &maxrow, err);
+  if (rc) {
     free(fmap);
     free_hierarchy(amg);
-    return bs_error_set(err, BS_ENOMEM, "amg setup: out of memory (row buffers)");
+    return rc;
   }
-  for (int32_t f = 0; f < nf; ++f) {
-    const int32_t i = amg->fvert[f];
-    int k = 0;
-    for (int a = 0; a < 3; ++a) {
-      rows[a] = 3 * f + a;
-      ncols[a] = 0;
-      for (int32_t s = P->row_ptr[i]; s < P->row_ptr[i + 1]; ++s) {
-        const int32_t fj = fmap[P->col[s]];
-        if (fj < 0) continue;
-        const double *blk = P->val + 9 * (int64_t)s;
-        for (int b = 0; b < 3; ++b) {
-          cols[k] = 3 * (HYPRE_BigInt)fj + b;
-          vals[k] = blk[3 * a + b];
-          ++k;
-          ++ncols[a];
-        }
-      }
-    }
-    HYPRE_IJMatrixSetValues(amg->A, 3, ncols, rows, cols, vals);
-  }
-  free(cols);
-  free(vals);
+  rc = fill_matrix(amg, P, fmap, maxrow, err);
   free(fmap);
+  if (rc) {
+    free_hierarchy(amg);
+    return rc;
+  }
   HYPRE_IJMatrixAssemble(amg->A);
   HYPRE_IJMatrixGetObject(amg->A, (void **)&amg->pA);
   if (HYPRE_GetError()) return hypre_fail(amg, "matrix assembly", err);
-  HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, N - 1, &amg->b);
-  HYPRE_IJVectorSetObjectType(amg->b, HYPRE_PARCSR);
-  HYPRE_IJVectorInitialize(amg->b);
-  HYPRE_IJVectorAssemble(amg->b);
-  HYPRE_IJVectorGetObject(amg->b, (void **)&amg->pb);
-  HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, N - 1, &amg->x);
-  HYPRE_IJVectorSetObjectType(amg->x, HYPRE_PARCSR);
-  HYPRE_IJVectorInitialize(amg->x);
-  HYPRE_IJVectorAssemble(amg->x);
-  HYPRE_IJVectorGetObject(amg->x, (void **)&amg->px);
+  make_vector(N, &amg->b, &amg->pb);
+  make_vector(N, &amg->x, &amg->px);
   if (HYPRE_GetError()) return hypre_fail(amg, "vector creation", err);
   HYPRE_BoomerAMGCreate(&amg->solver);
   amg_settings(amg->solver);
