@@ -1422,7 +1422,8 @@ static int ev_pow12(fx *f, const double *u, double *E, double *g, bs_bsr *H) { r
 static int ev_pow20(fx *f, const double *u, double *E, double *g, bs_bsr *H) { return ev_pow(f, u, E, g, H, 20); }
 
 /* bs_newton on a 1-vertex fixture (Hessian scaled by hess_scale) from x,
- * at tolerance tol with the iteration cap newton_max_iter. */
+ * at tolerance tol with the iteration cap newton_max_iter; st->reason_text
+ * points at a copy valid until the next call. */
 static void newton_1(fx_eval ev, double hess_scale, double tol, int newton_max_iter, double x[3],
                      bs_minimize_stats *st) {
   bs_bsr *P = pattern_chain(1);
@@ -1438,6 +1439,9 @@ static void newton_1(fx_eval ev, double hess_scale, double tol, int newton_max_i
   cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
   bs_objective obj = make_obj(&f, NULL);
   cr_assert_eq(bs_newton(m, &obj, 0, x, st, &err), 0, "%s", err.msg);
+  static char why[512]; /* reason_text lives in the minimizer: keep a copy */
+  snprintf(why, sizeof why, "%s", st->reason_text);
+  st->reason_text = why;
   bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
 }
