@@ -145,7 +145,10 @@ static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
   if (s->scene->mode == BS_MODE_STATIC) {
     const bs_step_stats *st = &fs->steps[0].st;
     printf("static: %s after %d iterations (%d CG), |grad E| %.3e, E %.6e, %d inverted tets, %.3f s\n",
-           st->failed ? "FAILED" : "converged", st->min.iterations, st->min.cg_iterations, st->min.grad_norm,
+           st->failed                           ? "FAILED"
+           : st->min.reason == BS_MIN_FLOOR ? "converged at the rounding floor of E"
+                                            : "converged",
+           st->min.iterations, st->min.cg_iterations, st->min.grad_norm,
            st->min.E, m.inverted, st->seconds);
     return 0;
   }

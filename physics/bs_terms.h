@@ -82,6 +82,11 @@ struct bs_term {
   const bs_step_data *step;
   int dynamic_only;          /* 1: skipped in static solves (inertia, damping, drag) */
   int expensive;             /* 1: may be skipped in line searches (section 3.3)    */
+  int quadratic;             /* 1: E is a polynomial of degree <= 2 in x (constant   */
+                             /* Hessian): inertia, gravity, damping, drag, and      */
+                             /* elasticity when every material is linear            */
+  int external;              /* 1: an external load (gradient independent of x:     */
+                             /* gravity); its force sets the load of load_rtol      */
   int64_t hessian_extra;     /* most Hessian blocks it adds outside the fem pattern  */
                              /* (bs_bsr extra list; 0 for every term but self-collision) */
   void *data;
@@ -102,7 +107,7 @@ int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, b
  * that outlives the term), the callbacks `ops` (value, gradient and hessian
  * required; kept as a pointer too), the fem cache and step data it reads, and
  * its data (freed by ops->destroy_data when the term is destroyed, and also
- * when this fails). dynamic_only, expensive and hessian_extra start at 0: set
+ * when this fails). dynamic_only, expensive, quadratic, external and hessian_extra start at 0: set
  * them on the term before it is used. The Hessian callback adds into the
  * fem's pattern (bs_fem_scatter_hessian, or H->diag[v] for a vertex's own
  * block). Example: examples/02_spring. */

@@ -272,8 +272,37 @@ static void obj_trace(const bs_min_iter *it, void *ctx) {
   fflush(I->opts.trace);
 }
 
-static void make_objective(bs_integrator *I, bs_objective *o) {
+/* The 2-norm over the free dofs of the active external loads' forces (the
+ * scale of opts.load_rtol), computed in I->g1 (free once the guess is in x). */
+static double load_norm(bs_integrator *I, const double *x) {
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  int any = 0;
+  memset(I->g1, 0, sizeof(double) * n3);
+  for (int i = 0; i < I->n_terms; i++) {
+    double e;
+    const bs_term *t = I->terms[i];
+    if (t->external && term_active(I, t) && t->ops->gradient(t, x, &e, I->g1) == BS_TERM_OK) any = 1;
+  }
+  if (!any) return 0;
+  double s = 0;
+  for (size_t i = 0; i < n3; i++)
+    if (!I->mask || I->mask[i / 3]) s += I->g1[i] * I->g1[i];
+  return isfinite(s) ? sqrt(s) : 0;
+}
+
+/* 1 when the objective of this solve is quadratic: every active term is and
+ * nothing projects (constraints make it piecewise). */
+static int objective_quadratic(const bs_integrator *I) {
+  if (I->hooks.project) return 0;
+  for (int i = 0; i < I->n_terms; i++)
+    if (term_active(I, I->terms[i]) && !I->terms[i]->quadratic) return 0;
+  return 1;
+}
+
+static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   memset(o, 0, sizeof *o);
+  o->load_norm = load_norm(I, x);
+  o->quadratic = objective_quadratic(I);
   o->n = I->fem->n_vertices;
   o->mask = I->mask;
   o->value = obj_value;
@@ -319,7 +348,7 @@ static int check_finite(const double *a, size_t n, const char *what, bs_error *e
 
 static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st, bs_error *err) {
   bs_objective obj;
-  make_objective(I, &obj);
+  make_objective(I, x, &obj);
   int rc;
   I->opts.min.naive_guess = naive;
   bs_minimize_opts mo = I->opts.min;
@@ -335,7 +364,7 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   else rc = bs_newton(I->min, &obj, I->opts.method == BS_METHOD_NEWTON_K ? I->opts.newton_k : 0, x, &st->min, err);
   if (rc) return rc;
   /* "k Newton steps and stop" ends by design without convergence: not a failure. */
-  st->failed = st->min.reason != BS_MIN_CONVERGED && st->min.reason != BS_MIN_STEPS_DONE;
+  st->failed = !bs_min_reason_converged(st->min.reason) && st->min.reason != BS_MIN_STEPS_DONE;
   return 0;
 }
 
@@ -449,6 +478,13 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
     st->min.ls_evaluations += sub.min.ls_evaluations;
     st->min.indefinite_exits += sub.min.indefinite_exits;
     st->min.downhill_iterates += sub.min.downhill_iterates;
+    st->min.fallback_neg_dx += sub.min.fallback_neg_dx;
+    st->min.fallback_neg_grad += sub.min.fallback_neg_grad;
+    st->min.clamps += sub.min.clamps;
+    st->min.cholmod_fallbacks += sub.min.cholmod_fallbacks;
+    st->min.ls_failures += sub.min.ls_failures;
+    st->min.noise_steps += sub.min.noise_steps;
+    st->min.tol_used = sub.min.tol_used;
     st->min.reason = sub.min.reason;
     st->min.reason_text = sub.min.reason_text;
     st->min.grad_norm = sub.min.grad_norm;

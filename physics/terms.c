@@ -97,7 +97,7 @@ static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia
 
 int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err) {
   int st = bs_term_create("inertia", &inertia_ops, fem, step, NULL, out, err);
-  if (!st) (*out)->dynamic_only = 1;
+  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }
 
@@ -138,7 +138,9 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
   double *gc = malloc(3 * sizeof(double));
   if (!gc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the gravity term");
   memcpy(gc, g, 3 * sizeof(double));
-  return bs_term_create("gravity", &gravity_ops, fem, step, gc, out, err);
+  int st = bs_term_create("gravity", &gravity_ops, fem, step, gc, out, err);
+  if (!st) (*out)->quadratic = (*out)->external = 1;
+  return st;
 }
 
 /* ---- elasticity ------------------------------------------------------- */
@@ -160,7 +162,12 @@ int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs
   int *p = malloc(sizeof(int));
   if (!p) return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
   *p = project_psd ? 1 : 0;
-  return bs_term_create("elasticity", &elastic_ops, fem, NULL, p, out, err);
+  int st = bs_term_create("elasticity", &elastic_ops, fem, NULL, p, out, err);
+  if (st) return st;
+  (*out)->quadratic = 1;
+  for (int i = 0; i < fem->n_materials; i++)
+    if (fem->materials[i].model != BS_MODEL_LINEAR) (*out)->quadratic = 0;
+  return 0;
 }
 
 /* ---- lagged Rayleigh damping ------------------------------------------ */
@@ -242,7 +249,7 @@ int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const do
   }
   memcpy(dd->k, k, sizeof(double) * (size_t)fem->n_materials);
   st = bs_term_create("damping", &damping_ops, fem, step, dd, out, err);
-  if (!st) (*out)->dynamic_only = 1;
+  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }
 
@@ -270,6 +277,6 @@ int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, b
   if (!kc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the drag term");
   *kc = k;
   int st = bs_term_create("drag", &drag_ops, fem, step, kc, out, err);
-  if (!st) (*out)->dynamic_only = 1;
+  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }

@@ -218,8 +218,8 @@ int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
  *   (= frame / fps), uint64 scene hash (FNV-1a of the resolved scene without
  *   output.dir and description), double wall seconds of the run so far,
  *   int32 the scene's frames, int32 0 (48 bytes);
- *   the run's totals so far: 11 int64 (steps, failed, iterations, cg, ls,
- *   indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill), 2 doubles
+ *   the run's totals so far: 12 int64 (steps, failed, iterations, cg, ls,
+ *   indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill, floor), 2 doubles
  *   (seconds, max_grad), 2 int32 (first failed frame and step), the first
  *   failure's reason (256 bytes);
  *   x (3n doubles), v (3n doubles); a uint64 FNV-1a of every byte before.
@@ -231,7 +231,7 @@ int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
  * One exception: solver.linear "amg" with solver.amg_matrix "current" builds
  * its preconditioner at an earlier iterate, which no checkpoint holds:
  * bs_runfolder_resume refuses such a scene. */
-#define BS_CHECKPOINT_VERSION 1
+#define BS_CHECKPOINT_VERSION 2
 
 typedef struct bs_checkpoint {
   int frame;

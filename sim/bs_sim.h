@@ -88,6 +88,7 @@ typedef struct bs_frame_stats {
 /* Sums over a whole run, and its first failed step. */
 typedef struct bs_run_totals {
   long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill;
+  long floor; /* steps converged at the rounding floor of E (BS_MIN_FLOOR) */
   double seconds, max_grad;
   int first_fail_frame, first_fail_step;
   char first_fail_reason[256];

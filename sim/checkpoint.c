@@ -12,7 +12,8 @@
 
 #define CK_MAGIC "BSCK"
 #define CK_HEADER 48 /* magic, version, n, frame, time, scene hash, wall, frames, 0 */
-#define CK_TOTALS (11 * 8 + 2 * 8 + 2 * 4 + 256)
+#define CK_LONGS 12
+#define CK_TOTALS (CK_LONGS * 8 + 2 * 8 + 2 * 4 + 256)
 
 uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n) {
   const unsigned char *b = p;
@@ -31,36 +32,38 @@ int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err) {
   return st;
 }
 
-/* The totals as 11 int64, 2 doubles, 2 int32 and the reason (256 bytes). */
+/* The totals as CK_LONGS int64, 2 doubles, 2 int32 and the reason (256 bytes). */
 static void pack_totals(const bs_run_totals *T, unsigned char *b) {
-  const long L[11] = {T->steps, T->failed, T->iterations, T->cg,     T->ls,      T->indefinite,
-                      T->fb_dx, T->fb_grad, T->clamps,    T->chol_fb, T->downhill};
-  for (int i = 0; i < 11; i++) {
+  const long L[CK_LONGS] = {T->steps, T->failed, T->iterations, T->cg,      T->ls,       T->indefinite,
+                            T->fb_dx, T->fb_grad, T->clamps,    T->chol_fb, T->downhill, T->floor};
+  for (int i = 0; i < CK_LONGS; i++) {
     int64_t v = L[i];
     memcpy(b + 8 * i, &v, 8);
   }
-  memcpy(b + 88, &T->seconds, 8);
-  memcpy(b + 96, &T->max_grad, 8);
+  unsigned char *r = b + 8 * CK_LONGS;
+  memcpy(r, &T->seconds, 8);
+  memcpy(r + 8, &T->max_grad, 8);
   int32_t f[2] = {T->first_fail_frame, T->first_fail_step};
-  memcpy(b + 104, f, 8);
-  memcpy(b + 112, T->first_fail_reason, 256);
+  memcpy(r + 16, f, 8);
+  memcpy(r + 24, T->first_fail_reason, 256);
 }
 
 static void unpack_totals(const unsigned char *b, bs_run_totals *T) {
-  long *L[11] = {&T->steps, &T->failed, &T->iterations, &T->cg,     &T->ls,      &T->indefinite,
-                 &T->fb_dx, &T->fb_grad, &T->clamps,    &T->chol_fb, &T->downhill};
-  for (int i = 0; i < 11; i++) {
+  long *L[CK_LONGS] = {&T->steps, &T->failed, &T->iterations, &T->cg,      &T->ls,       &T->indefinite,
+                       &T->fb_dx, &T->fb_grad, &T->clamps,    &T->chol_fb, &T->downhill, &T->floor};
+  for (int i = 0; i < CK_LONGS; i++) {
     int64_t v;
     memcpy(&v, b + 8 * i, 8);
     *L[i] = (long)v;
   }
-  memcpy(&T->seconds, b + 88, 8);
-  memcpy(&T->max_grad, b + 96, 8);
+  const unsigned char *r = b + 8 * CK_LONGS;
+  memcpy(&T->seconds, r, 8);
+  memcpy(&T->max_grad, r + 8, 8);
   int32_t f[2];
-  memcpy(f, b + 104, 8);
+  memcpy(f, r + 16, 8);
   T->first_fail_frame = f[0];
   T->first_fail_step = f[1];
-  memcpy(T->first_fail_reason, b + 112, 256);
+  memcpy(T->first_fail_reason, r + 24, 256);
   T->first_fail_reason[255] = 0;
 }
 

@@ -652,6 +652,8 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
   if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor)) ||
       (st = get_int(c, so, "solver", "solver", "amg_rebuild_every", &s->solver.min.amg_rebuild_every)) ||
       (st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol)) || (st = parse_sigma(c, so, s)) ||
+      (st = get_num(c, so, "solver", "rtol", 0, &s->solver.min.rtol)) ||
+      (st = get_num(c, so, "solver", "load_rtol", 0, &s->solver.min.load_rtol)) ||
       (st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill)) ||
       (st = get_int(c, so, "solver", "solver", "max_iterations", &s->solver.min.max_iter)) ||
       (st = get_int(c, so, "solver", "solver", "newton_max_iterations", &s->solver.min.newton_max_iter)) ||

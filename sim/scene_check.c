@@ -113,6 +113,9 @@ static int check_obstacle(const bs_scene *s, const bs_scene_obstacle *o, int i, 
 static int check_solver(const bs_scene *s, bs_error *err) {
   const bs_minimize_opts *m = &s->solver.min;
   if (!(m->tol > 0)) return bad(s, err, "solver.tolerance: must be > 0, got %g", m->tol);
+  if (!(m->rtol >= 0 && m->rtol < 1)) return bad(s, err, "solver.rtol: must be in [0, 1), got %g", m->rtol);
+  if (!(m->load_rtol >= 0 && m->load_rtol < 1))
+    return bad(s, err, "solver.load_rtol: must be in [0, 1), got %g", m->load_rtol);
   if (!(m->amg_rebuild_factor == 0 || (m->amg_rebuild_factor >= 1 && isfinite(m->amg_rebuild_factor))))
     return bad(s, err, "solver.amg_rebuild_factor: must be 0 (never) or a finite value >= 1, got %g",
                m->amg_rebuild_factor);

@@ -67,6 +67,8 @@ static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
   str(w, o, "method", bs_method_name(s->solver.method));
   str(w, o, "linear", bs_lin_kind_name(m->linear));
   num(w, o, "tolerance", m->tol);
+  num(w, o, "rtol", m->rtol);
+  num(w, o, "load_rtol", m->load_rtol);
   num(w, o, "max_iterations", m->max_iter);
   num(w, o, "newton_max_iterations", m->newton_max_iter);
   num(w, o, "cg_max_iterations", m->cg_max_iter);

@@ -115,6 +115,7 @@ void bs_run_totals_add(bs_run_totals *T, const bs_frame_stats *fs) {
     }
     T->steps++;
     T->failed += st->failed;
+    T->floor += st->min.reason == BS_MIN_FLOOR;
     T->iterations += st->min.iterations;
     T->cg += st->min.cg_iterations;
     T->ls += st->min.ls_evaluations;

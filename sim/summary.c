@@ -51,9 +51,9 @@ int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
   len += snprintf(REST,
                   "solver health: %ld CG iterations (%.1f per solve), %ld line-search evaluations, %ld indefinite CG "
                   "exits, %ld earlier CG iterates, %ld -dx and %ld -grad fallbacks, %ld clamps, %ld CHOLMOD "
-                  "fallbacks; peak memory %.1f MiB\n",
+                  "fallbacks, %ld steps converged at the rounding floor of E; peak memory %.1f MiB\n",
                   T->cg, T->iterations ? (double)T->cg / T->iterations : 0.0, T->ls, T->indefinite, T->downhill,
-                  T->fb_dx, T->fb_grad, T->clamps, T->chol_fb, u->peak_mib);
+                  T->fb_dx, T->fb_grad, T->clamps, T->chol_fb, T->floor, u->peak_mib);
   if (u->partial == BS_SUMMARY_RUNNING)
     len += snprintf(REST, "partial: %d of %d frames (the run has not finished, or was killed)\n", u->frames,
                     u->frames_total);

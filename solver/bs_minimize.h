@@ -56,6 +56,23 @@
  * The initial guess is projected too. Fixed dofs (mask 0) never move: they are
  * restored after every projection, and directions are zero there.
  *
+ * Rounding floor (added; paper 3.3 notes that E is noisy): E is known to
+ * about its rounding level, noise(E) = 64 eps |E|, and grad E to its own
+ * rounding level, which the minimizer cannot see. An iteration is at the
+ * noise level when its direction is Newton's (dx or -dx, not -grad E) and
+ * the decrease it predicts, |g.d|, is at most noise(E): E can no longer
+ * tell whether the step helps. The solve stops with BS_MIN_FLOOR, a
+ * converged state, when (a) such an iteration's line search finds no
+ * decrease, or (b) BS_FLOOR_WINDOW noise-level iterations in a row (1 for
+ * obj->quadratic) have not halved the ||g|| of the first of
+ * them: ||g|| has reached the rounding level of the gradient (with
+ * opts.accept_noise the steps of those iterations are taken; they go on
+ * lowering ||g|| while the gradient still resolves it). The reason text
+ * gives ||g||, E and noise(E). A tolerance below the floor thus ends as
+ * "converged at the rounding floor of E", never as a failure; where a
+ * larger ||g|| is not acceptable, compare stats.grad_norm with what you
+ * need.
+ *
  * Line-search constants: c1 = 1e-4 (sufficient decrease) and c2 = 0.9
  * (curvature) by default, Nocedal & Wright's choice for Newton-type methods.
  * Extrapolation (a > 1): the minimizer of the cubic through the last two trial
@@ -225,10 +242,25 @@ typedef struct bs_objective {
      and every step of bs_newton. */
   void (*trace)(const bs_min_iter *it, void *ctx);
   void *ctx;
+  /* Added: the 2-norm of the external load on the free dofs (N; e.g. gravity's forces),
+     the scale of opts.load_rtol; 0 when there is none. */
+  double load_norm;
+  /* Added: 1 when E is exactly quadratic in x (constant Hessian, no projection): a
+     full Newton step then leaves the linear solve's residual as the gradient, so step 4
+     asks the solver for min(forcing term, max(tau_eff / (4 ||g||), 1e-13)) and the
+     solve ends in one or two iterations; and the rounding floor (BS_MIN_FLOOR) is
+     declared after one noise-level iteration that does not halve ||g||, not three. */
+  int quadratic;
 } bs_objective;
 
 typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default() */
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
+  double rtol;         /* added, default 0 (off): also converged when ||g|| < rtol ||g_0||, */
+                       /* g_0 the gradient at the solve's first iterate (unitless, >= 0)    */
+  double load_rtol;    /* added, default 0 (off): also converged when ||g|| < load_rtol *   */
+                       /* obj->load_norm, the external load (unitless, >= 0). The solve's  */
+                       /* tolerance is tau_eff = max(tol, rtol ||g_0||, load_rtol load)    */
+                       /* (stats.tol_used); every "tol" below means tau_eff                */
   int max_iter;        /* Newton iterations cap, default 500 (>= 0)                        */
   double sigma;        /* CG tolerance scale, default 1 (> 0)                              */
   int sigma_auto;      /* added, default 0. 1: the tolerance's scale is sigma/sqrt(||g_0||),*/
@@ -281,15 +313,21 @@ typedef enum {
   BS_MIN_LINE_SEARCH,   /* no trial point decreased E within max_ls (x unchanged)          */
   BS_MIN_NONFINITE,     /* E, grad E or H not finite / not evaluable at an iterate         */
   BS_MIN_STEPS_DONE,    /* bs_newton with k_steps > 0 took its k steps, ||g|| >= tol        */
-  BS_MIN_DIVERGED       /* bs_newton: ||g|| grew BS_NEWTON_GROWTH-fold, or did not halve    */
+  BS_MIN_DIVERGED,      /* bs_newton: ||g|| grew BS_NEWTON_GROWTH-fold, or did not halve    */
                         /* over BS_NEWTON_WINDOW iterations                                 */
+  BS_MIN_FLOOR          /* converged at the rounding floor of E: a CONVERGED state (see     */
+                        /* "Rounding floor" above), ||g|| >= tol                            */
 } bs_min_reason;
+#define BS_FLOOR_WINDOW 3
 #define BS_NEWTON_GROWTH 1e4
 #define BS_NEWTON_WINDOW 20
 
 /* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done",
- * "diverged". */
+ * "diverged", "converged_floor". */
 const char *bs_min_reason_name(bs_min_reason r);
+
+/* 1 for the reasons that mean x is a solution: CONVERGED and FLOOR. */
+int bs_min_reason_converged(bs_min_reason r);
 
 /* iterations: accepted steps (Newton steps for bs_newton); cg_iterations: Krylov
  * iterations summed over the solves (MINRES for bs_newton); ls_evaluations: line-search
@@ -305,6 +343,7 @@ typedef struct bs_minimize_stats {
   double t_amg_setup;                        /* added: seconds in AMG setups (in t_linear) */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
   double grad_norm, E;                       /* final                                      */
+  double tol_used;                           /* added: tau_eff of this solve (N)           */
   double t_eval, t_assembly, t_linear, t_line_search, t_total; /* seconds per phase        */
   bs_min_reason reason;
   const char *reason_text;

@@ -114,8 +114,15 @@ const char *bs_min_reason_name(bs_min_reason r) {
   case BS_MIN_NONFINITE: return "nonfinite";
   case BS_MIN_STEPS_DONE: return "steps_done";
   case BS_MIN_DIVERGED: return "diverged";
+  case BS_MIN_FLOOR: return "converged_floor";
   }
   return "unknown";
+}
+
+int bs_min_reason_converged(bs_min_reason r) { return r == BS_MIN_CONVERGED || r == BS_MIN_FLOOR; }
+
+double bs__tolerance(const bs_minimize_opts *o, const bs_objective *obj, double g0) {
+  return fmax(o->tol, fmax(o->rtol * g0, o->load_rtol * obj->load_norm));
 }
 
 const char *bs_direction_name(bs_direction d) {
@@ -164,6 +171,9 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
   if (!o) return bs_error_set(err, BS_EINPUT, "minimizer options: NULL");
   if (!(o->tol >= 0) || !isfinite(o->tol))
     return bs_error_set(err, BS_EINPUT, "minimizer option tol must be finite and >= 0, got %g", o->tol);
+  if (!(o->rtol >= 0 && o->rtol < 1) || !(o->load_rtol >= 0 && o->load_rtol < 1))
+    return bs_error_set(err, BS_EINPUT, "minimizer options rtol and load_rtol must be in [0, 1), got %g and %g",
+                        o->rtol, o->load_rtol);
   if (o->max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
   if (o->newton_max_iter < 1)
@@ -319,6 +329,8 @@ int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *
   if (!obj->value) return bs_error_set(err, BS_EINPUT, "objective callback 'value' is NULL");
   if (!obj->gradient) return bs_error_set(err, BS_EINPUT, "objective callback 'gradient' is NULL");
   if (!obj->hessian) return bs_error_set(err, BS_EINPUT, "objective callback 'hessian' is NULL");
+  if (!(obj->load_norm >= 0) || !isfinite(obj->load_norm))
+    return bs_error_set(err, BS_EINPUT, "objective load_norm must be finite and >= 0, got %g", obj->load_norm);
   int64_t bad = bs__first_nonfinite(m->n, obj->mask, x);
   if (bad >= 0)
     return bs_error_set(err, BS_ENUMERIC, "initial x is not finite at vertex %lld component %d (%g)",
@@ -395,7 +407,8 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   int64_t auto_it = 2 * free_dofs + 100;
   int max_it = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
   const double sigma = o->sigma_auto ? o->sigma / sqrt(m->g0_norm) : o->sigma;
-  double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, o->tol)));
+  double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, m->tau)));
+  if (obj->quadratic) rel = fmin(rel, fmax(m->tau / (4 * gnorm), 1e-13)); /* one step reaches tau */
   if (o->forcing_ew && it > 0) { /* Eisenstat & Walker (1996), choice 2, gamma 0.9, alpha 2 */
     const double q = gnorm / m->g_prev, safe = 0.9 * m->eta_prev * m->eta_prev;
     double e = 0.9 * q * q;
@@ -497,20 +510,43 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
 
 /* The reason of a line search with no decrease. Paper 3.3: below some
  * |grad E| the decrease a step can make, about |g.d|/2, is lost in the
- * rounding of E itself. Say so when it is. */
+ * rounding of E itself: a Newton direction there is at the rounding floor,
+ * a converged state (bs_minimize.h, "Rounding floor"). */
 static void no_decrease_reason(bs_minimizer *m, bs_minimize_stats *st, const bs__ls_result *ls, int it, double E,
-                               double gnorm, double dphi0) {
-  if (-dphi0 <= bs__noise_level(E))
-    bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
-                   "no decrease of E in %d trial points at iteration %d: the predicted decrease |g.d| = %.3e "
-                   "is at the rounding level of E = %.9e (|grad E| = %.3e; tol %.3e is below what E resolves; "
-                   "see opts.accept_noise)",
-                   ls->evals, it, -dphi0, E, gnorm, m->opts.tol);
+                               double gnorm, double dphi0, bs_direction dir) {
+  if (-dphi0 <= bs__noise_level(E) && dir != BS_DIR_NEG_GRAD)
+    bs__set_reason(m, st, BS_MIN_FLOOR,
+                   "converged at the rounding floor of E after %d iterations: no decrease in %d trial points, the "
+                   "predicted decrease |g.d| = %.3e is below the rounding level %.3e of E = %.9e (|grad E| = %.3e, "
+                   "tol %.3e)",
+                   it, ls->evals, -dphi0, bs__noise_level(E), E, gnorm, m->tau);
   else
     bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
                    "no decrease of E along the search direction in %d trial points at iteration %d "
                    "(|grad E| = %.3e, E = %.9e, g.d = %.3e)",
                    ls->evals, it, gnorm, E, dphi0);
+}
+
+/* The floor watch (bs_minimize.h, "Rounding floor") for the iteration at
+ * ||g|| = gnorm whose direction predicts the decrease -dphi0: 1 (reason
+ * set) when the solve ends there at the floor. */
+static int at_floor(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double E, double gnorm,
+                    double dphi0, bs_direction dir) {
+  if (!(-dphi0 <= bs__noise_level(E)) || dir == BS_DIR_NEG_GRAD) {
+    m->floor_run = 0;
+    return 0;
+  }
+  if (m->floor_run == 0 || gnorm <= 0.5 * m->floor_best) {
+    m->floor_run = 1;
+    m->floor_best = gnorm;
+    return 0;
+  }
+  if (++m->floor_run <= (obj->quadratic ? 1 : BS_FLOOR_WINDOW)) return 0;
+  bs__set_reason(m, st, BS_MIN_FLOOR,
+                 "converged at the rounding floor of E after %d iterations: |grad E| = %.3e (tol %.3e) did not halve "
+                 "over %d iterations whose predicted decrease is below the rounding level %.3e of E = %.9e",
+                 it, gnorm, m->tau, m->floor_run - 1, bs__noise_level(E), E);
+  return 1;
 }
 
 /* The AMG setup when due, from the objective's matrix (assembled in H's
@@ -588,13 +624,17 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     double gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 1);
     st->E = E;
     st->grad_norm = gnorm;
-    if (it == 0) m->g0_norm = gnorm;
-    if (gnorm == 0 || (gnorm < o->tol && !(it == 0 && o->naive_guess))) {
-      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, o->tol, it);
+    if (it == 0) {
+      m->g0_norm = gnorm;
+      st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
+      m->floor_run = 0;
+    }
+    if (gnorm == 0 || (gnorm < m->tau && !(it == 0 && o->naive_guess))) {
+      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, m->tau, it);
       break;
     }
     if (it >= o->max_iter) {
-      bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, o->tol, it);
+      bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, m->tau, it);
       break;
     }
     bs_min_iter rec;
@@ -611,6 +651,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     if (rc > 0) break;
 
     const double dphi0 = downhill_and_clamp(m, gnorm, st, &rec);
+    if (at_floor(m, obj, st, it, E, gnorm, dphi0, rec.direction)) break;
 
     /* Steps 7-9: line search along the projected curve. */
     bs__ls_result ls;
@@ -619,7 +660,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     st->t_line_search += bs_seconds() - t;
     st->ls_evaluations += ls.evals;
     if (ls.status == BS_LSEARCH_NO_DECREASE) {
-      no_decrease_reason(m, st, &ls, it, E, gnorm, dphi0);
+      no_decrease_reason(m, st, &ls, it, E, gnorm, dphi0, rec.direction);
       break;
     }
     if (ls.status == BS_LSEARCH_CAPPED) st->ls_failures++;

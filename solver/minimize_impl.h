@@ -16,6 +16,9 @@ struct bs_minimizer {
   int amg_reset;              /* 1: set up the AMG before the next solve             */
   int amg_calls;              /* bs_minimize calls started since the last setup      */
   double g0_norm;             /* ||g|| at the first iterate of the current solve (sigma_auto) */
+  double tau;                 /* tau_eff of the current solve (bs__tolerance)         */
+  int floor_run;              /* noise-level iterations in a row (rounding floor watch) */
+  double floor_best;          /* ||g|| at the first of them (or the last halving)       */
   double g_prev, eta_prev;    /* ||g|| and the CG tolerance of the previous iteration   */
                               /* (opts.forcing_ew)                                       */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
@@ -76,6 +79,8 @@ typedef struct bs__ls_result {
 
 /* Rounding level of E below which changes of E are not resolved. */
 double bs__noise_level(double E);
+/* tau_eff = max(tol, rtol g0, load_rtol obj->load_norm) (bs_minimize.h). */
+double bs__tolerance(const bs_minimize_opts *o, const bs_objective *obj, double g0);
 
 /* Strong Wolfe line search along m->d from x (phi0 = E(x), dphi0 = g.d < 0).
  * On any status but BS_LSEARCH_NO_DECREASE: m->y = P(x + alpha d), m->gy_raw

@@ -26,18 +26,21 @@ typedef struct watch {
 
 /* 1 (and the reason set) when iteration it at ||g|| = gnorm ends the solve:
  * converged, the cap, or diverged (bs_minimize.h). */
-static int stop_here(bs_minimizer *m, bs_minimize_stats *st, watch *w, int k_steps, int it, double gnorm) {
+static int stop_here(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, watch *w, int k_steps, int it,
+                     double gnorm) {
   const bs_minimize_opts *o = &m->opts;
+  if (it == 0) st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
+  const double tol = m->tau;
   if (k_steps > 0) {
     if (it < k_steps) return 0;
-    if (gnorm < o->tol)
-      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d Newton steps", gnorm, o->tol, it);
+    if (gnorm < tol)
+      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d Newton steps", gnorm, tol, it);
     else
-      bs__set_reason(m, st, BS_MIN_STEPS_DONE, "%d Newton steps taken, |grad E| = %.3e (tol %.3e)", it, gnorm, o->tol);
+      bs__set_reason(m, st, BS_MIN_STEPS_DONE, "%d Newton steps taken, |grad E| = %.3e (tol %.3e)", it, gnorm, tol);
     return 1;
   }
-  if (gnorm < o->tol) {
-    bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d Newton iterations", gnorm, o->tol, it);
+  if (gnorm < tol) {
+    bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d Newton iterations", gnorm, tol, it);
     return 1;
   }
   if (it == 0 || gnorm < w->g_min) w->g_min = gnorm;
@@ -54,7 +57,7 @@ static int stop_here(bs_minimizer *m, bs_minimize_stats *st, watch *w, int k_ste
     return 1;
   }
   if (it >= o->newton_max_iter || it >= o->max_iter) {
-    bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d Newton iterations", gnorm, o->tol, it);
+    bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d Newton iterations", gnorm, tol, it);
     return 1;
   }
   return 0;
@@ -160,7 +163,7 @@ int bs_newton(bs_minimizer *m, const bs_objective *obj, int k_steps, double *x, 
   for (int it = 0;; ++it) {
     double gnorm = NAN;
     int lin_it = 0;
-    if (newton_gradient(m, obj, x, it, &gnorm, st) || stop_here(m, st, &w, k_steps, it, gnorm)) break;
+    if (newton_gradient(m, obj, x, it, &gnorm, st) || stop_here(m, obj, st, &w, k_steps, it, gnorm)) break;
     rc = newton_step(m, obj, x, it, max_it, gnorm, st, &lin_it, err);
     if (rc < 0) return rc;
     if (rc > 0) break;

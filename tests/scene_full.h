@@ -14,7 +14,7 @@
 static const char *const bs_test_full_scene =
     "{\"$schema\": \"../scene.schema.json\", \"description\": \"every section\",\n"
     " \"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 1},\n"
-    " \"solver\": {\"method\": \"optimization\", \"linear\": \"cg\", \"tolerance\": 1e-3, \"max_iterations\": 500,\n"
+    " \"solver\": {\"method\": \"optimization\", \"linear\": \"cg\", \"tolerance\": 1e-3, \"rtol\": 0, \"load_rtol\": 0, \"max_iterations\": 500,\n"
     "   \"newton_max_iterations\": 40,\n"
     "   \"cg_max_iterations\": 0, \"newton_k\": 1, \"mode\": \"dynamic\", \"load_steps\": 1,\n"
     "   \"project_hessian\": false, \"cg_sigma\": \"auto\", \"cg_forcing\": \"paper\",\n"

@@ -71,7 +71,7 @@ static inline int sim_rec_frame(const bs_sim *s, const bs_frame_stats *fs, void 
   for (int k = 0; k < fs->n_steps; k++) {
     const bs_step_stats *st = &fs->steps[k].st;
     const char *text = st->min.reason_text;
-    int known = (int)st->min.reason >= BS_MIN_CONVERGED && (int)st->min.reason <= BS_MIN_DIVERGED;
+    int known = (int)st->min.reason >= BS_MIN_CONVERGED && (int)st->min.reason <= BS_MIN_FLOOR;
     /* each step keeps its own reason text (bs_sim_step.reason), which must
      * start with the name of that step's reason */
     if (known) {
