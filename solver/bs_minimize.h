@@ -319,7 +319,7 @@ typedef enum {
                         /* "Rounding floor" above), ||g|| >= tol                            */
 } bs_min_reason;
 #define BS_FLOOR_WINDOW 3
-#define BS_NEWTON_GROWTH 1e4
+#define BS_NEWTON_GROWTH 1e2
 #define BS_NEWTON_WINDOW 20
 
 /* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done",
