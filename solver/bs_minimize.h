@@ -281,7 +281,9 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
                        /* tolerance of step 4 is also capped by Eisenstat & Walker's       */
                        /* (1996) choice 2, eta_k = 0.9 (||g_k|| / ||g_k-1||)^2, kept >=    */
                        /* 0.9 eta_k-1^2 when that exceeds 0.1: solves tighten where Newton */
-                       /* converges fast and stay loose where it does not                  */
+                       /* converges fast and stay loose where it does not. 2: the same cap */
+                       /* only after an iteration that took the full Newton step (Newton   */
+                       /* direction, no negative curvature, alpha = 1 at its first trial) */
   int cg_downhill;      /* added, default 1. 1: a Krylov answer that fails step 5's test     */
                        /* is replaced by the last CG iterate that passed it (step 5);      */
                        /* 0: the paper's rule (-g when neither dx nor -dx passes)          */

@@ -176,6 +176,8 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
                         o->rtol, o->load_rtol);
   if (o->max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
+  if (o->forcing_ew < 0 || o->forcing_ew > 2)
+    return bs_error_set(err, BS_EINPUT, "minimizer option forcing_ew must be 0, 1 or 2, got %d", o->forcing_ew);
   if (o->newton_max_iter < 1)
     return bs_error_set(err, BS_EINPUT, "minimizer option newton_max_iter must be >= 1, got %d", o->newton_max_iter);
   if (!(o->sigma > 0) || !isfinite(o->sigma))
@@ -409,12 +411,17 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   const double sigma = o->sigma_auto ? o->sigma / sqrt(m->g0_norm) : o->sigma;
   double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, m->tau)));
   if (obj->quadratic) rel = fmin(rel, fmax(m->tau / (4 * gnorm), 1e-13)); /* one step reaches tau */
-  if (o->forcing_ew && it > 0) { /* Eisenstat & Walker (1996), choice 2, gamma 0.9, alpha 2 */
+  /* Eisenstat & Walker (1996), choice 2, gamma 0.9, alpha 2; forcing_ew 2 only
+   * after a full Newton step (bs_minimize.h) */
+  if (o->forcing_ew && it > 0 && (o->forcing_ew == 1 || m->last_full)) {
     const double q = gnorm / m->g_prev, safe = 0.9 * m->eta_prev * m->eta_prev;
     double e = 0.9 * q * q;
     if (safe > 0.1) e = fmax(e, safe);
     rel = fmin(rel, e);
   }
+  /* forcing_ew 2: a solve that follows one made only of full Newton steps
+   * starts from that solve's last forcing term */
+  if (o->forcing_ew == 2 && it == 0 && m->prev_full && m->prev_eta > 0) rel = fmin(rel, m->prev_eta);
   m->g_prev = gnorm;
   m->eta_prev = rel;
   rec->lin_rel_tol = rel;
@@ -628,6 +635,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
       m->g0_norm = gnorm;
       st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
       m->floor_run = 0;
+      m->all_full = 1;
     }
     if (gnorm == 0 || (gnorm < m->tau && !(it == 0 && o->naive_guess))) {
       bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, m->tau, it);
@@ -664,6 +672,9 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
       break;
     }
     if (ls.status == BS_LSEARCH_CAPPED) st->ls_failures++;
+    m->last_full = rec.direction == BS_DIR_NEWTON && !rec.lin_indefinite && ls.status == BS_LSEARCH_WOLFE &&
+                   ls.alpha == 1 && ls.evals == 1;
+    m->all_full &= m->last_full;
     if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
     const int moved = free_dofs_moved(m, obj, x);
     if (obj->trace) trace_step(m, obj, x, E, dphi0, &ls, &rec);
@@ -677,6 +688,8 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
       break;
     }
   }
+  m->prev_full = bs_min_reason_converged(st->reason) && m->all_full && it > 0;
+  m->prev_eta = m->eta_prev;
   st->t_total = bs_seconds() - t_start;
   return 0;
 }

@@ -20,6 +20,12 @@ struct bs_minimizer {
   int floor_run;              /* noise-level iterations in a row (rounding floor watch) */
   double floor_best;          /* ||g|| at the first of them (or the last halving)       */
   double g_prev, eta_prev;    /* ||g|| and the CG tolerance of the previous iteration   */
+  int prev_full;              /* the previous solve converged by full steps only       */
+  double prev_eta;            /* and its last forcing term                              */
+  int all_full;               /* every iteration of this solve so far was full          */
+  int last_full;              /* the previous iteration took the full Newton step: a   */
+                              /* Newton direction, no indefinite exit, alpha = 1 at    */
+                              /* its first trial (opts.forcing_ew = 2)                 */
                               /* (opts.forcing_ew)                                       */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
