@@ -34,6 +34,7 @@ void bs_scene_defaults_(bs_scene *s) {
   bs_integrator_opts_default(&s->solver);
   s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
+  s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (README, Scenes) */
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
   s->gravity[0] = 0;

@@ -65,7 +65,7 @@ const bs_schema_key bs_schema_keys_[] = {
     {"solver", "cg_sigma", BS_SCHEMA_NUM_OR_CHOICE, .choices = CHOICES("auto"), .range = "(0, )", .def = "\"auto\"",
      .doc = "sigma of the CG tolerance min(1/2, sigma sqrt(max(||grad E||, tau))), or auto (unitless)"},
     {"solver", "cg_sigma_scale", NUM, .range = "(0, )", .def = "1", .doc = "c of cg_sigma auto"},
-    {"solver", "cg_forcing", STR, .choices = CHOICES("paper", "eisenstat_walker", "adaptive"), .def = "\"paper\"",
+    {"solver", "cg_forcing", STR, .choices = CHOICES("paper", "eisenstat_walker", "adaptive"), .def = "\"adaptive\"",
      .doc = "CG forcing terms: the paper's, or also capped by Eisenstat and Walker's choice 2 (always, or "
             "adaptive: after a full Newton step)"},
     {"solver", "cg_downhill", BOOL, .def = "true",

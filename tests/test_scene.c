@@ -106,7 +106,7 @@ Test(scene, impossible_values) {
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_sigma\": 1, \"cg_sigma_scale\": 0.1",
                "solver.cg_sigma_scale: applies to cg_sigma \"auto\" only");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_forcing\": \"ew\"",
-               "solver.cg_forcing: must be \"paper\" or \"eisenstat_walker\", got \"ew\"");
+               "solver.cg_forcing: must be \"paper\", \"eisenstat_walker\" or \"adaptive\", got \"ew\"");
   expect_error("\"tolerance\": 1e-3", "\"tolerance\": 1e-3, \"cg_downhill\": 1", "solver.cg_downhill: must be true or false");
   expect_error("\"frames\": 2", "\"frames\": 2.5", "time.frames");
   expect_error("\"cells\": [2, 2, 2]", "\"cells\": [2, 0, 2]", "bodies.0.box");
