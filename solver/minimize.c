@@ -610,6 +610,28 @@ static double accept_step(bs_minimizer *m, double *x, const bs__ls_result *ls, b
   return ls->phi;
 }
 
+/* Step 3 at iteration it with ||g|| = gnorm (the solve's tolerance and
+ * watches set at it = 0): 1 with the reason set when the solve ends there
+ * (converged, or the iteration cap). */
+static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double gnorm) {
+  const bs_minimize_opts *o = &m->opts;
+  if (it == 0) {
+    m->g0_norm = gnorm;
+    st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
+    m->floor_run = 0;
+    m->all_full = 1;
+  }
+  if (gnorm == 0 || (gnorm < m->tau && !(it == 0 && o->naive_guess))) {
+    bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, m->tau, it);
+    return 1;
+  }
+  if (it >= o->max_iter) {
+    bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, m->tau, it);
+    return 1;
+  }
+  return 0;
+}
+
 int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st_out, bs_error *err) {
   double t_start = bs_seconds();
   bs_minimize_stats local, *st = st_out ? st_out : &local;
@@ -631,20 +653,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     double gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 1);
     st->E = E;
     st->grad_norm = gnorm;
-    if (it == 0) {
-      m->g0_norm = gnorm;
-      st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
-      m->floor_run = 0;
-      m->all_full = 1;
-    }
-    if (gnorm == 0 || (gnorm < m->tau && !(it == 0 && o->naive_guess))) {
-      bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, m->tau, it);
-      break;
-    }
-    if (it >= o->max_iter) {
-      bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, m->tau, it);
-      break;
-    }
+    if (converged_or_capped(m, obj, st, it, gnorm)) break;
     bs_min_iter rec;
     memset(&rec, 0, sizeof rec);
     rec.iteration = it;
