@@ -140,6 +140,11 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
  * NaN when a term is not evaluable at x. */
 double bs_integrator_energy(bs_integrator *I, const double *x);
 
+/* The minimizer's state carried from one solve to the next (bs_min_carry in
+ * bs_minimize.h), for checkpoints. */
+void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c);
+void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c);
+
 #ifdef __cplusplus
 }
 #endif

@@ -318,6 +318,9 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   o->ctx = I;
 }
 
+void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c) { bs_minimizer_get_carry(I->min, c); }
+void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c) { bs_minimizer_set_carry(I->min, c); }
+
 double bs_integrator_energy(bs_integrator *I, const double *x) {
   double E;
   obj_value(x, &E, I);
@@ -352,6 +355,9 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   int rc;
   I->opts.min.naive_guess = naive;
   bs_minimize_opts mo = I->opts.min;
+  /* cg_forcing adaptive: the paper's loose solves while the step starts
+   * tangled (inverted tets), where they untangle best (README, Scenes) */
+  if (mo.forcing_ew == 2 && bs_fem_count_inverted(I->fem, I->x_n, NULL) > 0) mo.forcing_ew = 0;
   if (mo.linear == BS_LIN_AMG) {
     /* P changes with dt (M/dt^2) and between dynamic and static solves. */
     const double pdt = I->static_mode ? 0.0 : I->step->dt;

@@ -14,6 +14,8 @@
 #define CK_HEADER 48 /* magic, version, n, frame, time, scene hash, wall, frames, 0 */
 #define CK_LONGS 12
 #define CK_TOTALS (CK_LONGS * 8 + 2 * 8 + 2 * 4 + 256)
+#define CK_CARRY 16 /* the minimizer's carry: int64 full, double eta */
+#define CK_HEAD (CK_HEADER + CK_TOTALS + CK_CARRY)
 
 uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n) {
   const unsigned char *b = p;
@@ -82,9 +84,14 @@ static void pack_header(const bs_sim *s, uint64_t scene_hash, double wall, unsig
 
 int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T, double wall, uint64_t scene_hash,
                         bs_error *err) {
-  unsigned char head[CK_HEADER + CK_TOTALS];
+  unsigned char head[CK_HEAD];
   pack_header(s, scene_hash, wall, head);
   pack_totals(T, head + CK_HEADER);
+  bs_min_carry c;
+  bs_integrator_get_carry(s->integrator, &c);
+  const int64_t full = c.full;
+  memcpy(head + CK_HEADER + CK_TOTALS, &full, 8);
+  memcpy(head + CK_HEADER + CK_TOTALS + 8, &c.eta, 8);
   const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
   uint64_t h = bs_fnv1a_(BS_FNV_SEED, head, sizeof head);
   h = bs_fnv1a_(h, s->x, sizeof(double) * n3);
@@ -125,7 +132,7 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
                         bs_checkpoint *ck, bs_error *err) {
   if (n < 4 || memcmp(b, CK_MAGIC, 4))
     return bs_error_set(err, BS_EINPUT, "'%s' is not a bigstep checkpoint (no BSCK magic)", p);
-  if (n < CK_HEADER + CK_TOTALS + 8)
+  if (n < CK_HEAD + 8)
     return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, shorter than a checkpoint's header: truncated", p, n);
   uint32_t version;
   int32_t i3[2];
@@ -142,7 +149,7 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
   if (i3[0] != s->mesh->n_vertices)
     return bs_error_set(err, BS_EINPUT, "'%s' holds %d vertices, the scene's mesh %d: a checkpoint of another scene", p,
                         i3[0], s->mesh->n_vertices);
-  const size_t want = CK_HEADER + CK_TOTALS + 48 * (size_t)i3[0] + 8;
+  const size_t want = CK_HEAD + 48 * (size_t)i3[0] + 8;
   if (n != want)
     return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, a checkpoint of %d vertices %zu: truncated or damaged", p,
                         n, i3[0], want);
@@ -172,8 +179,15 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
   if (!st && !(ck->x = malloc(sizeof(double) * (2 * n3 + 1)))) st = bs_error_set(err, BS_ENOMEM, "out of memory");
   if (!st) {
     unpack_totals(b + CK_HEADER, &ck->totals);
+    int64_t full;
+    memcpy(&full, b + CK_HEADER + CK_TOTALS, 8);
+    memcpy(&ck->carry.eta, b + CK_HEADER + CK_TOTALS + 8, 8);
+    ck->carry.full = (int)full;
+    if (!(full == 0 || full == 1) || !(ck->carry.eta >= 0 && ck->carry.eta <= 0.5))
+      st = bs_error_set(err, BS_EINPUT, "'%s': the solver state (%lld, %g) is out of range: a damaged checkpoint", p,
+                        (long long)full, ck->carry.eta);
     ck->v = ck->x + n3;
-    memcpy(ck->x, b + CK_HEADER + CK_TOTALS, sizeof(double) * 2 * n3);
+    memcpy(ck->x, b + CK_HEAD, sizeof(double) * 2 * n3);
     for (size_t i = 0; i < 2 * n3 && !st; i++)
       if (!isfinite(ck->x[i]))
         st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p,

@@ -369,6 +369,18 @@ void bs_minimizer_amg_reset(bs_minimizer *m);
 /* The options in force. */
 const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m);
 
+/* What one bs_minimize call hands the next (opts.forcing_ew = 2): whether it
+ * converged by full Newton steps only, and its last forcing term. A run that
+ * is stopped and continued (a checkpoint) saves and restores it so that the
+ * continued solves are those of an uninterrupted run. */
+typedef struct bs_min_carry {
+  int full;   /* 0 or 1 */
+  double eta; /* in [0, 1/2] */
+} bs_min_carry;
+void bs_minimizer_get_carry(const bs_minimizer *m, bs_min_carry *c);
+/* Values outside the ranges above are ignored (full 0 is set). */
+void bs_minimizer_set_carry(bs_minimizer *m, const bs_min_carry *c);
+
 /* Minimizes from x (in/out). Returns 0 when it ran (converged or not: see stats.reason),
    negative on errors. st may be NULL. */
 int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st,

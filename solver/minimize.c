@@ -119,6 +119,17 @@ const char *bs_min_reason_name(bs_min_reason r) {
   return "unknown";
 }
 
+void bs_minimizer_get_carry(const bs_minimizer *m, bs_min_carry *c) {
+  c->full = m->prev_full;
+  c->eta = m->prev_eta;
+}
+
+void bs_minimizer_set_carry(bs_minimizer *m, const bs_min_carry *c) {
+  const int ok = (c->full == 0 || c->full == 1) && c->eta >= 0 && c->eta <= 0.5;
+  m->prev_full = ok ? c->full : 0;
+  m->prev_eta = ok ? c->eta : 0;
+}
+
 int bs_min_reason_converged(bs_min_reason r) { return r == BS_MIN_CONVERGED || r == BS_MIN_FLOOR; }
 
 double bs__tolerance(const bs_minimize_opts *o, const bs_objective *obj, double g0) {
