@@ -53,8 +53,9 @@ typedef struct bs_dfem {
 } bs_dfem;
 
 /* The fem of the owned cells: material i has 3-D group tag material_tags[i]
- * (a cell's material is the tag of its 3-D group; n_materials = 1 with any
- * tag accepts every cell, groups or none). */
+ * (a cell's material is the tag of its 3-D group); a cell of no listed tag
+ * takes the first material of tag -1 (the default), or the only material
+ * when n_materials = 1. */
 int bs_dfem_create(const bs_dmesh *mesh, int n_materials, const bs_material *materials, const int *material_tags,
                    bs_dfem **out, bs_error *err);
 void bs_dfem_destroy(bs_dfem **df);

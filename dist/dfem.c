@@ -12,7 +12,9 @@ static int tet_materials(const bs_mesh *local, int n, const int *tags, int32_t *
   for (int32_t t = 0; t < local->n_tets; t++) {
     int k = -1;
     for (int i = 0; i < n && k < 0; i++)
-      if (n == 1 || tags[i] == local->material[t]) k = i;
+      if (tags[i] >= 0 && tags[i] == local->material[t]) k = i;
+    for (int i = 0; i < n && k < 0; i++)
+      if (tags[i] < 0 || n == 1) k = i;
     if (k < 0) return bs_error_set(err, BS_EINPUT, "cells of material tag %d have no material", local->material[t]);
     out[t] = k;
   }

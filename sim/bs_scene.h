@@ -242,6 +242,11 @@ int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, 
  * x, reduce mean, body 0, no group, obstacle 0, energy total: set them). */
 int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_qoi **out, bs_error *err);
 
+/* The offset from rest of a scripted group at time t (s): 0 for fixed, the
+ * velocity times t, or the keyframes interpolated linearly (held before the
+ * first and after the last key), in metres. */
+void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]);
+
 /* Sets s->dt = 1 / (fps * steps_per_frame), then bs_scene_check. */
 int bs_scene_validate(bs_scene *s, bs_error *err);
 

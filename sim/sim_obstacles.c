@@ -9,27 +9,31 @@
 #include "bs_selfcollide.h"
 #include "sim_internal.h"
 
+void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]) {
+  off[0] = off[1] = off[2] = 0;
+  if (sc->kind == BS_SCRIPT_VELOCITY) {
+    for (int k = 0; k < 3; k++) off[k] = sc->velocity[k] * t;
+  } else if (sc->kind == BS_SCRIPT_KEYFRAMES) {
+    int n = sc->n_keys;
+    if (t <= sc->key_t[0]) memcpy(off, sc->key_offset, 3 * sizeof(double));
+    else if (t >= sc->key_t[n - 1]) memcpy(off, sc->key_offset + 3 * (n - 1), 3 * sizeof(double));
+    else
+      for (int j = 0; j + 1 < n; j++)
+        if (t >= sc->key_t[j] && t <= sc->key_t[j + 1]) {
+          double w = (t - sc->key_t[j]) / (sc->key_t[j + 1] - sc->key_t[j]);
+          for (int k = 0; k < 3; k++)
+            off[k] = (1 - w) * sc->key_offset[3 * j + k] + w * sc->key_offset[3 * (j + 1) + k];
+          break;
+        }
+  }
+}
+
 void bs_sim_script_positions_(double t, double *x, void *ctx) {
   bs_sim *s = ctx;
   for (int i = 0; i < s->n_scripts; i++) {
     const bs_sim_script *ss = &s->scripts[i];
-    const bs_scene_script *sc = ss->script;
-    double off[3] = {0, 0, 0};
-    if (sc->kind == BS_SCRIPT_VELOCITY) {
-      for (int k = 0; k < 3; k++) off[k] = sc->velocity[k] * t;
-    } else if (sc->kind == BS_SCRIPT_KEYFRAMES) {
-      int n = sc->n_keys;
-      if (t <= sc->key_t[0]) memcpy(off, sc->key_offset, sizeof off);
-      else if (t >= sc->key_t[n - 1]) memcpy(off, sc->key_offset + 3 * (n - 1), sizeof off);
-      else
-        for (int j = 0; j + 1 < n; j++)
-          if (t >= sc->key_t[j] && t <= sc->key_t[j + 1]) {
-            double w = (t - sc->key_t[j]) / (sc->key_t[j + 1] - sc->key_t[j]);
-            for (int k = 0; k < 3; k++)
-              off[k] = (1 - w) * sc->key_offset[3 * j + k] + w * sc->key_offset[3 * (j + 1) + k];
-            break;
-          }
-    }
+    double off[3];
+    bs_scene_script_offset(ss->script, t, off);
     for (int32_t q = 0; q < ss->n; q++) {
       int32_t v = ss->vertices[q];
       for (int k = 0; k < 3; k++) x[3 * v + k] = s->x0[3 * v + k] + off[k];

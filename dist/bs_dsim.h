@@ -1,0 +1,72 @@
+/* bs_dsim.h — a scene run on the petsc backend (solver.backend = "petsc"):
+ * the scene's body as a distributed mesh (bs_dmesh.h), its terms on the
+ * owned cells (bs_dfem.h), its scripted and fixed groups, and the
+ * distributed integrator (bs_dstep.h), stepped frame by frame or solved
+ * statically as bs_sim does (sim/bs_sim.h).
+ *
+ * What the backend runs (bs_dsim_check refuses anything else, naming the
+ * key): one body; mesh "box" or a .msh file (bodies.0.mesh), refined
+ * (bodies.0.refine); materials by 3-D group, every model, Rayleigh damping;
+ * gravity, drag; scripted groups (fixed, velocity, keyframes); an initial
+ * velocity; statics with load steps; solver.method optimization with
+ * solver.linear cg, pcg or amg. Refused: self_collision, obstacles,
+ * body transforms (translate, rotate, scale), angular velocity, random or
+ * point initial states, qoi, several bodies, other mesh files.
+ *
+ * Collective (PETSC_COMM_WORLD). Ownership: bs_dsim_create borrows the scene
+ * (it must outlive the dsim) and owns everything else. State (x, v, mask)
+ * is in local vectors (3 per local vertex of mesh, consistent).
+ */
+#ifndef BS_DSIM_H
+#define BS_DSIM_H
+
+#include "bs_scene.h"
+#include "bs_dstep.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_DSIM_MAX_TERMS 8
+
+typedef struct bs_dsim_script {
+  const bs_scene_script *script;
+  int32_t n;          /* local vertices it moves */
+  int32_t *vertices;
+} bs_dsim_script;
+
+typedef struct bs_dsim {
+  const bs_scene *scene;
+  bs_dmesh *mesh;
+  bs_dfem *df;
+  int n_terms;
+  bs_term *terms[BS_DSIM_MAX_TERMS];
+  bs_step_data step;
+  double *x, *v;        /* local vectors: the state                       */
+  uint8_t *mask;        /* per local vertex: 1 free, 0 scripted           */
+  int n_scripts;
+  bs_dsim_script *scripts;
+  int64_t n_free;       /* free vertices over the ranks                   */
+  bs_dintegrator *integrator;
+  int frame;
+  double time;
+} bs_dsim;
+
+/* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
+ * collective (the same answer on every rank). */
+int bs_dsim_check(const bs_scene *sc, bs_error *err);
+
+int bs_dsim_create(const bs_scene *sc, bs_dsim **out, bs_error *err);
+void bs_dsim_destroy(bs_dsim **s);
+
+/* Statics (scene mode static): st of the solve. */
+int bs_dsim_statics(bs_dsim *s, bs_step_stats *st, bs_error *err);
+
+/* One frame of steps_per_frame steps; st[steps_per_frame] receives each
+ * step's statistics (may be NULL). */
+int bs_dsim_advance_frame(bs_dsim *s, bs_step_stats *st, bs_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

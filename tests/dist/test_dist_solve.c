@@ -1,0 +1,181 @@
+/* test_dist_solve: the scenes on the petsc backend (bs_dsim.h) give the
+ * serial answers, on 1 and 2 ranks: the static cantilever
+ * (data/scenes/beam_sag.json: tip deflection and final positions to 1e-9
+ * relative, the same Newton iteration count on 1 rank) and the stretched
+ * cube (data/scenes/cube_stretch.json, its first frames: positions to 1e-9,
+ * the same iteration counts on 1 rank); refused scenes name their key. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_dsim.h"
+#include "bs_sim.h"
+#include "dist_check.h"
+
+static const double *sort_base;
+static int by_position(const void *a, const void *b) {
+  const double *p = sort_base + 3 * *(const int32_t *)a, *q = sort_base + 3 * *(const int32_t *)b;
+  for (int k = 0; k < 3; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+  return 0;
+}
+
+/* For each local vertex of d, the serial vertex at the same rest position
+ * (exactly), -1 if none. Caller frees. */
+static int32_t *match_vertices(const bs_dsim *d, const bs_sim *s) {
+  int32_t n = s->mesh->n_vertices, *idx = malloc(sizeof(int32_t) * (size_t)n);
+  int32_t *map = malloc(sizeof(int32_t) * (size_t)d->mesh->n_vertices + 4);
+  for (int32_t i = 0; i < n; i++) idx[i] = i;
+  sort_base = s->x0;
+  qsort(idx, (size_t)n, sizeof *idx, by_position);
+  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
+    int32_t lo = 0, hi = n - 1;
+    map[v] = -1;
+    while (lo <= hi && map[v] < 0) {
+      int32_t mid = (lo + hi) / 2, c = 0;
+      for (int k = 0; k < 3 && !c; k++) {
+        double a = d->mesh->x[3 * v + k], b = s->x0[3 * idx[mid] + k];
+        c = a < b ? -1 : a > b ? 1 : 0;
+      }
+      if (c == 0) map[v] = idx[mid];
+      else if (c < 0) hi = mid - 1;
+      else lo = mid + 1;
+    }
+  }
+  free(idx);
+  return map;
+}
+
+/* max |x_d - x_s| over the vertices, relative to max |x_s| (positions) and
+ * to the largest displacement; the mean y displacement of group `group`. */
+static void compare(const bs_dsim *d, const bs_sim *s, const char *what, const char *group) {
+  int32_t *map = match_vertices(d, s);
+  double err = 0, xmax = 0, umax = 0;
+  int unmatched = 0;
+  for (int32_t i = 0; i < 3 * s->mesh->n_vertices; i++) {
+    xmax = fmax(xmax, fabs(s->x[i]));
+    umax = fmax(umax, fabs(s->x[i] - s->x0[i]));
+  }
+  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
+    if (map[v] < 0) {
+      unmatched++;
+      continue;
+    }
+    for (int k = 0; k < 3; k++) err = fmax(err, fabs(d->x[3 * v + k] - s->x[3 * map[v] + k]));
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  CHECK(unmatched == 0, "%s: %d vertices with no serial twin", what, unmatched);
+  CHECK(err <= 1e-9 * xmax, "%s: positions differ by %.3g (max |x| %.3g)", what, err, xmax);
+  if (bs_dist_rank() == 0)
+    printf("  %s: max |x - x_serial| = %.3e (%.3e of max |x|, %.3e of max |u|)\n", what, err, err / xmax,
+           err / fmax(umax, 1e-300));
+  if (group) {
+    const bs_group *gs = bs_mesh_group(s->mesh, group);
+    const bs_dgroup *gd = bs_dmesh_group(d->mesh, group);
+    double us = 0, ud[2] = {0, 0};
+    for (int32_t i = 0; i < gs->n_vertices; i++) us += s->x[3 * gs->vertices[i] + 1] - s->x0[3 * gs->vertices[i] + 1];
+    us /= gs->n_vertices;
+    for (int32_t i = 0; i < gd->n_vertices; i++) {
+      int32_t v = gd->vertices[i];
+      if (!d->mesh->owned[v]) continue;
+      ud[0] += d->x[3 * v + 1] - d->mesh->x[3 * v + 1];
+      ud[1] += 1;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, ud, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    CHECK_REL(ud[0] / ud[1], us, 1e-9, "tip deflection");
+    if (bs_dist_rank() == 0) printf("  %s: tip deflection %.15e (serial %.15e)\n", what, ud[0] / ud[1], us);
+  }
+  free(map);
+}
+
+static void beam_sag_static(void) {
+  bs_error err = {0};
+  const char *sets[] = {"qoi=[]"};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/beam_sag.json", 1, sets, &sc, &err), err);
+  if (!sc) return;
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  bs_frame_stats fs;
+  bs_step_stats st;
+  CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  if (s) CHECK_OK(bs_sim_statics(s, &fs, &err), err);
+  CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  if (d) CHECK_OK(bs_dsim_statics(d, &st, &err), err);
+  if (s && d) {
+    compare(d, s, "beam_sag", "xmax");
+    CHECK(!st.failed, "the distributed solve failed: %s", st.min.reason_text);
+    if (bs_dist_size() == 1)
+      CHECK(st.min.iterations == fs.iterations, "%d Newton iterations, serial %ld", st.min.iterations, fs.iterations);
+    if (bs_dist_rank() == 0)
+      printf("  beam_sag: Newton iterations %d (serial %ld), CG %d (serial %ld)\n", st.min.iterations, fs.iterations,
+             st.min.cg_iterations, fs.cg_iterations);
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+static void cube_stretch_frames(void) {
+  bs_error err = {0};
+  const char *sets[] = {"time.frames=4"};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/cube_stretch.json", 1, sets, &sc, &err), err);
+  if (!sc) return;
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  long it_s = 0, it_d = 0;
+  for (int f = 0; s && d && f < sc->frames; f++) {
+    bs_frame_stats fs;
+    bs_step_stats st;
+    CHECK_OK(bs_sim_advance_frame(s, &fs, &err), err);
+    CHECK_OK(bs_dsim_advance_frame(d, &st, &err), err);
+    CHECK(!st.failed, "frame %d: %s", f + 1, st.min.reason_text);
+    if (bs_dist_size() == 1)
+      CHECK(st.min.iterations == fs.iterations, "frame %d: %d iterations, serial %ld", f + 1, st.min.iterations,
+            fs.iterations);
+    it_s += fs.iterations;
+    it_d += st.min.iterations;
+  }
+  if (s && d) {
+    compare(d, s, "cube_stretch", NULL);
+    if (bs_dist_rank() == 0) printf("  cube_stretch: Newton iterations %ld (serial %ld)\n", it_d, it_s);
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+/* A scene the backend does not run is refused with its key. */
+static void refused_scenes(void) {
+  static const struct {
+    const char *set, *key;
+  } cases[] = {{"self_collision={\"stiffness\":1e5}", "self_collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1}]", "obstacles"},
+               {"solver.linear=cholmod", "solver.linear"},
+               {"solver.method=newton", "solver.method"},
+               {"bodies.0.translate=[1,0,0]", "bodies.0.translate"}};
+  for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+    bs_error err = {0};
+    bs_scene *sc = NULL;
+    const char *sets[] = {cases[i].set};
+    int rc = bs_scene_load("data/scenes/cube_stretch.json", 1, sets, &sc, &err);
+    CHECK_OK(rc, err);
+    if (rc) continue;
+    bs_dsim *d = NULL;
+    rc = bs_dsim_create(sc, &d, &err);
+    CHECK(rc == BS_EINPUT && strstr(err.msg, cases[i].key) && strstr(err.msg, "petsc"), "%s: status %d: %s",
+          cases[i].set, rc, err.msg);
+    CHECK(d == NULL, "a dsim came back");
+    bs_scene_destroy(&sc);
+  }
+}
+
+int main(int argc, char **argv) {
+  static const dist_test tests[] = {{"beam_sag_static", beam_sag_static},
+                                    {"cube_stretch_frames", cube_stretch_frames},
+                                    {"refused_scenes", refused_scenes}};
+  return dist_check_main(argc, argv, tests, 3);
+}
