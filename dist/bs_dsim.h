@@ -21,6 +21,7 @@
 #define BS_DSIM_H
 
 #include "bs_scene.h"
+#include "bs_sim.h"
 #include "bs_dstep.h"
 
 #ifdef __cplusplus
@@ -48,8 +49,10 @@ typedef struct bs_dsim {
   bs_dsim_script *scripts;
   int64_t n_free;       /* free vertices over the ranks                   */
   bs_dintegrator *integrator;
-  int frame;
-  double time;
+  int frame;            /* frames completed                               */
+  double time;          /* s                                              */
+  bs_sim_step *steps;   /* steps_per_frame records of the last frame      */
+  double *xm;           /* work: 3 per local-mesh vertex                  */
 } bs_dsim;
 
 /* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
@@ -59,12 +62,18 @@ int bs_dsim_check(const bs_scene *sc, bs_error *err);
 int bs_dsim_create(const bs_scene *sc, bs_dsim **out, bs_error *err);
 void bs_dsim_destroy(bs_dsim **s);
 
-/* Statics (scene mode static): st of the solve. */
-int bs_dsim_statics(bs_dsim *s, bs_step_stats *st, bs_error *err);
+/* Statics (scene mode static), as bs_sim_statics: fs of the one step. */
+int bs_dsim_statics(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
 
-/* One frame of steps_per_frame steps; st[steps_per_frame] receives each
- * step's statistics (may be NULL). */
-int bs_dsim_advance_frame(bs_dsim *s, bs_step_stats *st, bs_error *err);
+/* One frame of steps_per_frame steps, as bs_sim_advance_frame (fs->steps
+ * points into s, valid until the next frame). */
+int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
+
+/* Tets with det F <= 0 at s->x over the ranks. */
+int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err);
+
+/* Unknowns over the ranks: 3 per free vertex. */
+long bs_dsim_dofs(const bs_dsim *s);
 
 #ifdef __cplusplus
 }

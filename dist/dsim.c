@@ -136,7 +136,9 @@ static int make_state(bs_dsim *s, bs_error *err) {
   s->x = bs_calloc(3 * (size_t)n + 3, sizeof *s->x, "positions", err);
   s->v = bs_calloc(3 * (size_t)n + 3, sizeof *s->v, "velocities", err);
   s->mask = bs_calloc((size_t)n + 1, 1, "mask", err);
-  if (!s->x || !s->v || !s->mask) return BS_ENOMEM;
+  s->steps = bs_calloc((size_t)s->scene->steps_per_frame, sizeof *s->steps, "step records", err);
+  s->xm = bs_calloc(3 * (size_t)s->mesh->local->n_vertices + 3, sizeof *s->xm, "positions", err);
+  if (!s->x || !s->v || !s->mask || !s->steps || !s->xm) return BS_ENOMEM;
   memcpy(s->x, s->mesh->x, 3 * (size_t)n * sizeof(double));
   memset(s->mask, 1, (size_t)n);
   const double *v0 = s->scene->bodies[0].velocity;
@@ -171,35 +173,62 @@ void bs_dsim_destroy(bs_dsim **sp) {
   for (int i = 0; i < s->n_terms; i++) bs_term_destroy(&s->terms[i]);
   bs_dfem_destroy(&s->df);
   bs_dmesh_destroy(&s->mesh);
-  free(s->x), free(s->v), free(s->mask), free(s->scripts);
+  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm);
   free(s);
   *sp = NULL;
 }
 
-int bs_dsim_statics(bs_dsim *s, bs_step_stats *st, bs_error *err) {
-  int rc = bs_dintegrator_static(s->integrator, 0.0, s->scene->load_steps, s->x, st, err);
-  if (!rc) s->frame = 1;
+int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err) {
+  bs_dfem_mesh_vector(s->df, s->x, s->xm);
+  *n = bs_fem_count_inverted(s->df->fem, s->xm, NULL);
+  return bs_dist_sum_i64(n, 1, err);
+}
+
+long bs_dsim_dofs(const bs_dsim *s) { return 3 * (long)s->n_free; }
+
+/* The step's record, as bs_sim's: time, inverted tets, its reason's copy. */
+static int record(bs_dsim *s, bs_sim_step *rec, bs_error *err) {
+  int64_t inv = 0;
+  int rc = bs_dsim_inverted(s, &inv, err);
+  rec->time = s->time;
+  rec->inverted = (int32_t)inv;
+  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
+  rec->st.min.reason_text = rec->reason;
+  return rc;
+}
+
+int bs_dsim_statics(bs_dsim *s, bs_frame_stats *fs, bs_error *err) {
+  bs_sim_step *rec = &s->steps[0];
+  int rc = bs_dintegrator_static(s->integrator, 0.0, s->scene->load_steps, s->x, &rec->st, err);
+  if (rc) {
+    bs_error_prefix(err, "static solve");
+    return rc;
+  }
+  s->frame = 1;
+  rc = record(s, rec, err);
+  bs_frame_sums(s->frame, s->time, 1, s->steps, fs);
   return rc;
 }
 
 /* Times as bs_sim's (sim/sim_step.c): step k of frame f ends at
  * (f - 1) / fps + (k + 1) dt, the frame at f / fps. */
-int bs_dsim_advance_frame(bs_dsim *s, bs_step_stats *st, bs_error *err) {
+int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err) {
   const bs_scene *sc = s->scene;
   if (sc->mode != BS_MODE_DYNAMIC)
     return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance", sc->path);
   const int f = s->frame + 1;
   for (int k = 0; k < sc->steps_per_frame; k++) {
-    bs_step_stats one;
-    int rc = bs_dintegrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &one, err);
+    bs_sim_step *rec = &s->steps[k];
+    int rc = bs_dintegrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
     if (rc) {
       bs_error_prefix(err, "frame %d step %d", f, k);
       return rc;
     }
     s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-    if (st) st[k] = one;
+    if ((rc = record(s, rec, err))) return rc;
   }
   s->time = f / sc->fps;
   s->frame = f;
+  bs_frame_sums(s->frame, s->time, sc->steps_per_frame, s->steps, fs);
   return BS_OK;
 }

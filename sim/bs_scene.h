@@ -166,6 +166,7 @@ typedef struct bs_scene_qoi {
 } bs_scene_qoi;
 
 typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
+typedef enum { BS_BACKEND_SERIAL = 0, BS_BACKEND_PETSC } bs_scene_backend;
 
 typedef struct bs_scene {
   char path[BS_MAX_PATH];  /* the scene file; "<scene>" for one built in C     */
@@ -176,6 +177,7 @@ typedef struct bs_scene {
                            /* bs_scene_validate set it                             */
   bs_integrator_opts solver;
   bs_scene_mode mode;
+  bs_scene_backend backend; /* solver.backend: serial [default] or petsc (dist/) */
   int load_steps;
   int project_hessian;     /* PSD-project the elastic Hessian (Newton option)   */
   double gravity[3];

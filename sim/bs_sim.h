@@ -85,6 +85,10 @@ typedef struct bs_frame_stats {
   double grad_max;     /* largest final ||grad E|| of its steps (N)         */
 } bs_frame_stats;
 
+/* The frame's sums (iterations, CG iterations, failed steps, seconds, the
+ * largest final |grad E|) from its n step records; fs->steps = steps. */
+void bs_frame_sums(int frame, double time, int n, const bs_sim_step *steps, bs_frame_stats *fs);
+
 /* Sums over a whole run, and its first failed step. */
 typedef struct bs_run_totals {
   long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill;
