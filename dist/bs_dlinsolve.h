@@ -41,8 +41,9 @@ int bs_dlin_setup(bs_dlin *s, Mat P, bs_error *err);
 int bs_dlin_ready(const bs_dlin *s);
 
 /* d = H^-1 r by CG on df->H (r masked: zero on fixed vertices, whose rows
- * df->H holds as identity). */
-int bs_dlin_solve(bs_dlin *s, const double *r, double rel, int max_it, double kappa, double *d, bs_lin_stats *st,
+ * df->H holds as identity; mask, per local vertex, 1 free / 0 fixed, NULL:
+ * all free; the preconditioned residual is masked too, so d is 0 there). */
+int bs_dlin_solve(bs_dlin *s, const uint8_t *mask, const double *r, double rel, int max_it, double kappa, double *d, bs_lin_stats *st,
                   bs_error *err);
 
 /* GAMG setup figures of the last bs_dlin_setup: levels, seconds. */

@@ -16,8 +16,10 @@ struct bs_dlin {
   int ready;             /* GAMG: a hierarchy was built               */
   int levels;
   double setup_seconds;
-  Mat P;                 /* GAMG: the copy the hierarchy was built from */
+  Mat P;                 /* GAMG: the AIJ copy the hierarchy was built from */
   Vec x, r, p, q, z, xs;
+  Vec free;              /* 1 on free dofs, 0 on fixed: z is masked with it */
+  double *ones;          /* local vector work                           */
 };
 
 int bs_dlin_create(bs_dfem *df, bs_dpc kind, bs_dlin **out, bs_error *err) {
@@ -27,8 +29,10 @@ int bs_dlin_create(bs_dfem *df, bs_dpc kind, bs_dlin **out, bs_error *err) {
   s->df = df;
   s->kind = kind;
   *out = s;
-  Vec *v[] = {&s->x, &s->r, &s->p, &s->q, &s->z, &s->xs};
+  Vec *v[] = {&s->x, &s->r, &s->p, &s->q, &s->z, &s->xs, &s->free};
   for (size_t i = 0; i < sizeof v / sizeof *v; i++) BS_PETSC_TRY(VecDuplicate(df->xg, v[i]), err);
+  s->ones = bs_calloc((size_t)df->n3 + 1, sizeof *s->ones, "mask vector", err);
+  if (!s->ones) return BS_ENOMEM;
   if (kind == BS_DPC_NONE) return BS_OK;
   BS_PETSC_TRY(PCCreate(PETSC_COMM_WORLD, &s->pc), err);
   BS_PETSC_TRY(PCSetType(s->pc, kind == BS_DPC_GAMG ? PCGAMG : PCPBJACOBI), err);
@@ -42,8 +46,9 @@ void bs_dlin_destroy(bs_dlin **sp) {
   bs_dlin *s = *sp;
   PCDestroy(&s->pc);
   MatDestroy(&s->P);
-  Vec *v[] = {&s->x, &s->r, &s->p, &s->q, &s->z, &s->xs};
+  Vec *v[] = {&s->x, &s->r, &s->p, &s->q, &s->z, &s->xs, &s->free};
   for (size_t i = 0; i < sizeof v / sizeof *v; i++) VecDestroy(v[i]);
+  free(s->ones);
   free(s);
   *sp = NULL;
 }
@@ -66,7 +71,8 @@ int bs_dlin_setup(bs_dlin *s, Mat P, bs_error *err) {
   if (s->kind != BS_DPC_GAMG) return BS_OK;
   double t = bs_seconds();
   MatDestroy(&s->P);
-  BS_PETSC_TRY(MatDuplicate(P, MAT_COPY_VALUES, &s->P), err);
+  /* GAMG's graph and Galerkin products want AIJ (block size 3 kept). */
+  BS_PETSC_TRY(MatConvert(P, MATAIJ, MAT_INITIAL_MATRIX, &s->P), err);
   int rc = near_null_space(s, s->P, err);
   if (rc) return rc;
   BS_PETSC_TRY(PCSetOperators(s->pc, s->P, s->P), err);
@@ -93,6 +99,9 @@ static int precond(bs_dlin *s, double rr, double *rz, bs_error *err) {
     return BS_OK;
   }
   BS_PETSC_TRY(PCApply(s->pc, s->r, s->z), err);
+  /* A multigrid cycle can write fixed dofs (its coarse correction): the
+     iterates must stay zero there, as the serial masked solvers keep them. */
+  BS_PETSC_TRY(VecPointwiseMult(s->z, s->z, s->free), err);
   BS_PETSC_TRY(VecDot(s->r, s->z, rz), err);
   return isfinite(*rz) ? BS_OK : bs_error_set(err, BS_ENUMERIC, "preconditioner gave a non-finite r.z");
 }
@@ -163,7 +172,13 @@ static int cg_loop(bs_dlin *s, cg_state *c, int max_it, bs_lin_stats *st, bs_err
   return BS_OK;
 }
 
-int bs_dlin_solve(bs_dlin *s, const double *r, double rel, int max_it, double kappa, double *d, bs_lin_stats *st,
+/* s->free from the mask (NULL: all free). */
+static int load_mask(bs_dlin *s, const uint8_t *mask, bs_error *err) {
+  for (int64_t i = 0; i < s->df->n3; i++) s->ones[i] = !mask || mask[i / 3] ? 1.0 : 0.0;
+  return bs_dfem_to_global(s->df, s->ones, s->free, err);
+}
+
+int bs_dlin_solve(bs_dlin *s, const uint8_t *mask, const double *r, double rel, int max_it, double kappa, double *d, bs_lin_stats *st,
                   bs_error *err) {
   memset(st, 0, sizeof *st);
   double t0 = bs_seconds();
@@ -172,7 +187,8 @@ int bs_dlin_solve(bs_dlin *s, const double *r, double rel, int max_it, double ka
     BS_PETSC_TRY(PCSetOperators(s->pc, s->df->H, s->df->H), err);
     BS_PETSC_TRY(PCSetUp(s->pc), err);
   }
-  int rc = bs_dfem_to_global(s->df, r, s->r, err);
+  int rc = load_mask(s, mask, err);
+  if (!rc) rc = bs_dfem_to_global(s->df, r, s->r, err);
   if (rc) return rc;
   BS_PETSC_TRY(VecSet(s->x, 0.0), err);
   cg_state c = {0};

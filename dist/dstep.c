@@ -58,7 +58,7 @@ static void vo_sum(double *v, int n, void *ctx) { bs_dist_sum(v, n, NULL); }
 static int vo_solve(const uint8_t *mask, const double *r, double rel, int max_it, double kappa, double *d,
                     bs_lin_stats *ls, bs_error *err, void *ctx) {
   bs_dintegrator *D = ctx;
-  return bs_dlin_solve(D->lin, r, rel, max_it, kappa, d, ls, err);
+  return bs_dlin_solve(D->lin, mask, r, rel, max_it, kappa, d, ls, err);
 }
 
 void bs__dstep_objective(bs_dintegrator *D, bs_objective *o) {
