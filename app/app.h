@@ -58,7 +58,7 @@ char *bs_app_command_line(int argc, char **argv);
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);
 /* bigstep run on the petsc backend (cmd_run_petsc.c): the exit status. */
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet);
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace);
 int bs_cmd_study(int argc, char **argv);
 int bs_cmd_check(int argc, char **argv);
 int bs_cmd_levelset(int argc, char **argv);

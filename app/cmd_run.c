@@ -293,7 +293,7 @@ int bs_cmd_run(int argc, char **argv) {
   int st = bs_scene_load(a.scene, a.sets.n, (const char *const *)a.sets.v, &sc, &err);
   if (!st && a.trace) sc->solver.trace = stderr;
   if (!st && sc->backend == BS_BACKEND_PETSC) {
-    rc = bs_app_run_petsc(a.scene, sc, a.quiet);
+    rc = bs_app_run_petsc(a.scene, sc, a.quiet, a.replace);
   } else if (!st && mpi_ranks() > 1) {
     fprintf(stderr, "bigstep run: %s: solver.backend is \"serial\" but mpirun started %d ranks (each would run the "
                     "whole scene): set solver.backend to \"petsc\" (--set solver.backend=petsc) or run one process\n",

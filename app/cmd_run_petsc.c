@@ -12,7 +12,7 @@
 
 #ifndef BS_HAVE_PETSC
 
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet) {
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
   fprintf(stderr, "bigstep run: %s: solver.backend: this bigstep was built without PETSc (BS_PETSC=OFF); "
                   "use \"serial\" or rebuild with petsc-dev installed\n", path);
   return BS_EXIT_FAIL;
@@ -21,6 +21,7 @@ int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet) {
 #else
 
 #include "bs_dist.h"
+#include "bs_doutput.h"
 #include "bs_dsim.h"
 
 /* The message of a failed collective call: rank 0's, and another rank's
@@ -57,22 +58,27 @@ static void print_frame(const bs_dsim *d, const bs_frame_stats *fs) {
   fflush(stdout);
 }
 
-/* The frames (or the static solve), totals into *T. */
-static int run_frames(bs_dsim *d, int quiet, bs_run_totals *T, bs_error *err) {
+/* The frames (or the static solve), totals into *T, each frame into the
+ * folder (out may be NULL), frame 0 (the initial state) first. */
+static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_error *err) {
   const bs_scene *sc = d->scene;
   int n = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
-  for (int f = 0; f < n; f++) {
-    bs_frame_stats fs;
-    int rc = sc->mode == BS_MODE_STATIC ? bs_dsim_statics(d, &fs, err) : bs_dsim_advance_frame(d, &fs, err);
+  bs_frame_stats fs;
+  bs_frame_sums(0, 0.0, 0, NULL, &fs);
+  int rc = out ? bs_dout_frame(out, d, &fs, err) : BS_OK;
+  for (int f = 0; f < n && !rc; f++) {
+    rc = sc->mode == BS_MODE_STATIC ? bs_dsim_statics(d, &fs, err) : bs_dsim_advance_frame(d, &fs, err);
     if (rc) return rc;
     bs_run_totals_add(T, &fs);
     if (!quiet && bs_dist_rank() == 0) print_frame(d, &fs);
+    if (out) rc = bs_dout_frame(out, d, &fs, err);
   }
-  return BS_OK;
+  return rc;
 }
 
-/* The serial run's summary, from the distributed run. */
-static void print_summary(const bs_dsim *d, const bs_run_totals *T, double wall) {
+/* The serial run's summary, from the distributed run: printed by rank 0,
+ * and written into the folder (out may be NULL). */
+static int print_summary(const bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, bs_error *err) {
   const bs_scene *sc = d->scene;
   bs_summary u;
   memset(&u, 0, sizeof u);
@@ -85,6 +91,7 @@ static void print_summary(const bs_dsim *d, const bs_run_totals *T, double wall)
   u.failed = T->failed;
   u.max_grad = T->max_grad;
   u.inverted = d->steps[0].inverted;
+  u.self_intersections = -1; /* not computed on this backend */
   u.totals = *T;
   double mib = bs_peak_rss() / 1048576.0;
   MPI_Allreduce(MPI_IN_PLACE, &mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
@@ -92,9 +99,10 @@ static void print_summary(const bs_dsim *d, const bs_run_totals *T, double wall)
   char text[2048];
   bs_summary_format(&u, text, sizeof text);
   if (bs_dist_rank() == 0) printf("\n%s(peak memory: the largest of the %d ranks)\n", text, bs_dist_size());
+  return out ? bs_dout_finish(out, text, err) : BS_OK;
 }
 
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet) {
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
   bs_error err;
   bs_error_clear(&err);
   if (bs_dist_init(NULL, NULL, &err)) {
@@ -107,11 +115,12 @@ int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet) {
   bs_run_totals T;
   memset(&T, 0, sizeof T);
   if (!rc && !quiet && bs_dist_rank() == 0) print_header(path, d);
-  if (!rc && sc->out_dir[0] && bs_dist_rank() == 0)
-    fprintf(stderr, "bigstep run: output.dir '%s': the petsc backend writes no output folder yet\n", sc->out_dir);
-  if (!rc) rc = run_frames(d, quiet, &T, &err);
+  bs_dout *out = NULL;
+  if (!rc && sc->out_dir[0]) rc = bs_dout_open(d, sc->out_dir, replace, &out, &err);
+  if (!rc) rc = run_frames(d, out, quiet, &T, &err);
+  if (!rc) rc = print_summary(d, out, &T, bs_seconds() - t0, &err);
   if (rc) report(&err);
-  else print_summary(d, &T, bs_seconds() - t0);
+  bs_dout_destroy(&out);
   if (!rc && T.failed && bs_dist_rank() == 0)
     fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
             T.steps, T.first_fail_frame, T.first_fail_step, T.first_fail_reason);

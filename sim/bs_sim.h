@@ -197,6 +197,11 @@ typedef struct bs_sim_measures {
 
 #define BS_SIM_SELF_CAP 100000
 
+/* The measures of a state x, v (3 per vertex of fem's mesh) that need no
+ * obstacle or surface: energies (gravity g, m/s^2), inverted tets, min det F;
+ * penetrating and max_depth 0, self_intersections -1 (not computed). */
+void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const double g[3], bs_sim_measures *m);
+
 /* Measures the current state; intersections only when `intersections`. */
 void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m);
 
