@@ -9,9 +9,12 @@
  * (bodies.0.refine); materials by 3-D group, every model, Rayleigh damping;
  * gravity, drag; scripted groups (fixed, velocity, keyframes); an initial
  * velocity; statics with load steps; solver.method optimization with
- * solver.linear cg, pcg or amg. Refused: self_collision, obstacles,
- * body transforms (translate, rotate, scale), angular velocity, random or
- * point initial states, qoi, several bodies, other mesh files.
+ * solver.linear cg, pcg or amg; analytic obstacles (plane, sphere, box,
+ * cylinder, torus, moving or not) with penalty collisions (each vertex once,
+ * on its owner). Refused: self_collision, constraint and postprocess
+ * collisions, friction, grid level sets (shape grid, grid_h), body transforms
+ * (translate, rotate, scale), angular velocity, random or point initial
+ * states, qoi, several bodies, other mesh files.
  *
  * Collective (PETSC_COMM_WORLD). Ownership: bs_dsim_create borrows the scene
  * (it must outlive the dsim) and owns everything else. State (x, v, mask)
@@ -28,7 +31,8 @@
 extern "C" {
 #endif
 
-#define BS_DSIM_MAX_TERMS 8
+#define BS_DSIM_MAX_OBSTACLES 8
+#define BS_DSIM_MAX_TERMS (8 + BS_DSIM_MAX_OBSTACLES)
 
 typedef struct bs_dsim_script {
   const bs_scene_script *script;
@@ -43,6 +47,8 @@ typedef struct bs_dsim {
   int n_terms;
   bs_term *terms[BS_DSIM_MAX_TERMS];
   bs_step_data step;
+  int n_levelsets;
+  bs_levelset *levelsets[BS_DSIM_MAX_OBSTACLES]; /* the penalty obstacles' */
   double *x, *v;        /* local vectors: the state                       */
   uint8_t *mask;        /* per local vertex: 1 free, 0 scripted           */
   int n_scripts;

@@ -48,6 +48,7 @@
 #include "bs_base.h"
 #include "bs_material.h"
 #include "bs_mesh.h"
+#include "bs_levelset.h"
 #include "bs_obstacles.h"
 #include "bs_step.h"
 
@@ -248,6 +249,12 @@ int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_q
  * velocity times t, or the keyframes interpolated linearly (held before the
  * first and after the last key), in metres. */
 void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]);
+
+/* Obstacle o as a level set (bs_levelset.h; the caller frees it): its shape
+ * (or grid file), complement, motion, and with grid_h > 0 an analytic shape
+ * sampled on a grid over the box [lo - margin, hi + margin] (m). */
+int bs_scene_obstacle_levelset(const bs_scene_obstacle *o, const double lo[3], const double hi[3], double margin,
+                               bs_levelset **out, bs_error *err);
 
 /* Sets s->dt = 1 / (fps * steps_per_frame), then bs_scene_check. */
 int bs_scene_validate(bs_scene *s, bs_error *err);

@@ -134,20 +134,17 @@ static int obstacle_motion(const bs_scene_obstacle *o, bs_levelset *ls, bs_error
   return st;
 }
 
-/* Obstacle i as a level set: shape, complement, motion, optional grid sampling
- * around the bodies (one diagonal of margin). */
-static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error *err) {
-  const bs_scene_obstacle *o = &s->scene->obstacles[i];
+int bs_scene_obstacle_levelset(const bs_scene_obstacle *o, const double lo[3], const double hi[3], double margin,
+                               bs_levelset **out, bs_error *err) {
   bs_levelset *ls = NULL;
   int st = obstacle_shape(o, &ls, err);
   if (!st && o->inside_out) bs_levelset_set_complement(ls, 1);
   if (!st) st = obstacle_motion(o, ls, err);
   if (!st && o->grid_h > 0 && o->shape != BS_SHAPE_GRID) {
-    double lo[3], hi[3], glo[3], ghi[3];
-    bs_bbox(s->mesh->n_vertices, s->x0, lo, hi);
+    double glo[3], ghi[3];
     for (int k = 0; k < 3; k++) {
-      glo[k] = lo[k] - s->size;
-      ghi[k] = hi[k] + s->size;
+      glo[k] = lo[k] - margin;
+      ghi[k] = hi[k] + margin;
     }
     bs_levelset *g = NULL;
     st = bs_levelset_grid_sample(ls, 0.0, glo, ghi, o->grid_h, &g, err);
@@ -157,6 +154,14 @@ static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error
   if (st) bs_levelset_destroy(&ls);
   *out = ls;
   return st;
+}
+
+/* Obstacle i as a level set, a grid sampled around the bodies with one
+ * diagonal of margin. */
+static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error *err) {
+  double lo[3], hi[3];
+  bs_bbox(s->mesh->n_vertices, s->x0, lo, hi);
+  return bs_scene_obstacle_levelset(&s->scene->obstacles[i], lo, hi, s->size, out, err);
 }
 
 int bs_sim_make_obstacles_(bs_sim *s, bs_error *err) {

@@ -184,12 +184,58 @@ static void cube_stretch_frames(void) { cube_stretch_with(4, NULL); }
 /* Drag and gravity on top (a free fall with drag, the groups held). */
 static void cube_stretch_drag(void) { cube_stretch_with(2, "drag=0.5"); }
 
+/* The cube, free, thrown down onto a penalty floor and a penalty sphere
+ * (gravity, impact in the first frame). */
+static void cube_penalty_floor(void) {
+  char obs[512];
+  snprintf(obs, sizeof obs,
+           "obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-0.05,\"collision\":\"penalty\","
+           "\"stiffness\":1e6},{\"shape\":\"sphere\",\"center\":[0.5,-0.25,0.5],\"radius\":0.3,"
+           "\"collision\":\"penalty\",\"stiffness\":1e6}]");
+  bs_error err = {0};
+  const char *sets[] = {"time.frames=3", "bodies.0.scripted=[]", "gravity=[0,-9.8,0]", "bodies.0.velocity=[0,-3,0]", obs};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/cube_stretch.json", 5, sets, &sc, &err), err);
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  if (sc) CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  if (sc) CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  long it_s = 0, it_d = 0;
+  for (int f = 0; s && d && f < sc->frames; f++) {
+    bs_frame_stats fs, fd;
+    CHECK_OK(bs_sim_advance_frame(s, &fs, &err), err);
+    CHECK_OK(bs_dsim_advance_frame(d, &fd, &err), err);
+    CHECK(!fd.failed, "frame %d: %s", f + 1, d->steps[0].reason);
+    if (bs_dist_size() == 1)
+      CHECK(fd.iterations == fs.iterations, "frame %d: %ld iterations, serial %ld", f + 1, fd.iterations, fs.iterations);
+    it_s += fs.iterations, it_d += fd.iterations;
+  }
+  if (s && d) {
+    compare(d, s, "cube on penalty floor and sphere", NULL, 0);
+    double ymin = 1e300;
+    for (int32_t v = 0; v < d->mesh->n_vertices; v++) ymin = fmin(ymin, d->x[3 * v + 1]);
+    MPI_Allreduce(MPI_IN_PLACE, &ymin, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    CHECK(ymin < 0 && ymin > -0.2, "lowest vertex at y = %g: no contact, or through the floor", ymin);
+    if (bs_dist_rank() == 0)
+      printf("  cube on penalty floor: Newton iterations %ld (serial %ld), lowest y %.4f\n", it_d, it_s, ymin);
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
 /* A scene the backend does not run is refused with its key. */
 static void refused_scenes(void) {
   static const struct {
     const char *set, *key;
   } cases[] = {{"self_collision={\"stiffness\":1e5}", "self_collision"},
-               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1}]", "obstacles"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1}]", "obstacles.0.collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"penalty\","
+                "\"grid_h\":0.1}]",
+                "obstacles.0.grid_h"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"penalty\","
+                "\"friction\":0.3}]",
+                "obstacles.0.friction"},
                {"solver.linear=cholmod", "solver.linear"},
                {"solver.method=newton", "solver.method"},
                {"bodies.0.translate=[1,0,0]", "bodies.0.translate"}};
@@ -214,6 +260,7 @@ int main(int argc, char **argv) {
                                     {"beam_sag_preconditioned", beam_sag_preconditioned},
                                     {"cube_stretch_frames", cube_stretch_frames},
                                     {"cube_stretch_drag", cube_stretch_drag},
+                                    {"cube_penalty_floor", cube_penalty_floor},
                                     {"refused_scenes", refused_scenes}};
-  return dist_check_main(argc, argv, tests, 5);
+  return dist_check_main(argc, argv, tests, 6);
 }
