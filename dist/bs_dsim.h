@@ -34,12 +34,6 @@ extern "C" {
 #define BS_DSIM_MAX_OBSTACLES 8
 #define BS_DSIM_MAX_TERMS (8 + BS_DSIM_MAX_OBSTACLES)
 
-typedef struct bs_dsim_script {
-  const bs_scene_script *script;
-  int32_t n;          /* local vertices it moves */
-  int32_t *vertices;
-} bs_dsim_script;
-
 typedef struct bs_dsim {
   const bs_scene *scene;
   bs_dmesh *mesh;
@@ -52,7 +46,7 @@ typedef struct bs_dsim {
   double *x, *v;        /* local vectors: the state                       */
   uint8_t *mask;        /* per local vertex: 1 free, 0 scripted           */
   int n_scripts;
-  bs_dsim_script *scripts;
+  bs_sim_script *scripts; /* vertices: local vertices (the mesh's group arrays) */
   int64_t n_free;       /* free vertices over the ranks                   */
   bs_dintegrator *integrator;
   int frame;            /* frames completed                               */

@@ -71,6 +71,30 @@ static int united_values(DMLabel lab, int **vals, int *n, bs_error *err) {
   return BS_OK;
 }
 
+/* Group membership on every local vertex as its owner sees it. The owner
+ * holds the vertex's whole star (overlap 1), hence every labelled face or
+ * edge through it; a ghost in the overlap's outer layer may hold none of them
+ * (a cell that meets the group's surface at that vertex only), and would
+ * otherwise leave the group: then the group's vertex set, the scripted mask,
+ * and the vectors built from them would differ between owner and ghost. */
+static int owner_flags(const bs_dmesh *m, uint8_t *in, bs_error *err) {
+  Vec l, g;
+  PetscScalar *a;
+  BS_PETSC_TRY(DMGetLocalVector(m->dm, &l), err);
+  BS_PETSC_TRY(DMGetGlobalVector(m->dm, &g), err);
+  BS_PETSC_TRY(VecGetArray(l, &a), err);
+  for (int32_t v = 0; v < m->n_vertices; v++) a[3 * v] = a[3 * v + 1] = a[3 * v + 2] = in[v];
+  BS_PETSC_TRY(VecRestoreArray(l, &a), err);
+  BS_PETSC_TRY(DMLocalToGlobal(m->dm, l, INSERT_VALUES, g), err);
+  BS_PETSC_TRY(DMGlobalToLocal(m->dm, g, INSERT_VALUES, l), err);
+  BS_PETSC_TRY(VecGetArray(l, &a), err);
+  for (int32_t v = 0; v < m->n_vertices; v++) in[v] = a[3 * v] > 0.5;
+  BS_PETSC_TRY(VecRestoreArray(l, &a), err);
+  BS_PETSC_TRY(DMRestoreGlobalVector(m->dm, &g), err);
+  BS_PETSC_TRY(DMRestoreLocalVector(m->dm, &l), err);
+  return BS_OK;
+}
+
 /* Dimension (largest depth over the ranks) and local vertices of (lab, value). */
 static int group_points(const bs_dmesh *m, DMLabel lab, int value, bs_dgroup *g, bs_error *err) {
   IS is = NULL;
@@ -92,6 +116,7 @@ static int group_points(const bs_dmesh *m, DMLabel lab, int value, bs_dgroup *g,
   }
   int dim = (int)depth;
   MPI_Allreduce(MPI_IN_PLACE, &dim, 1, MPI_INT, MPI_MAX, PETSC_COMM_WORLD);
+  if (!rc) rc = owner_flags(m, in, err);
   g->dim = dim;
   for (int32_t v = 0; !rc && v < m->n_vertices; v++) g->n_vertices += in[v];
   g->vertices = rc ? NULL : bs_calloc((size_t)g->n_vertices + 1, sizeof *g->vertices, "group vertices", err);

@@ -150,10 +150,10 @@ static int make_scripts(bs_dsim *s, bs_error *err) {
     if (!g)
       return bs_error_set(err, BS_EINPUT, "%s: bodies.0.scripted.%d.group: the mesh has no physical group named '%s'",
                           s->scene->path, i, b->scripts[i].group);
-    bs_dsim_script *q = &s->scripts[s->n_scripts++];
+    bs_sim_script *q = &s->scripts[s->n_scripts++];
     q->script = &b->scripts[i];
     q->n = g->n_vertices;
-    q->vertices = g->vertices; /* the mesh's array: borrowed */
+    q->vertices = g->vertices; /* the mesh's array: borrowed, never freed here */
     for (int32_t j = 0; j < g->n_vertices; j++) s->mask[g->vertices[j]] = 0;
   }
   int64_t nf = 0;
