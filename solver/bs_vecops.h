@@ -4,7 +4,7 @@
  * array is one process's part of a larger vector (a distributed mesh: owned
  * and ghost vertices, ghosts holding their owner's values), everything the
  * minimizer decides from must be the same on every process. A bs_vecops set
- * on the minimizer supplies the three things that are not local:
+ * on the minimizer supplies the four things that are not local:
  *   dot    a.b of the whole vector (each entry counted once over the
  *          processes: ghosts left out, then summed over the processes);
  *   any    1 if flag is nonzero on some process (non-finite values, a step
