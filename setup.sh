@@ -21,7 +21,8 @@ JOBS=${JOBS:-$(nproc)}
 # Debian packages bigstep needs (build, run, tests, plots).
 pkgs=(build-essential cmake pkg-config libgmsh-dev gmsh libmetis-dev libsuitesparse-dev
       libcgal-dev libcjson-dev libcriterion-dev libopenblas0-pthread libopenblas-dev
-      gnuplot-nox libhypre-dev libopenmpi-dev libexpat1-dev zlib1g-dev)
+      gnuplot-nox libhypre-dev libopenmpi-dev libexpat1-dev zlib1g-dev
+      petsc-dev openmpi-bin)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

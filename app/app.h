@@ -10,6 +10,7 @@
 
 #include "bs_base.h"
 #include "bs_mesh.h"
+#include "bs_scene.h"
 
 #define BS_EXIT_FAIL 1
 #define BS_EXIT_USAGE 2
@@ -56,6 +57,8 @@ char *bs_app_command_line(int argc, char **argv);
 
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);
+/* bigstep run on the petsc backend (cmd_run_petsc.c): the exit status. */
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace);
 int bs_cmd_study(int argc, char **argv);
 int bs_cmd_check(int argc, char **argv);
 int bs_cmd_levelset(int argc, char **argv);

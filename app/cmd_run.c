@@ -13,7 +13,7 @@
 #include "bs_sim.h"
 
 static const char *run_help =
-    "usage: bigstep run SCENE [--method M] [--steps-per-frame N] [--frames N]\n"
+    "usage: bigstep run SCENE [--method M] [--backend B] [--steps-per-frame N] [--frames N]\n"
     "                         [--set key.path=value]... [--out DIR] [--replace] [--quiet] [--trace]\n"
     "                         [--resume [DIR]]\n"
     "\n"
@@ -39,6 +39,8 @@ static const char *run_help =
     "                        scene must be the one the folder was run with\n"
     "  --quiet               no per-frame lines\n"
     "  --trace               one line per solver iteration on stderr (to follow a slow step)\n"
+    "  --backend B           serial | petsc (solver.backend); petsc runs the scene\n"
+    "                        distributed: mpirun -np N bigstep run SCENE --backend petsc\n"
     "\n"
     "Exit status: 0 every step converged; 1 a step did not converge, or an error\n"
     "(bad scene, a file that cannot be written, a folder in use or holding an\n"
@@ -60,6 +62,7 @@ static const char *flag_key(const char *flag, int *is_count) {
   if (!strcmp(flag, "--steps-per-frame")) return "time.steps_per_frame";
   if (!strcmp(flag, "--frames")) return "time.frames";
   if (!strcmp(flag, "--out")) return "output.dir";
+  if (!strcmp(flag, "--backend")) return "solver.backend";
   return NULL;
 }
 
@@ -268,6 +271,16 @@ static int run_scene(const run_args *a, bs_sim *s) {
   return rc;
 }
 
+/* The ranks mpirun started this process among (Open MPI's, or a PMI's
+ * environment), 1 outside mpirun. */
+static int mpi_ranks(void) {
+  const char *v = getenv("OMPI_COMM_WORLD_SIZE");
+  if (!v) v = getenv("PMI_SIZE");
+  int n = 1;
+  if (v && bs_parse_int(v, 1, 1 << 30, &n)) n = 1;
+  return n;
+}
+
 int bs_cmd_run(int argc, char **argv) {
   run_args a = {0};
   int rc = parse_args(argc, argv, &a);
@@ -282,7 +295,14 @@ int bs_cmd_run(int argc, char **argv) {
   bs_sim *s = NULL;
   int st = bs_scene_load(a.scene, a.sets.n, (const char *const *)a.sets.v, &sc, &err);
   if (!st && a.trace) sc->solver.trace = stderr;
-  if (st || bs_sim_create(sc, &s, &err)) {
+  if (!st && sc->backend == BS_BACKEND_PETSC) {
+    rc = bs_app_run_petsc(a.scene, sc, a.quiet, a.replace);
+  } else if (!st && mpi_ranks() > 1) {
+    fprintf(stderr, "bigstep run: %s: solver.backend is \"serial\" but mpirun started %d ranks (each would run the "
+                    "whole scene): set solver.backend to \"petsc\" (--set solver.backend=petsc) or run one process\n",
+            a.scene, mpi_ranks());
+    rc = BS_EXIT_FAIL;
+  } else if (st || bs_sim_create(sc, &s, &err)) {
     fprintf(stderr, "bigstep run: %s\n", err.msg);
     rc = BS_EXIT_FAIL;
   } else {

@@ -321,6 +321,19 @@ int bs_vti_write(const bs_vti_grid *g, const char *path, bs_error *err);
 /* PVD collection: n entries (time, file relative to the PVD's folder). */
 int bs_pvd_write(const char *path, int n, const double *times, const char *const *files, bs_error *err);
 
+/* A parallel VTU (.pvtu): the pieces (VTU file names relative to the PVTU's
+ * folder, one per process, as bs_mesh_write_vtu writes them) and the point
+ * and cell arrays each of them holds (name, type, components; "Points" is
+ * declared by the writer). A missing name, an unknown type or no piece is
+ * BS_EINPUT naming it; a write failure BS_EIO. */
+typedef struct bs_pvtu_array {
+  const char *name;
+  bs_vtu_type type;
+  int ncomp;
+} bs_pvtu_array;
+int bs_pvtu_write(const char *path, int n_point, const bs_pvtu_array *point, int n_cell, const bs_pvtu_array *cell,
+                  int n_pieces, const char *const *pieces, bs_error *err);
+
 /* .msh (Gmsh format 4.1) through the Gmsh API, with the groups, so results
  * open in Gmsh; x may be NULL (rest). */
 int bs_mesh_write_msh(const bs_mesh *m, const double *x, const char *path, bs_error *err);

@@ -79,6 +79,11 @@ extern "C" {
   "t_eval,t_assembly,t_linear,t_line_search,seconds"
 #define BS_STATE_VERSION 2
 
+/* One frames.csv row (BS_FRAMES_CSV_HEADER's columns, newline ended) of
+ * frame fs at time (s) with the state's measures m, into buf (512 bytes
+ * hold any row); returns snprintf's length. */
+int bs_frames_csv_row(char *buf, size_t n, double time, const bs_frame_stats *fs, const bs_sim_measures *m);
+
 /* ---- writing ------------------------------------------------------------ */
 
 typedef struct bs_runfolder bs_runfolder;

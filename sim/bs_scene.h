@@ -48,6 +48,7 @@
 #include "bs_base.h"
 #include "bs_material.h"
 #include "bs_mesh.h"
+#include "bs_levelset.h"
 #include "bs_obstacles.h"
 #include "bs_step.h"
 
@@ -166,6 +167,7 @@ typedef struct bs_scene_qoi {
 } bs_scene_qoi;
 
 typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
+typedef enum { BS_BACKEND_SERIAL = 0, BS_BACKEND_PETSC } bs_scene_backend;
 
 typedef struct bs_scene {
   char path[BS_MAX_PATH];  /* the scene file; "<scene>" for one built in C     */
@@ -176,6 +178,7 @@ typedef struct bs_scene {
                            /* bs_scene_validate set it                             */
   bs_integrator_opts solver;
   bs_scene_mode mode;
+  bs_scene_backend backend; /* solver.backend: serial [default] or petsc (dist/) */
   int load_steps;
   int project_hessian;     /* PSD-project the elastic Hessian (Newton option)   */
   double gravity[3];
@@ -241,6 +244,17 @@ int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, 
 /* Appends a quantity of interest named `name` of the given kind (component
  * x, reduce mean, body 0, no group, obstacle 0, energy total: set them). */
 int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_qoi **out, bs_error *err);
+
+/* The offset from rest of a scripted group at time t (s): 0 for fixed, the
+ * velocity times t, or the keyframes interpolated linearly (held before the
+ * first and after the last key), in metres. */
+void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]);
+
+/* Obstacle o as a level set (bs_levelset.h; the caller frees it): its shape
+ * (or grid file), complement, motion, and with grid_h > 0 an analytic shape
+ * sampled on a grid over the box [lo - margin, hi + margin] (m). */
+int bs_scene_obstacle_levelset(const bs_scene_obstacle *o, const double lo[3], const double hi[3], double margin,
+                               bs_levelset **out, bs_error *err);
 
 /* Sets s->dt = 1 / (fps * steps_per_frame), then bs_scene_check. */
 int bs_scene_validate(bs_scene *s, bs_error *err);

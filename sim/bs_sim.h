@@ -85,6 +85,10 @@ typedef struct bs_frame_stats {
   double grad_max;     /* largest final ||grad E|| of its steps (N)         */
 } bs_frame_stats;
 
+/* The frame's sums (iterations, CG iterations, failed steps, seconds, the
+ * largest final |grad E|) from its n step records; fs->steps = steps. */
+void bs_frame_sums(int frame, double time, int n, const bs_sim_step *steps, bs_frame_stats *fs);
+
 /* Sums over a whole run, and its first failed step. */
 typedef struct bs_run_totals {
   long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill;
@@ -193,6 +197,11 @@ typedef struct bs_sim_measures {
 } bs_sim_measures;
 
 #define BS_SIM_SELF_CAP 100000
+
+/* The measures of a state x, v (3 per vertex of fem's mesh) that need no
+ * obstacle or surface: energies (gravity g, m/s^2), inverted tets, min det F;
+ * penetrating and max_depth 0, self_intersections -1 (not computed). */
+void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const double g[3], bs_sim_measures *m);
 
 /* Measures the current state; intersections only when `intersections`. */
 void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m);

@@ -132,12 +132,18 @@ static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *e
   return bs_outfile_flush(f, err);
 }
 
+int bs_frames_csv_row(char *buf, size_t n, double time, const bs_frame_stats *fs, const bs_sim_measures *m) {
+  return snprintf(buf, n, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, time,
+                  m->kinetic, m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations,
+                  fs->cg_iterations, fs->failed, fs->seconds, m->penetrating, m->max_depth,
+                  (long long)m->self_intersections);
+}
+
 static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                            bs_error *err) {
-  bs_outfile_printf(f, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld\n", fs->frame, s->time,
-                    m->kinetic, m->elastic, m->gravity, m->total, m->inverted, m->min_detF, fs->iterations,
-                    fs->cg_iterations, fs->failed, fs->seconds, m->penetrating, m->max_depth,
-                    (long long)m->self_intersections);
+  char row[512];
+  bs_frames_csv_row(row, sizeof row, s->time, fs, m);
+  bs_outfile_printf(f, "%s", row);
   return bs_outfile_flush(f, err);
 }
 

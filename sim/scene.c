@@ -629,14 +629,16 @@ static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
 /* The solver's string keys. */
 static int parse_solver_choices(ctx *c, const cJSON *so, bs_scene *s) {
   int st, method = (int)s->solver.method, linear = (int)s->solver.min.linear;
-  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC;
+  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC, backend = (int)s->backend;
   if ((st = get_enum(c, so, "solver", "solver", "method", parse_method, &method)) ||
       (st = get_enum(c, so, "solver", "solver", "linear", parse_linear, &linear)) ||
       (st = get_choice(c, so, "solver", "solver", "cg_precision", &s->solver.min.cg_single)) ||
       (st = get_choice(c, so, "solver", "solver", "amg_matrix", &current)) ||
       (st = get_choice(c, so, "solver", "solver", "cg_forcing", &s->solver.min.forcing_ew)) ||
-      (st = get_choice(c, so, "solver", "solver", "mode", &stat)))
+      (st = get_choice(c, so, "solver", "solver", "mode", &stat)) ||
+      (st = get_choice(c, so, "solver", "solver", "backend", &backend)))
     return st;
+  s->backend = (bs_scene_backend)backend;
   s->solver.method = (bs_method)method;
   s->solver.min.linear = (bs_lin_kind)linear;
   s->solver.amg_at_rest = !current;

@@ -58,6 +58,8 @@ const bs_schema_key bs_schema_keys_[] = {
      .doc = "Krylov iterations per solve; 0: 2 x free dofs + 100"},
     {"solver", "newton_k", INT, .range = "[1, 1000000]", .def = "1",
      .doc = "k of newton_k (1: linearized backward Euler)"},
+    {"solver", "backend", STR, .choices = CHOICES("serial", "petsc"), .def = "\"serial\"",
+     .doc = "serial: this process; petsc: distributed over MPI ranks (mpirun -np N bigstep run SCENE)"},
     {"solver", "mode", STR, .choices = CHOICES("dynamic", "static"), .def = "\"dynamic\"",
      .doc = "dynamic, or static (minimize the potential energy alone)"},
     {"solver", "load_steps", INT, .range = "[1, 100000]", .def = "1", .doc = "load increments of a static solve"},

@@ -74,6 +74,7 @@ static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
   num(w, o, "cg_max_iterations", m->cg_max_iter);
   num(w, o, "newton_k", s->solver.newton_k);
   str(w, o, "mode", choice("solver", "mode", s->mode == BS_MODE_STATIC));
+  str(w, o, "backend", choice("solver", "backend", (int)s->backend));
   num(w, o, "load_steps", s->load_steps);
   boolean(w, o, "project_hessian", s->project_hessian);
   if (m->sigma_auto) {

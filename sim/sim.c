@@ -156,20 +156,25 @@ static int64_t surface_self_intersections(const bs_sim *s) {
   return n;
 }
 
-void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
-  const bs_fem *fem = s->fem;
-  const double *g = s->scene->gravity;
+void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const double g[3], bs_sim_measures *m) {
   double k = 0, gp = 0;
-  for (int32_t v = 0; v < fem->n_vertices; v++) {
-    const double *vv = s->v + 3 * v, *xx = s->x + 3 * v;
-    k += 0.5 * fem->mass[v] * (vv[0] * vv[0] + vv[1] * vv[1] + vv[2] * vv[2]);
-    gp -= fem->mass[v] * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
+  for (int32_t i = 0; i < fem->n_vertices; i++) {
+    const double *vv = v + 3 * i, *xx = x + 3 * i;
+    k += 0.5 * fem->mass[i] * (vv[0] * vv[0] + vv[1] * vv[1] + vv[2] * vv[2]);
+    gp -= fem->mass[i] * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
   }
   m->kinetic = k;
   m->gravity = gp;
-  m->elastic = bs_fem_elastic_energy(fem, s->x);
+  m->elastic = bs_fem_elastic_energy(fem, x);
   m->total = m->kinetic + m->elastic + m->gravity;
-  m->inverted = bs_fem_count_inverted(fem, s->x, &m->min_detF);
+  m->inverted = bs_fem_count_inverted(fem, x, &m->min_detF);
+  m->penetrating = 0;
+  m->max_depth = 0;
+  m->self_intersections = -1;
+}
+
+void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
+  bs_measure_state(s->fem, s->x, s->v, s->scene->gravity, m);
   bs_sim_penetration(s, &m->penetrating, &m->max_depth);
   m->self_intersections = intersections ? surface_self_intersections(s) : -1;
 }

@@ -9,27 +9,31 @@
 #include "bs_selfcollide.h"
 #include "sim_internal.h"
 
+void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]) {
+  off[0] = off[1] = off[2] = 0;
+  if (sc->kind == BS_SCRIPT_VELOCITY) {
+    for (int k = 0; k < 3; k++) off[k] = sc->velocity[k] * t;
+  } else if (sc->kind == BS_SCRIPT_KEYFRAMES) {
+    int n = sc->n_keys;
+    if (t <= sc->key_t[0]) memcpy(off, sc->key_offset, 3 * sizeof(double));
+    else if (t >= sc->key_t[n - 1]) memcpy(off, sc->key_offset + 3 * (n - 1), 3 * sizeof(double));
+    else
+      for (int j = 0; j + 1 < n; j++)
+        if (t >= sc->key_t[j] && t <= sc->key_t[j + 1]) {
+          double w = (t - sc->key_t[j]) / (sc->key_t[j + 1] - sc->key_t[j]);
+          for (int k = 0; k < 3; k++)
+            off[k] = (1 - w) * sc->key_offset[3 * j + k] + w * sc->key_offset[3 * (j + 1) + k];
+          break;
+        }
+  }
+}
+
 void bs_sim_script_positions_(double t, double *x, void *ctx) {
   bs_sim *s = ctx;
   for (int i = 0; i < s->n_scripts; i++) {
     const bs_sim_script *ss = &s->scripts[i];
-    const bs_scene_script *sc = ss->script;
-    double off[3] = {0, 0, 0};
-    if (sc->kind == BS_SCRIPT_VELOCITY) {
-      for (int k = 0; k < 3; k++) off[k] = sc->velocity[k] * t;
-    } else if (sc->kind == BS_SCRIPT_KEYFRAMES) {
-      int n = sc->n_keys;
-      if (t <= sc->key_t[0]) memcpy(off, sc->key_offset, sizeof off);
-      else if (t >= sc->key_t[n - 1]) memcpy(off, sc->key_offset + 3 * (n - 1), sizeof off);
-      else
-        for (int j = 0; j + 1 < n; j++)
-          if (t >= sc->key_t[j] && t <= sc->key_t[j + 1]) {
-            double w = (t - sc->key_t[j]) / (sc->key_t[j + 1] - sc->key_t[j]);
-            for (int k = 0; k < 3; k++)
-              off[k] = (1 - w) * sc->key_offset[3 * j + k] + w * sc->key_offset[3 * (j + 1) + k];
-            break;
-          }
-    }
+    double off[3];
+    bs_scene_script_offset(ss->script, t, off);
     for (int32_t q = 0; q < ss->n; q++) {
       int32_t v = ss->vertices[q];
       for (int k = 0; k < 3; k++) x[3 * v + k] = s->x0[3 * v + k] + off[k];
@@ -130,20 +134,17 @@ static int obstacle_motion(const bs_scene_obstacle *o, bs_levelset *ls, bs_error
   return st;
 }
 
-/* Obstacle i as a level set: shape, complement, motion, optional grid sampling
- * around the bodies (one diagonal of margin). */
-static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error *err) {
-  const bs_scene_obstacle *o = &s->scene->obstacles[i];
+int bs_scene_obstacle_levelset(const bs_scene_obstacle *o, const double lo[3], const double hi[3], double margin,
+                               bs_levelset **out, bs_error *err) {
   bs_levelset *ls = NULL;
   int st = obstacle_shape(o, &ls, err);
   if (!st && o->inside_out) bs_levelset_set_complement(ls, 1);
   if (!st) st = obstacle_motion(o, ls, err);
   if (!st && o->grid_h > 0 && o->shape != BS_SHAPE_GRID) {
-    double lo[3], hi[3], glo[3], ghi[3];
-    bs_bbox(s->mesh->n_vertices, s->x0, lo, hi);
+    double glo[3], ghi[3];
     for (int k = 0; k < 3; k++) {
-      glo[k] = lo[k] - s->size;
-      ghi[k] = hi[k] + s->size;
+      glo[k] = lo[k] - margin;
+      ghi[k] = hi[k] + margin;
     }
     bs_levelset *g = NULL;
     st = bs_levelset_grid_sample(ls, 0.0, glo, ghi, o->grid_h, &g, err);
@@ -153,6 +154,14 @@ static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error
   if (st) bs_levelset_destroy(&ls);
   *out = ls;
   return st;
+}
+
+/* Obstacle i as a level set, a grid sampled around the bodies with one
+ * diagonal of margin. */
+static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error *err) {
+  double lo[3], hi[3];
+  bs_bbox(s->mesh->n_vertices, s->x0, lo, hi);
+  return bs_scene_obstacle_levelset(&s->scene->obstacles[i], lo, hi, s->size, out, err);
 }
 
 int bs_sim_make_obstacles_(bs_sim *s, bs_error *err) {

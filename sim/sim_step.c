@@ -9,15 +9,14 @@
 
 #include "sim_internal.h"
 
-/* The frame's sums from its step records. */
-static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) {
+void bs_frame_sums(int frame, double time, int n, const bs_sim_step *steps, bs_frame_stats *fs) {
   memset(fs, 0, sizeof *fs);
-  fs->frame = s->frame;
-  fs->time = s->time;
+  fs->frame = frame;
+  fs->time = time;
   fs->n_steps = n;
-  fs->steps = s->steps;
+  fs->steps = steps;
   for (int k = 0; k < n; k++) {
-    const bs_step_stats *st = &s->steps[k].st;
+    const bs_step_stats *st = &steps[k].st;
     fs->iterations += st->min.iterations;
     fs->cg_iterations += st->min.cg_iterations;
     fs->failed += st->failed;
@@ -25,6 +24,8 @@ static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) {
     if (st->min.grad_norm > fs->grad_max) fs->grad_max = st->min.grad_norm;
   }
 }
+
+static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) { bs_frame_sums(s->frame, s->time, n, s->steps, fs); }
 
 /* The step's record: its time, inverted tets and its own copy of the reason
  * (the minimizer's text is overwritten by the next solve). */

@@ -63,7 +63,7 @@ static double grad_here(ls_state *s, double *dphi) {
     return INFINITY;
   }
   bs__constrained_gradient(m, s->obj, m->y, m->gy_raw, m->gy, s->st, 0);
-  double sl = bs__dot(m->n3, m->gy, m->d);
+  double sl = bs__mdot(m, m->gy, m->d);
   if (!isfinite(sl)) {
     *dphi = NAN;
     return INFINITY;
@@ -263,7 +263,7 @@ capped:
     best_phi = phi;
     res->dphi = dphi;
   } else {
-    res->dphi = bs__dot(m->n3, m->gy, m->d);
+    res->dphi = bs__mdot(m, m->gy, m->d);
   }
   res->status = BS_LSEARCH_CAPPED;
   res->alpha = best_a;

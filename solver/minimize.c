@@ -70,7 +70,7 @@ int bs__gradient(bs_minimizer *m, const bs_objective *obj, const double *x, doub
   st->t_eval += bs_seconds() - t;
   if (rc != 0 || !isfinite(*E)) return 1;
   *bad = bs__first_nonfinite(m->n, obj->mask, g_raw);
-  return *bad >= 0;
+  return bs__many(m, *bad >= 0);
 }
 
 double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const double *x,
@@ -87,7 +87,7 @@ double bs__constrained_gradient(bs_minimizer *m, const bs_objective *obj, const 
   } else {
     bs__mask_copy(m->n, obj->mask, g_raw, g);
   }
-  return sqrt(bs__dot(m->n3, g, g));
+  return sqrt(bs__mdot(m, g, g));
 }
 
 double bs__noise_level(double E) { return 64 * DBL_EPSILON * fabs(E); }
@@ -345,6 +345,7 @@ int bs__obj_check(const bs_minimizer *m, const bs_objective *obj, const double *
   if (!(obj->load_norm >= 0) || !isfinite(obj->load_norm))
     return bs_error_set(err, BS_EINPUT, "objective load_norm must be finite and >= 0, got %g", obj->load_norm);
   int64_t bad = bs__first_nonfinite(m->n, obj->mask, x);
+  if (bs__many(m, bad >= 0) && bad < 0) return bs_error_set(err, BS_ENUMERIC, "initial x is not finite on another process");
   if (bad >= 0)
     return bs_error_set(err, BS_ENUMERIC, "initial x is not finite at vertex %lld component %d (%g)",
                         (long long)(bad / 3), (int)(bad % 3), x[bad]);
@@ -415,6 +416,7 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   const bs_minimize_opts *o = &m->opts;
   int64_t free_dofs = 0;
   for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;
+  if (m->has_vops) free_dofs = (int64_t)bs__msum(m, (double)free_dofs); /* ghosts counted too: a cap only */
   /* Default cap: CG ends in at most (free dofs) steps in exact arithmetic; allow
    * for rounding. */
   int64_t auto_it = 2 * free_dofs + 100;
@@ -440,16 +442,18 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   bs_lin_kind kind = o->linear;
   bs_lin_stats ls;
   memset(&ls, 0, sizeof ls);
-  if (kind == BS_LIN_AMG && !obj->precond_matrix) {
+  if (kind == BS_LIN_AMG && !obj->precond_matrix && !m->has_vops) {
     int arc = amg_prepare(m, obj, x, it, st, err);
     if (arc) return arc;
   }
   double t = bs_seconds();
   bs_error e2;
   bs_error_clear(&e2);
-  int rc = bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
-  if (rc == 0 && kind == BS_LIN_AMG) amg_judge(m, &ls);
-  if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd) {
+  int rc = m->has_vops ? m->vops.solve(obj->mask, m->r, rel, max_it, o->cg_downhill ? o->kappa : 0.0, m->d, &ls, &e2,
+                                        m->vops.ctx)
+                       : bs_linsolve_solve(m->lin[kind], m->H, obj->mask, m->r, rel, max_it, m->d, &ls, &e2);
+  if (rc == 0 && kind == BS_LIN_AMG && !m->has_vops) amg_judge(m, &ls);
+  if (rc == 0 && kind == BS_LIN_CHOLMOD && ls.not_pd && !m->has_vops) {
     st->cholmod_fallbacks++;
     rec->cholmod_fallback = 1;
     kind = BS_LIN_CG;
@@ -503,7 +507,7 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
   const bs_minimize_opts *o = &m->opts;
   const int64_t N = m->n3;
   /* Step 5: downhill check. */
-  double dn = sqrt(bs__dot(N, m->d, m->d)), dg = bs__dot(N, m->d, m->g);
+  double dn = sqrt(bs__mdot(m, m->d, m->d)), dg = bs__mdot(m, m->d, m->g);
   if (isfinite(dn) && isfinite(dg) && dn > 0 && dg < -o->kappa * dn * gnorm) {
     rec->direction = BS_DIR_NEWTON;
   } else if (isfinite(dn) && isfinite(dg) && dn > 0 && -dg < -o->kappa * dn * gnorm) {
@@ -523,7 +527,7 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
     rec->clamped = 1;
     st->clamps++;
   }
-  return bs__dot(N, m->d, m->g);
+  return bs__mdot(m, m->d, m->g);
 }
 
 /* The reason of a line search with no decrease. Paper 3.3: below some
@@ -572,7 +576,7 @@ static int at_floor(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats 
  * < 0 an error. */
 static int assemble(bs_minimizer *m, const bs_objective *obj, const double *x, int it, bs_minimize_stats *st,
                     bs_error *err) {
-  if (m->opts.linear == BS_LIN_AMG && obj->precond_matrix) {
+  if (m->opts.linear == BS_LIN_AMG && obj->precond_matrix && !m->has_vops) {
     int rc = amg_prepare(m, obj, x, it, st, err);
     if (rc) return rc;
   }
@@ -696,7 +700,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
                    ls.alpha == 1 && ls.evals == 1;
     m->all_full &= m->last_full;
     if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
-    const int moved = free_dofs_moved(m, obj, x);
+    const int moved = bs__many(m, free_dofs_moved(m, obj, x));
     if (obj->trace) trace_step(m, obj, x, E, dphi0, &ls, &rec);
     E = accept_step(m, x, &ls, st);
     if (!moved) {

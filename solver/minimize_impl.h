@@ -4,6 +4,7 @@
 #define BS_MINIMIZE_IMPL_H
 
 #include "bs_minimize.h"
+#include "bs_vecops.h"
 
 #define BS_MIN_TEXT 512
 
@@ -32,7 +33,15 @@ struct bs_minimizer {
    * direction, right-hand side, trial point, raw and projected gradient there. */
   double *g_raw, *g, *d, *r, *y, *gy_raw, *gy;
   char text[BS_MIN_TEXT];     /* stats.reason_text points here                      */
+  int has_vops;               /* 1: vops set (bs_minimizer_set_vecops)               */
+  bs_vecops vops;
 };
+
+/* Through m->vops when set (vecops.c): a.b over 3n, "flag on some process",
+ * a sum over the processes; else the local values. */
+double bs__mdot(const bs_minimizer *m, const double *a, const double *b);
+int bs__many(const bs_minimizer *m, int flag);
+double bs__msum(const bs_minimizer *m, double v);
 
 /* Vector kernels over N = 3n doubles (OpenMP, static schedule). */
 double bs__dot(int64_t N, const double *a, const double *b);

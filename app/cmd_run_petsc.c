@@ -1,0 +1,133 @@
+/* bigstep run SCENE with solver.backend = "petsc", under mpirun -np N: the
+ * scene on the distributed backend (dist/bs_dsim.h). Rank 0 prints the
+ * header, the frame lines and the summary (bs_summary_format, the serial
+ * run's summary). Without PETSc (BS_PETSC=OFF) the backend is refused. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app.h"
+#include "bs_runfolder.h"
+#include "bs_scene.h"
+
+#ifndef BS_HAVE_PETSC
+
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
+  fprintf(stderr, "bigstep run: %s: solver.backend: this bigstep was built without PETSc (BS_PETSC=OFF); "
+                  "use \"serial\" or rebuild with petsc-dev installed\n", path);
+  return BS_EXIT_FAIL;
+}
+
+#else
+
+#include "bs_dist.h"
+#include "bs_doutput.h"
+#include "bs_dsim.h"
+
+/* The message of a failed collective call: rank 0's, and another rank's
+ * when it differs. */
+static void report(const bs_error *err) {
+  char first[BS_ERROR_MSG];
+  snprintf(first, sizeof first, "%s", err->msg);
+  MPI_Bcast(first, (int)sizeof first, MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (bs_dist_rank() == 0 || strcmp(first, err->msg) != 0)
+    fprintf(stderr, "bigstep run%s: %s\n", bs_dist_rank() ? " (a rank > 0)" : "", err->msg);
+}
+
+static void print_header(const char *path, const bs_dsim *d) {
+  const bs_scene *sc = d->scene;
+  printf("bigstep run %s: %lld vertices, %lld tets, %ld dofs on %d ranks (petsc backend), method %s, linear %s, "
+         "%d frames at %g fps, %d steps/frame (dt %.6g s), tolerance %g\n",
+         path, (long long)d->mesh->n_global_vertices, (long long)d->mesh->n_global_cells, bs_dsim_dofs(d),
+         bs_dist_size(), bs_method_name(sc->solver.method), bs_lin_kind_name(sc->solver.min.linear), sc->frames,
+         sc->fps, sc->steps_per_frame, sc->dt, sc->solver.min.tol);
+  fflush(stdout);
+}
+
+static void print_frame(const bs_dsim *d, const bs_frame_stats *fs) {
+  const bs_scene *sc = d->scene;
+  const bs_step_stats *st = &fs->steps[0].st;
+  if (sc->mode == BS_MODE_STATIC)
+    printf("static: %s after %d iterations (%d CG), |grad E| %.3e, E %.6e, %d inverted tets, %.3f s\n",
+           st->failed ? "FAILED" : "converged", st->min.iterations, st->min.cg_iterations, st->min.grad_norm,
+           st->min.E, fs->steps[fs->n_steps - 1].inverted, st->seconds);
+  else
+    printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d  peak %.0f MiB (rank 0)  %.3f s%s\n",
+           fs->frame, sc->frames, fs->iterations, fs->cg_iterations, fs->grad_max, fs->steps[fs->n_steps - 1].inverted,
+           bs_peak_rss() / 1048576.0, fs->seconds, fs->failed ? "  FAILED STEPS" : "");
+  fflush(stdout);
+}
+
+/* The frames (or the static solve), totals into *T, each frame into the
+ * folder (out may be NULL), frame 0 (the initial state) first. */
+static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_error *err) {
+  const bs_scene *sc = d->scene;
+  int n = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
+  bs_frame_stats fs;
+  bs_frame_sums(0, 0.0, 0, NULL, &fs);
+  int rc = out ? bs_dout_frame(out, d, &fs, err) : BS_OK;
+  for (int f = 0; f < n && !rc; f++) {
+    rc = sc->mode == BS_MODE_STATIC ? bs_dsim_statics(d, &fs, err) : bs_dsim_advance_frame(d, &fs, err);
+    if (rc) return rc;
+    bs_run_totals_add(T, &fs);
+    if (!quiet && bs_dist_rank() == 0) print_frame(d, &fs);
+    if (out) rc = bs_dout_frame(out, d, &fs, err);
+  }
+  return rc;
+}
+
+/* The serial run's summary, from the distributed run: printed by rank 0,
+ * and written into the folder (out may be NULL). */
+static int print_summary(const bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, bs_error *err) {
+  const bs_scene *sc = d->scene;
+  bs_summary u;
+  memset(&u, 0, sizeof u);
+  snprintf(u.method, sizeof u.method, "%s", bs_method_name(sc->solver.method));
+  u.steps_per_frame = sc->steps_per_frame;
+  u.frames = u.frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
+  u.s_per_frame = wall / u.frames;
+  u.dofs = bs_dsim_dofs(d);
+  u.solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
+  u.failed = T->failed;
+  u.max_grad = T->max_grad;
+  u.inverted = d->steps[0].inverted;
+  u.self_intersections = -1; /* not computed on this backend */
+  u.totals = *T;
+  double mib = bs_peak_rss() / 1048576.0;
+  MPI_Allreduce(MPI_IN_PLACE, &mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  u.peak_mib = mib;
+  char text[2048];
+  bs_summary_format(&u, text, sizeof text);
+  if (bs_dist_rank() == 0) printf("\n%s(peak memory: the largest of the %d ranks)\n", text, bs_dist_size());
+  return out ? bs_dout_finish(out, text, err) : BS_OK;
+}
+
+int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
+  bs_error err;
+  bs_error_clear(&err);
+  if (bs_dist_init(NULL, NULL, &err)) {
+    fprintf(stderr, "bigstep run: %s\n", err.msg);
+    return BS_EXIT_FAIL;
+  }
+  double t0 = bs_seconds();
+  bs_dsim *d = NULL;
+  int rc = bs_dsim_create(sc, &d, &err);
+  bs_run_totals T;
+  memset(&T, 0, sizeof T);
+  if (!rc && !quiet && bs_dist_rank() == 0) print_header(path, d);
+  bs_dout *out = NULL;
+  if (!rc && sc->out_dir[0]) rc = bs_dout_open(d, sc->out_dir, replace, &out, &err);
+  if (!rc) rc = run_frames(d, out, quiet, &T, &err);
+  if (!rc) rc = print_summary(d, out, &T, bs_seconds() - t0, &err);
+  if (rc) report(&err);
+  bs_dout_destroy(&out);
+  if (!rc && T.failed && bs_dist_rank() == 0)
+    fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
+            T.steps, T.first_fail_frame, T.first_fail_step, T.first_fail_reason);
+  int status = rc ? BS_EXIT_FAIL : T.failed ? BS_EXIT_FAIL : 0;
+  bs_dsim_destroy(&d);
+  bs_dist_finalize();
+  return status;
+}
+
+#endif

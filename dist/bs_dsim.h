@@ -1,0 +1,81 @@
+/* bs_dsim.h — a scene run on the petsc backend (solver.backend = "petsc"):
+ * the scene's body as a distributed mesh (bs_dmesh.h), its terms on the
+ * owned cells (bs_dfem.h), its scripted and fixed groups, and the
+ * distributed integrator (bs_dstep.h), stepped frame by frame or solved
+ * statically as bs_sim does (sim/bs_sim.h).
+ *
+ * What the backend runs (bs_dsim_check refuses anything else, naming the
+ * key): one body; mesh "box" or a .msh file (bodies.0.mesh), refined
+ * (bodies.0.refine); materials by 3-D group, every model, Rayleigh damping;
+ * gravity, drag; scripted groups (fixed, velocity, keyframes); an initial
+ * velocity; statics with load steps; solver.method optimization with
+ * solver.linear cg, pcg or amg; analytic obstacles (plane, sphere, box,
+ * cylinder, torus, moving or not) with penalty collisions (each vertex once,
+ * on its owner). Refused: self_collision, constraint and postprocess
+ * collisions, friction, grid level sets (shape grid, grid_h), body transforms
+ * (translate, rotate, scale), angular velocity, random or point initial
+ * states, qoi, several bodies, other mesh files.
+ *
+ * Collective (PETSC_COMM_WORLD). Ownership: bs_dsim_create borrows the scene
+ * (it must outlive the dsim) and owns everything else. State (x, v, mask)
+ * is in local vectors (3 per local vertex of mesh, consistent).
+ */
+#ifndef BS_DSIM_H
+#define BS_DSIM_H
+
+#include "bs_scene.h"
+#include "bs_sim.h"
+#include "bs_dstep.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define BS_DSIM_MAX_OBSTACLES 8
+#define BS_DSIM_MAX_TERMS (8 + BS_DSIM_MAX_OBSTACLES)
+
+typedef struct bs_dsim {
+  const bs_scene *scene;
+  bs_dmesh *mesh;
+  bs_dfem *df;
+  int n_terms;
+  bs_term *terms[BS_DSIM_MAX_TERMS];
+  bs_step_data step;
+  int n_levelsets;
+  bs_levelset *levelsets[BS_DSIM_MAX_OBSTACLES]; /* the penalty obstacles' */
+  double *x, *v;        /* local vectors: the state                       */
+  uint8_t *mask;        /* per local vertex: 1 free, 0 scripted           */
+  int n_scripts;
+  bs_sim_script *scripts; /* vertices: local vertices (the mesh's group arrays) */
+  int64_t n_free;       /* free vertices over the ranks                   */
+  bs_dintegrator *integrator;
+  int frame;            /* frames completed                               */
+  double time;          /* s                                              */
+  bs_sim_step *steps;   /* steps_per_frame records of the last frame      */
+  double *xm;           /* work: 3 per local-mesh vertex                  */
+} bs_dsim;
+
+/* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
+ * collective (the same answer on every rank). */
+int bs_dsim_check(const bs_scene *sc, bs_error *err);
+
+int bs_dsim_create(const bs_scene *sc, bs_dsim **out, bs_error *err);
+void bs_dsim_destroy(bs_dsim **s);
+
+/* Statics (scene mode static), as bs_sim_statics: fs of the one step. */
+int bs_dsim_statics(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
+
+/* One frame of steps_per_frame steps, as bs_sim_advance_frame (fs->steps
+ * points into s, valid until the next frame). */
+int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
+
+/* Tets with det F <= 0 at s->x over the ranks. */
+int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err);
+
+/* Unknowns over the ranks: 3 per free vertex. */
+long bs_dsim_dofs(const bs_dsim *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,52 @@
+/* bs_dstep.h — the backward Euler step and statics of bs_step.h on a
+ * distributed mesh: the same steps (x̂, the terms' begin_step, scripted
+ * vertices, the paper's two initial guesses, the solve, the velocities), the
+ * same minimizer (bs_minimize through a bs_vecops, bs_vecops.h: dot products
+ * over owned dofs summed over the ranks, the Newton system solved by
+ * bs_dlinsolve.h's CG), the same options (bs_integrator_opts; min.linear picks
+ * the preconditioner: cg none, pcg point-block Jacobi, amg GAMG).
+ *
+ * x, v: bs_dfem local vectors (3 per local vertex, consistent). The terms
+ * (set on the dfem with bs_dfem_set_terms) were created with `step`, whose
+ * x_hat and x_n the integrator points at its own arrays in the local mesh's
+ * order. mask: 1 free, 0 scripted or fixed, per local vertex (consistent).
+ * script: the positions of the masked vertices at a time, on a local vector.
+ * Not supported (refused by the caller's scene check): projection hooks,
+ * friction, self-collision, the Newton baseline.
+ *
+ * Collective. Ownership: borrows dfem, step and the terms; copies the mask.
+ * Status: as bs_step.h, plus BS_EINPUT for an option the backend does not
+ * have (min.linear cholmod or minres, a method other than optimization).
+ */
+#ifndef BS_DSTEP_H
+#define BS_DSTEP_H
+
+/* bs_step.h first: <complex.h>, which PETSc includes, defines I. */
+#include "bs_step.h"
+#include "bs_dfem.h"
+#include "bs_dlinsolve.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct bs_dintegrator bs_dintegrator;
+
+int bs_dintegrator_create(bs_dfem *df, bs_step_data *step, const uint8_t *mask, bs_script_fn script, void *script_ctx,
+                          const bs_integrator_opts *opts, bs_dintegrator **out, bs_error *err);
+void bs_dintegrator_destroy(bs_dintegrator **D);
+
+/* Statics in load_steps increments (as bs_integrator_static). */
+int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err);
+
+/* One step of size dt from t (as bs_integrator_step). */
+int bs_dintegrator_step(bs_dintegrator *D, double t, double dt, double *x, double *v, bs_step_stats *st,
+                        bs_error *err);
+
+/* The linear solver (GAMG figures: bs_dlin_info). */
+const bs_dlin *bs_dintegrator_linsolve(const bs_dintegrator *D);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,170 @@
+/* doutput.c — a petsc-backend run's output folder: rank 0 writes frames.csv,
+ * scene.json, the PVTU and PVD files and summary.txt; every rank writes its
+ * VTU piece (bs_doutput.h). */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bs_dist.h"
+#include "bs_doutput.h"
+#include "bs_runfolder.h"
+
+struct bs_dout {
+  char dir[BS_MAX_PATH];
+  FILE *frames;          /* rank 0 */
+  int n_vtu, cap_vtu;
+  double *times;
+  char **names;          /* the PVTU files of frames.pvd */
+  double *vm;            /* work: 3 per local-mesh vertex */
+  int32_t *rank_cells;   /* per owned cell: this rank */
+};
+
+/* rc on every rank: the worst (most negative) status, with rank 0's
+ * message when rank 0 failed (it writes most files), else a message naming
+ * the failure on another rank. */
+static int agree(int rc, bs_error *err) {
+  int worst = rc, root = rc;
+  MPI_Allreduce(&rc, &worst, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Bcast(&root, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!worst) return BS_OK;
+  char msg[BS_ERROR_MSG] = "";
+  if (bs_dist_rank() == 0 && err) snprintf(msg, sizeof msg, "%s", err->msg);
+  MPI_Bcast(msg, (int)sizeof msg, MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (root && bs_dist_rank() != 0) bs_error_set(err, root, "%s", msg);
+  else if (!rc) bs_error_set(err, worst, "another rank could not write its output");
+  return root ? root : worst;
+}
+
+static int open_root(bs_dout *o, const bs_dsim *d, int replace, bs_error *err) {
+  int rc = bs_mkdir_p(o->dir, err);
+  char p[BS_MAX_PATH + 32];
+  snprintf(p, sizeof p, "%s/frames.csv", o->dir);
+  if (!rc && !replace && access(p, F_OK) == 0)
+    rc = bs_error_set(err, BS_EINPUT, "%s: the folder holds an earlier run (frames.csv); use --replace", o->dir);
+  if (!rc && !(o->frames = fopen(p, "w")))
+    rc = bs_error_set(err, BS_EIO, "%s: cannot open for writing: %s", p, strerror(errno));
+  if (!rc && (fprintf(o->frames, "%s\n", BS_FRAMES_CSV_HEADER) < 0 || fflush(o->frames)))
+    rc = bs_error_set(err, BS_EIO, "%s: write failed: %s", p, strerror(errno));
+  snprintf(p, sizeof p, "%s/scene.json", o->dir);
+  if (!rc) rc = bs_scene_write_json_file(d->scene, p, err);
+  return rc;
+}
+
+int bs_dout_open(const bs_dsim *d, const char *dir, int replace, bs_dout **out, bs_error *err) {
+  *out = NULL;
+  bs_dout *o = bs_calloc(1, sizeof *o, "output", err);
+  int rc = o ? BS_OK : BS_ENOMEM;
+  if (o) {
+    snprintf(o->dir, sizeof o->dir, "%s", dir);
+    o->vm = bs_calloc(3 * (size_t)d->mesh->local->n_vertices + 3, sizeof *o->vm, "output vectors", err);
+    o->rank_cells = bs_calloc((size_t)d->mesh->local->n_tets + 1, sizeof *o->rank_cells, "output cells", err);
+    if (!o->vm || !o->rank_cells) rc = BS_ENOMEM;
+    for (int32_t t = 0; !rc && t < d->mesh->local->n_tets; t++) o->rank_cells[t] = bs_dist_rank();
+  }
+  if (!rc && bs_dist_rank() == 0) rc = open_root(o, d, replace, err);
+  rc = agree(rc, err);
+  if (rc) bs_dout_destroy(&o);
+  *out = o;
+  return rc;
+}
+
+void bs_dout_destroy(bs_dout **op) {
+  if (!op || !*op) return;
+  bs_dout *o = *op;
+  if (o->frames) fclose(o->frames);
+  for (int i = 0; i < o->n_vtu; i++) free(o->names[i]);
+  free(o->names), free(o->times), free(o->vm), free(o->rank_cells);
+  free(o);
+  *op = NULL;
+}
+
+int bs_dsim_measure(bs_dsim *d, bs_sim_measures *m, bs_error *err) {
+  double *vm = bs_calloc(3 * (size_t)d->mesh->local->n_vertices + 3, sizeof *vm, "velocities", err);
+  if (!vm) return BS_ENOMEM;
+  bs_dfem_mesh_vector(d->df, d->x, d->xm);
+  bs_dfem_mesh_vector(d->df, d->v, vm);
+  bs_measure_state(d->df->fem, d->xm, vm, d->scene->gravity, m);
+  free(vm);
+  double s[5] = {m->kinetic, m->elastic, m->gravity, m->total, m->inverted};
+  int rc = bs_dist_sum(s, 5, err);
+  double mn = -m->min_detF;
+  if (!rc) rc = bs_dist_max(&mn, 1, err);
+  m->kinetic = s[0], m->elastic = s[1], m->gravity = s[2], m->total = s[3], m->inverted = (int32_t)s[4];
+  m->min_detF = -mn;
+  return rc;
+}
+
+/* This rank's piece of frame f. */
+static int write_piece(bs_dout *o, bs_dsim *d, int f, bs_error *err) {
+  char p[BS_MAX_PATH + 64];
+  snprintf(p, sizeof p, "%s/frame_%05d_p%04d.vtu", o->dir, f, bs_dist_rank());
+  bs_dfem_mesh_vector(d->df, d->x, d->xm);
+  bs_dfem_mesh_vector(d->df, d->v, o->vm);
+  bs_vtu_data rank = {"rank", BS_VTU_INT32, 1, o->rank_cells};
+  bs_vtu_fields fl = {.x = d->xm, .velocity = o->vm, .n_cell_data = 1, .cell_data = &rank, .compress = 0};
+  return bs_mesh_write_vtu(d->mesh->local, &fl, p, err);
+}
+
+/* Rank 0: frame f's PVTU over every rank's piece, and frames.pvd again. */
+static int write_pvtu(bs_dout *o, int f, double time, bs_error *err) {
+  static const bs_pvtu_array pa[] = {{"displacement", BS_VTU_FLOAT64, 3}, {"velocity", BS_VTU_FLOAT64, 3}};
+  static const bs_pvtu_array ca[] = {{"material", BS_VTU_INT32, 1}, {"detF", BS_VTU_FLOAT64, 1},
+                                     {"inverted", BS_VTU_UINT8, 1}, {"rank", BS_VTU_INT32, 1}};
+  int n = bs_dist_size(), rc = BS_OK;
+  char **pieces = calloc((size_t)n, sizeof *pieces), name[64], p[BS_MAX_PATH + 64];
+  for (int r = 0; pieces && r < n && !rc; r++)
+    if (!(pieces[r] = malloc(64))) rc = BS_ENOMEM;
+    else snprintf(pieces[r], 64, "frame_%05d_p%04d.vtu", f, r);
+  if (!pieces) rc = BS_ENOMEM;
+  snprintf(name, sizeof name, "frame_%05d.pvtu", f);
+  snprintf(p, sizeof p, "%s/%s", o->dir, name);
+  if (!rc) rc = bs_pvtu_write(p, 2, pa, 4, ca, n, (const char *const *)pieces, err);
+  for (int r = 0; pieces && r < n; r++) free(pieces[r]);
+  free(pieces);
+  if (!rc && o->n_vtu == o->cap_vtu) {
+    int cap = o->cap_vtu ? 2 * o->cap_vtu : 16;
+    double *t = realloc(o->times, (size_t)cap * sizeof *t);
+    char **nm = t ? realloc(o->names, (size_t)cap * sizeof *nm) : NULL;
+    if (t) o->times = t;
+    if (nm) o->names = nm, o->cap_vtu = cap;
+    else rc = bs_error_set(err, BS_ENOMEM, "out of memory listing the frames");
+  }
+  if (!rc && !(o->names[o->n_vtu] = malloc(strlen(name) + 1))) rc = BS_ENOMEM;
+  if (rc) return rc == BS_ENOMEM ? bs_error_set(err, rc, "out of memory writing %s", name) : rc;
+  strcpy(o->names[o->n_vtu], name);
+  o->times[o->n_vtu++] = time;
+  snprintf(p, sizeof p, "%s/frames.pvd", o->dir);
+  return bs_pvd_write(p, o->n_vtu, o->times, (const char *const *)o->names, err);
+}
+
+int bs_dout_frame(bs_dout *o, bs_dsim *d, const bs_frame_stats *fs, bs_error *err) {
+  bs_sim_measures m;
+  int rc = bs_dsim_measure(d, &m, err);
+  if (rc) return rc;
+  if (bs_dist_rank() == 0) {
+    char row[512];
+    bs_frames_csv_row(row, sizeof row, d->time, fs, &m);
+    if (fputs(row, o->frames) < 0 || fflush(o->frames))
+      rc = bs_error_set(err, BS_EIO, "%s/frames.csv: write failed: %s", o->dir, strerror(errno));
+  }
+  const int every = d->scene->vtu_every;
+  const int vtu = every > 0 && (fs->frame % every == 0 || d->scene->mode == BS_MODE_STATIC);
+  if (!rc && vtu) rc = write_piece(o, d, fs->frame, err);
+  if ((rc = agree(rc, err)) || !vtu) return rc;
+  if (bs_dist_rank() == 0) rc = write_pvtu(o, fs->frame, d->time, err);
+  return agree(rc, err);
+}
+
+int bs_dout_finish(bs_dout *o, const char *summary, bs_error *err) {
+  int rc = BS_OK;
+  if (bs_dist_rank() == 0) {
+    char p[BS_MAX_PATH + 32];
+    snprintf(p, sizeof p, "%s/summary.txt", o->dir);
+    FILE *f = fopen(p, "w");
+    if (!f || fputs(summary, f) < 0) rc = bs_error_set(err, BS_EIO, "%s: cannot write: %s", p, strerror(errno));
+    if (f && fclose(f) && !rc) rc = bs_error_set(err, BS_EIO, "%s: cannot write: %s", p, strerror(errno));
+  }
+  return agree(rc, err);
+}

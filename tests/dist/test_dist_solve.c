@@ -1,0 +1,268 @@
+/* test_dist_solve: the scenes on the petsc backend (bs_dsim.h) give the
+ * serial answers, on 1 and 2 ranks: the static cantilever
+ * (data/scenes/beam_sag.json: tip deflection and final positions to 1e-9
+ * relative, the same Newton iteration count on 1 rank) and the stretched
+ * cube (data/scenes/cube_stretch.json, its first frames: positions to 1e-9,
+ * the same iteration counts on 1 rank); refused scenes name their key. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_dsim.h"
+#include "bs_sim.h"
+#include "dist_check.h"
+
+static const double *sort_base;
+static int by_position(const void *a, const void *b) {
+  const double *p = sort_base + 3 * *(const int32_t *)a, *q = sort_base + 3 * *(const int32_t *)b;
+  for (int k = 0; k < 3; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+  return 0;
+}
+
+/* For each local vertex of d, the serial vertex at the same rest position
+ * (exactly), -1 if none. Caller frees. */
+static int32_t *match_vertices(const bs_dsim *d, const bs_sim *s) {
+  int32_t n = s->mesh->n_vertices, *idx = malloc(sizeof(int32_t) * (size_t)n);
+  int32_t *map = malloc(sizeof(int32_t) * (size_t)d->mesh->n_vertices + 4);
+  for (int32_t i = 0; i < n; i++) idx[i] = i;
+  sort_base = s->x0;
+  qsort(idx, (size_t)n, sizeof *idx, by_position);
+  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
+    int32_t lo = 0, hi = n - 1;
+    map[v] = -1;
+    while (lo <= hi && map[v] < 0) {
+      int32_t mid = (lo + hi) / 2, c = 0;
+      for (int k = 0; k < 3 && !c; k++) {
+        double a = d->mesh->x[3 * v + k], b = s->x0[3 * idx[mid] + k];
+        c = a < b ? -1 : a > b ? 1 : 0;
+      }
+      if (c == 0) map[v] = idx[mid];
+      else if (c < 0) hi = mid - 1;
+      else lo = mid + 1;
+    }
+  }
+  free(idx);
+  return map;
+}
+
+/* max |x_d - x_s| over the vertices, relative to max |x_s| (positions) and
+ * to the largest displacement; the mean y displacement of group `group`. */
+static void compare(const bs_dsim *d, const bs_sim *s, const char *what, const char *group, double tip_tol) {
+  int32_t *map = match_vertices(d, s);
+  double err = 0, xmax = 0, umax = 0;
+  int unmatched = 0;
+  for (int32_t i = 0; i < 3 * s->mesh->n_vertices; i++) {
+    xmax = fmax(xmax, fabs(s->x[i]));
+    umax = fmax(umax, fabs(s->x[i] - s->x0[i]));
+  }
+  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
+    if (map[v] < 0) {
+      unmatched++;
+      continue;
+    }
+    for (int k = 0; k < 3; k++) err = fmax(err, fabs(d->x[3 * v + k] - s->x[3 * map[v] + k]));
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  CHECK(unmatched == 0, "%s: %d vertices with no serial twin", what, unmatched);
+  CHECK(err <= 1e-9 * xmax, "%s: positions differ by %.3g (max |x| %.3g)", what, err, xmax);
+  if (bs_dist_rank() == 0)
+    printf("  %s: max |x - x_serial| = %.3e (%.3e of max |x|, %.3e of max |u|)\n", what, err, err / xmax,
+           err / fmax(umax, 1e-300));
+  if (group) {
+    const bs_group *gs = bs_mesh_group(s->mesh, group);
+    const bs_dgroup *gd = bs_dmesh_group(d->mesh, group);
+    double us = 0, ud[2] = {0, 0};
+    for (int32_t i = 0; i < gs->n_vertices; i++) us += s->x[3 * gs->vertices[i] + 1] - s->x0[3 * gs->vertices[i] + 1];
+    us /= gs->n_vertices;
+    for (int32_t i = 0; i < gd->n_vertices; i++) {
+      int32_t v = gd->vertices[i];
+      if (!d->mesh->owned[v]) continue;
+      ud[0] += d->x[3 * v + 1] - d->mesh->x[3 * v + 1];
+      ud[1] += 1;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, ud, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    CHECK_REL(ud[0] / ud[1], us, tip_tol, "tip deflection");
+    if (bs_dist_rank() == 0) printf("  %s: tip deflection %.15e (serial %.15e)\n", what, ud[0] / ud[1], us);
+  }
+  free(map);
+}
+
+/* The cantilever with solver.linear = linear on both backends; the same
+ * iteration counts required on 1 rank when `same_iterations` (the same
+ * preconditioner). */
+static void beam_sag_with(const char *linear, int same_iterations) {
+  bs_error err = {0};
+  char set[64];
+  snprintf(set, sizeof set, "solver.linear=%s", linear);
+  const char *sets[] = {"qoi=[]", set};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/beam_sag.json", 2, sets, &sc, &err), err);
+  if (!sc) return;
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  bs_frame_stats fs, fd;
+  CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  if (s) CHECK_OK(bs_sim_statics(s, &fs, &err), err);
+  CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  if (d) CHECK_OK(bs_dsim_statics(d, &fd, &err), err);
+  const bs_step_stats st = d ? d->steps[0].st : (bs_step_stats){0};
+  if (s && d) {
+    char what[64];
+    snprintf(what, sizeof what, "beam_sag (%s)", linear);
+    /* GAMG against BoomerAMG: two preconditioners, two answers within the
+       solver's tolerance (tol / stiffness ~ 1e-13 m; the serial cg and amg
+       answers themselves differ by 3e-9 of the deflection). */
+    compare(d, s, what, "xmax", same_iterations ? 1e-9 : 1e-8);
+    CHECK(!st.failed, "the distributed solve failed: %s", st.min.reason_text);
+    if (bs_dist_size() == 1 && same_iterations)
+      CHECK(st.min.iterations == fs.iterations, "%d Newton iterations, serial %ld", st.min.iterations, fs.iterations);
+    if (bs_dist_rank() == 0)
+      printf("  %s: Newton iterations %d (serial %ld), CG %d (serial %ld)\n", what, st.min.iterations, fs.iterations,
+             st.min.cg_iterations, fs.cg_iterations);
+    if (!strcmp(linear, "amg")) {
+      int levels = 0;
+      double secs = 0;
+      bs_dlin_info(bs_dintegrator_linsolve(d->integrator), &levels, &secs);
+      CHECK(levels >= 2, "GAMG has %d levels", levels);
+      if (bs_dist_rank() == 0) printf("  %s: GAMG %d levels\n", what, levels);
+    }
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+static void beam_sag_static(void) { beam_sag_with("cg", 1); }
+
+/* Block Jacobi (serial pcg, PETSc PCPBJACOBI) and GAMG against BoomerAMG:
+ * other preconditioners, the same answer. */
+static void beam_sag_preconditioned(void) {
+  beam_sag_with("pcg", 1);
+  beam_sag_with("amg", 0);
+}
+
+/* Both backends through `frames` frames: no failed step on the backend,
+ * the same Newton iterations per frame on 1 rank; the sums into *it_s, *it_d. */
+static void advance_both(bs_sim *s, bs_dsim *d, int frames, long *it_s, long *it_d) {
+  bs_error err = {0};
+  *it_s = *it_d = 0;
+  for (int f = 0; s && d && f < frames; f++) {
+    bs_frame_stats fs, fd;
+    CHECK_OK(bs_sim_advance_frame(s, &fs, &err), err);
+    CHECK_OK(bs_dsim_advance_frame(d, &fd, &err), err);
+    CHECK(!fd.failed, "frame %d: %s", f + 1, d->steps[0].reason);
+    if (bs_dist_size() == 1)
+      CHECK(fd.iterations == fs.iterations, "frame %d: %ld iterations, serial %ld", f + 1, fd.iterations, fs.iterations);
+    *it_s += fs.iterations, *it_d += fd.iterations;
+  }
+}
+
+/* cube_stretch (lagged Rayleigh damping, keyframed groups) for `frames`
+ * frames, with the extra setting `extra` (NULL: none). */
+static void cube_stretch_with(int frames, const char *extra) {
+  bs_error err = {0};
+  char fr[64];
+  snprintf(fr, sizeof fr, "time.frames=%d", frames);
+  const char *sets[] = {fr, extra};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/cube_stretch.json", extra ? 2 : 1, sets, &sc, &err), err);
+  if (!sc) return;
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  long it_s = 0, it_d = 0;
+  advance_both(s, d, sc ? sc->frames : 0, &it_s, &it_d);
+  if (s && d) {
+    char what[96];
+    snprintf(what, sizeof what, "cube_stretch%s%s", extra ? " " : "", extra ? extra : "");
+    compare(d, s, what, NULL, 0);
+    if (bs_dist_rank() == 0) printf("  %s: Newton iterations %ld (serial %ld)\n", what, it_d, it_s);
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+static void cube_stretch_frames(void) { cube_stretch_with(4, NULL); }
+
+/* Drag and gravity on top (a free fall with drag, the groups held). */
+static void cube_stretch_drag(void) { cube_stretch_with(2, "drag=0.5"); }
+
+/* The cube, free, thrown down onto a penalty floor and a penalty sphere
+ * (gravity, impact in the first frame). */
+static void cube_penalty_floor(void) {
+  char obs[512];
+  snprintf(obs, sizeof obs,
+           "obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-0.05,\"collision\":\"penalty\","
+           "\"stiffness\":1e6},{\"shape\":\"sphere\",\"center\":[0.5,-0.25,0.5],\"radius\":0.3,"
+           "\"collision\":\"penalty\",\"stiffness\":1e6}]");
+  bs_error err = {0};
+  /* tolerance 1e-6: two converged answers differ by about tol / stiffness,
+     and the partition (PTScotch's, not the same from run to run) changes the
+     rounding, hence the iterates */
+  const char *sets[] = {"time.frames=3",  "bodies.0.scripted=[]",      "gravity=[0,-9.8,0]",
+                        "bodies.0.velocity=[0,-3,0]", "solver.tolerance=1e-6", obs};
+  bs_scene *sc = NULL;
+  CHECK_OK(bs_scene_load("data/scenes/cube_stretch.json", 6, sets, &sc, &err), err);
+  bs_sim *s = NULL;
+  bs_dsim *d = NULL;
+  if (sc) CHECK_OK(bs_sim_create(sc, &s, &err), err);
+  if (sc) CHECK_OK(bs_dsim_create(sc, &d, &err), err);
+  long it_s = 0, it_d = 0;
+  advance_both(s, d, sc ? sc->frames : 0, &it_s, &it_d);
+  if (s && d) {
+    compare(d, s, "cube on penalty floor and sphere", NULL, 0);
+    double ymin = 1e300;
+    for (int32_t v = 0; v < d->mesh->n_vertices; v++) ymin = fmin(ymin, d->x[3 * v + 1]);
+    MPI_Allreduce(MPI_IN_PLACE, &ymin, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    CHECK(ymin < 0 && ymin > -0.2, "lowest vertex at y = %g: no contact, or through the floor", ymin);
+    if (bs_dist_rank() == 0)
+      printf("  cube on penalty floor: Newton iterations %ld (serial %ld), lowest y %.4f\n", it_d, it_s, ymin);
+  }
+  bs_dsim_destroy(&d);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+/* A scene the backend does not run is refused with its key. */
+static void refused_scenes(void) {
+  static const struct {
+    const char *set, *key;
+  } cases[] = {{"self_collision={\"stiffness\":1e5}", "self_collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1}]", "obstacles.0.collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"penalty\","
+                "\"grid_h\":0.1}]",
+                "obstacles.0.grid_h"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"penalty\","
+                "\"friction\":0.3}]",
+                "obstacles.0.friction"},
+               {"solver.linear=cholmod", "solver.linear"},
+               {"solver.method=newton", "solver.method"},
+               {"bodies.0.translate=[1,0,0]", "bodies.0.translate"}};
+  for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+    bs_error err = {0};
+    bs_scene *sc = NULL;
+    const char *sets[] = {cases[i].set};
+    int rc = bs_scene_load("data/scenes/cube_stretch.json", 1, sets, &sc, &err);
+    CHECK_OK(rc, err);
+    if (rc) continue;
+    bs_dsim *d = NULL;
+    rc = bs_dsim_create(sc, &d, &err);
+    CHECK(rc == BS_EINPUT && strstr(err.msg, cases[i].key) && strstr(err.msg, "petsc"), "%s: status %d: %s",
+          cases[i].set, rc, err.msg);
+    CHECK(d == NULL, "a dsim came back");
+    bs_scene_destroy(&sc);
+  }
+}
+
+int main(int argc, char **argv) {
+  static const dist_test tests[] = {{"beam_sag_static", beam_sag_static},
+                                    {"beam_sag_preconditioned", beam_sag_preconditioned},
+                                    {"cube_stretch_frames", cube_stretch_frames},
+                                    {"cube_stretch_drag", cube_stretch_drag},
+                                    {"cube_penalty_floor", cube_penalty_floor},
+                                    {"refused_scenes", refused_scenes}};
+  return dist_check_main(argc, argv, tests, 6);
+}
