@@ -15,9 +15,11 @@
  *                                     converted to metres (OCCTargetUnit "M");
  *   .stl                              a closed triangulated surface, merged by Gmsh
  *                                     (after bs_shim_check_stl);
- *   .off .obj .ply                    a closed surface read by the shim (OFF by its
- *                                     own reader, OBJ / PLY by CGAL) and handed to
- *                                     Gmsh as a discrete surface.
+ *   .off .obj .ply                    a surface read by the shim (OFF by its own
+ *                                     reader, OBJ / PLY by CGAL), repaired
+ *                                     (bs_surface_prepare: closed, outward, no
+ *                                     self-intersection) and handed to Gmsh as a
+ *                                     discrete surface.
  * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
  * are kept as the boundary of the volume mesh; with size > 0 it is classified
  * into patches (40 degree feature angle), reparametrized and remeshed at that
@@ -810,11 +812,13 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   int rc = input_file(path, &kind, err);
   if (rc) return rc;
 
-  /* Surfaces Gmsh does not read: CGAL reads them, before Gmsh is locked. */
+  /* Surfaces Gmsh does not read: CGAL reads and repairs them (surface_repair.c), before Gmsh is locked. */
   double *pts = NULL;
   int32_t *tris = NULL;
   int64_t np = 0, ntri = 0;
-  if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
+  if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
+  if (kind == IN_SOUP && (rc = bs_surface_prepare(path, &pts, &np, &tris, &ntri, opts, opts ? opts->report : NULL, err)))
+    return rc;
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
   if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;
