@@ -96,6 +96,10 @@ static int gmsh_fail(bs_error *err, int code, const char *path, const char *what
   return bs_error_set(err, code, "%s: Gmsh could not %s: %s", path, what, msg);
 }
 
+int bs__gmsh_fail(bs_error *err, int code, const char *path, const char *what) {
+  return gmsh_fail(err, code, path, what);
+}
+
 /* Silences Gmsh (the options a file may have changed are set again after it is read). */
 static void gmsh_quiet(void) {
   int ierr = 0;
@@ -787,9 +791,11 @@ static int input_file(const char *path, input_kind *kind, bs_error *err) {
  * Mesh.MeshSizeMin = Max = size, after a check that the tets would fit). */
 static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts *opts, bs_error *err) {
   int ierr = 0, rc;
+  static const char *const cad[] = {"step", "stp", "iges", "igs", "brep", NULL};
   gmshOpen(path, &ierr);
   if (ierr) return gmsh_fail(err, BS_EGMSH, path, "read the file");
   gmsh_quiet();
+  if (ext_is(file_ext(path), cad) && (rc = bs__cad_assembly(path, size, err))) return rc;
   if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) return rc;
   if (size > 0) {
     gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
