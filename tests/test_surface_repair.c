@@ -17,6 +17,8 @@
 #include "bs_mesh.h"
 #include "bs_shim.h"
 #include "cli_util.h"
+#include "scene_fixture.h"
+#include "sim_util.h"
 
 #define CORPUS BS_SOURCE_DIR "/data/corpus/cgal/"
 
@@ -272,4 +274,29 @@ Test(surface_repair, cli_close_holes) {
   cr_expect_eq(bs_test_run(cmd, &out), 2, "%s", out);
   cr_expect(strstr(out, "--max-hole must be a number in (0, 1]"), "%s", out);
   free(out);
+}
+
+/* A scene's body on pig.off: refused (naming the scene's body, the file and
+ * the loops) without bodies[].close_holes, simulated with it. */
+Test(surface_repair, scene_close_holes) {
+  static const char *const fmt =
+      "{\"time\": {\"fps\": 24, \"frames\": 1, \"steps_per_frame\": 1},\n"
+      " \"bodies\": [{\"mesh\": \"%s\", \"close_holes\": %s,\n"
+      "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n";
+  const char *mesh = corpus("pig.off");
+  char text[2048];
+  for (int close = 0; close <= 1; close++) {
+    snprintf(text, sizeof text, fmt, mesh, close ? "true" : "false");
+    char path[] = "/tmp/bs_scene_repair_XXXXXX";
+    bs_test_write_scene(path, text);
+    bs_error err;
+    int rc = sim_load_error(path, NULL, 0, &err);
+    unlink(path);
+    if (close) {
+      cr_expect_eq(rc, BS_OK, "%s", err.msg);
+    } else {
+      cr_expect_eq(rc, BS_EINPUT, "%s", err.msg);
+      cr_expect(strstr(err.msg, "pig.off") && strstr(err.msg, "7 boundary loops"), "%s", err.msg);
+    }
+  }
 }
