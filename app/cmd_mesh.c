@@ -206,6 +206,7 @@ int bs_cmd_mesh(int argc, char **argv) {
                          .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
                          .report = &rep};
   if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
+    if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then Gmsh failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }

@@ -127,7 +127,11 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * (in the range the header states; a node tag defined twice is an error
  * naming it) and every element's nodes (defined). Coincident nodes under
  * distinct tags are counted in m->n_coincident (a warning for the caller to
- * print) and merged when opts->merge_coincident. */
+ * print) and merged when opts->merge_coincident. A surface (.off, .obj,
+ * .ply) is repaired first (bs_surface_prepare; what was done goes to
+ * *opts->report). A CAD file (STEP, IGES, BREP) of several solids is
+ * fragmented into a conformal model, one 3-D group per part named after the
+ * part (mesh/cad_assembly.c), surface groups "surface_<tag>". */
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
 /* A surface file (.off, .obj, .ply, .stl: bs_shim_read_surface) read and

@@ -33,7 +33,9 @@
  * triangles / lines / points of its entities as vertex tuples). A model with no
  * physical group at all gets default groups: (3, 1, "body") for a single volume
  * entity or (3, tag, "volume_<tag>") per volume entity when there are several,
- * and (2, tag, "surface_<tag>") per surface entity. Nodes at exactly the
+ * and (2, tag, "surface_<tag>") per surface entity; a CAD file (STEP, IGES,
+ * BREP) of several solids is first fragmented into a conformal model with one
+ * named 3-D group per part (cad_assembly.c). Nodes at exactly the
  * position of another node (distinct tags) are counted in n_coincident and,
  * with opts->merge_coincident, mapped to the vertex of the smallest tag there.
  */
@@ -808,6 +810,7 @@ static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts 
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
+  if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
   if (!path || !path[0]) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: no file name given");
   double size = opts ? opts->size : 0.0;
   int refine = opts ? opts->refine : 0;
@@ -822,9 +825,8 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   double *pts = NULL;
   int32_t *tris = NULL;
   int64_t np = 0, ntri = 0;
-  if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
-  if (kind == IN_SOUP && (rc = bs_surface_prepare(path, &pts, &np, &tris, &ntri, opts, opts ? opts->report : NULL, err)))
-    return rc;
+  bs_surface_report *rep = opts ? opts->report : NULL;
+  if (kind == IN_SOUP && (rc = bs_surface_prepare(path, &pts, &np, &tris, &ntri, opts, rep, err))) return rc;
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
   if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;

@@ -145,18 +145,21 @@ Loop measure_loop(const Mesh &m, Halfedge h) {
 // The refusal of an open surface: the loop count and the largest loop.
 int refuse_open(const std::vector<Loop> &loops, const Loop &big, double limit, double diag, int close,
                 bs_error *err) {
-  char what[200];
+  char what[240];
   if (close)
-    std::snprintf(what, sizeof what, "it exceeds the largest hole closed, %.4g (%.3g of the bounding-box diagonal)",
-                  limit, limit / diag);
+    std::snprintf(what, sizeof what, "it exceeds the largest hole closed, %.4g (%.3g of the diagonal)", limit,
+                  limit / diag);
   else
-    std::snprintf(what, sizeof what, "close holes up to %.3g of the bounding-box diagonal (%.4g) with close_holes "
-                  "(bigstep mesh --close-holes)", limit / diag, limit);
+    std::snprintf(what, sizeof what,
+                  "holes up to %.3g of the diagonal (%.4g) are closed on request (bodies[].close_holes in a scene, "
+                  "bigstep mesh --close-holes)",
+                  limit / diag, limit);
   return bs_error_set(err, BS_EINPUT,
                       "the surface is not closed: %zu boundary loop%s (holes); the largest has diameter %.4g "
-                      "(perimeter %.4g, %zu edges) around (%.4g, %.4g, %.4g): %s",
-                      loops.size(), loops.size() == 1 ? "" : "s", big.diameter, big.perimeter, big.edges,
-                      big.centre[0], big.centre[1], big.centre[2], what);
+                      "(%.3g of the bounding-box diagonal %.4g; perimeter %.4g, %zu edges) around (%.4g, %.4g, "
+                      "%.4g): %s",
+                      loops.size(), loops.size() == 1 ? "" : "s", big.diameter, big.diameter / diag, diag,
+                      big.perimeter, big.edges, big.centre[0], big.centre[1], big.centre[2], what);
 }
 
 // Step 3: holes, closed when asked and small enough; else refused.

@@ -113,12 +113,20 @@ Test(surface_repair, cube_soup_duplicates_and_degenerates) {
   bs_shim_free(to);
 }
 
+/* A new file /tmp/bs_test_repair_XXXXXX.off (path: a buffer of 64), open for writing. */
+static FILE *temp_off(char *path) {
+  snprintf(path, 64, "/tmp/bs_test_repair_XXXXXX.off");
+  int fd = mkstemps(path, 4);
+  cr_assert(fd >= 0, "cannot create %s", path);
+  FILE *f = fdopen(fd, "w");
+  cr_assert_not_null(f);
+  return f;
+}
+
 /* The soup written as an OFF file meshes into the unit cube. */
 Test(surface_repair, cube_soup_file_meshes) {
-  char path[] = "/tmp/bs_test_repair_XXXXXX.off";
-  int fd = mkstemps(path, 4);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
+  char path[64];
+  FILE *f = temp_off(path);
   double x[3 * 3 * CUBE_TRIS];
   int32_t t[3 * CUBE_TRIS];
   cube_soup(x, t);
@@ -159,10 +167,8 @@ Test(surface_repair, bad_soups_refused) {
 
 /* A file whose triangles are all degenerate: the message names the file. */
 Test(surface_repair, all_degenerate_file_refused) {
-  char path[] = "/tmp/bs_test_repair_XXXXXX.off";
-  int fd = mkstemps(path, 4);
-  cr_assert(fd >= 0);
-  FILE *f = fdopen(fd, "w");
+  char path[64];
+  FILE *f = temp_off(path);
   fputs("OFF\n3 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 1\n3 0 1 2\n", f);
   fclose(f);
   bs_mesh *m = NULL;
