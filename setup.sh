@@ -54,8 +54,10 @@ fi
 # tests/test_cad_assembly.c; not committed): scans with self-intersections and
 # holes from the same CGAL archive, and Gmsh's STEP assembly demo from
 # gmsh-doc, into data/corpus/.
-corpus_cgal=(camel.off elk.off pig.off mech-holes-shark.off)
-if [ ! -f data/corpus/cgal/pig.off ] || [ ! -f data/corpus/gmsh/as1-tu-203.stp ]; then
+corpus_cgal=(camel.off cow.off elk.off pig.off mech-holes-shark.off)
+corpus_missing=0
+for f in "${corpus_cgal[@]/#/cgal/}" gmsh/as1-tu-203.stp; do [ -f "data/corpus/$f" ] || corpus_missing=1; done
+if [ "$corpus_missing" = 1 ]; then
   tmp=$(mktemp -d)
   if (cd "$tmp" && { apt-get download -q libcgal-demo gmsh-doc >/dev/null 2>&1 ||
                      { apt-get update -q >/dev/null && apt-get download -q libcgal-demo gmsh-doc >/dev/null 2>&1; }; } &&

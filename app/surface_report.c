@@ -26,7 +26,9 @@ void bs_app_print_surface_report(const char *spec, const bs_surface_report *r) {
     printf(" with %lld triangles (largest: diameter %.4g m = %.3g of the bounding-box diagonal, perimeter %.4g m)",
            (long long)r->hole_tris, r->hole_max_diameter,
            r->bbox_diagonal > 0 ? r->hole_max_diameter / r->bbox_diagonal : 0.0, r->hole_max_perimeter);
-  printf("\n  self-intersections: %lld pairs of triangles, %s\n", (long long)r->self_intersections,
+  printf("\n  self-intersections: %lld pairs of triangles, %s", (long long)r->self_intersections,
          fix_name(r->self_intersection_fix));
+  if (r->fold_tris) printf("; %lld triangles around folds re-filled", (long long)r->fold_tris);
+  printf("\n");
   printf("  enclosed volume %.9g m^3 (before the self-intersection repair: %.9g)\n", r->volume, r->volume_before);
 }

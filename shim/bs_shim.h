@@ -211,13 +211,18 @@ int bs_shim_count_self_intersections(const double *points, int64_t n_points, con
  *      the volume before (it misreads folded regions of some scans and then
  *      keeps almost nothing); else remove_self_intersections (local
  *      smoothing and re-filling of the intersecting regions), followed by the
- *      autorefinement again for what it left;
+ *      autorefinement again for what it left; after the local removal, the
+ *      folds it leaves (two neighbouring triangles at a dihedral angle below
+ *      BS_SURFACE_FOLD_DEGREES, which Gmsh takes for overlapping facets) are
+ *      cut out with the ring of triangles around them and re-filled;
  *   5. oriented to bound a volume (normals outward: positive enclosed volume).
  * Lengths are in the units of the points; volumes in those units cubed.
  * ========================================================================== */
 
 /* The largest hole closed by default, as a fraction of the bbox diagonal. */
 #define BS_SURFACE_MAX_HOLE_DEFAULT 0.2
+/* A fold: neighbouring triangles at a dihedral angle below this (degrees). */
+#define BS_SURFACE_FOLD_DEGREES 3.0
 
 typedef struct bs_surface_repair_opts {
   int close_holes;   /* 1: close holes up to max_hole (0: an open surface is refused) */
@@ -234,11 +239,12 @@ typedef struct bs_surface_report {
   int holes;                     /* boundary loops found (after steps 1-2)       */
   int holes_closed;              /* of them, closed                              */
   int64_t hole_tris;             /* triangles added to close them                */
-  double hole_max_diameter;      /* the largest closed hole: diameter and        */
-  double hole_max_perimeter;     /* perimeter (0 when none was closed)           */
+  double hole_max_diameter;      /* the largest diameter and the largest         */
+  double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
   int64_t self_intersections;    /* pairs of intersecting triangles found        */
   int self_intersection_fix;     /* 0 none needed, 1 autorefinement, 2 local removal,
                                     3 local removal then autorefinement          */
+  int64_t fold_tris;             /* triangles cut out around folds and re-filled */
   double volume_before;          /* enclosed (signed) before step 4, 0 if open   */
   double volume;                 /* enclosed by the clean surface (> 0)          */
   double bbox_diagonal;          /* of the input points                          */

@@ -8,7 +8,10 @@
 // the intersection curves), but on folded scans (cow, elk, man) it keeps the
 // wrong side and returns a surface of almost no volume, which the volume test
 // catches; remove_self_intersections then repairs cow and elk alone and all
-// but 12 of man's 848 pairs, which the autorefinement finishes. Hole filling
+// but 12 of man's 848 pairs, which the autorefinement finishes. The local
+// removal leaves folds (neighbouring triangles at almost 0 degrees: cow, man)
+// that exact predicates accept but Gmsh takes for overlapping facets: they
+// are cut out with a ring of neighbours and re-filled. Hole filling
 // triangulates and refines without fairing (fairing needs Eigen, which
 // bigstep does not use).
 //
@@ -17,7 +20,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/bbox.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/compute_normal.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/manifoldness.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -38,6 +43,7 @@
 #include <exception>
 #include <iterator>
 #include <new>
+#include <set>
 #include <vector>
 
 #include "bs_shim.h"
@@ -231,6 +237,45 @@ void remove_locally(Mesh &m) {
   if (CGAL::is_valid_polygon_mesh(c) && CGAL::is_closed(c)) m = std::move(c);
 }
 
+// The dihedral angle (degrees) at the edge of h: 180 flat, 0 folded onto itself.
+double dihedral(const Mesh &m, Halfedge h) {
+  K::Vector_3 a = PMP::compute_face_normal(m.face(h), m), b = PMP::compute_face_normal(m.face(m.opposite(h)), m);
+  return 180.0 - std::acos(std::max(-1.0, std::min(1.0, a * b))) * 180.0 / CGAL_PI;
+}
+
+// Folds (a dihedral angle below BS_SURFACE_FOLD_DEGREES): their triangles and
+// the ring around them cut out and the holes re-filled, up to 5 rounds.
+// False when a hole cannot be filled or folds remain.
+bool remove_folds(Mesh &m, bs_surface_report *r) {
+  for (int round = 0; round <= 5; round++) {
+    std::set<Face> fold, cut;
+    for (Mesh::Edge_index e : m.edges()) {
+      Halfedge h = m.halfedge(e);
+      if (m.is_border(e) || dihedral(m, h) >= BS_SURFACE_FOLD_DEGREES) continue;
+      fold.insert(m.face(h));
+      fold.insert(m.face(m.opposite(h)));
+    }
+    if (fold.empty()) return true;
+    if (round == 5) return false;
+    for (Face f : fold)
+      for (Halfedge h : CGAL::halfedges_around_face(m.halfedge(f), m))
+        for (Face g : CGAL::faces_around_target(h, m))
+          if (g != Mesh::null_face()) cut.insert(g);
+    for (Face f : cut) CGAL::Euler::remove_face(m.halfedge(f), m);
+    m.collect_garbage();
+    PMP::duplicate_non_manifold_vertices(m);
+    std::vector<Halfedge> border;
+    PMP::extract_boundary_cycles(m, std::back_inserter(border));
+    for (Halfedge h : border) {
+      std::vector<Face> added;
+      PMP::triangulate_and_refine_hole(m, h, std::back_inserter(added), CGAL::Emptyset_iterator());
+      if (added.empty()) return false;
+    }
+    r->fold_tris += (int64_t)cut.size();
+  }
+  return false;
+}
+
 // Step 4: self-intersections removed (see the file comment for the order).
 int fix_self_intersections(Mesh &m, bs_surface_report *r, bs_error *err) {
   std::vector<std::pair<Face, Face>> pairs;
@@ -244,10 +289,12 @@ int fix_self_intersections(Mesh &m, bs_surface_report *r, bs_error *err) {
   }
   remove_locally(m);
   r->self_intersection_fix = 2;
-  if (sound(m)) return BS_OK;
-  if (try_autorefine(m, v0)) {
-    r->self_intersection_fix = 3;
-    return BS_OK;
+  if (!sound(m) && try_autorefine(m, v0)) r->self_intersection_fix = 3;
+  if (sound(m)) {
+    if (remove_folds(m, r) && sound(m)) return BS_OK;
+    return bs_error_set(err, BS_EINPUT, "its %lld intersecting pairs were removed, but the folds left (dihedral "
+                        "angles below %g degrees) could not be", (long long)r->self_intersections,
+                        BS_SURFACE_FOLD_DEGREES);
   }
   pairs.clear();
   PMP::self_intersections(m, std::back_inserter(pairs));
