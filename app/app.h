@@ -30,6 +30,13 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...)
  * kept, a note when merged. */
 int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_mesh **out, bs_error *err);
 
+/* The same with all of bs_mesh_read_opts (o may be NULL). */
+int bs_app_load_mesh_opts(const char *spec, const bs_mesh_read_opts *o, bs_mesh **out, bs_error *err);
+
+/* Prints what the surface repair of spec did (bs_surface_report) to stdout;
+ * nothing when r is NULL or holds no surface (r->tris_in == 0). */
+void bs_app_print_surface_report(const char *spec, const struct bs_surface_report *r);
+
 /* A growing list of owned "key=value" strings (the --set list of a run). */
 typedef struct bs_app_sets {
   int n, cap;

@@ -17,7 +17,11 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...) {
 
 int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_mesh **out, bs_error *err) {
   bs_mesh_read_opts o = {.size = size, .refine = refine, .merge_coincident = merge};
-  int st = bs_mesh_load(spec, &o, out, err);
+  return bs_app_load_mesh_opts(spec, &o, out, err);
+}
+
+int bs_app_load_mesh_opts(const char *spec, const bs_mesh_read_opts *o, bs_mesh **out, bs_error *err) {
+  int st = bs_mesh_load(spec, o, out, err);
   const bs_mesh *m = st ? NULL : *out;
   if (m && m->n_coincident && m->coincident_merged)
     fprintf(stderr, "bigstep: note: %s: merged %d coincident nodes (same position as another node, distinct tags)\n",

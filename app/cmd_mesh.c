@@ -4,9 +4,11 @@
 #include <string.h>
 
 #include "app.h"
+#include "bs_shim.h"
 
 static const char *mesh_help =
     "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm] [--merge-coincident]\n"
+    "                 [--close-holes] [--max-hole F]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
@@ -20,7 +22,13 @@ static const char *mesh_help =
     "  --reorder M    renumber vertices (info): metis or rcm\n"
     "  --method M     reordering method (reorder; default metis)\n"
     "  --merge-coincident  merge nodes of a .msh that share a position under\n"
-    "                 distinct tags (reported as a warning otherwise)\n";
+    "                 distinct tags (reported as a warning otherwise)\n"
+    "  --close-holes  close the holes of a surface (.off, .obj, .ply) up to the\n"
+    "                 --max-hole size (an open surface is refused otherwise)\n"
+    "  --max-hole F   largest hole closed: diameter <= F x the bounding-box\n"
+    "                 diagonal (default 0.2)\n"
+    "A surface is repaired before it is meshed (duplicates, zero-area triangles,\n"
+    "self-intersections); what was done is printed.\n";
 
 static int parse_order(const char *s, bs_order *o) {
   if (strcmp(s, "metis") == 0) *o = BS_ORDER_METIS;
@@ -72,7 +80,8 @@ typedef struct mesh_args {
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
   double size;
-  int refine, levels, have_order, merge;
+  int refine, levels, have_order, merge, close_holes;
+  double max_hole;
   bs_order order;
 } mesh_args;
 
@@ -85,6 +94,9 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
   } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
     if (bs_parse_int(val, 0, 6, &a->refine))
       return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
+  } else if (!strcmp(flag, "--max-hole")) {
+    if (bs_parse_double(val, &a->max_hole) || !(a->max_hole > 0 && a->max_hole <= 1))
+      return bs_app_usage_error("mesh", "--max-hole must be a number in (0, 1], got '%s'", val);
   } else if (!strcmp(flag, "--levels") && !strcmp(sub, "refine")) {
     if (bs_parse_int(val, 1, 6, &a->levels))
       return bs_app_usage_error("mesh", "--levels must be an integer 1..6, got '%s'", val);
@@ -115,6 +127,8 @@ static int parse_args(int argc, char **argv, mesh_args *a) {
     const char *arg = argv[i];
     if (strcmp(arg, "--merge-coincident") == 0) {
       a->merge = 1;
+    } else if (strcmp(arg, "--close-holes") == 0) {
+      a->close_holes = 1;
     } else if (strncmp(arg, "--", 2) == 0) {
       char fbuf[64];
       const char *flag, *val;
@@ -187,10 +201,16 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_error_clear(&err);
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
-  if (bs_app_load_mesh(a.pos[0], a.size, !strcmp(a.sub, "refine") ? a.levels : a.refine, a.merge, &m, &err)) {
+  bs_surface_report rep = {0};
+  bs_mesh_read_opts o = {.size = a.size, .refine = !strcmp(a.sub, "refine") ? a.levels : a.refine,
+                         .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
+                         .report = &rep};
+  if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
+    if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then Gmsh failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
+  bs_app_print_surface_report(a.pos[0], &rep);
   double t_load = bs_seconds() - t0;
   rc = !strcmp(a.sub, "info") ? mesh_info(m, &a, t_load, &err) : mesh_write(m, &a, &err);
   bs_mesh_destroy(&m);

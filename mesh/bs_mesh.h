@@ -96,6 +96,13 @@ typedef struct bs_mesh_read_opts {
                     equal coordinates) under distinct tags become one
                     vertex (the one of the smallest tag); 0: they are kept
                     and only counted in bs_mesh.n_coincident           */
+  int close_holes;  /* surfaces (.off .obj .ply): 1 closes holes up to
+                    max_hole (bs_surface_prepare); 0 refuses an open surface */
+  double max_hole;  /* the largest hole closed, as a fraction of the
+                    bounding-box diagonal; <= 0: BS_SURFACE_MAX_HOLE_DEFAULT */
+  struct bs_surface_report *report; /* if not NULL: the surface repair's
+                    counts (bs_shim.h), zeroed for inputs that are not a
+                    .off/.obj/.ply surface                               */
 } bs_mesh_read_opts;
 
 /* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
@@ -120,8 +127,29 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * (in the range the header states; a node tag defined twice is an error
  * naming it) and every element's nodes (defined). Coincident nodes under
  * distinct tags are counted in m->n_coincident (a warning for the caller to
- * print) and merged when opts->merge_coincident. */
+ * print) and merged when opts->merge_coincident. A surface (.off, .obj,
+ * .ply) is repaired first (bs_surface_prepare; what was done goes to
+ * *opts->report). A CAD file (STEP, IGES, BREP) of several solids is
+ * fragmented into a conformal model, one 3-D group per part named after the
+ * part (mesh/cad_assembly.c), surface groups "surface_<tag>". */
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
+/* A surface file (.off, .obj, .ply, .stl: bs_shim_read_surface) read and
+ * repaired (bs_shim_repair_surface: duplicates and zero-area triangles
+ * removed, holes closed when opts->close_holes and no larger than
+ * opts->max_hole, self-intersections removed, oriented outward). *pts (3 per
+ * point) and *tris (3 per triangle) are allocated by the shim: free them with
+ * bs_shim_free. opts (may be NULL: no hole closed) supplies close_holes and
+ * max_hole only; rep (may be NULL) gets the counts. Errors name the file:
+ * BS_EIO (unreadable), BS_EINPUT (a malformed file, or a surface the repair
+ * refuses: open, or self-intersections it cannot remove; the message says
+ * how many, where and how large), BS_ENOMEM, BS_EINTERNAL. Example:
+ *     double *x; int32_t *t; int64_t np, nt; bs_surface_report r;
+ *     bs_mesh_read_opts o = {.close_holes = 1};
+ *     if (bs_surface_prepare("scan.off", &x, &np, &t, &nt, &o, &r, &err)) ...
+ *     bs_shim_free(x); bs_shim_free(t); */
+int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
+                       const bs_mesh_read_opts *opts, struct bs_surface_report *rep, bs_error *err);
 
 /* The security rule for Gmsh scripts: a .geo file (with what it includes or
  * merges, and FILE.opt beside it) that runs a program (SystemCall,

@@ -15,9 +15,11 @@
  *                                     converted to metres (OCCTargetUnit "M");
  *   .stl                              a closed triangulated surface, merged by Gmsh
  *                                     (after bs_shim_check_stl);
- *   .off .obj .ply                    a closed surface read by the shim (OFF by its
- *                                     own reader, OBJ / PLY by CGAL) and handed to
- *                                     Gmsh as a discrete surface.
+ *   .off .obj .ply                    a surface read by the shim (OFF by its own
+ *                                     reader, OBJ / PLY by CGAL), repaired
+ *                                     (bs_surface_prepare: closed, outward, no
+ *                                     self-intersection) and handed to Gmsh as a
+ *                                     discrete surface.
  * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
  * are kept as the boundary of the volume mesh; with size > 0 it is classified
  * into patches (40 degree feature angle), reparametrized and remeshed at that
@@ -31,7 +33,9 @@
  * triangles / lines / points of its entities as vertex tuples). A model with no
  * physical group at all gets default groups: (3, 1, "body") for a single volume
  * entity or (3, tag, "volume_<tag>") per volume entity when there are several,
- * and (2, tag, "surface_<tag>") per surface entity. Nodes at exactly the
+ * and (2, tag, "surface_<tag>") per surface entity; a CAD file (STEP, IGES,
+ * BREP) of several solids is first fragmented into a conformal model with one
+ * named 3-D group per part (cad_assembly.c). Nodes at exactly the
  * position of another node (distinct tags) are counted in n_coincident and,
  * with opts->merge_coincident, mapped to the vertex of the smallest tag there.
  */
@@ -92,6 +96,10 @@ static int gmsh_fail(bs_error *err, int code, const char *path, const char *what
   char msg[800];
   gmsh_last_error(msg, sizeof msg);
   return bs_error_set(err, code, "%s: Gmsh could not %s: %s", path, what, msg);
+}
+
+int bs__gmsh_fail(bs_error *err, int code, const char *path, const char *what) {
+  return gmsh_fail(err, code, path, what);
 }
 
 /* Silences Gmsh (the options a file may have changed are set again after it is read). */
@@ -785,9 +793,11 @@ static int input_file(const char *path, input_kind *kind, bs_error *err) {
  * Mesh.MeshSizeMin = Max = size, after a check that the tets would fit). */
 static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts *opts, bs_error *err) {
   int ierr = 0, rc;
+  static const char *const cad[] = {"step", "stp", "iges", "igs", "brep", NULL};
   gmshOpen(path, &ierr);
   if (ierr) return gmsh_fail(err, BS_EGMSH, path, "read the file");
   gmsh_quiet();
+  if (ext_is(file_ext(path), cad) && (rc = bs__cad_assembly(path, size, err))) return rc;
   if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) return rc;
   if (size > 0) {
     gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
@@ -800,6 +810,7 @@ static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts 
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
+  if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
   if (!path || !path[0]) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: no file name given");
   double size = opts ? opts->size : 0.0;
   int refine = opts ? opts->refine : 0;
@@ -810,11 +821,12 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   int rc = input_file(path, &kind, err);
   if (rc) return rc;
 
-  /* Surfaces Gmsh does not read: CGAL reads them, before Gmsh is locked. */
+  /* Surfaces Gmsh does not read: CGAL reads and repairs them (surface_repair.c), before Gmsh is locked. */
   double *pts = NULL;
   int32_t *tris = NULL;
   int64_t np = 0, ntri = 0;
-  if (kind == IN_SOUP && (rc = bs_shim_read_surface(path, &pts, &np, &tris, &ntri, err))) return rc;
+  bs_surface_report *rep = opts ? opts->report : NULL;
+  if (kind == IN_SOUP && (rc = bs_surface_prepare(path, &pts, &np, &tris, &ntri, opts, rep, err))) return rc;
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
   if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;

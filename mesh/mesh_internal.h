@@ -35,6 +35,17 @@ int bs__check_refined_count(double n_tets, int refine, const bs_mesh_read_opts *
                             bs_error *err);
 int bs__check_mesh_size(double volume, double size, const bs_mesh_read_opts *opts, const char *what, bs_error *err);
 
+/* Inside a Gmsh session (gmsh_io.c): records "<path>: Gmsh could not <what>:
+ * <Gmsh's last error>" with code and returns it. */
+int bs__gmsh_fail(bs_error *err, int code, const char *path, const char *what);
+
+/* Inside a Gmsh session, after a CAD file (STEP, IGES, BREP) is opened: an
+ * assembly of several solids with no physical groups is fragmented into a
+ * conformal model with one named 3-D group per part (cad_assembly.c has the
+ * rules); size <= 0 (the file's size) also turns on curvature sizing. A
+ * model of one solid is left alone. BS_OK, or BS_EGMSH / BS_ENOMEM naming path. */
+int bs__cad_assembly(const char *path, double size, bs_error *err);
+
 /* Deep copy of n groups into a new array *out (NULL when n == 0). A NULL
  * name is copied as "". Vertex sets are copied as they are (possibly NULL). */
 int bs__groups_copy(const bs_group *src, int n, bs_group **out, bs_error *err);

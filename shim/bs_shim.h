@@ -189,6 +189,86 @@ int bs_shim_self_intersections(const double *points, int64_t n_points, const int
 int bs_shim_count_self_intersections(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
                                      int64_t cap, int64_t *count, int *truncated, bs_error *err);
 
+/* ==========================================================================
+ * Surface repair (shim_repair.cpp; helper "repair"): a triangle soup that
+ * is not clean (duplicates, zero-area triangles, holes, self-intersections)
+ * made into a closed, outward, self-intersection-free surface, with CGAL's
+ * Polygon_mesh_processing. The steps, in order:
+ *   1. soup: points at bitwise-equal positions merged; triangles with a
+ *      repeated vertex dropped (degenerate); copies of a triangle (the same
+ *      three vertices, either orientation) dropped; unused points dropped;
+ *      orientation made consistent (orient_polygon_soup, which duplicates
+ *      the points where the surface is not manifold);
+ *   2. zero-area (collinear) triangles removed by edge collapses and flips
+ *      (remove_degenerate_faces);
+ *   3. holes (boundary loops): with close_holes, every loop whose diameter
+ *      (largest distance between two of its points) is at most max_hole
+ *      times the bounding-box diagonal is triangulated and refined
+ *      (triangulate_and_refine_hole); an open surface is refused otherwise;
+ *   4. self-intersections: first autorefine_and_remove_self_intersections
+ *      (exact intersection curves, keeps the outer hull), kept only if the
+ *      result is closed, free of intersections and encloses 50% to 105% of
+ *      the volume before (it misreads folded regions of some scans and then
+ *      keeps almost nothing); else remove_self_intersections (local
+ *      smoothing and re-filling of the intersecting regions), followed by the
+ *      autorefinement again for what it left; after the local removal, the
+ *      folds it leaves (two neighbouring triangles at a dihedral angle below
+ *      BS_SURFACE_FOLD_DEGREES, which Gmsh takes for overlapping facets) are
+ *      cut out with the ring of triangles around them and re-filled;
+ *   5. oriented to bound a volume (normals outward: positive enclosed volume).
+ * Lengths are in the units of the points; volumes in those units cubed.
+ * ========================================================================== */
+
+/* The largest hole closed by default, as a fraction of the bbox diagonal. */
+#define BS_SURFACE_MAX_HOLE_DEFAULT 0.2
+/* A fold: neighbouring triangles at a dihedral angle below this (degrees). */
+#define BS_SURFACE_FOLD_DEGREES 3.0
+
+typedef struct bs_surface_repair_opts {
+  int close_holes;   /* 1: close holes up to max_hole (0: an open surface is refused) */
+  double max_hole;   /* fraction of the bounding-box diagonal; <= 0: BS_SURFACE_MAX_HOLE_DEFAULT */
+} bs_surface_repair_opts;
+
+typedef struct bs_surface_report {
+  int64_t points_in, tris_in;    /* as given                                     */
+  int64_t points_out, tris_out;  /* the clean surface                            */
+  int64_t duplicate_points;      /* merged into an earlier point at the same position */
+  int64_t duplicate_tris;        /* copies of another triangle, dropped          */
+  int64_t degenerate_tris;       /* zero-area triangles (repeated vertex or collinear), removed */
+  int64_t split_points;          /* points duplicated to make the surface manifold */
+  int holes;                     /* boundary loops found (after steps 1-2)       */
+  int holes_closed;              /* of them, closed                              */
+  int64_t hole_tris;             /* triangles added to close them                */
+  double hole_max_diameter;      /* the largest diameter and the largest         */
+  double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
+  int64_t self_intersections;    /* pairs of intersecting triangles found        */
+  int self_intersection_fix;     /* 0 none needed, 1 autorefinement, 2 local removal,
+                                    3 local removal then autorefinement          */
+  int64_t fold_tris;             /* triangles cut out around folds and re-filled */
+  double volume_before;          /* enclosed (signed) before step 4, 0 if open   */
+  double volume;                 /* enclosed by the clean surface (> 0)          */
+  double bbox_diagonal;          /* of the input points                          */
+} bs_surface_report;
+
+/* Repairs the surface (points, n_points; tris, n_tris: see Data above) into
+ * a new soup (*points_out, *tris_out, allocated by the shim: free with
+ * bs_shim_free) that is closed (every edge in exactly two triangles),
+ * consistently oriented outward, with no zero-area triangle and no two
+ * triangles intersecting (bs_shim_self_intersections finds none). opts may
+ * be NULL (no hole closed). report (may be NULL) gets the counts; it is filled
+ * as far as the repair went when it fails. Errors (the message says what and
+ * where, not the file: the caller adds it):
+ *   BS_EINPUT  an index out of range or a non-finite coordinate; an open
+ *              surface without close_holes, or with a hole larger than
+ *              max_hole (the message gives the number of loops and the
+ *              largest one's diameter, perimeter, edges and centre); self-
+ *              intersections that neither method removes (count and a place);
+ *              nothing left (everything degenerate) or no enclosed volume;
+ *   BS_ENOMEM; BS_EINTERNAL when CGAL fails in an unexpected way. */
+int bs_shim_repair_surface(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
+                           const bs_surface_repair_opts *opts, double **points_out, int64_t *n_points_out,
+                           int32_t **tris_out, int64_t *n_tris_out, bs_surface_report *report, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -100,6 +100,7 @@ typedef struct bs_scene_body {
   double box_size[3];      /* mesh "box": edge lengths (m) [1, 1, 1]            */
   double mesh_size;        /* <= 0: the file's own                             */
   int refine;              /* uniform refinements [0], 0..6                     */
+  int close_holes;         /* a surface mesh (.off .obj .ply): close its small holes [0] */
   bs_order reorder;
   double translate[3], rotate[3] /* axis * angle (degrees) */, scale[3];
   int n_materials;         /* [0] is the default; others by group name          */

@@ -87,6 +87,8 @@ const bs_schema_key bs_schema_keys_[] = {
     {"bodies[]", "mesh_size", NUM, .range = "[0, )", .def = "0",
      .doc = "target mesh size (m) for geometry inputs; 0: the file's own"},
     {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", .doc = "uniform 1-to-8 refinements"},
+    {"bodies[]", "close_holes", BOOL, .def = "false",
+     .doc = "a surface (.off, .obj, .ply): close holes up to 0.2 of its bounding-box diagonal (else an open one is refused)"},
     {"bodies[]", "reorder", STR, .choices = CHOICES("none", "metis", "rcm"), .def = "\"none\"",
      .doc = "vertex renumbering"},
     {"bodies[]", "scale", BS_SCHEMA_NUM_OR_VEC3, .range = "(0, )", .def = "[1, 1, 1]",

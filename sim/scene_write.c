@@ -148,6 +148,7 @@ static void write_body(writer *w, cJSON *o, const bs_scene_body *b) {
   }
   num(w, o, "mesh_size", b->mesh_size);
   num(w, o, "refine", b->refine);
+  boolean(w, o, "close_holes", b->close_holes);
   str(w, o, "reorder", choice("bodies[]", "reorder", (int)b->reorder));
   vec3(w, o, "scale", b->scale);
   vec3(w, o, "rotate", b->rotate);

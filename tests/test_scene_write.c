@@ -38,7 +38,7 @@ static void expect_same_file(const char *p, const char *q, const char *where) {
 
 static void expect_same_body(const bs_scene_body *a, const bs_scene_body *b, const char *where) {
   expect_same_file(a->mesh, b->mesh, where);
-  EQ3(box_cells); EQ3(box_size); EQ(mesh_size); EQ(refine); EQ(reorder); EQ3(translate); EQ3(rotate); EQ3(scale);
+  EQ3(box_cells); EQ3(box_size); EQ(mesh_size); EQ(refine); EQ(close_holes); EQ(reorder); EQ3(translate); EQ3(rotate); EQ3(scale);
   EQ3(velocity); EQ3(angular_velocity); EQ(init); EQ(init_seed); EQ(n_materials); EQ(n_scripts);
   if (a->init != BS_INIT_REST) EQ3(init_lo);
   if (a->init == BS_INIT_RANDOM) EQ3(init_hi);
@@ -148,7 +148,7 @@ Test(scene_write, scene_built_in_c_comes_back) {
   bs_scene_script *scr;
   bs_scene_obstacle *o;
   bs_error err;
-  b->box_size[1] = 0.25, b->refine = 1, b->reorder = BS_ORDER_RCM, b->scale[2] = 2, b->rotate[0] = 30;
+  b->box_size[1] = 0.25, b->refine = 1, b->close_holes = 1, b->reorder = BS_ORDER_RCM, b->scale[2] = 2, b->rotate[0] = 30;
   b->translate[1] = 0.5, b->velocity[0] = -1, b->angular_velocity[2] = 0.5;
   b->init = BS_INIT_POINT, b->init_lo[1] = 2, b->init_seed = 7;
   b->materials[0].model = BS_MODEL_NEO_HOOKEAN, b->materials[0].rayleigh = 0.01;

@@ -1,0 +1,321 @@
+/* Surfaces that are not clean (bs_shim_repair_surface, bs_surface_prepare and
+ * bs_mesh_read on .off files): a synthetic cube soup with duplicated and
+ * zero-area triangles, and the corpus of data/corpus/cgal (setup.sh extracts
+ * it from Debian's libcgal-demo): closed scans with self-intersections
+ * (camel: removed by autorefinement; elk, cow: removed locally, cow's folds
+ * re-filled), a scan with small
+ * holes (pig) and one with large holes (mech-holes-shark). Every refusal names
+ * the file and the reason. */
+#define _GNU_SOURCE
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bs_mesh.h"
+#include "bs_shim.h"
+#include "cli_util.h"
+#include "scene_fixture.h"
+#include "sim_util.h"
+
+#define CORPUS BS_SOURCE_DIR "/data/corpus/cgal/"
+
+static const char *corpus(const char *name) {
+  static char path[512];
+  snprintf(path, sizeof path, CORPUS "%s", name);
+  cr_assert_eq(access(path, R_OK), 0, "%s is missing: run `bash setup.sh build` (it extracts the corpus)", path);
+  return path;
+}
+
+/* Every edge of the soup in exactly two triangles, once in each direction. */
+static void assert_closed_oriented(const int32_t *t, int64_t nt) {
+  for (int64_t e = 0; e < nt; e++)
+    for (int k = 0; k < 3; k++) {
+      int32_t a = t[3 * e + k], b = t[3 * e + (k + 1) % 3];
+      int same = 0, opposite = 0;
+      for (int64_t f = 0; f < nt; f++)
+        for (int j = 0; j < 3; j++) {
+          int32_t c = t[3 * f + j], d = t[3 * f + (j + 1) % 3];
+          same += c == a && d == b;
+          opposite += c == b && d == a;
+        }
+      cr_assert(same == 1 && opposite == 1, "edge %d-%d of triangle %lld: %d same, %d opposite", a, b, (long long)e,
+                same, opposite);
+    }
+}
+
+static double soup_volume(const double *x, const int32_t *t, int64_t nt) {
+  double v = 0;
+  for (int64_t e = 0; e < nt; e++) {
+    const double *a = x + 3 * t[3 * e], *b = x + 3 * t[3 * e + 1], *c = x + 3 * t[3 * e + 2];
+    v += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+          a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
+  }
+  return v;
+}
+
+/* ---- a synthetic soup ---------------------------------------------------- */
+
+/* The unit cube as 12 outward triangles, with triangle (0 5 4) of the face
+ * y = 0 split at the midpoint m = 8 of its edge 4-0 into (0 5 m), (m 5 4) and
+ * the zero-area (0 m 4); plus two copies of cube triangles (one reversed)
+ * and a triangle with a repeated corner. Every triangle gets its own three
+ * points, as in an STL file. */
+enum { CUBE_TRIS = 17, CUBE_POSITIONS = 9 };
+static const double corner[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+                                    {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 0.5}};
+static const int cube_tri[CUBE_TRIS][3] = {
+    {0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, /* z = 0, z = 1, y = 0 */
+    {0, 5, 8}, {8, 5, 4}, {0, 8, 4},                       /* y = 0 split, zero-area (0 m 4) */
+    {3, 6, 2}, {3, 7, 6}, {0, 4, 7}, {0, 7, 3}, {1, 2, 6}, {1, 6, 5}, /* y = 1, x = 0, x = 1 */
+    {0, 2, 1}, {6, 5, 4},                                  /* copies of 0 and (reversed) 2 */
+    {1, 1, 2}};                                            /* a repeated corner */
+
+static void cube_soup(double *x, int32_t *t) {
+  for (int e = 0; e < CUBE_TRIS; e++)
+    for (int k = 0; k < 3; k++) {
+      for (int c = 0; c < 3; c++) x[3 * (3 * e + k) + c] = corner[cube_tri[e][k]][c];
+      t[3 * e + k] = 3 * e + k;
+    }
+}
+
+Test(surface_repair, cube_soup_duplicates_and_degenerates) {
+  double x[3 * 3 * CUBE_TRIS];
+  int32_t t[3 * CUBE_TRIS];
+  cube_soup(x, t);
+  double *xo = NULL;
+  int32_t *to = NULL;
+  int64_t npo = 0, nto = 0;
+  bs_surface_report r;
+  bs_error err = {0};
+  int rc = bs_shim_repair_surface(x, 3 * CUBE_TRIS, t, CUBE_TRIS, NULL, &xo, &npo, &to, &nto, &r, &err);
+  cr_assert_eq(rc, BS_OK, "%s", err.msg);
+  cr_expect_eq(r.tris_in, CUBE_TRIS);
+  cr_expect_eq(r.duplicate_points, 3 * CUBE_TRIS - CUBE_POSITIONS, "merged %lld", (long long)r.duplicate_points);
+  cr_expect_eq(r.duplicate_tris, 2, "duplicates %lld", (long long)r.duplicate_tris);
+  cr_expect_eq(r.degenerate_tris, 2, "degenerates %lld (one repeated corner, one collinear)",
+               (long long)r.degenerate_tris);
+  cr_expect_eq(r.holes, 0);
+  cr_expect_eq(r.self_intersections, 0);
+  cr_expect_eq(r.tris_out, nto);
+  cr_expect(nto >= 12 && nto <= 14, "%lld triangles out", (long long)nto);
+  assert_closed_oriented(to, nto);
+  cr_expect_float_eq(soup_volume(xo, to, nto), 1.0, 1e-12);
+  cr_expect_float_eq(r.volume, 1.0, 1e-12);
+  int32_t *pairs = NULL;
+  int64_t n_pairs = -1;
+  cr_assert_eq(bs_shim_self_intersections(xo, npo, to, nto, &pairs, &n_pairs, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(n_pairs, 0, "%lld intersecting pairs (a degenerate triangle is a pair (i, i))", (long long)n_pairs);
+  bs_shim_free(pairs);
+  bs_shim_free(xo);
+  bs_shim_free(to);
+}
+
+/* A new file /tmp/bs_test_repair_XXXXXX.off (path: a buffer of 64), open for writing. */
+static FILE *temp_off(char *path) {
+  snprintf(path, 64, "/tmp/bs_test_repair_XXXXXX.off");
+  int fd = mkstemps(path, 4);
+  cr_assert(fd >= 0, "cannot create %s", path);
+  FILE *f = fdopen(fd, "w");
+  cr_assert_not_null(f);
+  return f;
+}
+
+/* The soup written as an OFF file meshes into the unit cube. */
+Test(surface_repair, cube_soup_file_meshes) {
+  char path[64];
+  FILE *f = temp_off(path);
+  double x[3 * 3 * CUBE_TRIS];
+  int32_t t[3 * CUBE_TRIS];
+  cube_soup(x, t);
+  fprintf(f, "OFF\n%d %d 0\n", 3 * CUBE_TRIS, CUBE_TRIS);
+  for (int i = 0; i < 3 * CUBE_TRIS; i++) fprintf(f, "%.17g %.17g %.17g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+  for (int e = 0; e < CUBE_TRIS; e++) fprintf(f, "3 %d %d %d\n", t[3 * e], t[3 * e + 1], t[3 * e + 2]);
+  fclose(f);
+  bs_surface_report r;
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  int rc = bs_mesh_read(path, &(bs_mesh_read_opts){.report = &r}, &m, &err);
+  remove(path);
+  cr_assert_eq(rc, BS_OK, "%s", err.msg);
+  cr_expect_float_eq(bs_mesh_volume(m), 1.0, 1e-12);
+  cr_expect_eq(r.duplicate_tris, 2);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
+
+Test(surface_repair, bad_soups_refused) {
+  double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  int32_t t[3] = {0, 1, 3};
+  double *xo = NULL;
+  int32_t *to = NULL;
+  int64_t npo, nto;
+  bs_error err = {0};
+  cr_expect_eq(bs_shim_repair_surface(x, 3, t, 1, NULL, &xo, &npo, &to, &nto, NULL, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "triangle 0 refers to point 3"), "%s", err.msg);
+  int32_t flat[3] = {0, 0, 1};
+  cr_expect_eq(bs_shim_repair_surface(x, 3, flat, 1, NULL, &xo, &npo, &to, &nto, NULL, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "degenerate"), "%s", err.msg);
+  x[4] = NAN;
+  cr_expect_eq(bs_shim_repair_surface(x, 3, t, 1, NULL, &xo, &npo, &to, &nto, NULL, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "point 1 has a non-finite coordinate"), "%s", err.msg);
+  cr_expect_null(xo);
+  cr_expect_null(to);
+}
+
+/* A file whose triangles are all degenerate: the message names the file. */
+Test(surface_repair, all_degenerate_file_refused) {
+  char path[64];
+  FILE *f = temp_off(path);
+  fputs("OFF\n3 2 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 1\n3 0 1 2\n", f);
+  fclose(f);
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  int rc = bs_mesh_read(path, NULL, &m, &err);
+  remove(path);
+  cr_expect_eq(rc, BS_EINPUT, "%s", err.msg);
+  cr_expect(strstr(err.msg, path) && strstr(err.msg, "degenerate"), "%s", err.msg);
+  cr_expect_null(m);
+}
+
+/* ---- the corpus ----------------------------------------------------------- */
+
+/* Meshes path with opts and checks the tets: valid, none inverted, the volume
+ * within 1% of what the repaired surface encloses. */
+static bs_mesh *mesh_corpus(const char *path, bs_mesh_read_opts *o, bs_surface_report *r) {
+  o->report = r;
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_mesh_read(path, o, &m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_expect_eq(q.n_inverted, 0);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_expect(r->volume > 0);
+  cr_expect(fabs(bs_mesh_volume(m) - r->volume) <= 0.01 * r->volume, "tets %.9g, surface %.9g", bs_mesh_volume(m),
+            r->volume);
+  return m;
+}
+
+Test(surface_repair, camel_self_intersections_autorefined) {
+  bs_surface_report r;
+  bs_mesh *m = mesh_corpus(corpus("camel.off"), &(bs_mesh_read_opts){0}, &r);
+  cr_expect_eq(r.tris_in, 19536);
+  cr_expect_eq(r.self_intersections, 20);
+  cr_expect_eq(r.self_intersection_fix, 1);
+  cr_expect(fabs(r.volume - r.volume_before) <= 1e-3 * r.volume_before, "%.9g vs %.9g", r.volume, r.volume_before);
+  cr_expect_eq(r.tris_out, m->n_faces, "the clean surface is the mesh's boundary");
+  bs_mesh_destroy(&m);
+}
+
+/* Gmsh refused the cow after the local removal ("overlapping facets") until
+ * the folds it leaves were cut out and re-filled. */
+Test(surface_repair, cow_folds_refilled) {
+  bs_surface_report r;
+  bs_mesh *m = mesh_corpus(corpus("cow.off"), &(bs_mesh_read_opts){0}, &r);
+  cr_expect_eq(r.self_intersections, 101);
+  cr_expect_eq(r.self_intersection_fix, 2);
+  cr_expect(r.fold_tris > 0, "no fold was re-filled");
+  cr_expect(fabs(r.volume - r.volume_before) <= 2e-3 * r.volume_before, "%.9g vs %.9g", r.volume, r.volume_before);
+  bs_mesh_destroy(&m);
+}
+
+Test(surface_repair, elk_self_intersections_removed_locally) {
+  bs_surface_report r;
+  bs_mesh *m = mesh_corpus(corpus("elk.off"), &(bs_mesh_read_opts){0}, &r);
+  cr_expect_eq(r.self_intersections, 7);
+  cr_expect_eq(r.self_intersection_fix, 2, "autorefinement keeps almost nothing of the elk: the local removal runs");
+  cr_expect(fabs(r.volume - r.volume_before) <= 1e-3 * r.volume_before, "%.9g vs %.9g", r.volume, r.volume_before);
+  bs_mesh_destroy(&m);
+}
+
+Test(surface_repair, pig_holes_refused_by_default) {
+  const char *path = corpus("pig.off");
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_mesh_read(path, NULL, &m, &err), BS_EINPUT, "%s", err.msg);
+  const char *needles[] = {path, "not closed", "7 boundary loops", "largest has diameter 0.1439", "perimeter",
+                           "11 edges", "around (0.1363, 0.2008, 0.2021)", "close_holes"};
+  for (size_t i = 0; i < sizeof needles / sizeof *needles; i++)
+    cr_expect(strstr(err.msg, needles[i]), "'%s' not in: %s", needles[i], err.msg);
+  cr_expect_null(m);
+}
+
+Test(surface_repair, pig_holes_closed_on_request) {
+  bs_surface_report r;
+  bs_mesh *m = mesh_corpus(corpus("pig.off"), &(bs_mesh_read_opts){.close_holes = 1}, &r);
+  cr_expect_eq(r.holes, 7);
+  cr_expect_eq(r.holes_closed, 7);
+  cr_expect(r.hole_tris >= 7, "%lld triangles added", (long long)r.hole_tris);
+  cr_expect(fabs(r.hole_max_diameter - 0.1439) < 1e-4, "largest closed %.6g", r.hole_max_diameter);
+  cr_expect(r.hole_max_perimeter > r.hole_max_diameter);
+  cr_expect(r.hole_max_diameter <= BS_SURFACE_MAX_HOLE_DEFAULT * r.bbox_diagonal);
+  cr_expect_eq(r.self_intersections, 3, "the pig also has 3 intersecting pairs");
+  bs_mesh_destroy(&m);
+}
+
+Test(surface_repair, shark_large_holes_refused) {
+  const char *path = corpus("mech-holes-shark.off");
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.close_holes = 1}, &m, &err), BS_EINPUT, "%s", err.msg);
+  const char *needles[] = {path, "4 boundary loops", "largest has diameter 0.799", "exceeds the largest hole closed"};
+  for (size_t i = 0; i < sizeof needles / sizeof *needles; i++)
+    cr_expect(strstr(err.msg, needles[i]), "'%s' not in: %s", needles[i], err.msg);
+  cr_expect_null(m);
+}
+
+Test(surface_repair, shark_holes_closed_with_a_larger_limit) {
+  bs_surface_report r;
+  bs_mesh *m = mesh_corpus(corpus("mech-holes-shark.off"), &(bs_mesh_read_opts){.close_holes = 1, .max_hole = 0.5},
+                           &r);
+  cr_expect_eq(r.holes_closed, 4);
+  cr_expect(fabs(r.hole_max_diameter - 0.799) < 1e-3, "%.6g", r.hole_max_diameter);
+  bs_mesh_destroy(&m);
+}
+
+/* bigstep mesh info prints the report; --close-holes reaches the repair. */
+Test(surface_repair, cli_close_holes) {
+  char cmd[1024], *out = NULL;
+  snprintf(cmd, sizeof cmd, "%s mesh info %s", BS_BIGSTEP_EXE, corpus("pig.off"));
+  cr_expect_eq(bs_test_run(cmd, &out), 1, "%s", out);
+  cr_expect(strstr(out, "7 boundary loops"), "%s", out);
+  free(out);
+  snprintf(cmd, sizeof cmd, "%s mesh info %s --close-holes", BS_BIGSTEP_EXE, corpus("pig.off"));
+  cr_expect_eq(bs_test_run(cmd, &out), 0, "%s", out);
+  cr_expect(strstr(out, "holes: 7 found, 7 closed with"), "%s", out);
+  cr_expect(strstr(out, "self-intersections: 3 pairs of triangles, removed by autorefinement"), "%s", out);
+  free(out);
+  snprintf(cmd, sizeof cmd, "%s mesh info %s --close-holes --max-hole 2", BS_BIGSTEP_EXE, corpus("pig.off"));
+  cr_expect_eq(bs_test_run(cmd, &out), 2, "%s", out);
+  cr_expect(strstr(out, "--max-hole must be a number in (0, 1]"), "%s", out);
+  free(out);
+}
+
+/* A scene's body on pig.off: refused (naming the scene's body, the file and
+ * the loops) without bodies[].close_holes, simulated with it. */
+Test(surface_repair, scene_close_holes) {
+  static const char *const fmt =
+      "{\"time\": {\"fps\": 24, \"frames\": 1, \"steps_per_frame\": 1},\n"
+      " \"bodies\": [{\"mesh\": \"%s\", \"close_holes\": %s,\n"
+      "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n";
+  const char *mesh = corpus("pig.off");
+  char text[2048];
+  for (int close = 0; close <= 1; close++) {
+    snprintf(text, sizeof text, fmt, mesh, close ? "true" : "false");
+    char path[] = "/tmp/bs_scene_repair_XXXXXX";
+    bs_test_write_scene(path, text);
+    bs_error err;
+    int rc = sim_load_error(path, NULL, 0, &err);
+    unlink(path);
+    if (close) {
+      cr_expect_eq(rc, BS_OK, "%s", err.msg);
+    } else {
+      cr_expect_eq(rc, BS_EINPUT, "%s", err.msg);
+      cr_expect(strstr(err.msg, "pig.off") && strstr(err.msg, "7 boundary loops"), "%s", err.msg);
+    }
+  }
+}
