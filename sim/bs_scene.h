@@ -98,6 +98,7 @@ typedef struct bs_scene_body {
   int box_cells[3];        /* mesh "box": cells [4, 4, 4]                       */
   double box_size[3];      /* mesh "box": edge lengths (m) [1, 1, 1]            */
   double mesh_size;        /* <= 0: the file's own                             */
+  double min_dihedral;     /* quality gate (degrees) of a mesh bigstep makes [10]; 0: none */
   int refine;              /* uniform refinements [0], 0..6                     */
   bs_order reorder;
   double translate[3], rotate[3] /* axis * angle (degrees) */, scale[3];

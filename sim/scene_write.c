@@ -144,6 +144,7 @@ static void write_body(writer *w, cJSON *o, const bs_scene_body *b) {
     vec3(w, bx, "size", b->box_size);
   }
   num(w, o, "mesh_size", b->mesh_size);
+  num(w, o, "min_dihedral", b->min_dihedral);
   num(w, o, "refine", b->refine);
   str(w, o, "reorder", choice("bodies[]", "reorder", (int)b->reorder));
   vec3(w, o, "scale", b->scale);
