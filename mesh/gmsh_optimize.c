@@ -3,7 +3,7 @@
  * session (gmsh_io.c holds the lock).
  *
  * Each round runs gmshModelMeshOptimize with "" (Gmsh's own optimiser) then
- * "Netgen", with Mesh.OptimizeThreshold (the gamma quality under which a tet
+ * "Netgen" (when Gmsh has it and it succeeds), with Mesh.OptimizeThreshold (the gamma quality under which a tet
  * is worked on) raised from 0.3 by 0.1 a round, and stops when the smallest
  * dihedral angle of the model's tets reaches the gate, or a round improves
  * it by less than 0.01 degree, or after BS_GMSH_ROUNDS rounds.
@@ -66,13 +66,14 @@ done:
 }
 
 int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, bs_error *err) {
-  int rc = BS_OK, ierr = 0;
+  int rc = BS_OK, ierr = 0, netgen = 1;
   double best = model_min_dihedral(path, err, &rc);
   for (int r = 0; !rc && best >= 0 && best < gate && r < BS_GMSH_ROUNDS; r++) {
     gmshOptionSetNumber("Mesh.OptimizeThreshold", 0.3 + 0.1 * r, &ierr);
     gmshModelMeshOptimize("", 0, 1, NULL, 0, &ierr);
-    if (!ierr) gmshModelMeshOptimize("Netgen", 0, 1, NULL, 0, &ierr);
     if (ierr) return bs_error_set(err, BS_EGMSH, "%s: Gmsh could not optimise the mesh", path);
+    if (netgen) gmshModelMeshOptimize("Netgen", 0, 1, NULL, 0, &ierr);
+    if (ierr) netgen = 0, ierr = 0; /* Gmsh built without Netgen, or it gave up: Gmsh's own optimiser goes on */
     double now = model_min_dihedral(path, err, &rc);
     if (rc || now < best + 0.01) {
       if (now > best) best = now;

@@ -16,8 +16,11 @@
 #include "mesh_internal.h"
 
 /* Mesh_3's options for a target size h (see bs_shim_mesh3_opts): ODT
- * smoothing, then perturbation and exudation in rounds towards the gate (at
- * least the default gate, so that a relaxed gate still gets a good mesh). */
+ * smoothing, then perturbation and exudation in rounds towards the gate, at
+ * least the default gate (a relaxed gate still gets a good mesh) and at most
+ * BS_MESH3_MAX_TARGET: CGAL's perturber reaches 10 to 15 degrees; asked
+ * for more it works on nearly every tet for minutes and rarely gets there. */
+#define BS_MESH3_MAX_TARGET 15.0
 static bs_shim_mesh3_opts mesh3_opts(double h, const bs_mesh_read_opts *opts) {
   double fa = opts ? opts->feature_angle : 0.0;
   double gate = bs__mesh_gate(opts);
@@ -28,7 +31,7 @@ static bs_shim_mesh3_opts mesh3_opts(double h, const bs_mesh_read_opts *opts) {
                               .smooth_iterations = 10,
                               .perturb = 1,
                               .exude = 1,
-                              .target_dihedral = fmax(gate, BS_MESH_MIN_DIHEDRAL),
+                              .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
                               .max_rounds = 3};
 }
 

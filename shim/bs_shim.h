@@ -210,9 +210,15 @@ enum { BS_SHIM_SMOOTH_NONE = 0, BS_SHIM_SMOOTH_ODT = 1, BS_SHIM_SMOOTH_LLOYD = 2
 typedef struct bs_shim_mesh3_opts {
   double size;            /* target size h (> 0): Mesh_3's edge_size, facet_size and cell_size */
   double facet_distance;  /* surface approximation bound; <= 0: h / 10                   */
+  double facet_size;      /* boundary triangles' and sharp edges' size; <= 0: h          */
   double feature_angle;   /* degrees: edges whose faces meet at a dihedral angle further
                              than this from flat are protected (detect_features);
-                             <= 0: no features (a smooth scan)                           */
+                             <= 0: no features. They are kept only when the surface
+                             is CAD-like: chains of such edges at least
+                             feature_min_length long make >= 80% of their length (a
+                             scan's creases are many short chains, which Mesh_3 would
+                             protect with tiny balls and slivers; they are ignored)      */
+  double feature_min_length; /* <= 0: 2 h                                                */
   int smoother;           /* BS_SHIM_SMOOTH_*                                            */
   int smooth_iterations;  /* iterations of the smoother (0: none)                       */
   int perturb, exude;     /* 1: sliver perturbation / exudation after smoothing         */
@@ -228,10 +234,12 @@ typedef struct bs_shim_mesh3_out {
   int64_t n_tets;
   double refined_dihedral;/* smallest dihedral angle (degrees) after refinement         */
   double dihedral;        /* ... after the optimisers                                    */
+  int64_t n_features;     /* sharp-edge chains kept (0: meshed as a smooth surface)      */
 } bs_shim_mesh3_out;
 
 /* Meshes the volume inside the closed surface (points, tris) at opts->size
- * with CGAL's Mesh_3 on a Polyhedral_mesh_domain_with_features_3: criteria
+ * with CGAL's Mesh_3 on a Polyhedral_mesh_domain_with_features_3, its
+ * features detected (detect_features) when the surface is CAD-like: criteria
  * edge_size = facet_size = cell_size = h, facet_angle 25 degrees,
  * facet_distance, cell_radius_edge_ratio 3; then the optimisers of opts.
  * Sequential and seeded: the same input gives the same mesh. The surface
