@@ -50,6 +50,12 @@ static void soup_read(const char *path, soup *s) {
   s->volume = fabs(v) / 6.0;
 }
 
+/* The soup of rel (its path into path), or the test is skipped without it. */
+static void soup_or_skip(const char *rel, char *path, size_t n, soup *s) {
+  if (!have(rel, path, n)) cr_skip_test("%s missing (bash setup.sh extracts it from libcgal-demo)", rel);
+  soup_read(path, s);
+}
+
 static void soup_free(soup *s) {
   bs_shim_free(s->x);
   bs_shim_free(s->t);
@@ -71,11 +77,11 @@ static double hausdorff(const bs_mesh *m, const soup *s, double spacing) {
 
 /* Meshes rel at h = diagonal / n and checks what every such mesh must hold:
  * bs_mesh_check, no inverted tet, the gate, volume and Hausdorff bounds. */
-static bs_mesh *mesh_checked(const char *rel, double n, double vol_tol, double haus_over_h, soup *s, double *h) {
+static void mesh_checked(const char *rel, double n, double vol_tol, double haus_over_h) {
   char path[1024];
-  if (!have(rel, path, sizeof path)) cr_skip_test("%s missing (bash setup.sh extracts it from libcgal-demo)", rel);
-  soup_read(path, s);
-  *h = s->diag / n;
+  soup sb, *s = &sb;
+  soup_or_skip(rel, path, sizeof path, s);
+  double hb = s->diag / n, *h = &hb;
   bs_mesh_read_opts o = {.size = *h};
   bs_mesh *m = NULL;
   bs_error err;
@@ -96,24 +102,13 @@ static bs_mesh *mesh_checked(const char *rel, double n, double vol_tol, double h
   cr_expect_leq(d, haus_over_h * *h, "Hausdorff distance %g = %.3f h", d, d / *h);
   cr_expect_not_null(bs_mesh_group(m, "body"));
   cr_expect_not_null(bs_mesh_group(m, "surface_1"));
-  return m;
+  bs_mesh_destroy(&m);
+  soup_free(s);
 }
 
-Test(mesh_surface, fandisk_cad_part) {
-  soup s;
-  double h;
-  bs_mesh *m = mesh_checked("data/meshes/fandisk.off", 36, 0.01, 0.3, &s, &h);
-  bs_mesh_destroy(&m);
-  soup_free(&s);
-}
+Test(mesh_surface, fandisk_cad_part) { mesh_checked("data/meshes/fandisk.off", 36, 0.01, 0.3); }
 
-Test(mesh_surface, armadillo_scan) {
-  soup s;
-  double h;
-  bs_mesh *m = mesh_checked("data/meshes/armadillo.off", 35, 0.04, 0.45, &s, &h);
-  bs_mesh_destroy(&m);
-  soup_free(&s);
-}
+Test(mesh_surface, armadillo_scan) { mesh_checked("data/meshes/armadillo.off", 35, 0.04, 0.45); }
 
 /* The fandisk's sharp edges (faces turning by more than 60 degrees) are kept:
  * every point along them lies within h / 8 of the mesh's boundary (measured
@@ -121,9 +116,8 @@ Test(mesh_surface, armadillo_scan) {
  * (feature_angle < 0) the edges are cut off (0.58 h). */
 Test(mesh_surface, fandisk_keeps_sharp_edges) {
   char path[1024];
-  if (!have("data/meshes/fandisk.off", path, sizeof path)) cr_skip_test("fandisk.off missing (bash setup.sh)");
   soup s;
-  soup_read(path, &s);
+  soup_or_skip("data/meshes/fandisk.off", path, sizeof path, &s);
   bs_error err;
   bs_error_clear(&err);
   double *seg = NULL;
@@ -160,9 +154,8 @@ Test(mesh_surface, fandisk_keeps_sharp_edges) {
  * is the same on a second run (sequential, seeded). STL goes through it too. */
 Test(mesh_surface, shim_orientation_and_determinism) {
   char path[1024];
-  if (!have("data/meshes/sphere.off", path, sizeof path)) cr_skip_test("sphere.off missing (bash setup.sh)");
   soup s;
-  soup_read(path, &s);
+  soup_or_skip("data/meshes/sphere.off", path, sizeof path, &s);
   bs_shim_mesh3_opts o = {.size = s.diag / 8, .feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT,
                           .smooth_iterations = 5, .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 2};
   bs_shim_mesh3_out r[2];
@@ -252,21 +245,28 @@ Test(mesh_surface, refusals) {
   cr_expect(strstr(err.msg, "nan.off") && strstr(err.msg, "point 1"), "%s", err.msg);
 }
 
+/* bs_mesh_read that must succeed, with the mesh's quality into q. */
+static bs_mesh *read_quality(const char *path, const bs_mesh_read_opts *o, bs_mesh_quality *q) {
+  bs_mesh *m = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  cr_assert_eq(bs_mesh_read(path, o, &m, &err), 0, "%s", err.msg);
+  bs_mesh_quality_compute(m, NULL, q);
+  return m;
+}
+
 /* ---- the gate --------------------------------------------------------------- */
 
 Test(mesh_surface, gate_relaxed_passes_strict_fails) {
   char path[1024];
-  if (!have("data/meshes/sphere.off", path, sizeof path)) cr_skip_test("sphere.off missing (bash setup.sh)");
   soup s;
-  soup_read(path, &s);
+  soup_or_skip("data/meshes/sphere.off", path, sizeof path, &s);
   double h = s.diag / 6;
   bs_mesh_read_opts o = {.size = h, .min_dihedral = -1};
-  bs_mesh *m = NULL;
+  bs_mesh_quality q;
+  bs_mesh *m = read_quality(path, &o, &q);
   bs_error err;
   bs_error_clear(&err);
-  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), 0, "%s", err.msg);
-  bs_mesh_quality q;
-  bs_mesh_quality_compute(m, NULL, &q);
   cr_assert_lt(q.dihedral_min, 40);
   cr_expect_eq(bs_mesh_dihedral_gate(m, q.dihedral_min * 0.99, path, &err), 0, "%s", err.msg);
   cr_expect_eq(bs_mesh_dihedral_gate(m, 0, path, &err), 0, "gate 0 is no gate");
@@ -288,12 +288,8 @@ Test(mesh_surface, gmsh_path_gate) {
   char path[1024];
   snprintf(path, sizeof path, "%s/data/geo/cube.geo", BS_SOURCE_DIR);
   bs_mesh_read_opts o = {0};
-  bs_mesh *m = NULL;
-  bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), 0, "%s", err.msg);
   bs_mesh_quality q;
-  bs_mesh_quality_compute(m, NULL, &q);
+  bs_mesh *m = read_quality(path, &o, &q);
   cr_log_info("cube.geo: %d tets, min dihedral %.3f", m->n_tets, q.dihedral_min);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
   bs_mesh_destroy(&m);
