@@ -105,7 +105,10 @@ typedef struct bs_mesh_read_opts {
                     BS_MESH_MIN_DIHEDRAL; < 0: no gate                   */
   double feature_angle; /* closed surfaces at size > 0: edges where the
                     surface turns by more than this (degrees) are kept as
-                    sharp edges; 0: BS_MESH_FEATURE_ANGLE; < 0: none     */
+                    sharp edges when the surface is CAD-like (its sharp
+                    edges are long chains, bs_shim_mesh3_opts; a scan's
+                    short creases are ignored); 0: BS_MESH_FEATURE_ANGLE;
+                    < 0: none                                           */
   int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_CGAL (0,
                     CGAL's Mesh_3) or BS_SURFACE_GMSH (Gmsh reparametrises
                     and remeshes the surface; kept for comparison)      */

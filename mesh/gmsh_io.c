@@ -21,8 +21,9 @@
  * reparametrizes and remeshes them at that size; with size <= 0 Gmsh keeps
  * its triangles as the boundary of the volume mesh.
  * Meshes made here (not a .msh) are optimised by Gmsh towards the quality
- * gate (gmsh_optimize.c) and then held to it (bs_mesh_dihedral_gate). For geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size
- * after the file is read (so it overrides the file's settings).
+ * gate (gmsh_optimize.c) and then held to it (bs_mesh_dihedral_gate). For
+ * geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size after
+ * the file is read (so it overrides the file's settings).
  *
  * The model becomes a bs_mesh: node tags (possibly sparse) map to vertex
  * indices in increasing tag order; the 4-node tets of every volume entity, in
