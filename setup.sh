@@ -34,19 +34,24 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-# The armadillo of data/scenes/paper/fig13_armadillo.json: data/meshes/armadillo.off
-# from the data archive of Debian's libcgal-demo (not committed). Optional: the
-# bench skips the scene without it.
-if [ ! -f data/meshes/armadillo.off ]; then
+# Surfaces from the data archive of Debian's libcgal-demo (not committed):
+# data/meshes/armadillo.off for data/scenes/paper/fig13_armadillo.json, and
+# the corpus of tests/test_mesh_surface.c and bench/mesh_surface.c (fandisk:
+# a CAD part with sharp edges; elephant, anchor, blobby; sphere .off/.stl).
+# Optional: the tests and the bench skip what is missing.
+cgal_meshes=(armadillo.off fandisk.off elephant.off anchor.off blobby.off sphere.off sphere.stl)
+missing_meshes=()
+for f in "${cgal_meshes[@]}"; do [ -f "data/meshes/$f" ] || missing_meshes+=("data/meshes/$f"); done
+if [ ${#missing_meshes[@]} -gt 0 ]; then
   tmp=$(mktemp -d)
   if (cd "$tmp" && { apt-get download -q libcgal-demo >/dev/null 2>&1 ||
                      { apt-get update -q >/dev/null && apt-get download -q libcgal-demo >/dev/null 2>&1; }; } &&
       dpkg-deb -x libcgal-demo_*.deb x &&
-      tar xzf x/usr/share/doc/libcgal-dev/data.tar.gz data/meshes/armadillo.off); then
-    mkdir -p data/meshes && mv "$tmp/data/meshes/armadillo.off" data/meshes/armadillo.off
-    echo "setup: extracted data/meshes/armadillo.off from libcgal-demo"
+      tar xzf x/usr/share/doc/libcgal-dev/data.tar.gz "${missing_meshes[@]}"); then
+    mkdir -p data/meshes && mv "$tmp"/data/meshes/* data/meshes/
+    echo "setup: extracted ${missing_meshes[*]} from libcgal-demo"
   else
-    echo "setup: warning: could not extract armadillo.off from libcgal-demo (fig13_armadillo will be skipped)" >&2
+    echo "setup: warning: could not extract ${missing_meshes[*]} from libcgal-demo (tests and scenes using them are skipped)" >&2
   fi
   rm -rf "$tmp"
 fi

@@ -25,10 +25,12 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...)
 
 /* Loads a mesh from a file (through Gmsh) or from a structured box spec
  * "box:NX[xNYxNZ][:LX[xLYxLZ]]" (bs_mesh_load), then refines `refine` times;
- * merge: bs_mesh_read_opts.merge_coincident. Coincident nodes of the file
+ * merge: bs_mesh_read_opts.merge_coincident; min_dihedral: its quality gate
+ * (0: the default, < 0: none). Coincident nodes of the file
  * (distinct tags at one position) are reported on stderr: a warning when
  * kept, a note when merged. */
-int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_mesh **out, bs_error *err);
+int bs_app_load_mesh(const char *spec, double size, int refine, int merge, double min_dihedral, bs_mesh **out,
+                     bs_error *err);
 
 /* The same with all of bs_mesh_read_opts (o may be NULL). */
 int bs_app_load_mesh_opts(const char *spec, const bs_mesh_read_opts *o, bs_mesh **out, bs_error *err);

@@ -15,8 +15,9 @@ int bs_app_usage_error(const char *cmd, const char *fmt, ...) {
   return BS_EXIT_USAGE;
 }
 
-int bs_app_load_mesh(const char *spec, double size, int refine, int merge, bs_mesh **out, bs_error *err) {
-  bs_mesh_read_opts o = {.size = size, .refine = refine, .merge_coincident = merge};
+int bs_app_load_mesh(const char *spec, double size, int refine, int merge, double min_dihedral, bs_mesh **out,
+                     bs_error *err) {
+  bs_mesh_read_opts o = {.size = size, .refine = refine, .merge_coincident = merge, .min_dihedral = min_dihedral};
   return bs_app_load_mesh_opts(spec, &o, out, err);
 }
 

@@ -158,7 +158,7 @@ static int read_surface(const char *path, double size, surface *s, bs_error *err
     return bs_shim_read_surface(path, &s->pts, &s->np, &s->tris, &s->nt, err);
   }
   bs_mesh *m = NULL;
-  int st = bs_app_load_mesh(path, size, 0, 0, &m, err);
+  int st = bs_app_load_mesh(path, size, 0, 0, -1, &m, err);
   if (st) return st;
   s->np = m->n_vertices;
   s->nt = m->n_faces;

@@ -7,16 +7,22 @@
 #include "bs_shim.h"
 
 static const char *mesh_help =
-    "usage: bigstep mesh info FILE [--size H] [--refine N] [--reorder metis|rcm] [--merge-coincident]\n"
-    "                 [--close-holes] [--max-hole F]\n"
+    "usage: bigstep mesh info FILE [--size H] [--min-dihedral DEG] [--refine N] [--reorder metis|rcm]\n"
+    "                         [--merge-coincident] [--close-holes] [--max-hole F]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
     "\n"
-    "FILE/IN: a mesh or geometry Gmsh reads (.msh v2/v4, .geo, .step/.stp, .brep,\n"
-    "         .stl, .off), or a structured box 'box:NX[xNYxNZ][:LX[xLYxLZ]]'.\n"
+    "FILE/IN: a mesh (.msh v2/v4), a geometry Gmsh meshes (.geo, .step/.stp, .brep),\n"
+    "         a closed surface (.stl, .off, .obj, .ply: meshed by CGAL at --size H,\n"
+    "         on its own triangles by Gmsh without), or a structured box\n"
+    "         'box:NX[xNYxNZ][:LX[xLYxLZ]]'.\n"
     "OUT:     .msh (Gmsh 4.1, with groups) or .vtu (ParaView).\n"
     "  --size H       target mesh size in metres for geometry inputs\n"
+    "  --min-dihedral DEG  quality gate for the meshes bigstep makes (not .msh):\n"
+    "                 optimise until every tet's smallest dihedral angle is at\n"
+    "                 least DEG degrees, else fail naming the worst region\n"
+    "                 (default 10; 0: no gate)\n"
     "  --refine N     uniform 1->8 refinements after reading (info, convert)\n"
     "  --levels N     refinements to apply (refine; default 1)\n"
     "  --reorder M    renumber vertices (info): metis or rcm\n"
@@ -79,7 +85,7 @@ typedef struct mesh_args {
   int need_out;       /* the subcommand writes OUT */
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
-  double size;
+  double size, min_dihedral; /* min_dihedral: < 0 none, 0 default */
   int refine, levels, have_order, merge, close_holes;
   double max_hole;
   bs_order order;
@@ -91,6 +97,10 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
   if (!strcmp(flag, "--size")) {
     if (bs_parse_double(val, &a->size) || a->size <= 0)
       return bs_app_usage_error("mesh", "--size must be a positive number, got '%s'", val);
+  } else if (!strcmp(flag, "--min-dihedral")) {
+    if (bs_parse_double(val, &a->min_dihedral) || !(a->min_dihedral >= 0 && a->min_dihedral < 70.5))
+      return bs_app_usage_error("mesh", "--min-dihedral must be a number of degrees in [0, 70.5), got '%s'", val);
+    if (a->min_dihedral == 0) a->min_dihedral = -1; /* no gate */
   } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
     if (bs_parse_int(val, 0, 6, &a->refine))
       return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
@@ -204,9 +214,9 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_surface_report rep = {0};
   bs_mesh_read_opts o = {.size = a.size, .refine = !strcmp(a.sub, "refine") ? a.levels : a.refine,
                          .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
-                         .report = &rep};
+                         .min_dihedral = a.min_dihedral, .report = &rep};
   if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
-    if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then Gmsh failed */
+    if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then meshing failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }

@@ -103,7 +103,27 @@ typedef struct bs_mesh_read_opts {
   struct bs_surface_report *report; /* if not NULL: the surface repair's
                     counts (bs_shim.h), zeroed for inputs that are not a
                     .off/.obj/.ply surface                               */
+  double min_dihedral; /* the quality gate, degrees, for the meshes bigstep
+                    makes (.geo, .step/.stp, .brep, .iges, closed surfaces;
+                    not a .msh, which is taken as is): they are optimised
+                    until every tet's smallest dihedral angle reaches it, and
+                    a mesh that does not is refused (BS_EINPUT, naming the
+                    angle reached and the worst region). 0: the default
+                    BS_MESH_MIN_DIHEDRAL; < 0: no gate                   */
+  double feature_angle; /* closed surfaces at size > 0: edges where the
+                    surface turns by more than this (degrees) are kept as
+                    sharp edges when the surface is CAD-like (its sharp
+                    edges are long chains, bs_shim_mesh3_opts; a scan's
+                    short creases are ignored); 0: BS_MESH_FEATURE_ANGLE;
+                    < 0: none                                           */
+  int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_CGAL (0,
+                    CGAL's Mesh_3) or BS_SURFACE_GMSH (Gmsh reparametrises
+                    and remeshes the surface; kept for comparison)      */
 } bs_mesh_read_opts;
+
+#define BS_MESH_MIN_DIHEDRAL 10.0
+#define BS_MESH_FEATURE_ANGLE 60.0
+enum { BS_SURFACE_CGAL = 0, BS_SURFACE_GMSH = 1 };
 
 /* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
  * refinement multiplies by 8), and by default no more than this machine's
@@ -114,8 +134,11 @@ typedef struct bs_mesh_read_opts {
 /* opts->max_tets when > 0, else min(BS_MESH_MAX_TETS, memory / BS_MESH_BYTES_PER_TET). */
 double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
 
-/* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep,
- * .stl and .off (closed surfaces are meshed into a volume) through Gmsh. Only
+/* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep
+ * meshed through Gmsh; closed surfaces (.stl .off .obj .ply, read by the
+ * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
+ * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
+ * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
  * type and count. opts may be NULL (defaults).
  *
@@ -267,6 +290,17 @@ typedef struct bs_mesh_quality {
 
 /* Quality of the mesh at positions x (NULL: rest positions). */
 void bs_mesh_quality_compute(const bs_mesh *m, const double *x, bs_mesh_quality *q);
+
+/* The quality gate: BS_OK when every tet's smallest dihedral angle is at
+ * least gate degrees (gate <= 0: always), else BS_EINPUT with a message
+ * that starts with `what` (the file) and gives the angle reached, how many
+ * tets are under the gate, the centre of the worst tet and the box around
+ * the tets under the gate, e.g.
+ *   "part.off: the mesh's smallest dihedral angle is 4.21 degrees, under
+ *    the gate of 10: 37 of 81234 tets are under it, the worst at (0.1, 0.2,
+ *    0.3), all in [..] x [..] x [..] (relax the gate with --min-dihedral
+ *    or bodies[].min_dihedral)". */
+int bs_mesh_dihedral_gate(const bs_mesh *m, double gate, const char *what, bs_error *err);
 
 /* ---- output ----------------------------------------------------------
  *

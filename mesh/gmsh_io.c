@@ -13,18 +13,19 @@
  *                                     readers trust their input);
  *   .geo .step .stp .brep .iges .igs  meshed in 3-D; STEP and IGES lengths are
  *                                     converted to metres (OCCTargetUnit "M");
- *   .stl                              a closed triangulated surface, merged by Gmsh
- *                                     (after bs_shim_check_stl);
- *   .off .obj .ply                    a surface read by the shim (OFF by its own
- *                                     reader, OBJ / PLY by CGAL), repaired
+ *   .stl .off .obj .ply               a surface read by the shim (OFF by its own
+ *                                     reader, STL / OBJ / PLY by CGAL), repaired
  *                                     (bs_surface_prepare: closed, outward, no
- *                                     self-intersection) and handed to Gmsh as a
- *                                     discrete surface.
- * A closed surface is meshed into a volume: with opts->size <= 0 its triangles
- * are kept as the boundary of the volume mesh; with size > 0 it is classified
- * into patches (40 degree feature angle), reparametrized and remeshed at that
- * size. For geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size
- * after the file is read (so it overrides the file's settings).
+ *                                     self-intersection).
+ * A closed surface is meshed into a volume: with opts->size > 0 by CGAL's
+ * Mesh_3 (surface_mesh.c; Gmsh is not involved) unless opts->surface_mesher
+ * asks for Gmsh, which classifies it into patches (40 degree feature angle),
+ * reparametrizes and remeshes them at that size; with size <= 0 Gmsh keeps
+ * its triangles as the boundary of the volume mesh.
+ * Meshes made here (not a .msh) are optimised by Gmsh towards the quality
+ * gate (gmsh_optimize.c) and then held to it (bs_mesh_dihedral_gate). For
+ * geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size after
+ * the file is read (so it overrides the file's settings).
  *
  * The model becomes a bs_mesh: node tags (possibly sparse) map to vertex
  * indices in increasing tag order; the 4-node tets of every volume entity, in
@@ -149,17 +150,15 @@ static int ext_is(const char *ext, const char *const *list) {
   return 0;
 }
 
-typedef enum { IN_MESH, IN_GEOMETRY, IN_STL, IN_SOUP, IN_UNKNOWN } input_kind;
+typedef enum { IN_MESH, IN_GEOMETRY, IN_SOUP, IN_UNKNOWN } input_kind;
 
 static input_kind classify_input(const char *path) {
   static const char *const mesh[] = {"msh", NULL};
   static const char *const geometry[] = {"geo", "step", "stp", "brep", "iges", "igs", NULL};
-  static const char *const stl[] = {"stl", NULL};
-  static const char *const soup[] = {"off", "obj", "ply", NULL};
+  static const char *const soup[] = {"off", "obj", "ply", "stl", NULL};
   const char *ext = file_ext(path);
   if (ext_is(ext, mesh)) return IN_MESH;
   if (ext_is(ext, geometry)) return IN_GEOMETRY;
-  if (ext_is(ext, stl)) return IN_STL;
   if (ext_is(ext, soup)) return IN_SOUP;
   return IN_UNKNOWN;
 }
@@ -830,12 +829,15 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   /* Gmsh's .msh readers trust the file (msh_check.c lists what fuzzing
    * found in them): only a file that passed the check reaches Gmsh. */
   if (kind == IN_MESH && (rc = bs__msh_check(path, err))) return rc;
-  if (kind == IN_STL && (rc = bs_shim_check_stl(path, err))) return rc;
 
   static const char *const script[] = {"geo", NULL};
   if (ext_is(file_ext(path), script) && (rc = bs__geo_check(path, err))) return rc;
 
   bs_mesh *m = NULL;
+  if (kind == IN_SOUP && size > 0 && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
+    rc = bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err);
+    goto refine;
+  }
   if ((rc = gmsh_begin(path, err))) goto out;
   int ierr = 0;
   gmshOptionSetString("Geometry.OCCTargetUnit", "M", &ierr);
@@ -847,14 +849,6 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   case IN_GEOMETRY:
     rc = mesh_geometry(path, size, opts, err);
     break;
-  case IN_STL:
-    gmshOpen(path, &ierr);
-    if (ierr) {
-      rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
-      break;
-    }
-    rc = surface_to_volume(path, size, opts, err);
-    break;
   case IN_SOUP:
     rc = add_discrete_surface(path, pts, np, tris, ntri, err);
     if (!rc) rc = surface_to_volume(path, size, opts, err);
@@ -862,10 +856,14 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   case IN_UNKNOWN:
     break;
   }
+  const double gate = kind == IN_MESH ? 0.0 : bs__mesh_gate(opts);
+  if (!rc && gate > 0) rc = bs__gmsh_optimize_to_gate(path, gate, NULL, err);
   gmsh_quiet();
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
+  if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
 
+refine:
   if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
   if (!rc) rc = refine_read(path, refine, &m, err);
 out:

@@ -70,6 +70,32 @@ int bs__msh_check(const char *path, bs_error *err);
  * err) when the work array cannot be allocated. */
 int64_t bs__coincident(int64_t n, const double *x, int32_t *rep, bs_error *err);
 
+/* quality.c: the measures of one tet (p[0..3] its vertices), as defined in
+ * quality.c's comment: signed volume, extreme dihedral angles (degrees) and
+ * signed radius ratio. */
+typedef struct bs__tet_measures {
+  double volume, dihedral_min, dihedral_max, radius_ratio;
+} bs__tet_measures;
+void bs__tet_quality(const double *const p[4], bs__tet_measures *out);
+
+/* surface_mesh.c: the volume inside a closed surface soup (from a file
+ * `path`, already read) meshed by CGAL's Mesh_3 at opts->size > 0, then
+ * held to the quality gate (bs_mesh_dihedral_gate). Groups (3, 1, "body")
+ * and (2, 1, "surface_1"). BS_EINPUT naming path: size absurd for the
+ * surface's bounding box, too many tets, the shim's refusals, the gate. */
+int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                            const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
+/* gmsh_optimize.c: inside a Gmsh session whose model has a 3-D mesh, runs
+ * gmshModelMeshOptimize ("" then "Netgen", Mesh.OptimizeThreshold raised each
+ * round) until the smallest dihedral angle of its tets reaches gate degrees
+ * or a round brings no progress. *achieved: the angle at the end. */
+int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, bs_error *err);
+
+/* The gate the options ask for, in degrees (0: none): opts->min_dihedral
+ * when > 0, BS_MESH_MIN_DIHEDRAL when 0, none when < 0. */
+double bs__mesh_gate(const bs_mesh_read_opts *opts);
+
 #ifdef __cplusplus
 }
 #endif

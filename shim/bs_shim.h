@@ -269,6 +269,93 @@ int bs_shim_repair_surface(const double *points, int64_t n_points, const int32_t
                            const bs_surface_repair_opts *opts, double **points_out, int64_t *n_points_out,
                            int32_t **tris_out, int64_t *n_tris_out, bs_surface_report *report, bs_error *err);
 
+/* ==========================================================================
+ * Volume meshing of closed surfaces (shim_mesh3.cpp, shim_surface_mesh.cpp)
+ * and surface measures (shim_distance.cpp): CGAL's Mesh_3 and its mesh
+ * optimisers; the sampled distance between two surfaces; sharp edges.
+ *
+ * Data as above: points 3 doubles each, triangles 3 int32_t 0-based indices
+ * each, lengths in the points' units (metres). Arrays returned are
+ * allocated by the shim and freed with bs_shim_free.
+ * ========================================================================== */
+
+/* Smoothing after Mesh_3's refinement (CGAL::odt_optimize_mesh_3 or
+ * CGAL::lloyd_optimize_mesh_3), or none. */
+enum { BS_SHIM_SMOOTH_NONE = 0, BS_SHIM_SMOOTH_ODT = 1, BS_SHIM_SMOOTH_LLOYD = 2 };
+
+/* The most tets bs_shim_mesh_surface returns (int32 indices, 4 per tet). */
+#define BS_SHIM_MAX_TETS (INT32_MAX / 8)
+
+typedef struct bs_shim_mesh3_opts {
+  double size;            /* target size h (> 0): Mesh_3's edge_size, facet_size and cell_size */
+  double facet_distance;  /* surface approximation bound; <= 0: h / 10                   */
+  double facet_size;      /* boundary triangles' and sharp edges' size; <= 0: h          */
+  double feature_angle;   /* degrees: edges whose faces meet at a dihedral angle further
+                             than this from flat are protected (detect_features);
+                             <= 0: no features. They are kept only when the surface
+                             is CAD-like: chains of such edges at least
+                             feature_min_length long make >= 80% of their length (a
+                             scan's creases are many short chains, which Mesh_3 would
+                             protect with tiny balls and slivers; they are ignored)      */
+  double feature_min_length; /* <= 0: 2 h                                                */
+  int smoother;           /* BS_SHIM_SMOOTH_*                                            */
+  int smooth_iterations;  /* iterations of the smoother (0: none)                       */
+  int perturb, exude;     /* 1: sliver perturbation / exudation after smoothing         */
+  double target_dihedral; /* degrees: the perturber's and exuder's sliver bound         */
+  int max_rounds;         /* perturb + exude rounds while below target and improving (>= 1) */
+} bs_shim_mesh3_opts;
+
+typedef struct bs_shim_mesh3_out {
+  double *x;              /* 3 * n_vertices                                              */
+  int64_t n_vertices;
+  int32_t *tets;          /* 4 * n_tets, CGAL::orientation(p0, p1, p2, p3) > 0 (positive
+                             volume in bs_mesh's convention, see bs_shim_orient3d)      */
+  int64_t n_tets;
+  double refined_dihedral;/* smallest dihedral angle (degrees) after refinement         */
+  double dihedral;        /* ... after the optimisers                                    */
+  int64_t n_features;     /* sharp-edge chains kept (0: meshed as a smooth surface)      */
+} bs_shim_mesh3_out;
+
+/* Meshes the volume inside the closed surface (points, tris) at opts->size
+ * with CGAL's Mesh_3 on a Polyhedral_mesh_domain_with_features_3, its
+ * features detected (detect_features) when the surface is CAD-like: criteria
+ * edge_size = facet_size = cell_size = h, facet_angle 25 degrees,
+ * facet_distance, cell_radius_edge_ratio 3; then the optimisers of opts.
+ * Sequential and seeded: the same input gives the same mesh. The surface
+ * must be an orientable, closed 2-manifold without self-intersections (an
+ * inconsistently oriented soup is oriented first). `name` (the file) starts
+ * every message. Errors: BS_EINPUT (empty, an index out of range, a
+ * triangle repeating a vertex, non-manifold, not closed: the count of hole
+ * edges, self-intersecting, size <= 0, CGAL's failure with its text),
+ * BS_ENUMERIC (a non-finite point), BS_ENOMEM. On success *out holds the
+ * arrays (free x and tets with bs_shim_free); on error it is zeroed.
+ * Example:
+ *   bs_shim_mesh3_opts o = {.size = 0.01, .feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT,
+ *                           .smooth_iterations = 10, .perturb = 1, .exude = 1, .target_dihedral = 10,
+ *                           .max_rounds = 3};
+ *   bs_shim_mesh3_out r;
+ *   if (!bs_shim_mesh_surface("part.off", x, nx, t, nt, &o, &r, &err)) { ...; bs_shim_free(r.x); bs_shim_free(r.tets); } */
+int bs_shim_mesh_surface(const char *name, const double *points, int64_t n_points, const int32_t *tris,
+                         int64_t n_tris, const bs_shim_mesh3_opts *opts, bs_shim_mesh3_out *out, bs_error *err);
+
+/* One-sided distance from surface A to surface B: the largest distance from
+ * the points of a barycentric grid on every triangle of A (about `spacing`
+ * apart, the vertices included) to B's closest point (CGAL AABB tree). The
+ * Hausdorff distance is the larger of the two directions; the sampling
+ * underestimates it by at most about spacing / 2. where (may be NULL)
+ * receives the sample that is farthest. Errors: BS_EINPUT (NULL, empty,
+ * index out of range, spacing <= 0), BS_ENUMERIC, BS_ENOMEM. */
+int bs_shim_surface_distance(const double *pa, int64_t na, const int32_t *ta, int64_t nta, const double *pb,
+                             int64_t nb, const int32_t *tb, int64_t ntb, double spacing, double *max_dist,
+                             double where[3], bs_error *err);
+
+/* Sharp edges of a closed surface (as bs_shim_mesh_surface requires): edges
+ * whose two faces' normals differ by more than `angle` degrees
+ * (CGAL::Polygon_mesh_processing::detect_sharp_edges). *segments receives 6
+ * doubles (both end points) per edge, *n_edges of them. */
+int bs_shim_sharp_edges(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris, double angle,
+                        double **segments, int64_t *n_edges, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

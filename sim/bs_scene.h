@@ -99,6 +99,7 @@ typedef struct bs_scene_body {
   int box_cells[3];        /* mesh "box": cells [4, 4, 4]                       */
   double box_size[3];      /* mesh "box": edge lengths (m) [1, 1, 1]            */
   double mesh_size;        /* <= 0: the file's own                             */
+  double min_dihedral;     /* quality gate (degrees) of a mesh bigstep makes [10]; 0: none */
   int refine;              /* uniform refinements [0], 0..6                     */
   int close_holes;         /* a surface mesh (.off .obj .ply): close its small holes [0] */
   bs_order reorder;

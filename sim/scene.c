@@ -501,6 +501,7 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   }
   int reorder = (int)b->reorder; /* the table's order: none, metis, rcm */
   if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size)) ||
+      (st = get_num(c, o, where, "min_dihedral", 0, &b->min_dihedral)) ||
       (st = get_int(c, o, where, "bodies[]", "refine", &b->refine)) ||
       (st = get_bool(c, o, where, "close_holes", &b->close_holes)) ||
       (st = get_choice(c, o, where, "bodies[]", "reorder", &reorder)))

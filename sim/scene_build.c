@@ -53,6 +53,7 @@ void bs_scene_body_defaults_(bs_scene_body *b) {
   b->box_size[0] = b->box_size[1] = b->box_size[2] = 1;
   b->scale[0] = b->scale[1] = b->scale[2] = 1;
   b->reorder = BS_ORDER_NONE;
+  b->min_dihedral = BS_MESH_MIN_DIHEDRAL;
   b->init = BS_INIT_REST;
   b->init_seed = 1;
 }

@@ -68,6 +68,8 @@ static int check_body(const bs_scene *s, const bs_scene_body *b, int i, bs_error
       if (!(b->box_size[k] > 0) || !isfinite(b->box_size[k])) return bad(s, err, "bodies.%d.box: size must be positive", i);
     }
   if (!(b->mesh_size >= 0)) return bad(s, err, "bodies.%d.mesh_size: must be > 0, got %g", i, b->mesh_size);
+  if (!(b->min_dihedral >= 0 && b->min_dihedral < 70.5))
+    return bad(s, err, "bodies.%d.min_dihedral: must be in [0, 70.5) degrees (0: no gate), got %g", i, b->min_dihedral);
   if (b->refine < 0 || b->refine > 6) return bad(s, err, "bodies.%d.refine: must be an integer in [0, 6], got %d", i, b->refine);
   for (int k = 0; k < 3; k++)
     if (!(b->scale[k] > 0) || !isfinite(b->scale[k])) return bad(s, err, "bodies.%d.scale: must be positive and finite", i);

@@ -86,6 +86,9 @@ const bs_schema_key bs_schema_keys_[] = {
     {"bodies[]", "box", BS_SCHEMA_OBJECT, .sub = "bodies[].box", .doc = "the structured box (required with mesh box)"},
     {"bodies[]", "mesh_size", NUM, .range = "[0, )", .def = "0",
      .doc = "target mesh size (m) for geometry inputs; 0: the file's own"},
+    {"bodies[]", "min_dihedral", NUM, .range = "[0, 70.5)", .def = "10",
+     .doc = "quality gate (degrees) for a mesh bigstep makes (not a .msh): optimised until every tet's smallest "
+            "dihedral angle reaches it, else an error naming the worst region; 0: no gate"},
     {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", .doc = "uniform 1-to-8 refinements"},
     {"bodies[]", "close_holes", BOOL, .def = "false",
      .doc = "a surface (.off, .obj, .ply): close holes up to 0.2 of its bounding-box diagonal (else an open one is refused)"},

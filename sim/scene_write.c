@@ -147,6 +147,7 @@ static void write_body(writer *w, cJSON *o, const bs_scene_body *b) {
     vec3(w, bx, "size", b->box_size);
   }
   num(w, o, "mesh_size", b->mesh_size);
+  num(w, o, "min_dihedral", b->min_dihedral);
   num(w, o, "refine", b->refine);
   boolean(w, o, "close_holes", b->close_holes);
   str(w, o, "reorder", choice("bodies[]", "reorder", (int)b->reorder));

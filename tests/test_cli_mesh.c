@@ -94,6 +94,25 @@ Test(cli_mesh, errors) {
   free(out);
 }
 
+/* The quality gate from the command line: a gate the mesh cannot meet is an
+ * error (exit 1) giving the angle reached and the worst region; 0 relaxes it;
+ * a bad value is a usage error naming the flag. */
+Test(cli_mesh, min_dihedral_gate) {
+  char *out = NULL;
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info data/geo/cube.geo --min-dihedral 40", &out), 1, "%s", out);
+  cr_expect(strstr(out, "data/geo/cube.geo") && strstr(out, "under the gate of 40") && strstr(out, "centred at ("),
+            "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info data/geo/sliver.geo --min-dihedral 0", &out), 0, "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info data/geo/sliver.geo", &out), 1, "the sliver plate passed the gate");
+  cr_expect(strstr(out, "sliver.geo") && strstr(out, "smallest dihedral angle is"), "%s", out);
+  free(out);
+  cr_expect_eq(bs_test_run(BS_BIGSTEP_EXE " mesh info box:2 --min-dihedral 80", &out), 2);
+  cr_expect(strstr(out, "--min-dihedral") != NULL, "%s", out);
+  free(out);
+}
+
 /* A .msh with three nodes at the position of others under distinct tags: a
  * warning with the count, or merged with --merge-coincident. */
 Test(cli_mesh, coincident_nodes_warned_or_merged) {

@@ -1,0 +1,172 @@
+/* bench/mesh_surface.c — closed surfaces meshed into tets by CGAL's Mesh_3
+ * (the shim, as bs_mesh_read does it) and by Gmsh (reparametrised surface)
+ * on the same input and size: a table of tets, seconds, tets per second,
+ * smallest dihedral angle, smallest radius ratio, volume error against the
+ * surface's enclosed volume and the two-sided sampled Hausdorff distance of
+ * the boundary to the input (in units of h).
+ *
+ *   bench_mesh_surface [options] FILE:N [FILE:N ...]
+ *
+ * FILE:N meshes FILE at h = (bounding-box diagonal) / N. Options:
+ *   --smoother odt|lloyd|none  (default odt)   --iters K (smoother iterations, 10)
+ *   --rounds R (perturb + exude rounds, 3)     --target DEG (sliver bound, 10)
+ *   --feature DEG (feature angle, 60; 0 none)  --distance F (facet_distance = h / F, 10)
+ *   --facet F (facet_size = edge_size = h / F, 1)
+ *   --no-perturb  --no-exude  --no-gmsh
+ * Seconds are wall-clock of one run: on a busy machine, say so beside them.
+ * Never run by the test suite. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_mesh.h"
+#include "bs_shim.h"
+
+typedef struct row {
+  double h, seconds, dmin, refined, rmin, vol_err, haus;
+  int64_t tets, features;
+} row;
+
+static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
+  double v = 0;
+  for (int64_t f = 0; f < nt; f++) {
+    const double *a = p + 3 * t[3 * f], *b = p + 3 * t[3 * f + 1], *c = p + 3 * t[3 * f + 2];
+    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return fabs(v / 6.0);
+}
+
+/* Quality, volume error and Hausdorff distance (spacing h / 4) of m against the soup. */
+static void measure(const bs_mesh *m, const double *p, int64_t np, const int32_t *t, int64_t nt, row *r) {
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  r->tets = m->n_tets;
+  r->dmin = q.dihedral_min;
+  r->rmin = q.radius_ratio_min;
+  double v0 = soup_volume(p, t, nt);
+  r->vol_err = (bs_mesh_volume(m) - v0) / v0;
+  double d1 = NAN, d2 = NAN;
+  bs_error err;
+  bs_error_clear(&err);
+  if (!bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, p, np, t, nt, r->h / 4, &d1, NULL, &err) &&
+      !bs_shim_surface_distance(p, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, r->h / 4, &d2, NULL, &err))
+    r->haus = fmax(d1, d2);
+  else
+    r->haus = NAN;
+}
+
+static void print_row(const char *input, const char *mesher, const row *r) {
+  printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.2f %8.4f %9.2e %7.3f %5lld\n", input, mesher, r->h,
+         (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h, (long long)r->features);
+}
+
+static int run_cgal(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt,
+                    const bs_shim_mesh3_opts *o, row *r) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_mesh3_out out;
+  double t0 = bs_seconds();
+  int rc = bs_shim_mesh_surface(path, p, np, t, nt, o, &out, &err);
+  bs_mesh *m = NULL;
+  if (!rc) rc = bs_mesh_create((int32_t)out.n_vertices, out.x, (int32_t)out.n_tets, out.tets, 0, NULL, &m, &err);
+  r->seconds = bs_seconds() - t0;
+  r->refined = out.refined_dihedral;
+  r->features = out.n_features;
+  bs_shim_free(out.x);
+  bs_shim_free(out.tets);
+  if (rc) {
+    printf("%-28s cgal   failed: %s\n", path, err.msg);
+    return rc;
+  }
+  measure(m, p, np, t, nt, r);
+  bs_mesh_destroy(&m);
+  return 0;
+}
+
+static void run_gmsh(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, row *r) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh_read_opts o = {.size = r->h, .min_dihedral = -1, .surface_mesher = BS_SURFACE_GMSH};
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  int rc = bs_mesh_read(path, &o, &m, &err);
+  r->seconds = bs_seconds() - t0;
+  r->refined = NAN;
+  r->features = 0;
+  if (rc) {
+    printf("%-28s gmsh   failed: %.200s\n", path, err.msg);
+    return;
+  }
+  measure(m, p, np, t, nt, r);
+  print_row(path, "gmsh", r);
+  bs_mesh_destroy(&m);
+}
+
+static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, double *dist_frac, double *facet_frac, int *first) {
+  *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
+                            .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
+  *gmsh = 1;
+  *dist_frac = 10;
+  *facet_frac = 1;
+  int i = 1;
+  for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
+    const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
+    if (!strcmp(a, "--no-gmsh")) *gmsh = 0;
+    else if (!strcmp(a, "--no-perturb")) o->perturb = 0;
+    else if (!strcmp(a, "--no-exude")) o->exude = 0;
+    else if (!strcmp(a, "--smoother") && ++i)
+      o->smoother = !strcmp(v, "lloyd") ? BS_SHIM_SMOOTH_LLOYD : !strcmp(v, "none") ? BS_SHIM_SMOOTH_NONE : BS_SHIM_SMOOTH_ODT;
+    else if (!strcmp(a, "--iters") && ++i) o->smooth_iterations = atoi(v);
+    else if (!strcmp(a, "--rounds") && ++i) o->max_rounds = atoi(v);
+    else if (!strcmp(a, "--target") && ++i) o->target_dihedral = atof(v);
+    else if (!strcmp(a, "--feature") && ++i) o->feature_angle = atof(v);
+    else if (!strcmp(a, "--distance") && ++i) *dist_frac = atof(v);
+    else if (!strcmp(a, "--facet") && ++i) *facet_frac = atof(v);
+    else {
+      fprintf(stderr, "bench_mesh_surface: unknown option %s\n", a);
+      return 2;
+    }
+  }
+  *first = i;
+  return i < argc ? 0 : 2;
+}
+
+int main(int argc, char **argv) {
+  bs_shim_mesh3_opts o;
+  int gmsh, first;
+  double dist_frac, facet_frac;
+  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &first)) {
+    fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
+    return 2;
+  }
+  printf("%-28s %-6s %10s %9s %8s %9s %8s %8s %8s %9s %7s %5s\n", "input", "mesher", "h", "tets", "seconds", "tets/s",
+         "refined", "dih.min", "rr.min", "vol.err", "haus/h", "feat");
+  for (int a = first; a < argc; a++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s", argv[a]);
+    char *colon = strrchr(path, ':');
+    double n = colon ? atof(colon + 1) : 30;
+    if (colon) *colon = '\0';
+    double *p = NULL, lo[3], hi[3];
+    int32_t *t = NULL;
+    int64_t np = 0, nt = 0;
+    bs_error err;
+    bs_error_clear(&err);
+    if (bs_shim_read_surface(path, &p, &np, &t, &nt, &err)) {
+      printf("%-28s        failed: %s\n", path, err.msg);
+      continue;
+    }
+    bs_bbox(np, p, lo, hi);
+    row r = {.h = bs_bbox_diagonal(lo, hi) / n};
+    o.size = r.h;
+    o.facet_distance = r.h / dist_frac;
+    o.facet_size = r.h / facet_frac;
+    if (!run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
+    if (gmsh) run_gmsh(path, p, np, t, nt, &r);
+    bs_shim_free(p);
+    bs_shim_free(t);
+    fflush(stdout);
+  }
+  return 0;
+}
