@@ -6,6 +6,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "bs_minimize.h"
@@ -109,6 +110,9 @@ static void solve(int with_ops, ctx *c, double *x, bs_minimize_stats *st, int *s
   for (int i = 0; i < N; i++) x[3 * i] = i, x[3 * i + 1] = x[3 * i + 2] = 0;
   bs_objective obj = {.n = N, .mask = mask, .value = value, .gradient = gradient, .hessian = hessian, .ctx = c};
   *status = bs_minimize(m, &obj, x, st, err);
+  static char why[2][512]; /* reason_text lives in the minimizer: keep a copy */
+  snprintf(why[with_ops], sizeof why[with_ops], "%s", st->reason_text ? st->reason_text : "");
+  st->reason_text = why[with_ops];
   bs_linsolve_destroy(&c->cg);
   bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
