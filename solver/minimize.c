@@ -414,13 +414,7 @@ static void amg_judge(bs_minimizer *m, const bs_lin_stats *ls) {
 static int newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
                             bs_minimize_stats *st, bs_min_iter *rec, bs_error *err) {
   const bs_minimize_opts *o = &m->opts;
-  int64_t free_dofs = 0;
-  for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;
-  if (m->has_vops) free_dofs = (int64_t)bs__msum(m, (double)free_dofs); /* ghosts counted too: a cap only */
-  /* Default cap: CG ends in at most (free dofs) steps in exact arithmetic; allow
-   * for rounding. */
-  int64_t auto_it = 2 * free_dofs + 100;
-  int max_it = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
+  const int max_it = m->cg_cap;
   const double sigma = o->sigma_auto ? o->sigma / sqrt(m->g0_norm) : o->sigma;
   double rel = fmin(0.5, sigma * sqrt(fmax(gnorm, m->tau)));
   if (obj->quadratic) rel = fmin(rel, fmax(m->tau / (4 * gnorm), 1e-13)); /* one step reaches tau */
@@ -625,12 +619,19 @@ static double accept_step(bs_minimizer *m, double *x, const bs__ls_result *ls, b
   return ls->phi;
 }
 
-/* Step 3 at iteration it with ||g|| = gnorm (the solve's tolerance and
- * watches set at it = 0): 1 with the reason set when the solve ends there
+/* Step 3 at iteration it with ||g|| = gnorm (the solve's Krylov cap,
+ * tolerance and watches set at it = 0): 1 with the reason set when the solve ends there
  * (converged, or the iteration cap). */
 static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double gnorm) {
   const bs_minimize_opts *o = &m->opts;
   if (it == 0) {
+    /* The Krylov cap of the solve's systems: CG ends in at most (free dofs)
+     * steps in exact arithmetic; allow for rounding. */
+    int64_t free_dofs = 0;
+    for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;
+    if (m->has_vops) free_dofs = (int64_t)bs__msum(m, (double)free_dofs); /* ghosts counted too: a cap only */
+    const int64_t auto_it = 2 * free_dofs + 100;
+    m->cg_cap = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);
     m->g0_norm = gnorm;
     st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
     m->floor_run = 0;

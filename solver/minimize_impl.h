@@ -18,6 +18,7 @@ struct bs_minimizer {
   int amg_calls;              /* bs_minimize calls started since the last setup      */
   double g0_norm;             /* ||g|| at the first iterate of the current solve (sigma_auto) */
   double tau;                 /* tau_eff of the current solve (bs__tolerance)         */
+  int cg_cap;                 /* Krylov iterations per system of the current solve     */
   int floor_run;              /* noise-level iterations in a row (rounding floor watch) */
   double floor_best;          /* ||g|| at the first of them (or the last halving)       */
   double g_prev, eta_prev;    /* ||g|| and the CG tolerance of the previous iteration   */
