@@ -301,7 +301,7 @@ static int objective_quadratic(const bs_integrator *I) {
 
 static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   memset(o, 0, sizeof *o);
-  o->load_norm = load_norm(I, x);
+  o->load_norm = I->opts.min.load_rtol > 0 ? load_norm(I, x) : 0; /* read by load_rtol only */
   o->quadratic = objective_quadratic(I);
   o->n = I->fem->n_vertices;
   o->mask = I->mask;
