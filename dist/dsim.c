@@ -55,7 +55,6 @@ int bs_dsim_check(const bs_scene *sc, bs_error *err) {
   bs_lin_kind k = sc->solver.min.linear;
   if (k != BS_LIN_CG && k != BS_LIN_PCG && k != BS_LIN_AMG)
     return refuse(sc, err, "solver.linear", "only cg, pcg and amg are available");
-  if (sc->project_hessian) return refuse(sc, err, "solver.project_hessian", "not supported");
   return check_body(sc, &sc->bodies[0], err);
 }
 
@@ -128,7 +127,7 @@ static int make_terms(bs_dsim *s, bs_error *err) {
   int dyn = sc->mode == BS_MODE_DYNAMIC, rc = BS_OK;
   if (dyn) rc = bs_term_inertia_create(fem, &s->step, &T[s->n_terms++], err);
   if (!rc && nonzero3(sc->gravity)) rc = bs_term_gravity_create(fem, &s->step, sc->gravity, &T[s->n_terms++], err);
-  if (!rc) rc = bs_term_elastic_create(fem, 0, &T[s->n_terms++], err);
+  if (!rc) rc = bs_term_elastic_create_step(fem, &s->step, sc->project_hessian, &T[s->n_terms++], err);
   const bs_scene_body *b = &sc->bodies[0];
   double k[64];
   int any = 0;

@@ -104,9 +104,16 @@ double bs_fem_elastic_energy(const bs_fem *fem, const double *x);
  * in the last bits: another summation order). */
 double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g);
 
-/* scale * ∂²Φ_e/∂x² ADDED into H (fem pattern). project_psd: each tet's
- * Hessian projected onto the PSD cone (the definiteness fix). */
+/* scale * ∂²Φ_e/∂x² ADDED into H (fem pattern). project_psd: the
+ * definiteness fix of every tet's Hessian (a bs_psd_mode, bs_material.h:
+ * BS_PSD_NONE exact, BS_PSD_ALL projected onto the PSD cone, ...). */
 void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H);
+
+/* As bs_fem_elastic_hessian (scale applied) with the definiteness fix by
+ * tet: BS_PSD_INVERTED for a tet of material m whose rest volume is <=
+ * vmax[m] (n_materials entries; INFINITY: all of them), BS_PSD_NONE for the
+ * others. */
+void bs_fem_elastic_hessian_auto(const bs_fem *fem, const double *x, const double *vmax, double scale, bs_bsr *H);
 
 /* As bs_fem_elastic_hessian with one scale per material: material_scale[m] *
  * ∂²Φ_e/∂x² over the tets of material m ADDED into H; tets of a material with

@@ -64,12 +64,16 @@
  * singularity of |F - R|^2 where s_i = -s_j (R jumps there: the energy has a
  * ridge); its denominator is clamped at BS_SIGMA_SUM_MIN (Stomakhin et al.
  * 2012), which changes dPdF only within 1e-6 of that ridge.
- * project_psd = 1 clamps the eigenvalues of the 3x3 block and of the 2x2
- * blocks at zero — the exact projection of dP/dF onto the PSD cone (the blocks
- * are its eigen-decomposition; no 9x9 eigensolve). A block with no negative
- * eigenvalue is returned bit for bit (a positive definite 3x3 block is
- * recognized by its Cholesky pivots, without an eigen-decomposition).
+ * project_psd (a bs_psd_mode) = BS_PSD_ALL clamps the eigenvalues of the 3x3
+ * block and of the 2x2 blocks at zero — the exact projection of dP/dF onto the
+ * PSD cone (the blocks are its eigen-decomposition; no 9x9 eigensolve). A
+ * block with no negative eigenvalue is returned bit for bit (a positive
+ * definite 3x3 block is recognized by its Cholesky pivots, without an
+ * eigen-decomposition). BS_PSD_INVERTED projects only where det F <= 0 (the
+ * inverted elements of a tangle) and leaves dP/dF exact elsewhere;
+ * BS_PSD_ABS mirrors the negative eigenvalues (|lambda|) instead of clamping.
  */
+
 #ifndef BS_MATERIAL_H
 #define BS_MATERIAL_H
 
@@ -78,6 +82,21 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The definiteness fix of dP/dF: the project_psd argument of the functions
+ * below and of the element kernels (bs_element.h, bs_fem.h). */
+typedef enum bs_psd_mode {
+  BS_PSD_NONE = 0,    /* exact dP/dF                                    */
+  BS_PSD_ALL = 1,     /* projected onto the PSD cone everywhere         */
+  BS_PSD_INVERTED = 2, /* projected where det F <= 0, exact elsewhere   */
+  BS_PSD_ABS = 3,      /* negative eigenvalues mirrored (|lambda|)       */
+  BS_PSD_AUTO = 4      /* the elasticity term's choice per tet (INVERTED  */
+                       /* or NONE, bs_terms.h); kernels read it as NONE   */
+} bs_psd_mode;
+
+/* BS_PSD_AUTO: a tet whose mu dt^2 / (rho h^2) reaches this (its stiffness
+ * over its inertia in the step's Hessian) gets BS_PSD_INVERTED. */
+#define BS_PSD_AUTO_RATIO 10.0
 
 #define BS_NEO_HOOKEAN_J0 0.2
 #define BS_SIGMA_SUM_MIN 1e-6

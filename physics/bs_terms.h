@@ -96,8 +96,25 @@ int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term 
 /* Gravity scaled by step->load (step may be NULL: factor 1). */
 int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const double g[3], bs_term **out,
                            bs_error *err);
-/* project_psd: use the PSD-projected element Hessians (an option for Newton). */
+/* project_psd (a bs_psd_mode, bs_material.h): BS_PSD_NONE the exact element
+ * Hessians, BS_PSD_ALL every one projected onto the PSD cone (an option for
+ * Newton), BS_PSD_INVERTED those of inverted tets only (det F <= 0: a tangle's
+ * indefiniteness removed where it is worst, the exact Hessian elsewhere),
+ * BS_PSD_ABS every one with its negative eigenvalues mirrored. BS_EINPUT for
+ * another value, and for BS_PSD_AUTO, which needs the step (below). */
 int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err);
+/* The same with the step data (borrowed; may be NULL but for BS_PSD_AUTO):
+ * BS_PSD_AUTO gives a tet BS_PSD_INVERTED at every Hessian when its
+ * mu dt^2 / (rho h^2) >= BS_PSD_AUTO_RATIO (dt = step->dt then, h =
+ * (6 sqrt 2 V)^(1/3) the edge of the regular tet of its rest volume V; a
+ * static solve, dt = 0: every tet), BS_PSD_NONE otherwise: a rule of the tet
+ * alone, so a distributed mesh gives the serial choice. Where inertia
+ * dominates the step's Hessian (M / dt^2 against the elastic stiffness), the
+ * exact Hessian with CG's negative-curvature exit does better than any fix;
+ * where stiffness dominates, the inverted tets' indefiniteness sends CG out
+ * after a few iterations (README, solver.project_hessian: the measurements). */
+int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int project_psd, bs_term **out,
+                                bs_error *err);
 /* k: one coefficient per fem material (seconds, >= 0). */
 int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const double *k, bs_term **out,
                            bs_error *err);

@@ -387,8 +387,10 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
 }
 
 /* One chunk of the Hessian: its tets in order, batch by batch; scale s (or
- * material_scale[m] when not NULL, tets with 0 skipped). */
-static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, double s,
+ * material_scale[m] when not NULL, tets with 0 skipped); the definiteness
+ * fix project_psd, or when vmax is not NULL BS_PSD_INVERTED for the tets of
+ * material m of rest volume <= vmax[m] and BS_PSD_NONE for the others. */
+static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, const double *vmax, double s,
                           const double *material_scale, int32_t c, bs_bsr *H) {
   const int32_t lo = fem->chunk_ptr[c], hi = fem->chunk_ptr[c + 1];
   for (int32_t k0 = lo; k0 < hi; k0 += NB) {
@@ -406,11 +408,18 @@ static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, d
     }
     for (int i = 0; i < n;) {
       const int32_t k = k0 + i, mi = fem->tet_material[k];
-      const int r = material_run(fem, k, n - i);
+      int r = material_run(fem, k, n - i), mode = project_psd;
+      if (vmax) { /* the run's first tets on the same side of vmax */
+        const int small = fem->volume[k] <= vmax[mi];
+        int q = 1;
+        while (q < r && (fem->volume[k + q] <= vmax[mi]) == small) q++;
+        r = q;
+        mode = small ? BS_PSD_INVERTED : BS_PSD_NONE;
+      }
       const double sc = material_scale ? material_scale[mi] : s;
       if (sc != 0 || !material_scale) {
-        bs_tet_hessian_batch(&fem->materials[mi], r, xt + 12 * i, fem->Dm_inv + 9 * (size_t)k, fem->volume + k,
-                             project_psd, He + 144 * i);
+        bs_tet_hessian_batch(&fem->materials[mi], r, xt + 12 * i, fem->Dm_inv + 9 * (size_t)k, fem->volume + k, mode,
+                             He + 144 * i);
         for (int j = i; j < i + r; j++) scatter_at(fem, k0 + j, He + 144 * j, sc, H);
       }
       i += r;
@@ -418,22 +427,26 @@ static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, d
   }
 }
 
-static void hessian_all(const bs_fem *fem, const double *x, int project_psd, double s, const double *material_scale,
-                        bs_bsr *H) {
+static void hessian_all(const bs_fem *fem, const double *x, int project_psd, const double *vmax, double s,
+                        const double *material_scale, bs_bsr *H) {
   for (int c = 0; c < fem->n_colors; c++) {
     const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
 #pragma omp parallel for schedule(dynamic, 1) if (colour_parallel(fem, c))
-    for (int32_t q = lo; q < hi; q++) hessian_chunk(fem, x, project_psd, s, material_scale, fem->color_chunks[q], H);
+    for (int32_t q = lo; q < hi; q++) hessian_chunk(fem, x, project_psd, vmax, s, material_scale, fem->color_chunks[q], H);
   }
 }
 
 void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H) {
-  hessian_all(fem, x, project_psd, scale, NULL, H);
+  hessian_all(fem, x, project_psd, NULL, scale, NULL, H);
+}
+
+void bs_fem_elastic_hessian_auto(const bs_fem *fem, const double *x, const double *vmax, double scale, bs_bsr *H) {
+  hessian_all(fem, x, 0, vmax, scale, NULL, H);
 }
 
 void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, int project_psd,
                                    const double *material_scale, bs_bsr *H) {
-  hessian_all(fem, x, project_psd, 0, material_scale, H);
+  hessian_all(fem, x, project_psd, NULL, 0, material_scale, H);
 }
 
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF) {

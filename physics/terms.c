@@ -152,22 +152,63 @@ static int elastic_gradient(const bs_term *t, const double *x, double *E, double
   *E = bs_fem_elastic_gradient(t->fem, x, g);
   return BS_TERM_OK;
 }
+/* The elastic term's data: its definiteness fix, and for BS_PSD_AUTO the
+ * per-material volume bound it sets at each Hessian. */
+typedef struct elastic_data {
+  int mode;
+  double *vmax;
+} elastic_data;
+
+static void elastic_free(void *p) {
+  elastic_data *d = p;
+  if (!d) return;
+  free(d->vmax);
+  free(d);
+}
+
+/* BS_PSD_AUTO: a tet's mu dt^2 / (rho h^2) >= R with h = (6 sqrt 2 V)^(1/3)
+ * (the edge of the regular tet of its rest volume V) is V <= vmax =
+ * (mu dt^2 / (R rho))^(3/2) / (6 sqrt 2); every tet in a static solve. */
 static int elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
-  bs_fem_elastic_hessian(t->fem, x, *(const int *)t->data, 1.0, H);
+  const elastic_data *d = t->data;
+  if (d->mode != BS_PSD_AUTO) {
+    bs_fem_elastic_hessian(t->fem, x, d->mode, 1.0, H);
+    return BS_TERM_OK;
+  }
+  const double dt = t->step ? t->step->dt : 0.0;
+  for (int m = 0; m < t->fem->n_materials; m++) {
+    const bs_material *mat = &t->fem->materials[m];
+    d->vmax[m] = dt > 0 ? pow(mat->mu * dt * dt / (BS_PSD_AUTO_RATIO * mat->density), 1.5) / (6.0 * sqrt(2.0))
+                        : INFINITY;
+  }
+  bs_fem_elastic_hessian_auto(t->fem, x, d->vmax, 1.0, H);
   return BS_TERM_OK;
 }
-static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, free};
+static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, elastic_free};
 
-int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err) {
-  int *p = malloc(sizeof(int));
-  if (!p) return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
-  *p = project_psd ? 1 : 0;
-  int st = bs_term_create("elasticity", &elastic_ops, fem, NULL, p, out, err);
+int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int project_psd, bs_term **out,
+                                bs_error *err) {
+  if (project_psd < BS_PSD_NONE || project_psd > BS_PSD_AUTO)
+    return bs_error_set(err, BS_EINPUT, "elasticity term: project_psd %d is not a bs_psd_mode", project_psd);
+  if (project_psd == BS_PSD_AUTO && !step)
+    return bs_error_set(err, BS_EINPUT, "elasticity term: project_psd auto needs the step data (its dt)");
+  elastic_data *d = calloc(1, sizeof *d);
+  if (!d) return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
+  d->mode = project_psd;
+  if (project_psd == BS_PSD_AUTO && !(d->vmax = calloc((size_t)fem->n_materials, sizeof *d->vmax))) {
+    elastic_free(d);
+    return bs_error_set(err, BS_ENOMEM, "out of memory creating the elasticity term");
+  }
+  int st = bs_term_create("elasticity", &elastic_ops, fem, step, d, out, err);
   if (st) return st;
   (*out)->quadratic = 1;
   for (int i = 0; i < fem->n_materials; i++)
     if (fem->materials[i].model != BS_MODEL_LINEAR) (*out)->quadratic = 0;
   return 0;
+}
+
+int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err) {
+  return bs_term_elastic_create_step(fem, NULL, project_psd, out, err);
 }
 
 /* ---- lagged Rayleigh damping ------------------------------------------ */

@@ -182,7 +182,7 @@ typedef struct bs_scene {
   bs_scene_mode mode;
   bs_scene_backend backend; /* solver.backend: serial [default] or petsc (dist/) */
   int load_steps;
-  int project_hessian;     /* PSD-project the elastic Hessian (Newton option)   */
+  int project_hessian;     /* bs_psd_mode of the elastic Hessian                */
   double gravity[3];
   double drag;
   int n_bodies;

@@ -664,7 +664,7 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
       (st = get_int(c, so, "solver", "solver", "cg_max_iterations", &s->solver.min.cg_max_iter)) ||
       (st = get_int(c, so, "solver", "solver", "newton_k", &s->solver.newton_k)) ||
       (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||
-      (st = get_bool(c, so, "solver", "project_hessian", &s->project_hessian)))
+      (st = get_choice(c, so, "solver", "solver", "project_hessian", &s->project_hessian)))
     return st;
   return 0;
 }

@@ -76,7 +76,7 @@ static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
   str(w, o, "mode", choice("solver", "mode", s->mode == BS_MODE_STATIC));
   str(w, o, "backend", choice("solver", "backend", (int)s->backend));
   num(w, o, "load_steps", s->load_steps);
-  boolean(w, o, "project_hessian", s->project_hessian);
+  str(w, o, "project_hessian", choice("solver", "project_hessian", s->project_hessian));
   if (m->sigma_auto) {
     str(w, o, "cg_sigma", "auto");
     num(w, o, "cg_sigma_scale", m->sigma);

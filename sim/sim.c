@@ -62,7 +62,7 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if ((sc->gravity[0] != 0 || sc->gravity[1] != 0 || sc->gravity[2] != 0) &&
       (st = bs_term_gravity_create(s->fem, &s->step, sc->gravity, &T[s->n_terms++], err)))
     return st;
-  if ((st = bs_term_elastic_create(s->fem, sc->project_hessian, &T[s->n_terms++], err))) return st;
+  if ((st = bs_term_elastic_create_step(s->fem, &s->step, sc->project_hessian, &T[s->n_terms++], err))) return st;
   if ((st = damping_term(s, err))) return st;
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
   if (sc->n_obstacles > 0 && (st = bs_sim_make_obstacles_(s, err))) return st;

@@ -17,7 +17,7 @@ static const char *const bs_test_full_scene =
     " \"solver\": {\"method\": \"optimization\", \"linear\": \"cg\", \"tolerance\": 1e-3, \"rtol\": 0, \"load_rtol\": 0, \"max_iterations\": 500,\n"
     "   \"newton_max_iterations\": 40,\n"
     "   \"cg_max_iterations\": 0, \"newton_k\": 1, \"mode\": \"dynamic\", \"backend\": \"serial\", \"load_steps\": 1,\n"
-    "   \"project_hessian\": false, \"cg_sigma\": \"auto\", \"cg_forcing\": \"paper\",\n"
+    "   \"project_hessian\": \"none\", \"cg_sigma\": \"auto\", \"cg_forcing\": \"paper\",\n"
     "   \"cg_downhill\": true, \"cg_precision\": \"double\", \"amg_matrix\": \"rest\", \"amg_rebuild_factor\": 3,\n"
     "   \"amg_rebuild_every\": 0},\n"
     " \"gravity\": [0, -9.8, 0], \"drag\": 0,\n"

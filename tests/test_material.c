@@ -526,6 +526,46 @@ Test(material, psd_input_unchanged) {
   cr_assert(maxdiff(81, K, Kp) > 1e-3 * m.mu, "projection left an indefinite dPdF unchanged");
 }
 
+/* BS_PSD_INVERTED: an indefinite dPdF of a compressed but not inverted F is
+ * left exact (bit for bit the BS_PSD_NONE one), an inverted F's is the
+ * BS_PSD_ALL projection (bit for bit), for every nonlinear model. */
+Test(material, psd_inverted_only) {
+  double Q[9], R[9], F[9], K[81], Kp[81], Ki[81], lam[9];
+  rand_rot(Q);
+  rand_rot(R);
+  for (int i = 0; i < 5; i++) {
+    bs_material m = make(models[i], 1e5, 0.3);
+    if (m.model == BS_MODEL_LINEAR) continue;
+    /* strongly compressed, det F > 0: indefinite for the corotated models */
+    double sc[3] = {0.9, 0.15, 0.1};
+    compose(Q, sc, R, F);
+    bs_material_dPdF(&m, F, BS_PSD_NONE, K);
+    bs_material_dPdF(&m, F, BS_PSD_INVERTED, Ki);
+    cr_assert(memcmp(K, Ki, sizeof K) == 0, "%s: inverted-only projection changed a non-inverted dPdF",
+              bs_model_name(m.model));
+    if (m.model == BS_MODEL_FIXED_COROTATED) { /* the check above must be able to fail */
+      sym_eig_dense(9, K, lam, NULL);
+      double lmin = lam[0];
+      for (int k = 1; k < 9; k++) lmin = fmin(lmin, lam[k]);
+      cr_assert(lmin < 0, "precondition: the compressed fixed_corotated dPdF should be indefinite (%g)", lmin);
+    }
+    /* inverted: the full projection, which changes it */
+    double si[3] = {1.0, 0.6, -0.4};
+    compose(Q, si, R, F);
+    bs_material_dPdF(&m, F, BS_PSD_NONE, K);
+    bs_material_dPdF(&m, F, BS_PSD_ALL, Kp);
+    bs_material_dPdF(&m, F, BS_PSD_INVERTED, Ki);
+    cr_assert(memcmp(Kp, Ki, sizeof K) == 0, "%s: inverted-only projection differs from the full one on an "
+              "inverted F", bs_model_name(m.model));
+    sym_eig_dense(9, K, lam, NULL);
+    double lmin = lam[0];
+    for (int k = 1; k < 9; k++) lmin = fmin(lmin, lam[k]);
+    if (lmin < 0)
+      cr_assert(maxdiff(81, K, Ki) > 1e-6 * m.mu, "%s: an indefinite inverted dPdF was left unchanged",
+                bs_model_name(m.model));
+  }
+}
+
 /* Degenerate F: zero, rank 1, rank 2, huge; every output finite. */
 Test(material, degenerate_finite) {
   double Fs[5][9] = {{0},

@@ -470,3 +470,67 @@ Test(terms, bad_input) {
   cr_expect(strstr(err.msg, "tet 5") != NULL, "%s", err.msg);
   teardown(&f);
 }
+
+/* The elastic Hessian of a term with project_psd `mode` at x (step data of
+ * f, whose dt the caller sets). Caller destroys H. */
+static bs_bsr *elastic_H(fixture *f, int mode, const double *x) {
+  bs_error err;
+  bs_term *t = NULL;
+  bs_bsr *H = NULL;
+  cr_assert_eq(bs_term_elastic_create_step(f->fem, &f->step, mode, &t, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_matrix(f->fem, &H, &err), 0);
+  bs_bsr_zero(H);
+  cr_assert_eq(t->ops->hessian(t, x, H), BS_TERM_OK);
+  bs_term_destroy(&t);
+  return H;
+}
+
+static int same_values(const bs_bsr *A, const bs_bsr *B) {
+  return memcmp(A->val, B->val, sizeof(double) * 9 * (size_t)A->nnzb) == 0;
+}
+
+/* project_psd auto: the exact Hessian while mu dt^2 / (rho h^2) is below
+ * BS_PSD_AUTO_RATIO, the inverted tets projected once it reaches it, and in a
+ * static solve (dt = 0); bit for bit the fixed modes'. The rule is per tet;
+ * the box's tets have one volume, and the fixture's two materials (mu / rho
+ * 3.85 and 20.7 m^2/s^2) cross the ratio at different dt, so one dt gives
+ * each its own mode. */
+Test(terms, psd_auto) {
+  fixture f;
+  setup(&f, 3, BS_MODEL_FIXED_COROTATED);
+  size_t n3 = 3 * (size_t)f.mesh->n_vertices;
+  double *x = malloc(sizeof(double) * n3);
+  config(&f, "random", x);
+  cr_assert(bs_fem_count_inverted(f.fem, x, NULL) > 0, "precondition: the random state has inverted tets");
+  f.step.dt = 1e-4; /* both soft against their inertia */
+  bs_bsr *Hn = elastic_H(&f, BS_PSD_NONE, x), *Hi = elastic_H(&f, BS_PSD_INVERTED, x);
+  cr_assert(!same_values(Hn, Hi), "precondition: projecting the inverted tets changes the Hessian");
+  bs_bsr *Ha = elastic_H(&f, BS_PSD_AUTO, x);
+  cr_expect(same_values(Ha, Hn), "auto at dt = 1e-4 s is not the exact Hessian");
+  bs_bsr_destroy(&Ha);
+  f.step.dt = 10; /* both stiff */
+  Ha = elastic_H(&f, BS_PSD_AUTO, x);
+  cr_expect(same_values(Ha, Hi), "auto at dt = 10 s is not the inverted tets' projection");
+  bs_bsr_destroy(&Ha);
+  f.step.dt = 0; /* statics */
+  Ha = elastic_H(&f, BS_PSD_AUTO, x);
+  cr_expect(same_values(Ha, Hi), "auto in a static solve is not the inverted tets' projection");
+  bs_bsr_destroy(&Ha);
+  /* between: material 1 (stiffer per mass) projected, material 0 exact */
+  const double h = cbrt(6.0 * sqrt(2.0) * (0.8 * 0.6 / 27 / 6));
+  const double r0 = f.mats[0].mu / (f.mats[0].density * h * h), r1 = f.mats[1].mu / (f.mats[1].density * h * h);
+  f.step.dt = sqrt(BS_PSD_AUTO_RATIO / sqrt(r0 * r1));
+  cr_assert(r0 * f.step.dt * f.step.dt < BS_PSD_AUTO_RATIO && r1 * f.step.dt * f.step.dt > BS_PSD_AUTO_RATIO);
+  Ha = elastic_H(&f, BS_PSD_AUTO, x);
+  cr_expect(!same_values(Ha, Hn) && !same_values(Ha, Hi), "auto between the ratios is not a per-material mix");
+  bs_bsr_destroy(&Ha);
+  bs_error err;
+  bs_term *t = NULL;
+  cr_expect_neq(bs_term_elastic_create(f.fem, BS_PSD_AUTO, &t, &err), 0, "auto without the step was accepted");
+  cr_expect(strstr(err.msg, "auto") != NULL, "%s", err.msg);
+  cr_expect_neq(bs_term_elastic_create(f.fem, 7, &t, &err), 0, "project_psd 7 was accepted");
+  bs_bsr_destroy(&Hn);
+  bs_bsr_destroy(&Hi);
+  free(x);
+  teardown(&f);
+}
