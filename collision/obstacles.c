@@ -150,7 +150,8 @@ void bs_obstacles_set_bounds(bs_obstacles *o, const double lo[3], const double h
 
 int bs_obstacles_set_owned(bs_obstacles *o, const uint8_t *owned, bs_error *err) {
   if (o->n > 0)
-    return bs_error_set(err, BS_EINPUT, "obstacles: the owned vertices are set before the first obstacle (%d added)", o->n);
+    return bs_error_set(err, BS_EINPUT, "obstacles: the owned vertices are set before the first obstacle (%d added)",
+                        o->n);
   free(o->owned);
   free(o->own_idx);
   o->owned = NULL, o->own_idx = NULL, o->n_owned = 0;
