@@ -78,7 +78,7 @@ static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_
 
 /* The serial run's summary, from the distributed run: printed by rank 0,
  * and written into the folder (out may be NULL). */
-static int print_summary(const bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, bs_error *err) {
+static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, bs_error *err) {
   const bs_scene *sc = d->scene;
   bs_summary u;
   memset(&u, 0, sizeof u);
@@ -92,6 +92,11 @@ static int print_summary(const bs_dsim *d, bs_dout *out, const bs_run_totals *T,
   u.max_grad = T->max_grad;
   u.inverted = d->steps[0].inverted;
   u.self_intersections = -1; /* not computed on this backend */
+  u.obstacles = d->obstacles != NULL;
+  int64_t pen = 0;
+  int rc = u.obstacles ? bs_dsim_penetration(d, &pen, &u.max_depth, err) : BS_OK;
+  if (rc) return rc;
+  u.penetrating = (int32_t)pen;
   u.totals = *T;
   double mib = bs_peak_rss() / 1048576.0;
   MPI_Allreduce(MPI_IN_PLACE, &mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);

@@ -93,6 +93,18 @@
  * whenever step->time changes, so that a step never starts from the last
  * step's labels. One integrator per bs_obstacles.
  *
+ * Part of a distributed mesh (the petsc backend, dist/): a process whose fem
+ * covers only its own cells marks the vertices it owns (bs_obstacles_set_owned,
+ * each shared vertex owned by one process) and gives the whole scene's rest
+ * box (bs_obstacles_set_bounds, so that tol_b is the serial one). With x and
+ * g' consistent over the processes, project, register_active and
+ * project_gradient then give the same values on every process that holds a
+ * vertex, and project_hessian, applied to each process's partial Hessian
+ * H'_r (J^T H' J is linear in H'), adds C_p only where p is owned, so that
+ * the sum over the processes is the serial H. Counts and penalty terms take
+ * the owned vertices only. Without set_owned (the default) every vertex is
+ * owned and nothing changes.
+ *
  * Status: 0; BS_EINPUT for a bad argument (the message names the obstacle by
  * index and shape: "obstacle 1 (grid): ..." and the value), BS_ENOMEM.
  */
@@ -123,6 +135,20 @@ typedef struct bs_obstacles bs_obstacles;
 int bs_obstacles_create(const bs_fem *fem, const bs_step_data *step, const uint8_t *mask, bs_obstacles **out,
                         bs_error *err);
 void bs_obstacles_destroy(bs_obstacles **o);
+
+/* owned: n_vertices bytes, 1 for the vertices this process counts (copied;
+ * NULL: all, the default). A vertex that is not owned is still projected,
+ * labeled and its gradient and Hessian blocks transformed, but
+ * project_hessian does not add its curvature block C, the penalty terms of
+ * later adds leave it out (bs_term_penalty_create_subset over the owned
+ * vertices), and bs_obstacles_active_count and the count of
+ * bs_obstacles_penetration skip it. BS_EINPUT once an obstacle was added,
+ * BS_ENOMEM. */
+int bs_obstacles_set_owned(bs_obstacles *o, const uint8_t *owned, bs_error *err);
+
+/* The scene size L of the touching tolerance from the rest box [lo, hi] (m)
+ * of the whole scene instead of the fem's mesh (a process's part of it). */
+void bs_obstacles_set_bounds(bs_obstacles *o, const double lo[3], const double hi[3]);
 
 /* Adds obstacle number bs_obstacles_count(o) (0-based). Takes ownership of
  * ls. constraint needs an analytic level set (error naming the obstacle
@@ -157,7 +183,8 @@ void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, 
 void bs_obstacles_friction_output(bs_obstacles *o, double *dv);
 
 /* The number of (obstacle, vertex) pairs labeled active by the last
- * register_active (0 after a step ends). */
+ * register_active (0 after a step ends, i.e. after post_solve), over the
+ * owned vertices. */
 int32_t bs_obstacles_active_count(const bs_obstacles *o);
 
 /* The hooks themselves (ctx = the bs_obstacles), exposed for tests and for

@@ -49,7 +49,13 @@ struct bs_obstacles {
   int have_time;
   int32_t n_active;
   double *friction_dv; /* 3 per vertex, the caller's: friction's velocity change */
+  uint8_t *owned;     /* NULL, or per vertex: 1 counted here (set_owned)       */
+  int32_t n_owned;
+  int32_t *own_idx;   /* the owned vertices (penalty terms' vertex subset)     */
 };
+
+/* Whether vertex p is counted by this process (bs_obstacles_set_owned). */
+static inline int counted(const bs_obstacles *o, int32_t p) { return !o->owned || o->owned[p]; }
 
 static const char *mode_names[] = {"constraint", "penalty", "postprocess"};
 
@@ -100,8 +106,17 @@ void bs_obstacles_destroy(bs_obstacles **po) {
   free(o->J);
   free(o->C);
   free(o->vact);
+  free(o->owned);
+  free(o->own_idx);
   free(o);
   *po = NULL;
+}
+
+/* L of the touching tolerance: the box's diagonal plus its largest coordinate. */
+static double scene_scale(const double lo[3], const double hi[3]) {
+  double big = 0;
+  for (int k = 0; k < 3; k++) big = fmax(big, fmax(fabs(lo[k]), fabs(hi[k])));
+  return bs_bbox_diagonal(lo, hi) + big;
 }
 
 int bs_obstacles_create(const bs_fem *fem, const bs_step_data *step, const uint8_t *mask, bs_obstacles **out,
@@ -122,11 +137,33 @@ int bs_obstacles_create(const bs_fem *fem, const bs_step_data *step, const uint8
   if (mask) memcpy(o->mask, mask, nv);
   else memset(o->mask, 1, nv);
   /* Scene size: bounding-box diagonal plus the largest coordinate of the rest mesh. */
-  double lo[3], hi[3], big = 0;
+  double lo[3], hi[3];
   bs_bbox((int64_t)nv, fem->mesh->x, lo, hi);
-  for (int k = 0; k < 3; k++) big = fmax(big, fmax(fabs(lo[k]), fabs(hi[k])));
-  o->scale = bs_bbox_diagonal(lo, hi) + big;
+  o->scale = scene_scale(lo, hi);
   *out = o;
+  return 0;
+}
+
+void bs_obstacles_set_bounds(bs_obstacles *o, const double lo[3], const double hi[3]) {
+  o->scale = scene_scale(lo, hi);
+}
+
+int bs_obstacles_set_owned(bs_obstacles *o, const uint8_t *owned, bs_error *err) {
+  if (o->n > 0)
+    return bs_error_set(err, BS_EINPUT, "obstacles: the owned vertices are set before the first obstacle (%d added)",
+                        o->n);
+  free(o->owned);
+  free(o->own_idx);
+  o->owned = NULL, o->own_idx = NULL, o->n_owned = 0;
+  if (!owned) return 0;
+  const size_t nv = (size_t)o->nv;
+  o->owned = malloc(nv ? nv : 1);
+  o->own_idx = malloc(sizeof *o->own_idx * (nv ? nv : 1));
+  if (!o->owned || !o->own_idx)
+    return bs_error_set(err, BS_ENOMEM, "out of memory marking the owned vertices (%zu vertices)", nv);
+  memcpy(o->owned, owned, nv);
+  for (int32_t p = 0; p < o->nv; p++)
+    if (owned[p]) o->own_idx[o->n_owned++] = p;
   return 0;
 }
 
@@ -181,7 +218,9 @@ int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, dou
       goto fail;
     }
     o->terms = nt;
-    if ((rc = bs_term_penalty_create(o->fem, o->step, ls, stiffness, &ob.term, err))) {
+    rc = o->owned ? bs_term_penalty_create_subset(o->fem, o->step, ls, stiffness, o->n_owned, o->own_idx, &ob.term, err)
+                  : bs_term_penalty_create(o->fem, o->step, ls, stiffness, &ob.term, err);
+    if (rc) {
       bs_error_prefix(err, "obstacle %d (%s)", idx, kind);
       goto fail;
     }
@@ -305,7 +344,7 @@ void bs_obstacles_register_active(const double *x, const double *g, void *ctx) {
       if (fabs(phi) <= tol && bs_dot3(g + 3 * (size_t)p, n) >= 0) {
         ob->active[p] = ob->projected[p] = 1;
         for (int k = 0; k < 3; k++) ob->nreg[3 * (size_t)p + k] = (float)n[k];
-        count++;
+        count += counted(o, p);
       }
     }
   }
@@ -392,7 +431,7 @@ void bs_obstacles_project_hessian(const double *x, const double *g, bs_bsr *H, v
       if (o->vact[j]) mat3_mul(B, o->J + 9 * (size_t)j, B);
       if (o->vact[i]) mat3_tmul(o->J + 9 * (size_t)i, B, B);
     }
-    if (o->vact[i]) {
+    if (o->vact[i] && counted(o, i)) { /* C once over the processes */
       double *D = H->val + 9 * (size_t)H->diag[i];
       const double *C = o->C + 9 * (size_t)i;
       for (int k = 0; k < 9; k++) D[k] += C[k];
@@ -491,7 +530,7 @@ void bs_obstacles_penetration(const bs_obstacles *o, double t, const double *x, 
       if (phi < -tol) inside = 1;
       if (-phi > dmax) dmax = -phi;
     }
-    c += inside;
+    c += inside && counted(o, p);
   }
   if (count) *count = c;
   if (max_depth) *max_depth = dmax;

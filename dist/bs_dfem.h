@@ -72,6 +72,17 @@ int bs_dfem_gradient(bs_dfem *df, const double *x, double *E, double *g, bs_erro
  * NULL: none fixed). */
 int bs_dfem_hessian(bs_dfem *df, const double *x, const uint8_t *mask, bs_error *err);
 
+/* As bs_dfem_hessian, with fn(Hm, ctx) applied to this rank's partial
+ * Hessian (dfem->Hm: the terms' Hessian over the owned cells, in the order
+ * of dfem->fem's mesh) before its blocks are assembled into df->H. fn NULL:
+ * bs_dfem_hessian. The sum over the ranks of what fn leaves is what df->H
+ * holds: a linear map of Hm (J^T Hm J) gives the map of the whole Hessian;
+ * a block that fn adds must be added on one rank only. Not called when a
+ * term is not evaluable. */
+typedef void (*bs_dfem_hessian_fn)(bs_bsr *Hm, void *ctx);
+int bs_dfem_hessian_with(bs_dfem *df, const double *x, const uint8_t *mask, bs_dfem_hessian_fn fn, void *ctx,
+                         bs_error *err);
+
 /* Sum over the ranks of a.b over owned entries. */
 int bs_dfem_dot(const bs_dfem *df, const double *a, const double *b, double *out, bs_error *err);
 
@@ -83,6 +94,15 @@ int bs_dfem_from_global(const bs_dfem *df, Vec xg, double *x, bs_error *err);
  * the order of the arrays terms read (bs_step_data x_hat, x_n): xm has 3 per
  * local-mesh vertex. Not collective. */
 void bs_dfem_mesh_vector(const bs_dfem *df, const double *x, double *xm);
+
+/* The inverse of bs_dfem_mesh_vector: the entries of x of the local-mesh
+ * vertices set from xm (the other local vertices' left as they are). Not
+ * collective. */
+void bs_dfem_from_mesh_vector(const bs_dfem *df, const double *xm, double *x);
+
+/* x made consistent: every ghost entry set to its owner's value (through
+ * the global Vec). */
+int bs_dfem_consistent(const bs_dfem *df, double *x, bs_error *err);
 
 /* Sum over the ranks of a local contribution c (3 per local vertex, ghost
  * entries partial) into the consistent vector out (may alias c). */

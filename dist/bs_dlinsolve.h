@@ -2,9 +2,14 @@
  * of bs_linsolve.h (from zero, ||r - H d|| <= rel ||r||, the exit on
  * negative curvature with the last iterate or r itself on the first
  * iteration, the last downhill iterate with kappa > 0), written on PETSc
- * vectors over bs_dfem's matrix, with a PETSc preconditioner:
+ * vectors over bs_dfem's matrix, with a preconditioner:
  *   BS_DPC_NONE    plain CG (the serial "cg");
- *   BS_DPC_BJACOBI 3x3 point-block Jacobi of H (PCPBJACOBI; the serial "pcg");
+ *   BS_DPC_BJACOBI 3x3 point-block Jacobi of H, each owned diagonal block
+ *                  inverted as the serial "pcg" does (bs_linsolve_block_inverse:
+ *                  a block that is not SPD, e.g. left singular in the normal
+ *                  of an active constraint, gets the inverse of its diagonal
+ *                  or the identity, where PETSc's PCPBJACOBI would divide by
+ *                  a zero pivot);
  *   BS_DPC_GAMG    one PCGAMG cycle built from a symmetric positive definite
  *                  matrix P (bs_dlin_setup) with the rigid-body near-null
  *                  space of the rest positions (MatNullSpaceCreateRigidBody),

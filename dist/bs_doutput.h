@@ -35,7 +35,8 @@ int bs_dout_finish(bs_dout *o, const char *summary, bs_error *err);
 void bs_dout_destroy(bs_dout **o);
 
 /* The state's measures over the ranks (bs_measure_state on each rank's
- * owned cells, summed; min det F the minimum). */
+ * owned cells, summed; min det F the minimum; penetration from
+ * bs_dsim_penetration). */
 int bs_dsim_measure(bs_dsim *d, bs_sim_measures *m, bs_error *err);
 
 #ifdef __cplusplus

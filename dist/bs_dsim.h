@@ -9,12 +9,15 @@
  * (bodies.0.refine); materials by 3-D group, every model, Rayleigh damping;
  * gravity, drag; scripted groups (fixed, velocity, keyframes); an initial
  * velocity; statics with load steps; solver.method optimization with
- * solver.linear cg, pcg or amg; analytic obstacles (plane, sphere, box,
- * cylinder, torus, moving or not) with penalty collisions (each vertex once,
- * on its owner). Refused: self_collision, constraint and postprocess
- * collisions, friction, grid level sets (shape grid, grid_h), body transforms
- * (translate, rotate, scale), angular velocity, random or point initial
- * states, qoi, several bodies, other mesh files.
+ * solver.linear cg, pcg or amg, solver.rtol and solver.load_rtol; analytic
+ * obstacles (plane, sphere, box, cylinder, torus, moving or not) with
+ * constraint collisions (collision/bs_obstacles.h on each rank's owned cells:
+ * every rank that holds a vertex projects it alike, the curvature term of
+ * the Hessian added by its owner) and penalty collisions (each vertex once,
+ * on its owner). Refused: self_collision, postprocess collisions, friction
+ * (obstacles.N.friction > 0), grid level sets (shape grid, grid_h), body
+ * transforms (translate, rotate, scale), angular velocity, random or point
+ * initial states, qoi, several bodies, other mesh files.
  *
  * Collective (PETSC_COMM_WORLD). Ownership: bs_dsim_create borrows the scene
  * (it must outlive the dsim) and owns everything else. State (x, v, mask)
@@ -41,8 +44,8 @@ typedef struct bs_dsim {
   int n_terms;
   bs_term *terms[BS_DSIM_MAX_TERMS];
   bs_step_data step;
-  int n_levelsets;
-  bs_levelset *levelsets[BS_DSIM_MAX_OBSTACLES]; /* the penalty obstacles' */
+  bs_obstacles *obstacles; /* the scene's obstacles on df->fem (NULL: none)   */
+  double size;          /* m: the rest mesh's bounding-box diagonal           */
   double *x, *v;        /* local vectors: the state                       */
   uint8_t *mask;        /* per local vertex: 1 free, 0 scripted           */
   int n_scripts;
@@ -71,6 +74,18 @@ int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
 
 /* Tets with det F <= 0 at s->x over the ranks. */
 int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err);
+
+/* Free vertices inside obstacles at s->x deeper than 1e-10 of the mesh's
+ * size, over the ranks (each vertex once), and the largest depth (m), as
+ * bs_sim_penetration. */
+int bs_dsim_penetration(bs_dsim *s, int64_t *count, double *max_depth, bs_error *err);
+
+/* The (constraint obstacle, vertex) pairs labeled active by the last
+ * registration of the last solve, over the ranks (each vertex once). Unlike
+ * bs_obstacles_active_count on the serial backend (0 after a step: its
+ * post-solve hook forgets them), the labels of the last solve stay until
+ * the next step's first projection. */
+int bs_dsim_active_pairs(const bs_dsim *s, int64_t *n, bs_error *err);
 
 /* Unknowns over the ranks: 3 per free vertex. */
 long bs_dsim_dofs(const bs_dsim *s);

@@ -11,12 +11,22 @@
  * x_hat and x_n the integrator points at its own arrays in the local mesh's
  * order. mask: 1 free, 0 scripted or fixed, per local vertex (consistent).
  * script: the positions of the masked vertices at a time, on a local vector.
- * Not supported (refused by the caller's scene check): projection hooks,
- * friction, self-collision, the Newton baseline.
+ * Constraint hooks (bs_dintegrator_set_hooks): the guesses, the start of
+ * statics and the minimizer's iterates projected as in bs_step.h.
+ * Also as physics/step.c: solver.rtol and solver.load_rtol (the external
+ * loads' norm over the free dofs, summed over the ranks), the objective's
+ * quadratic flag (bs_step_objective_quadratic) and the adaptive forcing's
+ * rule for steps that start with inverted tets (bs_step_forcing, the tets
+ * counted over the ranks). Not supported (refused by the caller's scene
+ * check): post-solve hooks (friction), self-collision, the Newton baseline,
+ * the third guess (opts.guess_xn), opts.trace; GAMG is always built at rest
+ * (amg_at_rest = 1).
  *
- * Collective. Ownership: borrows dfem, step and the terms; copies the mask.
+ * Collective. Ownership: borrows dfem, step, the terms and the hooks' ctx;
+ * copies the mask.
  * Status: as bs_step.h, plus BS_EINPUT for an option the backend does not
- * have (min.linear cholmod or minres, a method other than optimization).
+ * have (min.linear cholmod or minres, a method other than optimization,
+ * guess_xn).
  */
 #ifndef BS_DSTEP_H
 #define BS_DSTEP_H
@@ -35,6 +45,18 @@ typedef struct bs_dintegrator bs_dintegrator;
 int bs_dintegrator_create(bs_dfem *df, bs_step_data *step, const uint8_t *mask, bs_script_fn script, void *script_ctx,
                           const bs_integrator_opts *opts, bs_dintegrator **out, bs_error *err);
 void bs_dintegrator_destroy(bs_dintegrator **D);
+
+/* The constraint hooks of bs_step.h made for dfem->fem (e.g. bs_obstacles_hooks
+ * on it, with bs_obstacles_set_owned and _set_bounds): each call gets copies
+ * of the local vectors x and g in the local mesh's order (dfem->fem's, the
+ * order the hooks index), and what project and project_gradient change is
+ * written back and made consistent on the ghosts (every rank must compute
+ * the same for a vertex it shares: x and g are consistent). project_hessian
+ * gets each rank's partial Hessian over its owned cells before the assembly
+ * (bs_dfem_hessian_with), so a block it adds per vertex must be added on one
+ * rank only. hooks NULL: none. BS_EINPUT for a post_solve hook (friction is
+ * not supported). Not collective; call before a step. */
+int bs_dintegrator_set_hooks(bs_dintegrator *D, const bs_step_hooks *hooks, bs_error *err);
 
 /* Statics in load_steps increments (as bs_integrator_static). */
 int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err);

@@ -107,6 +107,12 @@ void bs_dfem_mesh_vector(const bs_dfem *df, const double *x, double *xm) {
     memcpy(xm + 3 * (size_t)i, x + 3 * (size_t)df->mesh->local_vertex[i], 3 * sizeof(double));
 }
 
+void bs_dfem_from_mesh_vector(const bs_dfem *df, const double *xm, double *x) {
+  const bs_mesh *lm = df->mesh->local;
+  for (int32_t i = 0; i < lm->n_vertices; i++)
+    memcpy(x + 3 * (size_t)df->mesh->local_vertex[i], xm + 3 * (size_t)i, 3 * sizeof(double));
+}
+
 static void to_mesh(bs_dfem *df, const double *x) { bs_dfem_mesh_vector(df, x, df->xm); }
 
 /* NOT_EVALUABLE on every rank if on one. */
@@ -185,6 +191,11 @@ static int scatter_hessian(bs_dfem *df, const uint8_t *mask, bs_error *err) {
 }
 
 int bs_dfem_hessian(bs_dfem *df, const double *x, const uint8_t *mask, bs_error *err) {
+  return bs_dfem_hessian_with(df, x, mask, NULL, NULL, err);
+}
+
+int bs_dfem_hessian_with(bs_dfem *df, const double *x, const uint8_t *mask, bs_dfem_hessian_fn fn, void *ctx,
+                         bs_error *err) {
   to_mesh(df, x);
   bs_bsr_zero(df->Hm);
   int st = BS_TERM_OK;
@@ -192,6 +203,7 @@ int bs_dfem_hessian(bs_dfem *df, const double *x, const uint8_t *mask, bs_error 
     if (active(df, i)) st = df->terms[i]->ops->hessian(df->terms[i], df->xm, df->Hm);
   int rc = agree(st, err);
   if (rc) return rc;
+  if (fn) fn(df->Hm, ctx);
   BS_PETSC_TRY(MatZeroEntries(df->H), err);
   rc = scatter_hessian(df, mask, err);
   if (rc) return rc;
@@ -226,4 +238,9 @@ int bs_dfem_from_global(const bs_dfem *df, Vec xg, double *x, bs_error *err) {
   memcpy(x, a, (size_t)df->n3 * sizeof(double));
   BS_PETSC_TRY(VecRestoreArrayRead(df->xl, &a), err);
   return BS_OK;
+}
+
+int bs_dfem_consistent(const bs_dfem *df, double *x, bs_error *err) {
+  int rc = bs_dfem_to_global(df, x, df->xg, err);
+  return rc ? rc : bs_dfem_from_global(df, df->xg, x, err);
 }

@@ -20,6 +20,8 @@ struct bs_dlin {
   Vec x, r, p, q, z, xs;
   Vec free;              /* 1 on free dofs, 0 on fixed: z is masked with it */
   double *ones;          /* local vector work                           */
+  PetscInt bstart, nb;   /* BJACOBI: the owned blocks of the global Vecs */
+  double *minv;          /* BJACOBI: 9 per owned block, the serial pcg's inverses */
 };
 
 int bs_dlin_create(bs_dfem *df, bs_dpc kind, bs_dlin **out, bs_error *err) {
@@ -34,8 +36,15 @@ int bs_dlin_create(bs_dfem *df, bs_dpc kind, bs_dlin **out, bs_error *err) {
   s->ones = bs_calloc((size_t)df->n3 + 1, sizeof *s->ones, "mask vector", err);
   if (!s->ones) return BS_ENOMEM;
   if (kind == BS_DPC_NONE) return BS_OK;
+  if (kind == BS_DPC_BJACOBI) {
+    PetscInt lo, hi;
+    BS_PETSC_TRY(VecGetOwnershipRange(df->xg, &lo, &hi), err);
+    s->bstart = lo / 3, s->nb = (hi - lo) / 3;
+    s->minv = bs_calloc(9 * (size_t)s->nb + 9, sizeof *s->minv, "block Jacobi", err);
+    return s->minv ? BS_OK : BS_ENOMEM;
+  }
   BS_PETSC_TRY(PCCreate(PETSC_COMM_WORLD, &s->pc), err);
-  BS_PETSC_TRY(PCSetType(s->pc, kind == BS_DPC_GAMG ? PCGAMG : PCPBJACOBI), err);
+  BS_PETSC_TRY(PCSetType(s->pc, PCGAMG), err);
   BS_PETSC_TRY(PCSetOptionsPrefix(s->pc, "bs_"), err);
   BS_PETSC_TRY(PCSetFromOptions(s->pc), err);
   return BS_OK;
@@ -49,6 +58,7 @@ void bs_dlin_destroy(bs_dlin **sp) {
   Vec *v[] = {&s->x, &s->r, &s->p, &s->q, &s->z, &s->xs, &s->free};
   for (size_t i = 0; i < sizeof v / sizeof *v; i++) VecDestroy(v[i]);
   free(s->ones);
+  free(s->minv);
   free(s);
   *sp = NULL;
 }
@@ -92,13 +102,46 @@ void bs_dlin_info(const bs_dlin *s, int *levels, double *setup_seconds) {
   if (setup_seconds) *setup_seconds = s->setup_seconds;
 }
 
+/* The point-block Jacobi of H: each owned diagonal block's inverse as the
+ * serial pcg makes it (bs_linsolve_block_inverse: a block left singular by
+ * an active constraint gets its diagonal's inverse or the identity). */
+static int block_jacobi_setup(bs_dlin *s, bs_error *err) {
+  for (PetscInt i = 0; i < s->nb; i++) {
+    const PetscInt b = 3 * (s->bstart + i), idx[3] = {b, b + 1, b + 2};
+    double D[9];
+    BS_PETSC_TRY(MatGetValues(s->df->H, 3, idx, 3, idx, D), err);
+    (void)bs_linsolve_block_inverse(D, s->minv + 9 * (size_t)i);
+  }
+  return BS_OK;
+}
+
+/* z = M r, block by block over the owned blocks. */
+static int block_jacobi_apply(bs_dlin *s, bs_error *err) {
+  const PetscScalar *r;
+  PetscScalar *z;
+  BS_PETSC_TRY(VecGetArrayRead(s->r, &r), err);
+  BS_PETSC_TRY(VecGetArray(s->z, &z), err);
+  for (PetscInt i = 0; i < s->nb; i++) {
+    const double *M = s->minv + 9 * (size_t)i, *ri = r + 3 * i;
+    for (int a = 0; a < 3; a++) z[3 * i + a] = M[3 * a] * ri[0] + M[3 * a + 1] * ri[1] + M[3 * a + 2] * ri[2];
+  }
+  BS_PETSC_TRY(VecRestoreArray(s->z, &z), err);
+  BS_PETSC_TRY(VecRestoreArrayRead(s->r, &r), err);
+  return BS_OK;
+}
+
 /* z = M^-1 r and r.z (z = r, r.z = rr without a preconditioner). */
 static int precond(bs_dlin *s, double rr, double *rz, bs_error *err) {
   if (s->kind == BS_DPC_NONE) {
     *rz = rr;
     return BS_OK;
   }
-  BS_PETSC_TRY(PCApply(s->pc, s->r, s->z), err);
+  if (s->kind == BS_DPC_BJACOBI) {
+    int rc = block_jacobi_apply(s, err);
+    if (rc) return rc;
+  } else {
+    BS_PETSC_TRY(PCApply(s->pc, s->r, s->z), err);
+  }
   /* A multigrid cycle can write fixed dofs (its coarse correction): the
      iterates must stay zero there, as the serial masked solvers keep them. */
   BS_PETSC_TRY(VecPointwiseMult(s->z, s->z, s->free), err);
@@ -183,11 +226,8 @@ int bs_dlin_solve(bs_dlin *s, const uint8_t *mask, const double *r, double rel, 
   memset(st, 0, sizeof *st);
   double t0 = bs_seconds();
   if (s->kind == BS_DPC_GAMG && !s->ready) return bs_error_set(err, BS_EINTERNAL, "GAMG used before its setup");
-  if (s->kind == BS_DPC_BJACOBI) {
-    BS_PETSC_TRY(PCSetOperators(s->pc, s->df->H, s->df->H), err);
-    BS_PETSC_TRY(PCSetUp(s->pc), err);
-  }
-  int rc = load_mask(s, mask, err);
+  int rc = s->kind == BS_DPC_BJACOBI ? block_jacobi_setup(s, err) : BS_OK;
+  if (!rc) rc = load_mask(s, mask, err);
   if (!rc) rc = bs_dfem_to_global(s->df, r, s->r, err);
   if (rc) return rc;
   BS_PETSC_TRY(VecSet(s->x, 0.0), err);

@@ -93,6 +93,9 @@ int bs_dsim_measure(bs_dsim *d, bs_sim_measures *m, bs_error *err) {
   if (!rc) rc = bs_dist_max(&mn, 1, err);
   m->kinetic = s[0], m->elastic = s[1], m->gravity = s[2], m->total = s[3], m->inverted = (int32_t)s[4];
   m->min_detF = -mn;
+  int64_t pen = 0;
+  if (!rc) rc = bs_dsim_penetration(d, &pen, &m->max_depth, err);
+  m->penetrating = (int32_t)pen;
   return rc;
 }
 

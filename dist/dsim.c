@@ -1,5 +1,6 @@
 /* dsim.c — a scene on the petsc backend: what it may use, and its mesh,
- * materials, terms, scripts and integrator (bs_dsim.h). */
+ * materials, terms, scripts and integrator (bs_dsim.h); its obstacles are
+ * dsim_obstacles.c's. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -7,6 +8,7 @@
 #include "bs_dist.h"
 #include "bs_dsim.h"
 #include "bs_penalty.h"
+#include "dsim_internal.h"
 
 static int refuse(const bs_scene *sc, bs_error *err, const char *key, const char *why) {
   return bs_error_set(err, BS_EINPUT, "%s: %s: %s with solver.backend petsc", sc->path, key, why);
@@ -27,7 +29,8 @@ static int check_body(const bs_scene *sc, const bs_scene_body *b, bs_error *err)
   return BS_OK;
 }
 
-/* Obstacles: analytic shapes with penalty collisions, no friction. */
+/* Obstacles: analytic shapes with constraint or penalty collisions, no
+ * friction. */
 static int check_obstacles(const bs_scene *sc, bs_error *err) {
   char key[64];
   for (int i = 0; i < sc->n_obstacles; i++) {
@@ -35,8 +38,8 @@ static int check_obstacles(const bs_scene *sc, bs_error *err) {
     const char *why = NULL;
     if (o->shape == BS_SHAPE_GRID) snprintf(key, sizeof key, "obstacles.%d.shape", i), why = "grid level sets are not supported";
     else if (o->grid_h > 0) snprintf(key, sizeof key, "obstacles.%d.grid_h", i), why = "grid level sets are not supported";
-    else if (o->collision != BS_COLLIDE_PENALTY)
-      snprintf(key, sizeof key, "obstacles.%d.collision", i), why = "only penalty collisions are supported (not yet constraint)";
+    else if (o->collision == BS_COLLIDE_POSTPROCESS)
+      snprintf(key, sizeof key, "obstacles.%d.collision", i), why = "postprocess collisions are not supported";
     else if (o->friction > 0) snprintf(key, sizeof key, "obstacles.%d.friction", i), why = "friction is not supported";
     if (why) return refuse(sc, err, key, why);
   }
@@ -94,32 +97,8 @@ static int make_mesh(bs_dsim *s, bs_error *err) {
   return bs_dfem_create(s->mesh, b->n_materials, mats, tags, &s->df, err);
 }
 
-/* Penalty obstacles (bs_penalty.h) over the vertices of the local mesh that
- * this rank owns, so that every vertex is counted once over the ranks. */
-static int make_penalties(bs_dsim *s, bs_error *err) {
-  const bs_scene *sc = s->scene;
-  const bs_mesh *lm = s->mesh->local;
-  int32_t *own = bs_calloc((size_t)lm->n_vertices + 1, sizeof *own, "owned vertices", err), n = 0;
-  if (!own) return BS_ENOMEM;
-  for (int32_t i = 0; i < lm->n_vertices; i++)
-    if (s->mesh->owned[s->mesh->local_vertex[i]]) own[n++] = i;
-  static const double zero[3] = {0, 0, 0};
-  int rc = BS_OK;
-  for (int i = 0; i < sc->n_obstacles && !rc; i++) {
-    rc = bs_scene_obstacle_levelset(&sc->obstacles[i], zero, zero, 0, &s->levelsets[s->n_levelsets], err);
-    if (!rc) s->n_levelsets++;
-    if (!rc && s->n_terms >= BS_DSIM_MAX_TERMS) rc = bs_error_set(err, BS_EINPUT, "%s: too many terms", sc->path);
-    if (!rc)
-      rc = bs_term_penalty_create_subset(s->df->fem, &s->step, s->levelsets[i], sc->obstacles[i].stiffness, n, own,
-                                         &s->terms[s->n_terms++], err);
-    if (rc) bs_error_prefix(err, "%s: obstacles.%d", sc->path, i);
-  }
-  free(own);
-  return rc;
-}
-
 /* The terms the scene asks for, in bs_sim's order: inertia, gravity,
- * elasticity, damping, drag, penalty obstacles. */
+ * elasticity, damping, drag, penalty obstacles (the obstacles' terms). */
 static int make_terms(bs_dsim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   const bs_fem *fem = s->df->fem;
@@ -134,7 +113,7 @@ static int make_terms(bs_dsim *s, bs_error *err) {
   for (int i = 0; i < b->n_materials; i++) any |= (k[i] = b->materials[i].rayleigh) > 0;
   if (!rc && any && dyn) rc = bs_term_damping_create(fem, &s->step, k, &T[s->n_terms++], err);
   if (!rc && sc->drag > 0 && dyn) rc = bs_term_drag_create(fem, &s->step, sc->drag, &T[s->n_terms++], err);
-  if (!rc) rc = make_penalties(s, err);
+  if (!rc) rc = bs__dsim_make_obstacles(s, err);
   if (!rc) bs_dfem_set_terms(s->df, s->n_terms, s->terms, !dyn);
   return rc;
 }
@@ -198,12 +177,13 @@ int bs_dsim_create(const bs_scene *sc, bs_dsim **out, bs_error *err) {
   if (!s) return BS_ENOMEM;
   s->scene = sc;
   rc = make_mesh(s, err);
-  if (!rc) rc = make_terms(s, err);
   if (!rc) rc = make_state(s, err);
-  if (!rc) rc = make_scripts(s, err);
+  if (!rc) rc = make_scripts(s, err); /* the mask, before the obstacles copy it */
+  if (!rc) rc = make_terms(s, err);
   if (!rc)
     rc = bs_dintegrator_create(s->df, &s->step, s->mask, s->n_scripts ? script_positions : NULL, s, &sc->solver,
                                &s->integrator, err);
+  if (!rc) rc = bs__dsim_set_hooks(s, err);
   if (rc) bs_dsim_destroy(&s);
   *out = s;
   return rc;
@@ -213,8 +193,9 @@ void bs_dsim_destroy(bs_dsim **sp) {
   if (!sp || !*sp) return;
   bs_dsim *s = *sp;
   bs_dintegrator_destroy(&s->integrator);
-  for (int i = 0; i < s->n_terms; i++) bs_term_destroy(&s->terms[i]);
-  for (int i = 0; i < s->n_levelsets; i++) bs_levelset_destroy(&s->levelsets[i]);
+  for (int i = 0; i < s->n_terms; i++)
+    if (!bs_term_is_penalty(s->terms[i])) bs_term_destroy(&s->terms[i]); /* those are the obstacles' */
+  bs_obstacles_destroy(&s->obstacles);
   bs_dfem_destroy(&s->df);
   bs_dmesh_destroy(&s->mesh);
   free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm);

@@ -14,21 +14,21 @@
 
 /* ---- objective and vector operations ------------------------------------ */
 
-static void note(bs_dintegrator *D, int rc) {
+void bs__dstep_note(bs_dintegrator *D, int rc) {
   if (rc < 0 && !D->cb_rc) D->cb_rc = rc;
 }
 
 static int obj_value(const double *x, double *E, void *ctx) {
   bs_dintegrator *D = ctx;
   int rc = bs_dfem_value(D->df, x, E, &D->cb_err);
-  note(D, rc);
+  bs__dstep_note(D, rc);
   return rc ? 1 : !isfinite(*E);
 }
 
 static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
   bs_dintegrator *D = ctx;
   int rc = bs_dfem_gradient(D->df, x, E, g, &D->cb_err);
-  note(D, rc);
+  bs__dstep_note(D, rc);
   if (rc) *E = NAN;
   return rc ? 1 : 0;
 }
@@ -36,14 +36,14 @@ static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
 static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   bs_dintegrator *D = ctx;
   int rc = bs_dfem_hessian(D->df, x, D->mask, &D->cb_err);
-  note(D, rc);
+  bs__dstep_note(D, rc);
   return rc ? 1 : 0;
 }
 
 static double vo_dot(int64_t N, const double *a, const double *b, void *ctx) {
   bs_dintegrator *D = ctx;
   double s = NAN;
-  note(D, bs_dfem_dot(D->df, a, b, &s, &D->cb_err));
+  bs__dstep_note(D, bs_dfem_dot(D->df, a, b, &s, &D->cb_err));
   return s;
 }
 
@@ -68,6 +68,7 @@ void bs__dstep_objective(bs_dintegrator *D, bs_objective *o) {
   o->value = obj_value;
   o->gradient = obj_gradient;
   o->hessian = obj_hessian;
+  bs__dstep_hook_objective(D, o);
   o->ctx = D;
 }
 
@@ -77,6 +78,8 @@ static int check_opts(const bs_integrator_opts *o, bs_dpc *pc, bs_error *err) {
   if (o->method != BS_METHOD_OPTIMIZATION)
     return bs_error_set(err, BS_EINPUT, "solver.method: %s is not available with solver.backend petsc (optimization is)",
                         bs_method_name(o->method));
+  if (o->guess_xn)
+    return bs_error_set(err, BS_EINPUT, "integrator option guess_xn is not available with solver.backend petsc");
   switch (o->min.linear) {
   case BS_LIN_CG: *pc = BS_DPC_NONE; return BS_OK;
   case BS_LIN_PCG: *pc = BS_DPC_BJACOBI; return BS_OK;
@@ -103,12 +106,14 @@ static int alloc_all(bs_dintegrator *D, bs_error *err) {
   const bs_dfem *df = D->df;
   size_t n3 = (size_t)df->n3 + 3, nm = 3 * (size_t)df->mesh->local->n_vertices + 3, nv = (size_t)df->mesh->n_vertices;
   D->mask = bs_calloc(nv + 1, 1, "mask", err);
-  D->x_hat_m = bs_calloc(nm, sizeof(double), "x_hat", err);
-  D->x_n_m = bs_calloc(nm, sizeof(double), "x_n", err);
+  double **m[] = {&D->x_hat_m, &D->x_n_m, &D->hxm, &D->hgm};
+  for (size_t k = 0; k < sizeof m / sizeof *m; k++) *m[k] = bs_calloc(nm, sizeof(double), "local-mesh vectors", err);
   double **v[] = {&D->x_n, &D->g1, &D->g2, &D->grad, &D->mass};
   for (size_t k = 0; k < sizeof v / sizeof *v; k++) *v[k] = bs_calloc(n3, sizeof(double), "integrator vectors", err);
   D->potential = bs_calloc((size_t)D->n_terms + 1, sizeof *D->potential, "terms", err);
-  if (!D->mask || !D->x_hat_m || !D->x_n_m || !D->x_n || !D->g1 || !D->g2 || !D->grad || !D->mass || !D->potential)
+  D->external = bs_calloc((size_t)D->n_terms + 1, sizeof *D->external, "terms", err);
+  if (!D->mask || !D->x_hat_m || !D->x_n_m || !D->hxm || !D->hgm || !D->x_n || !D->g1 || !D->g2 || !D->grad ||
+      !D->mass || !D->potential || !D->external)
     return BS_ENOMEM;
   return BS_OK;
 }
@@ -147,8 +152,10 @@ int bs_dintegrator_create(bs_dfem *df, bs_step_data *step, const uint8_t *mask, 
   if (!rc) {
     if (mask) memcpy(D->mask, mask, (size_t)df->mesh->n_vertices);
     else memset(D->mask, 1, (size_t)df->mesh->n_vertices);
-    for (int i = 0; i < D->n_terms; i++)
+    for (int i = 0; i < D->n_terms; i++) {
       if (strcmp(D->terms[i]->name, "inertia") != 0) D->potential[D->n_potential++] = D->terms[i];
+      if (D->terms[i]->external) D->external[D->n_external++] = D->terms[i];
+    }
     step->x_hat = D->x_hat_m, step->x_n = D->x_n_m, step->load = 1.0, step->dt = 0;
     rc = assembled_mass(D, err);
   }
@@ -165,7 +172,7 @@ void bs_dintegrator_destroy(bs_dintegrator **pD) {
   bs_bsr_destroy(&D->diag);
   bs_dlin_destroy(&D->lin);
   free(D->mask), free(D->x_hat_m), free(D->x_n_m), free(D->x_n), free(D->g1), free(D->g2), free(D->grad);
-  free(D->mass), free(D->potential);
+  free(D->mass), free(D->potential), free(D->external), free(D->hxm), free(D->hgm);
   free(D);
   *pD = NULL;
 }

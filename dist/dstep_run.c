@@ -33,36 +33,66 @@ static int gamg_prepare(bs_dintegrator *D, bs_error *err) {
   return rc;
 }
 
+/* The 2-norm over the free dofs of the external loads' forces at x (the
+ * scale of load_rtol, as physics/step.c's load_norm), computed in D->g1
+ * (free once the guess is in x); 0 when there is none or it is not
+ * evaluable. */
+static int load_norm(bs_dintegrator *D, const double *x, double *out, bs_error *err) {
+  *out = 0;
+  bs_dfem *df = D->df;
+  const int statics = df->statics;
+  if (D->n_external == 0) return BS_OK;
+  double E, s = 0;
+  bs_dfem_set_terms(df, D->n_external, D->external, statics);
+  int rc = bs_dfem_gradient(df, x, &E, D->g1, err);
+  bs_dfem_set_terms(df, D->n_terms, D->terms, statics);
+  if (rc) return rc > 0 ? BS_OK : rc;
+  for (int32_t v = 0; v < df->mesh->n_vertices; v++)
+    if (!D->mask[v]) memset(D->g1 + 3 * (size_t)v, 0, 3 * sizeof(double));
+  if ((rc = bs_dfem_dot(df, D->g1, D->g1, &s, err))) return rc;
+  *out = isfinite(s) ? sqrt(s) : 0;
+  return BS_OK;
+}
+
+/* The solve's options as physics/step.c's run_solver sets them: the
+ * initial guess's kind, and the adaptive forcing's rule (bs_step_forcing)
+ * from the inverted tets at the step's start over the ranks. */
+static int solve_opts(bs_dintegrator *D, int naive, bs_minimize_opts *mo, bs_error *err) {
+  *mo = D->opts.min;
+  mo->naive_guess = naive;
+  mo->linear = BS_LIN_CG;
+  if (mo->forcing_ew != 2) return BS_OK;
+  int64_t inv = bs_fem_count_inverted(D->df->fem, D->x_n_m, NULL);
+  int rc = bs_dist_sum_i64(&inv, 1, err);
+  mo->forcing_ew = bs_step_forcing(2, inv);
+  return rc;
+}
+
 static int run_solver(bs_dintegrator *D, double *x, int naive, bs_step_stats *st, bs_error *err) {
   int rc = gamg_prepare(D, err);
   if (rc) return rc;
-  bs_minimize_opts mo = D->opts.min;
-  mo.naive_guess = naive;
-  mo.linear = BS_LIN_CG;
-  if ((rc = bs_minimizer_set_opts(D->min, &mo, err))) return rc;
+  bs_minimize_opts mo;
+  if ((rc = solve_opts(D, naive, &mo, err)) || (rc = bs_minimizer_set_opts(D->min, &mo, err))) return rc;
   bs_objective obj;
   bs__dstep_objective(D, &obj);
+  obj.quadratic = bs_step_objective_quadratic(D->n_terms, D->terms, D->df->statics, D->hooks.project != NULL);
+  if (mo.load_rtol > 0 && (rc = load_norm(D, x, &obj.load_norm, err))) return rc;
   D->cb_rc = 0;
   rc = bs_minimize(D->min, &obj, x, &st->min, err);
   if (!rc && D->cb_rc) {
     if (err) *err = D->cb_err;
     rc = D->cb_rc;
   }
-  st->failed = st->min.reason != BS_MIN_CONVERGED;
+  st->failed = !bs_min_reason_converged(st->min.reason);
   return rc;
 }
 
-static void add_stats(bs_step_stats *st, const bs_step_stats *sub) {
-  st->min.iterations += sub->min.iterations;
-  st->min.cg_iterations += sub->min.cg_iterations;
-  st->min.ls_evaluations += sub->min.ls_evaluations;
-  st->min.indefinite_exits += sub->min.indefinite_exits;
-  st->min.downhill_iterates += sub->min.downhill_iterates;
-  st->min.reason = sub->min.reason;
-  st->min.reason_text = sub->min.reason_text;
-  st->min.grad_norm = sub->min.grad_norm;
-  st->min.E = sub->min.E;
-  st->failed |= sub->failed;
+/* x <- P(x) outside the minimizer (the guesses, the start of statics). */
+static int project_now(bs_dintegrator *D, double *x, bs_error *err) {
+  D->cb_rc = 0;
+  bs__dstep_project(D, x);
+  if (D->cb_rc && err) *err = D->cb_err;
+  return D->cb_rc;
 }
 
 int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err) {
@@ -78,11 +108,12 @@ int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x
   bs_dfem_mesh_vector(D->df, x, D->x_n_m);
   bs_dfem_mesh_vector(D->df, x, D->x_hat_m);
   if (D->script) D->script(t, x, D->script_ctx);
+  rc = project_now(D, x, err);
   bs_step_stats sub;
   for (int l = 1; l <= load_steps && !rc; l++) {
     D->step->load = (double)l / load_steps;
     memset(&sub, 0, sizeof sub);
-    if (!(rc = run_solver(D, x, 1, &sub, err))) add_stats(st, &sub);
+    if (!(rc = run_solver(D, x, 1, &sub, err))) bs_step_stats_add(st, &sub);
   }
   bs_dfem_set_terms(D->df, D->n_terms, D->terms, 0);
   D->step->load = 1.0;
@@ -145,6 +176,7 @@ int bs_dintegrator_step(bs_dintegrator *D, double t, double dt, double *x, doubl
     if (D->terms[i]->ops->begin_step && (rc = D->terms[i]->ops->begin_step(D->terms[i], err))) return rc;
   if ((rc = potential_gradient(D, err))) return rc;
   guesses(D, t + dt, dt);
+  if ((rc = project_now(D, D->g1, err)) || (rc = project_now(D, D->g2, err))) return rc;
   const double E1 = guess_energy(D, D->g1, err), E2 = guess_energy(D, D->g2, err);
   int naive = 1;
   if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {

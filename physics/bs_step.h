@@ -136,6 +136,26 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
                          bs_error *err);
 
+/* Shared with the distributed integrator (dist/bs_dstep.h), so that both
+ * backends decide alike. Nothing allocates, prints or fails. */
+
+/* bs_objective.quadratic of a solve over the terms: 1 when every term active
+ * in it (statics = 1: those not dynamic_only) is quadratic and nothing
+ * projects (projected = 1: constraint hooks are set, which make E piecewise). */
+int bs_step_objective_quadratic(int n_terms, bs_term *const *terms, int statics, int projected);
+
+/* The forcing_ew (bs_minimize_opts) of a solve whose step starts with
+ * `inverted` tets: the adaptive forcing (2, scene cg_forcing "adaptive")
+ * becomes the paper's forcing term (0) while the step starts tangled
+ * (inverted > 0), where its loose solves untangle best (README, Scenes); any
+ * other value is returned as it is. */
+int bs_step_forcing(int forcing_ew, int64_t inverted);
+
+/* Adds the statistics of one solve (a load step of statics) into st: the
+ * counts summed; reason, reason_text, grad_norm, E and tol_used sub's;
+ * failed or-ed. */
+void bs_step_stats_add(bs_step_stats *st, const bs_step_stats *sub);
+
 /* The objective value E at x for the current step data (for tests/diagnostics);
  * NaN when a term is not evaluable at x. */
 double bs_integrator_energy(bs_integrator *I, const double *x);

@@ -290,19 +290,39 @@ static double load_norm(bs_integrator *I, const double *x) {
   return isfinite(s) ? sqrt(s) : 0;
 }
 
-/* 1 when the objective of this solve is quadratic: every active term is and
- * nothing projects (constraints make it piecewise). */
-static int objective_quadratic(const bs_integrator *I) {
-  if (I->hooks.project) return 0;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && !I->terms[i]->quadratic) return 0;
+int bs_step_objective_quadratic(int n_terms, bs_term *const *terms, int statics, int projected) {
+  if (projected) return 0;
+  for (int i = 0; i < n_terms; i++)
+    if (!(statics && terms[i]->dynamic_only) && !terms[i]->quadratic) return 0;
   return 1;
+}
+
+int bs_step_forcing(int forcing_ew, int64_t inverted) { return forcing_ew == 2 && inverted > 0 ? 0 : forcing_ew; }
+
+void bs_step_stats_add(bs_step_stats *st, const bs_step_stats *sub) {
+  st->min.iterations += sub->min.iterations;
+  st->min.cg_iterations += sub->min.cg_iterations;
+  st->min.ls_evaluations += sub->min.ls_evaluations;
+  st->min.indefinite_exits += sub->min.indefinite_exits;
+  st->min.downhill_iterates += sub->min.downhill_iterates;
+  st->min.fallback_neg_dx += sub->min.fallback_neg_dx;
+  st->min.fallback_neg_grad += sub->min.fallback_neg_grad;
+  st->min.clamps += sub->min.clamps;
+  st->min.cholmod_fallbacks += sub->min.cholmod_fallbacks;
+  st->min.ls_failures += sub->min.ls_failures;
+  st->min.noise_steps += sub->min.noise_steps;
+  st->min.tol_used = sub->min.tol_used;
+  st->min.reason = sub->min.reason;
+  st->min.reason_text = sub->min.reason_text;
+  st->min.grad_norm = sub->min.grad_norm;
+  st->min.E = sub->min.E;
+  st->failed |= sub->failed;
 }
 
 static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   memset(o, 0, sizeof *o);
   o->load_norm = I->opts.min.load_rtol > 0 ? load_norm(I, x) : 0; /* read by load_rtol only */
-  o->quadratic = objective_quadratic(I);
+  o->quadratic = bs_step_objective_quadratic(I->n_terms, I->terms, I->static_mode, I->hooks.project != NULL);
   o->n = I->fem->n_vertices;
   o->mask = I->mask;
   o->value = obj_value;
@@ -357,7 +377,7 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   bs_minimize_opts mo = I->opts.min;
   /* cg_forcing adaptive: the paper's loose solves while the step starts
    * tangled (inverted tets), where they untangle best (README, Scenes) */
-  if (mo.forcing_ew == 2 && bs_fem_count_inverted(I->fem, I->x_n, NULL) > 0) mo.forcing_ew = 0;
+  if (mo.forcing_ew == 2) mo.forcing_ew = bs_step_forcing(2, bs_fem_count_inverted(I->fem, I->x_n, NULL));
   if (mo.linear == BS_LIN_AMG) {
     /* P changes with dt (M/dt^2) and between dynamic and static solves. */
     const double pdt = I->static_mode ? 0.0 : I->step->dt;
@@ -479,23 +499,7 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
   for (int l = 1; l <= load_steps; l++) {
     I->step->load = (double)l / load_steps;
     if ((rc = run_solver(I, x, 1, &sub, err))) break;
-    st->min.iterations += sub.min.iterations;
-    st->min.cg_iterations += sub.min.cg_iterations;
-    st->min.ls_evaluations += sub.min.ls_evaluations;
-    st->min.indefinite_exits += sub.min.indefinite_exits;
-    st->min.downhill_iterates += sub.min.downhill_iterates;
-    st->min.fallback_neg_dx += sub.min.fallback_neg_dx;
-    st->min.fallback_neg_grad += sub.min.fallback_neg_grad;
-    st->min.clamps += sub.min.clamps;
-    st->min.cholmod_fallbacks += sub.min.cholmod_fallbacks;
-    st->min.ls_failures += sub.min.ls_failures;
-    st->min.noise_steps += sub.min.noise_steps;
-    st->min.tol_used = sub.min.tol_used;
-    st->min.reason = sub.min.reason;
-    st->min.reason_text = sub.min.reason_text;
-    st->min.grad_norm = sub.min.grad_norm;
-    st->min.E = sub.min.E;
-    st->failed |= sub.failed;
+    bs_step_stats_add(st, &sub);
   }
   I->static_mode = 0;
   I->step->load = 1.0;

@@ -92,6 +92,13 @@ int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err);
 /* The name parsed above, or "unknown". */
 const char *bs_lin_kind_name(bs_lin_kind k);
 
+/* The PCG preconditioner's block (above) for one 3x3 diagonal block D
+ * (row-major) into Mi (row-major): the inverse of D's symmetric part, of its
+ * diagonal, or the identity; returns 0, 1 or 2 for those. Shared with the
+ * petsc backend's point-block Jacobi (dist/bs_dlinsolve.h). Nothing
+ * allocates or fails. */
+int bs_linsolve_block_inverse(const double D[9], double Mi[9]);
+
 typedef struct bs_lin_stats {
   int iterations;      /* Krylov iterations (0 for a direct solve)                          */
   int indefinite;      /* 1: CG/PCG met p^T A p <= 0 and returned early (see above)          */

@@ -218,6 +218,8 @@ static bj_kind block_inverse(const double *D, double *Mi) {
   return BJ_IDENTITY;
 }
 
+int bs_linsolve_block_inverse(const double D[9], double Mi[9]) { return (int)block_inverse(D, Mi); }
+
 static void build_block_jacobi(const bs_bsr *A, const uint8_t *mask, double *minv) {
   const int32_t n = A->n;
 #pragma omp parallel for schedule(static) if (n > 4096)

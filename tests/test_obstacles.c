@@ -4,7 +4,8 @@
  * O(h^2), the curvature term matters on a sphere); a body dropped on the
  * ground with constraint / penalty / postprocess collisions; a hit at
  * 1e3 m/s; Coulomb friction (deceleration mu g, no energy gain, positions
- * untouched, mu = 0 inert); error messages. */
+ * untouched, mu = 0 inert); error messages; the fem split over two
+ * "processes" by owned vertices sums to the unsplit answers. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -647,5 +648,107 @@ Test(obstacles, active_pair_slides_off_a_box_edge) {
   cr_assert(fabs(x[0] - 0.5) < 1e-15, "violated pair not projected: x = %g", x[0]);
   free(x);
   free(g);
+  sim_destroy(&s);
+}
+
+/* ---- a fem split over processes (bs_obstacles_set_owned) ---------------------- */
+
+static bs_levelset *ball(double R) {
+  bs_levelset *ls;
+  bs_error err;
+  const double cen[3] = {0, -R, 0};
+  cr_assert_eq(bs_levelset_create_sphere(cen, R, &ls, &err), 0, "%s", err.msg);
+  return ls;
+}
+
+/* Two "processes" that own the even and the odd vertices: the same labels
+ * and projected gradient as the unsplit obstacles; the Hessian projection of
+ * H' on one plus that of a zero matrix on the other is the unsplit projected
+ * Hessian bit for bit (the curvature block once); active pairs, penetration
+ * and the penalty split over the two. set_owned after an add is refused. */
+Test(obstacles, owned_vertices_split_the_sums) {
+  sim s;
+  double lo[3] = {-0.2, 0.0, -0.2}, hi[3] = {0.2, 0.3, 0.2}, grav[3] = {0, -40, 0};
+  sim_create(&s, lo, hi, 2, 2e3, grav);
+  bs_error err;
+  bs_obstacles *part[2] = {NULL, NULL};
+  uint8_t *own = malloc((size_t)s.nv);
+  double blo[3], bhi[3];
+  bs_bbox(s.nv, s.mesh->x, blo, bhi);
+  for (int r = 0; r < 2; r++) {
+    for (int32_t p = 0; p < s.nv; p++) own[p] = (p % 2) == r;
+    cr_assert_eq(bs_obstacles_create(s.fem, &s.step, s.mask, &part[r], &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_obstacles_set_owned(part[r], own, &err), 0, "%s", err.msg);
+    bs_obstacles_set_bounds(part[r], blo, bhi); /* the fem's own box: the same tolerance */
+    cr_assert_eq(bs_obstacles_add(part[r], ball(0.5), BS_COLLIDE_CONSTRAINT, 0, 0, &err), 0, "%s", err.msg);
+    cr_assert_eq(bs_obstacles_add(part[r], ground(-0.01), BS_COLLIDE_PENALTY, 1e2, 0, &err), 0, "%s", err.msg);
+  }
+  cr_assert_eq(bs_obstacles_set_owned(part[0], own, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "before the first obstacle"), "%s", err.msg);
+  add(&s, ball(0.5), BS_COLLIDE_CONSTRAINT, 0, 0);
+  add(&s, ground(-0.01), BS_COLLIDE_PENALTY, 1e2, 0);
+  sim_finish(&s, 1e-6, 1);
+  const size_t n3 = 3 * (size_t)s.nv;
+  s.step.dt = 1.0 / 24, s.step.time = 0.5, s.step.load = 1;
+  s.step.x_n = s.step.x_hat = s.mesh->x;
+  /* a feasible x with the bottom layer pressed onto the sphere, a few
+     vertices below the penalty ground */
+  unsigned seed = 7;
+  for (size_t i = 0; i < n3; i++) s.x[i] = s.mesh->x[i] + 0.004 * (urand(&seed) - 0.5);
+  for (int32_t p = 0; p < s.nv; p++)
+    if (s.mesh->x[3 * p + 1] == 0) s.x[3 * p + 1] -= 0.05;
+  double *g = malloc(sizeof(double) * n3), *gs = malloc(sizeof(double) * n3), *gp = malloc(sizeof(double) * n3);
+  double *x1 = malloc(sizeof(double) * n3);
+  memcpy(x1, s.x, sizeof(double) * n3);
+  bs_obstacles_project(s.x, s.obs);
+  sim_gradient(&s, s.x, g);
+  bs_obstacles_register_active(s.x, g, s.obs);
+  memcpy(gs, g, sizeof(double) * n3);
+  bs_obstacles_project_gradient(s.x, gs, s.obs);
+  bs_bsr *H, *Hp[2];
+  cr_assert_eq(bs_fem_matrix(s.fem, &H, &err), 0, "%s", err.msg);
+  for (int i = 0; i < s.n_own; i++) term_hessian(s.own[i], s.x, H);
+  cr_assert_eq(bs_fem_matrix(s.fem, &Hp[0], &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_matrix(s.fem, &Hp[1], &err), 0, "%s", err.msg);
+  memcpy(Hp[0]->val, H->val, sizeof(double) * 9 * (size_t)H->nnzb);
+  bs_bsr_zero(Hp[1]);
+  bs_obstacles_project_hessian(s.x, g, H, s.obs);
+  int32_t na = bs_obstacles_active_count(s.obs), na_sum = 0, pen = 0, pen_sum = 0;
+  double depth = 0, depth_r;
+  bs_obstacles_penetration(s.obs, s.step.time, x1, 0, &pen, &depth);
+  cr_assert(na >= 5 && pen >= 1, "%d active pairs, %d vertices inside: the test needs contact", na, pen);
+  bs_term *const *pt;
+  cr_assert_eq(bs_obstacles_terms(s.obs, &pt), 1);
+  double Epen = term_value(pt[0], x1), Epart = 0;
+  for (int r = 0; r < 2; r++) {
+    double *xr = malloc(sizeof(double) * n3);
+    memcpy(xr, x1, sizeof(double) * n3);
+    bs_obstacles_project(xr, part[r]);
+    cr_assert_eq(memcmp(xr, s.x, sizeof(double) * n3), 0, "process %d projects otherwise", r);
+    bs_obstacles_register_active(xr, g, part[r]);
+    memcpy(gp, g, sizeof(double) * n3);
+    bs_obstacles_project_gradient(xr, gp, part[r]);
+    cr_assert_eq(memcmp(gp, gs, sizeof(double) * n3), 0, "process %d projects the gradient otherwise", r);
+    bs_obstacles_project_hessian(xr, g, Hp[r], part[r]);
+    na_sum += bs_obstacles_active_count(part[r]);
+    int32_t c;
+    bs_obstacles_penetration(part[r], s.step.time, x1, 0, &c, &depth_r);
+    cr_assert_eq(depth_r, depth);
+    pen_sum += c;
+    cr_assert_eq(bs_obstacles_terms(part[r], &pt), 1);
+    Epart += term_value(pt[0], x1);
+    free(xr);
+  }
+  for (int64_t k = 0; k < 9 * H->nnzb; k++)
+    cr_assert_eq(Hp[0]->val[k] + Hp[1]->val[k], H->val[k], "Hessian entry %lld: %.17g + %.17g vs %.17g", (long long)k,
+                 Hp[0]->val[k], Hp[1]->val[k], H->val[k]);
+  cr_assert_eq(na_sum, na, "active pairs %d over the parts, %d unsplit", na_sum, na);
+  cr_assert_eq(pen_sum, pen, "penetrating %d over the parts, %d unsplit", pen_sum, pen);
+  cr_assert(fabs(Epart - Epen) <= 1e-12 * Epen && Epen > 0, "penalty %.17g over the parts, %.17g unsplit", Epart, Epen);
+  bs_bsr_destroy(&H);
+  bs_bsr_destroy(&Hp[0]);
+  bs_bsr_destroy(&Hp[1]);
+  for (int r = 0; r < 2; r++) bs_obstacles_destroy(&part[r]);
+  free(own), free(g), free(gs), free(gp), free(x1);
   sim_destroy(&s);
 }

@@ -11,82 +11,7 @@
 #include "bs_dsim.h"
 #include "bs_sim.h"
 #include "dist_check.h"
-
-static const double *sort_base;
-static int by_position(const void *a, const void *b) {
-  const double *p = sort_base + 3 * *(const int32_t *)a, *q = sort_base + 3 * *(const int32_t *)b;
-  for (int k = 0; k < 3; k++)
-    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
-  return 0;
-}
-
-/* For each local vertex of d, the serial vertex at the same rest position
- * (exactly), -1 if none. Caller frees. */
-static int32_t *match_vertices(const bs_dsim *d, const bs_sim *s) {
-  int32_t n = s->mesh->n_vertices, *idx = malloc(sizeof(int32_t) * (size_t)n);
-  int32_t *map = malloc(sizeof(int32_t) * (size_t)d->mesh->n_vertices + 4);
-  for (int32_t i = 0; i < n; i++) idx[i] = i;
-  sort_base = s->x0;
-  qsort(idx, (size_t)n, sizeof *idx, by_position);
-  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
-    int32_t lo = 0, hi = n - 1;
-    map[v] = -1;
-    while (lo <= hi && map[v] < 0) {
-      int32_t mid = (lo + hi) / 2, c = 0;
-      for (int k = 0; k < 3 && !c; k++) {
-        double a = d->mesh->x[3 * v + k], b = s->x0[3 * idx[mid] + k];
-        c = a < b ? -1 : a > b ? 1 : 0;
-      }
-      if (c == 0) map[v] = idx[mid];
-      else if (c < 0) hi = mid - 1;
-      else lo = mid + 1;
-    }
-  }
-  free(idx);
-  return map;
-}
-
-/* max |x_d - x_s| over the vertices, relative to max |x_s| (positions) and
- * to the largest displacement; the mean y displacement of group `group`. */
-static void compare(const bs_dsim *d, const bs_sim *s, const char *what, const char *group, double tip_tol) {
-  int32_t *map = match_vertices(d, s);
-  double err = 0, xmax = 0, umax = 0;
-  int unmatched = 0;
-  for (int32_t i = 0; i < 3 * s->mesh->n_vertices; i++) {
-    xmax = fmax(xmax, fabs(s->x[i]));
-    umax = fmax(umax, fabs(s->x[i] - s->x0[i]));
-  }
-  for (int32_t v = 0; v < d->mesh->n_vertices; v++) {
-    if (map[v] < 0) {
-      unmatched++;
-      continue;
-    }
-    for (int k = 0; k < 3; k++) err = fmax(err, fabs(d->x[3 * v + k] - s->x[3 * map[v] + k]));
-  }
-  MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  CHECK(unmatched == 0, "%s: %d vertices with no serial twin", what, unmatched);
-  CHECK(err <= 1e-9 * xmax, "%s: positions differ by %.3g (max |x| %.3g)", what, err, xmax);
-  if (bs_dist_rank() == 0)
-    printf("  %s: max |x - x_serial| = %.3e (%.3e of max |x|, %.3e of max |u|)\n", what, err, err / xmax,
-           err / fmax(umax, 1e-300));
-  if (group) {
-    const bs_group *gs = bs_mesh_group(s->mesh, group);
-    const bs_dgroup *gd = bs_dmesh_group(d->mesh, group);
-    double us = 0, ud[2] = {0, 0};
-    for (int32_t i = 0; i < gs->n_vertices; i++) us += s->x[3 * gs->vertices[i] + 1] - s->x0[3 * gs->vertices[i] + 1];
-    us /= gs->n_vertices;
-    for (int32_t i = 0; i < gd->n_vertices; i++) {
-      int32_t v = gd->vertices[i];
-      if (!d->mesh->owned[v]) continue;
-      ud[0] += d->x[3 * v + 1] - d->mesh->x[3 * v + 1];
-      ud[1] += 1;
-    }
-    MPI_Allreduce(MPI_IN_PLACE, ud, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-    CHECK_REL(ud[0] / ud[1], us, tip_tol, "tip deflection");
-    if (bs_dist_rank() == 0) printf("  %s: tip deflection %.15e (serial %.15e)\n", what, ud[0] / ud[1], us);
-  }
-  free(map);
-}
+#include "dist_compare.h"
 
 /* The cantilever with solver.linear = linear on both backends; the same
  * iteration counts required on 1 rank when `same_iterations` (the same
@@ -135,27 +60,11 @@ static void beam_sag_with(const char *linear, int same_iterations) {
 
 static void beam_sag_static(void) { beam_sag_with("cg", 1); }
 
-/* Block Jacobi (serial pcg, PETSc PCPBJACOBI) and GAMG against BoomerAMG:
+/* Block Jacobi (the serial pcg's block inverses on both backends) and GAMG against BoomerAMG:
  * other preconditioners, the same answer. */
 static void beam_sag_preconditioned(void) {
   beam_sag_with("pcg", 1);
   beam_sag_with("amg", 0);
-}
-
-/* Both backends through `frames` frames: no failed step on the backend,
- * the same Newton iterations per frame on 1 rank; the sums into *it_s, *it_d. */
-static void advance_both(bs_sim *s, bs_dsim *d, int frames, long *it_s, long *it_d) {
-  bs_error err = {0};
-  *it_s = *it_d = 0;
-  for (int f = 0; s && d && f < frames; f++) {
-    bs_frame_stats fs, fd;
-    CHECK_OK(bs_sim_advance_frame(s, &fs, &err), err);
-    CHECK_OK(bs_dsim_advance_frame(d, &fd, &err), err);
-    CHECK(!fd.failed, "frame %d: %s", f + 1, d->steps[0].reason);
-    if (bs_dist_size() == 1)
-      CHECK(fd.iterations == fs.iterations, "frame %d: %ld iterations, serial %ld", f + 1, fd.iterations, fs.iterations);
-    *it_s += fs.iterations, *it_d += fd.iterations;
-  }
 }
 
 /* cube_stretch (lagged Rayleigh damping, keyframed groups) for `frames`
@@ -173,7 +82,7 @@ static void cube_stretch_with(int frames, const char *extra) {
   CHECK_OK(bs_sim_create(sc, &s, &err), err);
   CHECK_OK(bs_dsim_create(sc, &d, &err), err);
   long it_s = 0, it_d = 0;
-  advance_both(s, d, sc ? sc->frames : 0, &it_s, &it_d);
+  advance_both(s, d, sc ? sc->frames : 0, 1, &it_s, &it_d);
   if (s && d) {
     char what[96];
     snprintf(what, sizeof what, "cube_stretch%s%s", extra ? " " : "", extra ? extra : "");
@@ -211,7 +120,7 @@ static void cube_penalty_floor(void) {
   if (sc) CHECK_OK(bs_sim_create(sc, &s, &err), err);
   if (sc) CHECK_OK(bs_dsim_create(sc, &d, &err), err);
   long it_s = 0, it_d = 0;
-  advance_both(s, d, sc ? sc->frames : 0, &it_s, &it_d);
+  advance_both(s, d, sc ? sc->frames : 0, 1, &it_s, &it_d);
   if (s && d) {
     compare(d, s, "cube on penalty floor and sphere", NULL, 0);
     double ymin = 1e300;
@@ -231,7 +140,11 @@ static void refused_scenes(void) {
   static const struct {
     const char *set, *key;
   } cases[] = {{"self_collision={\"stiffness\":1e5}", "self_collision"},
-               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1}]", "obstacles.0.collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"postprocess\"}]",
+                "obstacles.0.collision"},
+               {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1},{\"shape\":\"plane\","
+                "\"normal\":[0,1,0],\"offset\":-2,\"friction\":0.3}]",
+                "obstacles.1.friction"},
                {"obstacles=[{\"shape\":\"plane\",\"normal\":[0,1,0],\"offset\":-1,\"collision\":\"penalty\","
                 "\"grid_h\":0.1}]",
                 "obstacles.0.grid_h"},
