@@ -72,7 +72,7 @@ static void box_squeeze_with(const char *linear, double tol, int same_iterations
   long it_s = 0, it_d = 0, pairs_min = -1;
   for (int f = 0; s && d && f < sc->frames; f++) {
     long is = 0, id = 0;
-    advance_both(s, d, 1, same_iterations, &is, &id);
+    advance_both(s, d, 1, same_iterations ? 0 : -1, &is, &id);
     it_s += is, it_d += id;
     int64_t pairs = 0;
     CHECK_OK(bs_dsim_active_pairs(d, &pairs, &err), err);
