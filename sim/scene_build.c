@@ -37,7 +37,6 @@ void bs_scene_defaults_(bs_scene *s) {
   s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (README, Scenes) */
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
-  s->project_hessian = BS_PSD_AUTO; /* solver.project_hessian "auto" (README, Scenes) */
   s->gravity[0] = 0;
   s->gravity[1] = -9.8;
   s->gravity[2] = 0;

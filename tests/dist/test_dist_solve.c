@@ -173,6 +173,7 @@ static void refused_scenes(void) {
                 "\"friction\":0.3}]",
                 "obstacles.0.friction"},
                {"solver.linear=cholmod", "solver.linear"},
+               {"solver={\"linear\":\"amg\",\"amg_matrix\":\"current\"}", "solver.amg_matrix"},
                {"solver.method=newton", "solver.method"},
                {"bodies.0.translate=[1,0,0]", "bodies.0.translate"}};
   for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
