@@ -70,8 +70,7 @@
  * block with no negative eigenvalue is returned bit for bit (a positive
  * definite 3x3 block is recognized by its Cholesky pivots, without an
  * eigen-decomposition). BS_PSD_INVERTED projects only where det F <= 0 (the
- * inverted elements of a tangle) and leaves dP/dF exact elsewhere;
- * BS_PSD_ABS mirrors the negative eigenvalues (|lambda|) instead of clamping.
+ * inverted elements of a tangle) and leaves dP/dF exact elsewhere.
  */
 
 #ifndef BS_MATERIAL_H
@@ -89,8 +88,7 @@ typedef enum bs_psd_mode {
   BS_PSD_NONE = 0,    /* exact dP/dF                                    */
   BS_PSD_ALL = 1,     /* projected onto the PSD cone everywhere         */
   BS_PSD_INVERTED = 2, /* projected where det F <= 0, exact elsewhere   */
-  BS_PSD_ABS = 3,      /* negative eigenvalues mirrored (|lambda|)       */
-  BS_PSD_AUTO = 4      /* the elasticity term's choice per tet (INVERTED  */
+  BS_PSD_AUTO = 3      /* the elasticity term's choice per tet (INVERTED  */
                        /* or NONE, bs_terms.h); kernels read it as NONE   */
 } bs_psd_mode;
 

@@ -99,9 +99,9 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
 /* project_psd (a bs_psd_mode, bs_material.h): BS_PSD_NONE the exact element
  * Hessians, BS_PSD_ALL every one projected onto the PSD cone (an option for
  * Newton), BS_PSD_INVERTED those of inverted tets only (det F <= 0: a tangle's
- * indefiniteness removed where it is worst, the exact Hessian elsewhere),
- * BS_PSD_ABS every one with its negative eigenvalues mirrored. BS_EINPUT for
- * another value, and for BS_PSD_AUTO, which needs the step (below). */
+ * indefiniteness removed where it is worst, the exact Hessian elsewhere).
+ * BS_EINPUT for another value, and for BS_PSD_AUTO, which needs the step
+ * (below). */
 int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err);
 /* The same with the step data (borrowed; may be NULL but for BS_PSD_AUTO):
  * BS_PSD_AUTO gives a tet BS_PSD_INVERTED at every Hessian when its

@@ -351,10 +351,10 @@ static void assemble_dPdF(const double U[9], const double V[9], const double H[9
 
 /* The exact PSD projection of the blocks: eigenvalues clamped at zero. A
  * block with no negative eigenvalue is left untouched (bit for bit). */
-static void project_blocks(double H[9], double lp[3], double lm[3], int mirror) {
+static void project_blocks(double H[9], double lp[3], double lm[3]) {
   for (int p = 0; p < 3; p++) {
-    if (lp[p] < 0) lp[p] = mirror ? -lp[p] : 0;
-    if (lm[p] < 0) lm[p] = mirror ? -lm[p] : 0;
+    if (lp[p] < 0) lp[p] = 0;
+    if (lm[p] < 0) lm[p] = 0;
   }
   /* Cholesky pivots first: when they are all positive, H is positive definite
    * up to a backward error of a few ulps of |H| (the common case), and the
@@ -373,7 +373,7 @@ static void project_blocks(double H[9], double lp[3], double lm[3], int mirror) 
   bs_sym3_eig(H, lam, Q);
   if (lam[2] < 0) {
     for (int k = 0; k < 3; k++)
-      if (lam[k] < 0) lam[k] = mirror ? -lam[k] : 0;
+      if (lam[k] < 0) lam[k] = 0;
     for (int i = 0; i < 3; i++)
       for (int j = i; j < 3; j++)
         H[3 * i + j] = H[3 * j + i] =
@@ -387,8 +387,8 @@ static void modes_from_svd(const bs_material *m, const double U[9], const double
   double g[3];
   sv_eval(m, s, 2, g, md->H, md->lp, md->lm);
   /* sign(s[2]) = sign(det F) (bs_svd.h) */
-  if (project_psd == BS_PSD_ALL || project_psd == BS_PSD_ABS || (project_psd == BS_PSD_INVERTED && !(s[2] > 0)))
-    project_blocks(md->H, md->lp, md->lm, project_psd == BS_PSD_ABS);
+  if (project_psd == BS_PSD_ALL || (project_psd == BS_PSD_INVERTED && !(s[2] > 0)))
+    project_blocks(md->H, md->lp, md->lm);
   memcpy(md->U, U, sizeof md->U);
   memcpy(md->V, V, sizeof md->V);
 }

@@ -63,9 +63,9 @@ const bs_schema_key bs_schema_keys_[] = {
     {"solver", "mode", STR, .choices = CHOICES("dynamic", "static"), .def = "\"dynamic\"",
      .doc = "dynamic, or static (minimize the potential energy alone)"},
     {"solver", "load_steps", INT, .range = "[1, 100000]", .def = "1", .doc = "load increments of a static solve"},
-    {"solver", "project_hessian", STR, .choices = CHOICES("none", "all", "inverted", "abs", "auto"), .def = "\"none\"",
+    {"solver", "project_hessian", STR, .choices = CHOICES("none", "all", "inverted", "auto"), .def = "\"none\"",
      .doc = "definiteness fix of the tets' elastic Hessians: none, all (PSD projection), inverted (det F <= 0) "
-            "only, abs (negative eigenvalues mirrored), auto (inverted where mu dt^2 / (rho h^2) >= 10)"},
+            "only, auto (inverted where mu dt^2 / (rho h^2) >= 10)"},
     {"solver", "cg_sigma", BS_SCHEMA_NUM_OR_CHOICE, .choices = CHOICES("auto"), .range = "(0, )", .def = "\"auto\"",
      .doc = "sigma of the CG tolerance min(1/2, sigma sqrt(max(||grad E||, tau))), or auto (unitless)"},
     {"solver", "cg_sigma_scale", NUM, .range = "(0, )", .def = "1", .doc = "c of cg_sigma auto"},

@@ -666,18 +666,17 @@ static bs_levelset *ball(double R) {
  * H' on one plus that of a zero matrix on the other is the unsplit projected
  * Hessian bit for bit (the curvature block once); active pairs, penetration
  * and the penalty split over the two. set_owned after an add is refused. */
-Test(obstacles, owned_vertices_split_the_sums) {
-  sim s;
-  double lo[3] = {-0.2, 0.0, -0.2}, hi[3] = {0.2, 0.3, 0.2}, grav[3] = {0, -40, 0};
-  sim_create(&s, lo, hi, 2, 2e3, grav);
+/* The two parts of the split test: part r owns the vertices p with p % 2 ==
+ * r, each with the sphere (constraint) and the ground (penalty); set_owned
+ * after an add refused. */
+static void make_parts(sim *s, bs_obstacles *part[2]) {
   bs_error err;
-  bs_obstacles *part[2] = {NULL, NULL};
-  uint8_t *own = malloc((size_t)s.nv);
+  uint8_t *own = malloc((size_t)s->nv);
   double blo[3], bhi[3];
-  bs_bbox(s.nv, s.mesh->x, blo, bhi);
+  bs_bbox(s->nv, s->mesh->x, blo, bhi);
   for (int r = 0; r < 2; r++) {
-    for (int32_t p = 0; p < s.nv; p++) own[p] = (p % 2) == r;
-    cr_assert_eq(bs_obstacles_create(s.fem, &s.step, s.mask, &part[r], &err), 0, "%s", err.msg);
+    for (int32_t p = 0; p < s->nv; p++) own[p] = (p % 2) == r;
+    cr_assert_eq(bs_obstacles_create(s->fem, &s->step, s->mask, &part[r], &err), 0, "%s", err.msg);
     cr_assert_eq(bs_obstacles_set_owned(part[r], own, &err), 0, "%s", err.msg);
     bs_obstacles_set_bounds(part[r], blo, bhi); /* the fem's own box: the same tolerance */
     cr_assert_eq(bs_obstacles_add(part[r], ball(0.5), BS_COLLIDE_CONSTRAINT, 0, 0, &err), 0, "%s", err.msg);
@@ -685,6 +684,16 @@ Test(obstacles, owned_vertices_split_the_sums) {
   }
   cr_assert_eq(bs_obstacles_set_owned(part[0], own, &err), BS_EINPUT);
   cr_assert(strstr(err.msg, "before the first obstacle"), "%s", err.msg);
+  free(own);
+}
+
+Test(obstacles, owned_vertices_split_the_sums) {
+  sim s;
+  double lo[3] = {-0.2, 0.0, -0.2}, hi[3] = {0.2, 0.3, 0.2}, grav[3] = {0, -40, 0};
+  sim_create(&s, lo, hi, 2, 2e3, grav);
+  bs_error err;
+  bs_obstacles *part[2] = {NULL, NULL};
+  make_parts(&s, part);
   add(&s, ball(0.5), BS_COLLIDE_CONSTRAINT, 0, 0);
   add(&s, ground(-0.01), BS_COLLIDE_PENALTY, 1e2, 0);
   sim_finish(&s, 1e-6, 1);
@@ -749,6 +758,6 @@ Test(obstacles, owned_vertices_split_the_sums) {
   bs_bsr_destroy(&Hp[0]);
   bs_bsr_destroy(&Hp[1]);
   for (int r = 0; r < 2; r++) bs_obstacles_destroy(&part[r]);
-  free(own), free(g), free(gs), free(gp), free(x1);
+  free(g), free(gs), free(gp), free(x1);
   sim_destroy(&s);
 }
