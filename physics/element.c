@@ -257,6 +257,83 @@ BS_AVX2_FN static int corotated_x4(const bs_material *m, const double *x, const 
   }
   return done;
 }
+
+/* hessian_from_modes on 4 tets in the lanes of AVX2 registers: the same
+ * operations in the same order, without FMA, so each lane is
+ * hessian_from_modes bit for bit (test_element's batch_bitwise). O holds H
+ * entry by entry (lanes = tets) and is transposed out 4 entries at a time. */
+BS_AVX2_FN static void hessian_from_modes_x4(const bs_dPdF_modes *md, const double *Dm, const double *vol,
+                                             double *H) {
+  v4 U[9], V[9], W[9], h[9], sp[3], dm[3], x[4][3], O[144];
+  const v4 vl = _mm256_set_pd(vol[3], vol[2], vol[1], vol[0]), hv = VMUL(_mm256_set1_pd(0.5), vl);
+  for (int i = 0; i < 9; i++) {
+    U[i] = _mm256_set_pd(md[3].U[i], md[2].U[i], md[1].U[i], md[0].U[i]);
+    V[i] = _mm256_set_pd(md[3].V[i], md[2].V[i], md[1].V[i], md[0].V[i]);
+    W[i] = _mm256_set_pd(Dm[27 + i], Dm[18 + i], Dm[9 + i], Dm[i]);
+    h[i] = VMUL(vl, _mm256_set_pd(md[3].H[i], md[2].H[i], md[1].H[i], md[0].H[i]));
+  }
+  for (int p = 0; p < 3; p++) {
+    const v4 lp = _mm256_set_pd(md[3].lp[p], md[2].lp[p], md[1].lp[p], md[0].lp[p]);
+    const v4 lm = _mm256_set_pd(md[3].lm[p], md[2].lm[p], md[1].lm[p], md[0].lm[p]);
+    sp[p] = VMUL(hv, VADD(lp, lm));
+    dm[p] = VMUL(hv, VSUB(lp, lm));
+  }
+  for (int a = 1; a < 4; a++)
+    for (int i = 0; i < 3; i++)
+      x[a][i] = VADD(VADD(VMUL(V[i], W[3 * (a - 1)]), VMUL(V[3 + i], W[3 * (a - 1) + 1])),
+                     VMUL(V[6 + i], W[3 * (a - 1) + 2]));
+#define HO(a, r, b, c) O[12 * (3 * (a) + (r)) + 3 * (b) + (c)]
+  for (int a = 1; a < 4; a++)
+    for (int b = a; b < 4; b++) {
+      v4 xy[9], M[9];
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) xy[3 * i + j] = VMUL(x[a][i], x[b][j]);
+      const v4 N[9] = {VADD(VADD(VMUL(h[0], xy[0]), VMUL(sp[0], xy[4])), VMUL(sp[1], xy[8])),
+                       VADD(VMUL(h[1], xy[1]), VMUL(dm[0], xy[3])),
+                       VADD(VMUL(h[2], xy[2]), VMUL(dm[1], xy[6])),
+                       VADD(VMUL(h[1], xy[3]), VMUL(dm[0], xy[1])),
+                       VADD(VADD(VMUL(h[4], xy[4]), VMUL(sp[0], xy[0])), VMUL(sp[2], xy[8])),
+                       VADD(VMUL(h[5], xy[5]), VMUL(dm[2], xy[7])),
+                       VADD(VMUL(h[2], xy[6]), VMUL(dm[1], xy[2])),
+                       VADD(VMUL(h[5], xy[7]), VMUL(dm[2], xy[5])),
+                       VADD(VADD(VMUL(h[8], xy[8]), VMUL(sp[1], xy[0])), VMUL(sp[2], xy[4]))};
+      for (int r = 0; r < 3; r++)
+        for (int j = 0; j < 3; j++)
+          M[3 * r + j] = VADD(VADD(VMUL(U[3 * r], N[j]), VMUL(U[3 * r + 1], N[3 + j])), VMUL(U[3 * r + 2], N[6 + j]));
+      for (int r = 0; r < 3; r++)
+        for (int c = (a == b ? r : 0); c < 3; c++)
+          HO(a, r, b, c) = VADD(VADD(VMUL(M[3 * r], U[3 * c]), VMUL(M[3 * r + 1], U[3 * c + 1])),
+                                VMUL(M[3 * r + 2], U[3 * c + 2]));
+      if (a == b)
+        for (int r = 0; r < 3; r++)
+          for (int c = r + 1; c < 3; c++) HO(a, c, a, r) = HO(a, r, a, c);
+    }
+  const v4 neg = _mm256_set1_pd(-0.0);
+  for (int a = 2; a < 4; a++)
+    for (int b = 1; b < a; b++)
+      for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) HO(a, r, b, c) = HO(b, c, a, r);
+  for (int b = 1; b < 4; b++)
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++)
+        HO(0, r, b, c) = _mm256_xor_pd(VADD(VADD(HO(1, r, b, c), HO(2, r, b, c)), HO(3, r, b, c)), neg);
+  for (int r = 0; r < 3; r++)
+    for (int c = r; c < 3; c++)
+      HO(0, r, 0, c) = HO(0, c, 0, r) =
+          _mm256_xor_pd(VADD(VADD(HO(0, r, 1, c), HO(0, r, 2, c)), HO(0, r, 3, c)), neg);
+  for (int b = 1; b < 4; b++)
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++) HO(b, r, 0, c) = HO(0, c, b, r);
+#undef HO
+  for (int k = 0; k < 144; k += 4) { /* 4x4 transposes: entries k..k+3 of each tet */
+    const v4 t0 = _mm256_unpacklo_pd(O[k], O[k + 1]), t1 = _mm256_unpackhi_pd(O[k], O[k + 1]);
+    const v4 t2 = _mm256_unpacklo_pd(O[k + 2], O[k + 3]), t3 = _mm256_unpackhi_pd(O[k + 2], O[k + 3]);
+    _mm256_storeu_pd(H + k, _mm256_permute2f128_pd(t0, t2, 0x20));
+    _mm256_storeu_pd(H + 144 + k, _mm256_permute2f128_pd(t1, t3, 0x20));
+    _mm256_storeu_pd(H + 288 + k, _mm256_permute2f128_pd(t0, t2, 0x31));
+    _mm256_storeu_pd(H + 432 + k, _mm256_permute2f128_pd(t1, t3, 0x31));
+  }
+}
 #undef VADD
 #undef VSUB
 #undef VMUL
@@ -324,6 +401,12 @@ void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const do
     bs_dPdF_modes md[BS_MATERIAL_BATCH];
     for (int i = 0; i < nb; i++) bs_tet_F(x + 12 * (i0 + i), Dm_inv + 9 * (i0 + i), F + 9 * i);
     bs_material_dPdF_modes_batch(m, nb, F, project_psd, md);
-    for (int i = 0; i < nb; i++) hessian_from_modes(md + i, Dm_inv + 9 * (i0 + i), vol[i0 + i], H + 144 * (i0 + i));
+    int i = 0;
+#ifdef BS_POLAR_AVX2
+    if (__builtin_cpu_supports("avx2"))
+      for (; i + 4 <= nb; i += 4)
+        hessian_from_modes_x4(md + i, Dm_inv + 9 * (i0 + i), vol + i0 + i, H + 144 * (i0 + i));
+#endif
+    for (; i < nb; i++) hessian_from_modes(md + i, Dm_inv + 9 * (i0 + i), vol[i0 + i], H + 144 * (i0 + i));
   }
 }
