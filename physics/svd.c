@@ -231,9 +231,11 @@ int bs_polar3(const double F[9], double R[9]) {
  * the next one: it rotates nothing again). Lanes that bs_svd3 treats
  * specially (non-finite, zero, or scaled with |exponent| >= 1000) go through
  * bs_svd3 itself; so does every matrix on a CPU without AVX2, and the last
- * n mod 4. (A portable version written for the compiler's auto-vectorizer
- * got two lanes per register in the sweeps and none in the epilogue;
- * interleaving two groups of four measured no gain.) */
+ * n mod 8. Two groups of four run together (svd3_avx2): a sweep is a chain
+ * of square roots and divisions whose latency, not the arithmetic, bounds a
+ * single group, and two independent chains overlap. (A portable version
+ * written for the compiler's auto-vectorizer got two lanes per register in
+ * the sweeps and none in the epilogue.) */
 #define L 4
 
 static inline double pow2i(int e) { /* 2^e for -1022 <= e <= 1023 */
@@ -292,9 +294,9 @@ AVX2_FN static inline void avx2_load(const double *restrict F, v4 B[9], v4 W[9],
   }
 }
 
-/* One Jacobi rotation of the column pair (p, q) in every active lane; returns
- * the mask of the lanes that rotated. */
-AVX2_FN static inline v4 avx2_rotate(v4 B[9], v4 W[9], int p, int q) {
+/* The Jacobi rotation of the column pair (p, q) in every lane: its cosine
+ * and sine, and the mask of the lanes where it applies (act). */
+AVX2_FN static inline v4 avx2_rot_coef(const v4 B[9], int p, int q, v4 *c, v4 *s) {
   const v4 zero = _mm256_setzero_pd(), two = _mm256_set1_pd(2.0);
   const v4 a = vdot3(B[p], B[3 + p], B[6 + p], B[p], B[3 + p], B[6 + p]);
   const v4 b = vdot3(B[q], B[3 + q], B[6 + q], B[q], B[3 + q], B[6 + q]);
@@ -307,11 +309,15 @@ AVX2_FN static inline v4 avx2_rotate(v4 B[9], v4 W[9], int p, int q) {
       _mm256_and_pd(_mm256_cmp_pd(_mm256_mul_pd(g, g),
                                   _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(SVD_TOL * SVD_TOL), a), b), _CMP_NLE_UQ),
                     _mm256_cmp_pd(D, zero, _CMP_GT_OQ));
-  if (_mm256_movemask_pd(act) == 0) return act;
   const v4 iq = _mm256_div_pd(_mm256_set1_pd(1.0), _mm256_sqrt_pd(_mm256_mul_pd(_mm256_mul_pd(two, rr), D)));
-  const v4 c = _mm256_mul_pd(D, iq);
-  const v4 s = _mm256_mul_pd(
+  *c = _mm256_mul_pd(D, iq);
+  *s = _mm256_mul_pd(
       vsel(_mm256_cmp_pd(dab, zero, _CMP_GE_OQ), _mm256_mul_pd(two, g), _mm256_mul_pd(_mm256_set1_pd(-2.0), g)), iq);
+  return act;
+}
+
+/* Applies the rotation (c, s) to columns p, q of B and W in the lanes of act. */
+AVX2_FN static inline void avx2_rot_apply(v4 B[9], v4 W[9], int p, int q, v4 c, v4 s, v4 act) {
   for (int r = 0; r < 3; r++) {
     v4 *X[2] = {B, W};
     for (int m = 0; m < 2; m++) {
@@ -322,7 +328,20 @@ AVX2_FN static inline v4 avx2_rotate(v4 B[9], v4 W[9], int p, int q) {
       X[m][3 * r + q] = vsel(act, nxq, xq);
     }
   }
-  return act;
+}
+
+/* One Jacobi rotation of the column pair (p, q) in every active lane of two
+ * groups of 4 matrices (B0, W0) and (B1, W1), whose independent chains of
+ * square roots and divisions then overlap; returns the mask of the lanes
+ * that rotated (of either group). */
+AVX2_FN static inline v4 avx2_rotate2(v4 B0[9], v4 W0[9], v4 B1[9], v4 W1[9], int p, int q) {
+  v4 c0, s0, c1, s1;
+  const v4 act0 = avx2_rot_coef(B0, p, q, &c0, &s0), act1 = avx2_rot_coef(B1, p, q, &c1, &s1);
+  const v4 any = _mm256_or_pd(act0, act1);
+  if (_mm256_movemask_pd(any) == 0) return any;
+  avx2_rot_apply(B0, W0, p, q, c0, s0, act0);
+  avx2_rot_apply(B1, W1, p, q, c1, s1, act1);
+  return any;
 }
 
 /* After the sweeps: sort, make V a rotation, build U and sigma (bs_svd3's
@@ -404,18 +423,22 @@ AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], do
   }
 }
 
-/* Four matrices: load, sweeps while any lane still rotates, finish. */
+/* Eight matrices as two groups of four: load, sweeps while any lane of
+ * either group still rotates (a converged lane is unchanged by them), finish. */
 AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, double *restrict sigma,
                               double *restrict V, int *restrict special) {
-  v4 B[9], W[9];
-  double isc[L];
-  avx2_load(F, B, W, isc, special);
+  v4 B0[9], W0[9], B1[9], W1[9];
+  double isc[2 * L];
+  avx2_load(F, B0, W0, isc, special);
+  avx2_load(F + 9 * L, B1, W1, isc + L, special + L);
   for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
-    v4 rot = _mm256_setzero_pd();
-    for (int k = 0; k < 3; k++) rot = _mm256_or_pd(rot, avx2_rotate(B, W, pair_p[k], pair_q[k]));
+    v4 rot = avx2_rotate2(B0, W0, B1, W1, 0, 1);
+    rot = _mm256_or_pd(rot, avx2_rotate2(B0, W0, B1, W1, 0, 2));
+    rot = _mm256_or_pd(rot, avx2_rotate2(B0, W0, B1, W1, 1, 2));
     if (_mm256_movemask_pd(rot) == 0) break; /* no lane rotated: every lane converged */
   }
-  avx2_finish(B, W, isc, U, sigma, V);
+  avx2_finish(B0, W0, isc, U, sigma, V);
+  avx2_finish(B1, W1, isc + L, U + 9 * L, sigma + 3 * L, V + 9 * L);
 }
 
 /* bs_polar3 on 4 matrices (bs_polar_avx2). */
@@ -438,10 +461,10 @@ void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) 
   int i = 0;
 #ifdef BS_SVD_AVX2
   if (__builtin_cpu_supports("avx2"))
-    for (; i + L <= n; i += L) {
-      int special[L];
+    for (; i + 2 * L <= n; i += 2 * L) {
+      int special[2 * L];
       svd3_avx2(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
-      for (int l = 0; l < L; l++)
+      for (int l = 0; l < 2 * L; l++)
         if (special[l])
           bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l),
                   V + 9 * (size_t)(i + l));
