@@ -1,5 +1,9 @@
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE /* madvise, MADV_HUGEPAGE */
 #include "bs_base.h"
+
+#include <stdint.h>
+#include <sys/mman.h>
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -85,6 +89,22 @@ double bs_machine_memory(void) {
 void *bs_calloc(size_t n, size_t size, const char *what, bs_error *err) {
   void *p = calloc(n ? n : 1, size ? size : 1);
   if (!p) bs_error_set(err, BS_ENOMEM, "out of memory allocating %zu x %zu bytes for %s", n, size, what);
+  return p;
+}
+
+void *bs_calloc_large(size_t n, size_t size, const char *what, bs_error *err) {
+  const size_t huge = (size_t)2 << 20;
+  if (n == 0 || size == 0 || n > SIZE_MAX / size || n * size < 4 * huge) return bs_calloc(n, size, what, err);
+  const size_t bytes = n * size;
+  void *p = NULL;
+  if (posix_memalign(&p, huge, bytes) != 0 || !p) {
+    bs_error_set(err, BS_ENOMEM, "out of memory allocating %zu x %zu bytes for %s", n, size, what);
+    return NULL;
+  }
+#ifdef MADV_HUGEPAGE
+  (void)madvise(p, bytes, MADV_HUGEPAGE); /* advice only: pages stay 4 KiB if refused */
+#endif
+  memset(p, 0, bytes);
   return p;
 }
 

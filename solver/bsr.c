@@ -99,7 +99,7 @@ int bs_bsr_create(int32_t n, const int32_t *adj_ptr, const int32_t *adj, bs_bsr 
   A->nnzb = w;
   int32_t *shrunk = realloc(tmp, (w > 0 ? (size_t)w : 1) * sizeof *tmp);
   A->col = shrunk ? shrunk : tmp; /* if shrinking fails, keep the larger block */
-  A->val = bs_calloc(w > 0 ? 9 * (size_t)w : 1, sizeof *A->val, "bs_bsr values", err);
+  A->val = bs_calloc_large(w > 0 ? 9 * (size_t)w : 1, sizeof *A->val, "bs_bsr values", err);
   if (!A->val) {
     bs_bsr_destroy(&A);
     return BS_ENOMEM;
@@ -262,6 +262,91 @@ static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, 
   return f ? x[3 * (int64_t)i] * y0 + x[3 * (int64_t)i + 1] * y1 + x[3 * (int64_t)i + 2] * y2 : 0.0;
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define BS_BSR_AVX2 1
+/* Row i of y = A x with AVX2 and FMA, masked or not as row_plain and
+ * row_masked: acc_r gathers, lane by lane, a_r0 x0, a_r1 x1, a_r2 x2 of
+ * block row r over the row's blocks (lane 3 reads the next entry of val,
+ * times x_j's lane 3, which the masked load makes 0; the last block's third
+ * row is a masked load too, so nothing past val is read), and the lanes 0-2
+ * are summed at the end; y_i is written by a masked store (never the next
+ * row's entries, which another thread may own). With val32, each block is
+ * also written there rounded to float (bs_bsr_mul_dot_round32's layout). */
+__attribute__((target("avx2,fma"), always_inline)) static inline double row_avx2(const bs_bsr *A, const uint8_t *mask,
+                                                                               const double *x, double *y, int fuse,
+                                                                               float *val32, int32_t i) {
+  const int32_t *rp = A->row_ptr, *col = A->col;
+  const double *val = A->val;
+  const __m256i m3 = _mm256_set_epi64x(0, -1, -1, -1);
+  const int64_t last = A->nnzb - 1;
+  __m256d acc0 = _mm256_setzero_pd(), acc1 = acc0, acc2 = acc0;
+  for (int32_t s = rp[i]; s < rp[i + 1]; ++s) {
+    const int32_t j = col[s];
+    const double *a = val + 9 * (int64_t)s;
+    if (val32)
+      for (int b = 0; b < 3; ++b)
+        for (int e = 0; e < 3; ++e) val32[9 * (int64_t)s + 3 * b + e] = (float)a[3 * e + b];
+    const __m256d xv = _mm256_maskload_pd(x + 3 * (int64_t)j, m3);
+    const __m256d a2 = s < last ? _mm256_loadu_pd(a + 6) : _mm256_maskload_pd(a + 6, m3);
+    if (!mask) {
+      acc0 = _mm256_fmadd_pd(_mm256_loadu_pd(a), xv, acc0);
+      acc1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 3), xv, acc1);
+      acc2 = _mm256_fmadd_pd(a2, xv, acc2);
+    } else { /* a constrained column's block never enters, even if it holds NaN */
+      const __m256d keep = _mm256_castsi256_pd(_mm256_set1_epi64x(mask[j] ? -1 : 0));
+      acc0 = _mm256_add_pd(acc0, _mm256_and_pd(_mm256_mul_pd(_mm256_loadu_pd(a), xv), keep));
+      acc1 = _mm256_add_pd(acc1, _mm256_and_pd(_mm256_mul_pd(_mm256_loadu_pd(a + 3), xv), keep));
+      acc2 = _mm256_add_pd(acc2, _mm256_and_pd(_mm256_mul_pd(a2, xv), keep));
+    }
+  }
+  const __m256d z = _mm256_setzero_pd();
+  acc0 = _mm256_blend_pd(acc0, z, 8);
+  acc1 = _mm256_blend_pd(acc1, z, 8);
+  acc2 = _mm256_blend_pd(acc2, z, 8);
+  const __m256d h01 = _mm256_hadd_pd(acc0, acc1), h22 = _mm256_hadd_pd(acc2, acc2);
+  __m256d r = _mm256_add_pd(_mm256_permute2f128_pd(h01, h22, 0x20), _mm256_permute2f128_pd(h01, h22, 0x31));
+  const int f = !mask || mask[i] != 0;
+  if (!f) r = z;
+  _mm256_maskstore_pd(y + 3 * (int64_t)i, m3, r);
+  if (!fuse || !f) return 0.0;
+  double yi[4];
+  _mm256_storeu_pd(yi, r);
+  return x[3 * (int64_t)i] * yi[0] + x[3 * (int64_t)i + 1] * yi[1] + x[3 * (int64_t)i + 2] * yi[2];
+}
+
+/* mul_impl's row loop with row_avx2 (mask and val32 tested once, outside). */
+__attribute__((target("avx2,fma"))) static void rows_avx2(const bs_bsr *A, const uint8_t *mask, const double *x,
+                                                         double *y, int fuse, float *val32, double *part) {
+  const bs_sum_plan P = bs_sum_plan_of(A->n);
+#pragma omp parallel for schedule(static) if (A->n > 4096)
+  for (int c = 0; c < P.count; ++c) {
+    const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
+    double xy = 0.0;
+    if (!mask && !val32)
+      for (int32_t i = lo; i < hi; ++i) xy += row_avx2(A, NULL, x, y, fuse, NULL, i);
+    else if (!val32)
+      for (int32_t i = lo; i < hi; ++i) xy += row_avx2(A, mask, x, y, fuse, NULL, i);
+    else if (!mask)
+      for (int32_t i = lo; i < hi; ++i) xy += row_avx2(A, NULL, x, y, fuse, val32, i);
+    else
+      for (int32_t i = lo; i < hi; ++i) xy += row_avx2(A, mask, x, y, fuse, val32, i);
+    part[c] = xy;
+  }
+}
+
+/* bs_bsr_mul_dot_round32's AVX2 path: 0 when the CPU lacks AVX2 or FMA (the
+ * caller then takes the portable one), else 1 with *xy set. */
+static int round32_avx2(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, float *val32, double *xy) {
+  if (A->nnzb == 0 || !__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) return 0;
+  const int fuse = A->n_extra == 0;
+  double part[BS_SUM_CHUNKS];
+  rows_avx2(A, mask, x, y, fuse, val32, part);
+  *xy = mul_tail(A, mask, x, y, fuse ? bs_sum_parts(bs_sum_plan_of(A->n).count, part) : 0.0);
+  return 1;
+}
+#endif
+
 /* y = A x, and x . y when dot (the fused dot reads each x_i, y_i while the
  * row is in registers, summed as in bs_sum.h; with extra blocks y changes
  * afterwards, so the dot is then a separate pass). */
@@ -270,15 +355,22 @@ static double mul_impl(const bs_bsr *A, const uint8_t *mask, const double *x, do
   const int fuse = dot && A->n_extra == 0;
   double part[BS_SUM_CHUNKS];
   const bs_sum_plan P = bs_sum_plan_of(n);
+#ifdef BS_BSR_AVX2
+  if (A->nnzb > 0 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    rows_avx2(A, mask, x, y, fuse, NULL, part);
+  } else
+#endif
+  {
 #pragma omp parallel for schedule(static) if (n > 4096)
-  for (int c = 0; c < P.count; ++c) {
-    const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
-    double xy = 0.0;
-    if (!mask)
-      for (int32_t i = lo; i < hi; ++i) xy += row_plain(A, x, y, fuse, i);
-    else
-      for (int32_t i = lo; i < hi; ++i) xy += row_masked(A, mask, x, y, fuse, i);
-    part[c] = xy;
+    for (int c = 0; c < P.count; ++c) {
+      const int32_t lo = (int32_t)bs_sum_lo(P, c), hi = (int32_t)bs_sum_hi(P, c);
+      double xy = 0.0;
+      if (!mask)
+        for (int32_t i = lo; i < hi; ++i) xy += row_plain(A, x, y, fuse, i);
+      else
+        for (int32_t i = lo; i < hi; ++i) xy += row_masked(A, mask, x, y, fuse, i);
+      part[c] = xy;
+    }
   }
   if (!dot) {
     if (A->n_extra > 0) mul_extra(A, mask, x, y);
@@ -361,6 +453,10 @@ int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
 
 double bs_bsr_mul_dot_round32(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, float *val32) {
   val32[9 * A->nnzb] = val32[9 * A->nnzb + 1] = val32[9 * A->nnzb + 2] = val32[9 * A->nnzb + 3] = 0.0f;
+#ifdef BS_BSR_AVX2
+  double xy;
+  if (round32_avx2(A, mask, x, y, val32, &xy)) return xy; /* bs_bsr_mul_dot's arithmetic, bit for bit */
+#endif
   BS_ROWS32(BS_BLOCK_ROUND);
 }
 
