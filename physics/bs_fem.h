@@ -72,7 +72,7 @@ typedef struct bs_fem {
 } bs_fem;
 
 /* Most tets in a chunk (a multiple of BS_MATERIAL_BATCH). */
-#define BS_FEM_CHUNK 128
+#define BS_FEM_CHUNK 512
 
 /* Builds the cache. tet_material[t] (NULL: all 0) indexes materials[0..n_materials).
  * Errors: a material index out of range names the tet; a tet with

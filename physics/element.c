@@ -82,7 +82,22 @@ double bs_tet_energy_grad(const bs_material *m, const double x[12], const double
  * The blocks among vertices 1..3 are formed so; those with vertex 0 are
  * minus the sums of the others (w_0 = -(w_1 + w_2 + w_3)). Diagonal blocks
  * are made exactly symmetric, and block (b, a) is block (a, b) transposed. */
+#ifdef BS_POLAR_AVX2
+static void hessian_from_modes_x4(const bs_dPdF_modes *md, const double *Dm, const double *vol, double *H);
+static int have_fma(void) { return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"); }
+#endif
+
 static void hessian_from_modes(const bs_dPdF_modes *md, const double Dm_inv[9], double vol, double H[144]) {
+#ifdef BS_POLAR_AVX2
+  if (have_fma()) { /* the 4-lane kernel's arithmetic (lane 0), see hessian_from_modes_x4 */
+    const bs_dPdF_modes m4[4] = {*md, *md, *md, *md};
+    double D4[36], v4[4] = {vol, vol, vol, vol}, H4[576];
+    for (int l = 0; l < 4; l++) memcpy(D4 + 9 * l, Dm_inv, 9 * sizeof(double));
+    hessian_from_modes_x4(m4, D4, v4, H4);
+    memcpy(H, H4, 144 * sizeof(double));
+    return;
+  }
+#endif
   const double *U = md->U, *V = md->V, *Hs = md->H;
   double x[4][3]; /* x[a][i] = v_i . w_a, a = 1..3 (w_a = row a-1 of Dm_inv) */
   for (int a = 1; a < 4; a++)
@@ -258,11 +273,14 @@ BS_AVX2_FN static int corotated_x4(const bs_material *m, const double *x, const 
   return done;
 }
 
-/* hessian_from_modes on 4 tets in the lanes of AVX2 registers: the same
- * operations in the same order, without FMA, so each lane is
- * hessian_from_modes bit for bit (test_element's batch_bitwise). O holds H
- * entry by entry (lanes = tets) and is transposed out 4 entries at a time. */
-BS_AVX2_FN static void hessian_from_modes_x4(const bs_dPdF_modes *md, const double *Dm, const double *vol,
+#define FMA _mm256_fmadd_pd
+/* hessian_from_modes on 4 tets in the lanes of AVX2 registers, with FMA:
+ * hessian_from_modes itself uses it on CPUs with AVX2 and FMA (one tet in
+ * lane 0), so the batched and single-tet Hessians agree bit for bit
+ * (test_element's batch_bitwise); the portable code below is for the others.
+ * O holds H entry by entry (lanes = tets) and is transposed out 4 entries
+ * at a time. */
+__attribute__((target("avx2,fma"))) static void hessian_from_modes_x4(const bs_dPdF_modes *md, const double *Dm, const double *vol,
                                              double *H) {
   v4 U[9], V[9], W[9], h[9], sp[3], dm[3], x[4][3], O[144];
   const v4 vl = _mm256_set_pd(vol[3], vol[2], vol[1], vol[0]), hv = VMUL(_mm256_set1_pd(0.5), vl);
@@ -280,30 +298,27 @@ BS_AVX2_FN static void hessian_from_modes_x4(const bs_dPdF_modes *md, const doub
   }
   for (int a = 1; a < 4; a++)
     for (int i = 0; i < 3; i++)
-      x[a][i] = VADD(VADD(VMUL(V[i], W[3 * (a - 1)]), VMUL(V[3 + i], W[3 * (a - 1) + 1])),
-                     VMUL(V[6 + i], W[3 * (a - 1) + 2]));
+      x[a][i] = FMA(V[6 + i], W[3 * (a - 1) + 2], FMA(V[3 + i], W[3 * (a - 1) + 1], VMUL(V[i], W[3 * (a - 1)])));
 #define HO(a, r, b, c) O[12 * (3 * (a) + (r)) + 3 * (b) + (c)]
   for (int a = 1; a < 4; a++)
     for (int b = a; b < 4; b++) {
       v4 xy[9], M[9];
       for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) xy[3 * i + j] = VMUL(x[a][i], x[b][j]);
-      const v4 N[9] = {VADD(VADD(VMUL(h[0], xy[0]), VMUL(sp[0], xy[4])), VMUL(sp[1], xy[8])),
-                       VADD(VMUL(h[1], xy[1]), VMUL(dm[0], xy[3])),
-                       VADD(VMUL(h[2], xy[2]), VMUL(dm[1], xy[6])),
-                       VADD(VMUL(h[1], xy[3]), VMUL(dm[0], xy[1])),
-                       VADD(VADD(VMUL(h[4], xy[4]), VMUL(sp[0], xy[0])), VMUL(sp[2], xy[8])),
-                       VADD(VMUL(h[5], xy[5]), VMUL(dm[2], xy[7])),
-                       VADD(VMUL(h[2], xy[6]), VMUL(dm[1], xy[2])),
-                       VADD(VMUL(h[5], xy[7]), VMUL(dm[2], xy[5])),
-                       VADD(VADD(VMUL(h[8], xy[8]), VMUL(sp[1], xy[0])), VMUL(sp[2], xy[4]))};
+      const v4 N[9] = {FMA(sp[1], xy[8], FMA(sp[0], xy[4], VMUL(h[0], xy[0]))), FMA(dm[0], xy[3], VMUL(h[1], xy[1])),
+                       FMA(dm[1], xy[6], VMUL(h[2], xy[2])),
+                       FMA(dm[0], xy[1], VMUL(h[1], xy[3])),
+                       FMA(sp[2], xy[8], FMA(sp[0], xy[0], VMUL(h[4], xy[4]))),
+                       FMA(dm[2], xy[7], VMUL(h[5], xy[5])),
+                       FMA(dm[1], xy[2], VMUL(h[2], xy[6])),
+                       FMA(dm[2], xy[5], VMUL(h[5], xy[7])),
+                       FMA(sp[2], xy[4], FMA(sp[1], xy[0], VMUL(h[8], xy[8])))};
       for (int r = 0; r < 3; r++)
         for (int j = 0; j < 3; j++)
-          M[3 * r + j] = VADD(VADD(VMUL(U[3 * r], N[j]), VMUL(U[3 * r + 1], N[3 + j])), VMUL(U[3 * r + 2], N[6 + j]));
+          M[3 * r + j] = FMA(U[3 * r + 2], N[6 + j], FMA(U[3 * r + 1], N[3 + j], VMUL(U[3 * r], N[j])));
       for (int r = 0; r < 3; r++)
         for (int c = (a == b ? r : 0); c < 3; c++)
-          HO(a, r, b, c) = VADD(VADD(VMUL(M[3 * r], U[3 * c]), VMUL(M[3 * r + 1], U[3 * c + 1])),
-                                VMUL(M[3 * r + 2], U[3 * c + 2]));
+          HO(a, r, b, c) = FMA(M[3 * r + 2], U[3 * c + 2], FMA(M[3 * r + 1], U[3 * c + 1], VMUL(M[3 * r], U[3 * c])));
       if (a == b)
         for (int r = 0; r < 3; r++)
           for (int c = r + 1; c < 3; c++) HO(a, c, a, r) = HO(a, r, a, c);
@@ -334,6 +349,7 @@ BS_AVX2_FN static void hessian_from_modes_x4(const bs_dPdF_modes *md, const doub
     _mm256_storeu_pd(H + 432 + k, _mm256_permute2f128_pd(t1, t3, 0x31));
   }
 }
+#undef FMA
 #undef VADD
 #undef VSUB
 #undef VMUL
@@ -403,7 +419,7 @@ void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const do
     bs_material_dPdF_modes_batch(m, nb, F, project_psd, md);
     int i = 0;
 #ifdef BS_POLAR_AVX2
-    if (__builtin_cpu_supports("avx2"))
+    if (have_fma())
       for (; i + 4 <= nb; i += 4)
         hessian_from_modes_x4(md + i, Dm_inv + 9 * (i0 + i), vol + i0 + i, H + 144 * (i0 + i));
 #endif

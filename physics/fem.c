@@ -306,7 +306,7 @@ static int material_run(const bs_fem *fem, int32_t k0, int n) {
 }
 
 /* A colour's chunks run on several threads when it holds at least
- * PAR_CHUNKS chunks (about 512 tets). */
+ * PAR_CHUNKS chunks (up to 4 BS_FEM_CHUNK tets). */
 enum { PAR_CHUNKS = 4 };
 static int colour_parallel(const bs_fem *fem, int c) { return fem->color_ptr[c + 1] - fem->color_ptr[c] >= PAR_CHUNKS; }
 
