@@ -89,7 +89,9 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
 /* gmsh_optimize.c: inside a Gmsh session whose model has a 3-D mesh, runs
  * gmshModelMeshOptimize ("" then "Netgen", Mesh.OptimizeThreshold raised each
  * round) until the smallest dihedral angle of its tets reaches gate degrees
- * or a round brings no progress. *achieved: the angle at the end. */
+ * or a round brings no progress, then meshes the volume again with HXT
+ * and optimises again if the gate still fails. *achieved (may be NULL): the
+ * smallest angle of the mesh left in the model (not the best one seen). */
 int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, bs_error *err);
 
 /* The gate the options ask for, in degrees (0: none): opts->min_dihedral
