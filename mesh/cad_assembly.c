@@ -18,7 +18,10 @@
  * At the file's own size (size <= 0) the mesh size follows the curvature
  * (Mesh.MeshSizeFromCurvature = 12 elements per 2 pi): at Gmsh's default
  * size the coarse triangles of a bolt and of the hole around it overlap
- * ("Invalid boundary mesh (overlapping facets)"). It is also at most
+ * ("Invalid boundary mesh (overlapping facets)").
+ *
+ * An assembly meshed at its own size that stays under the quality gate is
+ * meshed again whole by bs__cad_assembly_finer, with elements at most
  * BS_CAD_DIAG_FRACTION of the model's bounding-box diagonal
  * (Mesh.MeshSizeMax): a STEP file carries no sizes, and Gmsh's default
  * lets straight edges take triangles as long as a tenth of the diagonal,
@@ -132,24 +135,29 @@ done:
   return rc;
 }
 
-/* The file's own size: curvature sizing, elements at most
- * BS_CAD_DIAG_FRACTION of the bounding-box diagonal (see the top). */
-static int default_sizes(const char *path, bs_error *err) {
+int bs__cad_assembly_finer(const char *path, int *done, bs_error *err) {
   double lo[3], hi[3], hmax = 0;
   int ierr = 0;
+  *done = 0;
   gmshModelGetBoundingBox(-1, -1, &lo[0], &lo[1], &lo[2], &hi[0], &hi[1], &hi[2], &ierr);
   if (!ierr) gmshOptionGetNumber("Mesh.MeshSizeMax", &hmax, &ierr);
   if (ierr) return bs__gmsh_fail(err, BS_EGMSH, path, "measure the assembly's bounding box");
   double d2 = 0;
   for (int k = 0; k < 3; k++) d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
   double h = BS_CAD_DIAG_FRACTION * sqrt(d2);
-  gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 12, &ierr);
-  if (!ierr && h > 0 && h < hmax) gmshOptionSetNumber("Mesh.MeshSizeMax", h, &ierr);
-  return ierr ? bs__gmsh_fail(err, BS_EGMSH, path, "set the assembly's mesh sizes") : BS_OK;
+  if (!(h > 0 && h < hmax)) return BS_OK; /* the sizes are already that fine */
+  gmshOptionSetNumber("Mesh.MeshSizeMax", h, &ierr);
+  if (!ierr) gmshOptionSetNumber("Mesh.Algorithm3D", 1, &ierr); /* Gmsh's default Delaunay, as the first time */
+  if (!ierr) gmshModelMeshClear(NULL, 0, &ierr);
+  if (!ierr) gmshModelMeshGenerate(3, &ierr);
+  if (ierr) return bs__gmsh_fail(err, BS_EGMSH, path, "mesh the assembly again with smaller elements");
+  *done = 1;
+  return BS_OK;
 }
 
-int bs__cad_assembly(const char *path, double size, bs_error *err) {
+int bs__cad_assembly(const char *path, double size, int *assembly, bs_error *err) {
   int *dt = NULL, *out = NULL, **map = NULL, ierr = 0, rc = BS_OK, *pg = NULL;
+  *assembly = 0;
   size_t ndt = 0, nout = 0, *map_n = NULL, nmap = 0, npg = 0;
   char **names = NULL;
   gmshModelGetEntities(&dt, &ndt, 3, &ierr);
@@ -168,7 +176,8 @@ int bs__cad_assembly(const char *path, double size, bs_error *err) {
     goto done;
   }
   if ((rc = add_groups(path, names, n, map, map_n, err))) goto done;
-  if (size <= 0 && (rc = default_sizes(path, err))) goto done;
+  if (size <= 0) gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 12, &ierr);
+  *assembly = 1;
 done:
   free_names(names, ndt / 2);
   if (dt) gmshFree(dt);

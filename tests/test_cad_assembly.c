@@ -120,6 +120,29 @@ Test(cad_assembly, touching_boxes_conformal) {
   bs_mesh_destroy(&m);
 }
 
+/* At their own size the two boxes pass the gate at Gmsh's sizes, so they
+ * are not meshed again finer: elements of at most 1/40 of the diagonal
+ * (0.061 m) would give some 10^5 tets. */
+Test(cad_assembly, touching_boxes_own_size_kept) {
+  char path[] = "/tmp/bs_test_cad_XXXXXX.brep";
+  int fd = mkstemps(path, 5);
+  cr_assert(fd >= 0);
+  close(fd);
+  write_two_boxes(path);
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  int rc = bs_mesh_read(path, NULL, &m, &err);
+  remove(path);
+  cr_assert_eq(rc, BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "smallest dihedral angle %.3f degrees", q.dihedral_min);
+  cr_expect_lt(m->n_tets, 5000, "%d tets: meshed again finer though Gmsh's own sizes passed", m->n_tets);
+  cr_expect_eq(check_part_groups(m), 2);
+  cr_expect_float_eq(bs_mesh_volume(m), 2.0, 1e-9);
+  bs_mesh_destroy(&m);
+}
+
 /* The demo assembly meshed through the default gate (opts NULL: the file's
  * own size; or opts with .size): conformal, the named parts, the CAD volume
  * within 1%, every tet's smallest dihedral angle at least the gate. */
@@ -150,7 +173,8 @@ static void check_demo_assembly(const bs_mesh_read_opts *opts) {
   bs_mesh_destroy(&m);
 }
 
-/* At the file's own size (curvature sizing, elements at most 1/40 of the
+/* At the file's own size (curvature sizing; Gmsh's own sizes leave it at
+ * about 6 degrees, so it is meshed again with elements at most 1/40 of the
  * diagonal: mesh/cad_assembly.c), through the default gate of 10 degrees. */
 Test(cad_assembly, step_demo_assembly_at_default_size) { check_demo_assembly(NULL); }
 
