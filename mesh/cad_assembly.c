@@ -13,11 +13,26 @@
  * the STEP label path (Gmsh's entity name, e.g. "Shapes/as1/PLATE/plate")
  * that no other part shares ("plate", "NUT::1/nut"); "part_<n>" where the
  * file names none. Every surface entity gets the 2-D group "surface_<tag>"
- * (as bs_mesh_read's default groups). At the file's own size (size <= 0)
- * the mesh size follows the curvature (Mesh.MeshSizeFromCurvature = 12
- * elements per 2 pi): at Gmsh's default size the coarse triangles of a bolt
- * and of the hole around it overlap ("Invalid boundary mesh (overlapping
- * facets)"). */
+ * (as bs_mesh_read's default groups).
+ *
+ * At the file's own size (size <= 0) the mesh size follows the curvature
+ * (Mesh.MeshSizeFromCurvature = 12 elements per 2 pi): at Gmsh's default
+ * size the coarse triangles of a bolt and of the hole around it overlap
+ * ("Invalid boundary mesh (overlapping facets)").
+ *
+ * An assembly meshed at its own size that stays under the quality gate is
+ * meshed again whole by bs__cad_assembly_finer, with elements at most
+ * BS_CAD_DIAG_FRACTION of the model's bounding-box diagonal
+ * (Mesh.MeshSizeMax): a STEP file carries no sizes, and Gmsh's default
+ * lets straight edges take triangles as long as a tenth of the diagonal,
+ * which across a part thinner than them (a plate of 3 mm under triangles
+ * of 10 to 25 mm) gives flat tets whose four vertices all lie on the
+ * boundary, where no optimiser can move them. Not more elements per 2 pi:
+ * where fragmentation imprints a circle tangent to an edge (a nut's outline
+ * touching a bracket's edge) the face has a cusp, and the triangle at its
+ * tip has an angle of about pi / N for N elements per 2 pi (15 degrees for
+ * 12, 11 for 16), which bounds the tets there. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,6 +40,8 @@
 #include <gmshc.h>
 
 #include "mesh_internal.h"
+
+#define BS_CAD_DIAG_FRACTION (1.0 / 40.0)
 
 /* The trailing k components of a '/'-separated label (all of it if fewer). */
 static const char *label_suffix(const char *s, int k) {
@@ -118,8 +135,29 @@ done:
   return rc;
 }
 
-int bs__cad_assembly(const char *path, double size, bs_error *err) {
+int bs__cad_assembly_finer(const char *path, int *done, bs_error *err) {
+  double lo[3], hi[3], hmax = 0;
+  int ierr = 0;
+  *done = 0;
+  gmshModelGetBoundingBox(-1, -1, &lo[0], &lo[1], &lo[2], &hi[0], &hi[1], &hi[2], &ierr);
+  if (!ierr) gmshOptionGetNumber("Mesh.MeshSizeMax", &hmax, &ierr);
+  if (ierr) return bs__gmsh_fail(err, BS_EGMSH, path, "measure the assembly's bounding box");
+  double d2 = 0;
+  for (int k = 0; k < 3; k++) d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+  double h = BS_CAD_DIAG_FRACTION * sqrt(d2);
+  if (!(h > 0 && h < hmax)) return BS_OK; /* the sizes are already that fine */
+  gmshOptionSetNumber("Mesh.MeshSizeMax", h, &ierr);
+  if (!ierr) gmshOptionSetNumber("Mesh.Algorithm3D", 1, &ierr); /* Gmsh's default Delaunay, as the first time */
+  if (!ierr) gmshModelMeshClear(NULL, 0, &ierr);
+  if (!ierr) gmshModelMeshGenerate(3, &ierr);
+  if (ierr) return bs__gmsh_fail(err, BS_EGMSH, path, "mesh the assembly again with smaller elements");
+  *done = 1;
+  return BS_OK;
+}
+
+int bs__cad_assembly(const char *path, double size, int *assembly, bs_error *err) {
   int *dt = NULL, *out = NULL, **map = NULL, ierr = 0, rc = BS_OK, *pg = NULL;
+  *assembly = 0;
   size_t ndt = 0, nout = 0, *map_n = NULL, nmap = 0, npg = 0;
   char **names = NULL;
   gmshModelGetEntities(&dt, &ndt, 3, &ierr);
@@ -139,6 +177,7 @@ int bs__cad_assembly(const char *path, double size, bs_error *err) {
   }
   if ((rc = add_groups(path, names, n, map, map_n, err))) goto done;
   if (size <= 0) gmshOptionSetNumber("Mesh.MeshSizeFromCurvature", 12, &ierr);
+  *assembly = 1;
 done:
   free_names(names, ndt / 2);
   if (dt) gmshFree(dt);

@@ -23,7 +23,9 @@
  * reparametrizes and remeshes them at that size; with size <= 0 Gmsh keeps
  * its triangles as the boundary of the volume mesh.
  * Meshes made here (not a .msh) are optimised by Gmsh towards the quality
- * gate (gmsh_optimize.c) and then held to it (bs_mesh_dihedral_gate). For
+ * gate (gmsh_optimize.c; a CAD assembly at its own size still under it is
+ * meshed again with smaller elements, cad_assembly.c) and then held to it
+ * (bs_mesh_dihedral_gate). For
  * geometry, size > 0 sets Mesh.MeshSizeMin = Mesh.MeshSizeMax = size after
  * the file is read (so it overrides the file's settings).
  *
@@ -789,14 +791,16 @@ static int input_file(const char *path, input_kind *kind, bs_error *err) {
 }
 
 /* Geometry (.geo, STEP, BREP, IGES) opened and meshed in 3-D at size (> 0:
- * Mesh.MeshSizeMin = Max = size, after a check that the tets would fit). */
-static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts *opts, bs_error *err) {
+ * Mesh.MeshSizeMin = Max = size, after a check that the tets would fit);
+ * *assembly = 1 for a CAD assembly made conformal (cad_assembly.c). */
+static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts *opts, int *assembly,
+                         bs_error *err) {
   int ierr = 0, rc;
   static const char *const cad[] = {"step", "stp", "iges", "igs", "brep", NULL};
   gmshOpen(path, &ierr);
   if (ierr) return gmsh_fail(err, BS_EGMSH, path, "read the file");
   gmsh_quiet();
-  if (ext_is(file_ext(path), cad) && (rc = bs__cad_assembly(path, size, err))) return rc;
+  if (ext_is(file_ext(path), cad) && (rc = bs__cad_assembly(path, size, assembly, err))) return rc;
   if (size > 0 && (rc = bs__check_mesh_size(model_volume(), size, opts, path, err))) return rc;
   if (size > 0) {
     gmshOptionSetNumber("Mesh.MeshSizeMin", size, &ierr);
@@ -804,6 +808,17 @@ static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts 
   }
   gmshModelMeshGenerate(3, &ierr);
   return ierr ? gmsh_fail(err, BS_EGMSH, path, "mesh the geometry in 3-D") : 0;
+}
+
+/* Gmsh's optimisers towards the gate (gmsh_optimize.c); with finer (an
+ * assembly at its own size) a mesh still under it is meshed again with
+ * smaller elements (bs__cad_assembly_finer) and optimised again. */
+static int optimise(const char *path, double gate, int finer, bs_error *err) {
+  double got = 0;
+  int done = 0, rc = bs__gmsh_optimize_to_gate(path, gate, &got, err);
+  if (!rc && finer && got >= 0 && got < gate) rc = bs__cad_assembly_finer(path, &done, err);
+  if (!rc && done) rc = bs__gmsh_optimize_to_gate(path, gate, NULL, err);
+  return rc;
 }
 
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
@@ -839,7 +854,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     goto refine;
   }
   if ((rc = gmsh_begin(path, err))) goto out;
-  int ierr = 0;
+  int ierr = 0, assembly = 0;
   gmshOptionSetString("Geometry.OCCTargetUnit", "M", &ierr);
   switch (kind) {
   case IN_MESH:
@@ -847,7 +862,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     if (ierr) rc = gmsh_fail(err, BS_EGMSH, path, "read the file");
     break;
   case IN_GEOMETRY:
-    rc = mesh_geometry(path, size, opts, err);
+    rc = mesh_geometry(path, size, opts, &assembly, err);
     break;
   case IN_SOUP:
     rc = add_discrete_surface(path, pts, np, tris, ntri, err);
@@ -857,7 +872,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
     break;
   }
   const double gate = kind == IN_MESH ? 0.0 : bs__mesh_gate(opts);
-  if (!rc && gate > 0) rc = bs__gmsh_optimize_to_gate(path, gate, NULL, err);
+  if (!rc && gate > 0) rc = optimise(path, gate, assembly && size <= 0, err);
   gmsh_quiet();
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();

@@ -70,7 +70,9 @@ done:
   return worst;
 }
 
-/* The optimiser rounds from the mesh's smallest angle *best on. */
+/* The optimiser rounds from the mesh's smallest angle *best on; *best is
+ * the angle of the mesh they leave (a round that made it worse ends the
+ * rounds and is not undone, so the angle is the mesh's, not the best seen). */
 static int optimise_rounds(const char *path, double gate, double *best, bs_error *err) {
   int rc = BS_OK, ierr = 0, netgen = 1;
   for (int r = 0; !rc && *best >= 0 && *best < gate && r < BS_GMSH_ROUNDS; r++) {
@@ -80,11 +82,9 @@ static int optimise_rounds(const char *path, double gate, double *best, bs_error
     if (netgen) gmshModelMeshOptimize("Netgen", 0, 1, NULL, 0, &ierr);
     if (ierr) netgen = 0, ierr = 0; /* Gmsh built without Netgen, or it gave up: Gmsh's own optimiser goes on */
     double now = model_min_dihedral(path, err, &rc);
-    if (rc || now < *best + 0.01) {
-      if (now > *best) *best = now;
-      break;
-    }
+    int stalled = now < *best + 0.01;
     *best = now;
+    if (rc || stalled) break;
   }
   return rc;
 }

@@ -42,9 +42,17 @@ int bs__gmsh_fail(bs_error *err, int code, const char *path, const char *what);
 /* Inside a Gmsh session, after a CAD file (STEP, IGES, BREP) is opened: an
  * assembly of several solids with no physical groups is fragmented into a
  * conformal model with one named 3-D group per part (cad_assembly.c has the
- * rules); size <= 0 (the file's size) also turns on curvature sizing. A
- * model of one solid is left alone. BS_OK, or BS_EGMSH / BS_ENOMEM naming path. */
-int bs__cad_assembly(const char *path, double size, bs_error *err);
+ * rules), and *assembly = 1; size <= 0 (the file's size) also turns on
+ * curvature sizing. A model of one solid is left alone (*assembly = 0).
+ * BS_OK, or BS_EGMSH / BS_ENOMEM naming path. */
+int bs__cad_assembly(const char *path, double size, int *assembly, bs_error *err);
+
+/* Inside a Gmsh session whose assembly (bs__cad_assembly, at the file's own
+ * size) is meshed: meshes it again whole with Mesh.MeshSizeMax lowered to
+ * a fraction of the bounding-box diagonal (cad_assembly.c has it), and sets
+ * *done = 1; *done = 0 and the mesh untouched when the sizes are bounded
+ * that tightly already. BS_OK, or BS_EGMSH naming path. */
+int bs__cad_assembly_finer(const char *path, int *done, bs_error *err);
 
 /* Deep copy of n groups into a new array *out (NULL when n == 0). A NULL
  * name is copied as "". Vertex sets are copied as they are (possibly NULL). */
@@ -89,7 +97,9 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
 /* gmsh_optimize.c: inside a Gmsh session whose model has a 3-D mesh, runs
  * gmshModelMeshOptimize ("" then "Netgen", Mesh.OptimizeThreshold raised each
  * round) until the smallest dihedral angle of its tets reaches gate degrees
- * or a round brings no progress. *achieved: the angle at the end. */
+ * or a round brings no progress, then meshes the volume again with HXT
+ * and optimises again if the gate still fails. *achieved (may be NULL): the
+ * smallest angle of the mesh left in the model (not the best one seen). */
 int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, bs_error *err);
 
 /* The gate the options ask for, in degrees (0: none): opts->min_dihedral

@@ -4,7 +4,9 @@
  * by setup.sh: a plate, two L-brackets with three nut-bolt pairs each and a
  * rod with two nuts, 18 solids that touch). The mesh must be conformal (no
  * coincident nodes; the parts' tets one connected mesh), carry one named 3-D
- * group per part, and hold the parts' OpenCASCADE volume within 1%. */
+ * group per part, hold the parts' OpenCASCADE volume within 1%, and pass
+ * the default quality gate (every tet's smallest dihedral angle at least
+ * 10 degrees, none inverted). */
 #define _GNU_SOURCE
 
 #include <criterion/criterion.h>
@@ -118,21 +120,47 @@ Test(cad_assembly, touching_boxes_conformal) {
   bs_mesh_destroy(&m);
 }
 
-Test(cad_assembly, step_demo_assembly_at_default_size) {
+/* At their own size the two boxes pass the gate at Gmsh's sizes, so they
+ * are not meshed again finer: elements of at most 1/40 of the diagonal
+ * (0.061 m) would give some 10^5 tets. */
+Test(cad_assembly, touching_boxes_own_size_kept) {
+  char path[] = "/tmp/bs_test_cad_XXXXXX.brep";
+  int fd = mkstemps(path, 5);
+  cr_assert(fd >= 0);
+  close(fd);
+  write_two_boxes(path);
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  int rc = bs_mesh_read(path, NULL, &m, &err);
+  remove(path);
+  cr_assert_eq(rc, BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "smallest dihedral angle %.3f degrees", q.dihedral_min);
+  cr_expect_lt(m->n_tets, 5000, "%d tets: meshed again finer though Gmsh's own sizes passed", m->n_tets);
+  cr_expect_eq(check_part_groups(m), 2);
+  cr_expect_float_eq(bs_mesh_volume(m), 2.0, 1e-9);
+  bs_mesh_destroy(&m);
+}
+
+/* The demo assembly meshed through the default gate (opts NULL: the file's
+ * own size; or opts with .size): conformal, the named parts, the CAD volume
+ * within 1%, every tet's smallest dihedral angle at least the gate. */
+static void check_demo_assembly(const bs_mesh_read_opts *opts) {
   cr_assert_eq(access(ASSEMBLY, R_OK), 0, "%s is missing: run `bash setup.sh build`", ASSEMBLY);
   bs_mesh *m = NULL;
   bs_error err = {0};
-  /* Gmsh's optimisers leave this assembly at 6.0 degrees (164 tets under the
-   * default gate of 10): the conformity is checked here with the gate off,
-   * the gate's refusal below. */
-  bs_error gate_err = {0};
-  cr_assert_eq(bs_mesh_read(ASSEMBLY, NULL, &m, &gate_err), BS_EINPUT, "the assembly passed the gate");
-  cr_expect_not_null(strstr(gate_err.msg, "under the gate of 10"), "%s", gate_err.msg);
-  cr_assert_eq(bs_mesh_read(ASSEMBLY, &(bs_mesh_read_opts){.min_dihedral = -1}, &m, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(bs_mesh_read(ASSEMBLY, opts, &m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "smallest dihedral angle %.3f degrees", q.dihedral_min);
+  cr_expect_eq(q.n_inverted, 0, "%d inverted tets", q.n_inverted);
+  cr_expect_gt(q.vol_min, 0.0);
   cr_expect_eq(m->n_coincident, 0);
   cr_expect_eq(check_part_groups(m), 18);
   static const char *const names[] = {"NUT::1/nut", "NUT::2/nut", "rod", "plate",
-                                      "L-BRACKET-ASSEMBLY::1/l-bracket-assembly/L-BRACKET/l-bracket"};
+                                      "L-BRACKET-ASSEMBLY::1/l-bracket-assembly/L-BRACKET/l-bracket",
+                                      "L-BRACKET-ASSEMBLY::2/l-bracket-assembly/NUT-BOLT-ASSEMBLY::3/nut-bolt-assembly/BOLT/bolt"};
   for (size_t i = 0; i < sizeof names / sizeof *names; i++) {
     const bs_group *g = bs_mesh_group(m, names[i]);
     cr_expect(g && g->dim == 3, "no part \"%s\"", names[i]);
@@ -143,4 +171,15 @@ Test(cad_assembly, step_demo_assembly_at_default_size) {
   cr_expect(fabs(bs_mesh_volume(m) - v) <= 0.01 * v, "tets %.9g m^3, OpenCASCADE %.9g m^3", bs_mesh_volume(m), v);
   cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
   bs_mesh_destroy(&m);
+}
+
+/* At the file's own size (curvature sizing; Gmsh's own sizes leave it at
+ * about 6 degrees, so it is meshed again with elements at most 1/40 of the
+ * diagonal: mesh/cad_assembly.c), through the default gate of 10 degrees. */
+Test(cad_assembly, step_demo_assembly_at_default_size) { check_demo_assembly(NULL); }
+
+/* At the size a user would ask, diagonal / 25 (10.5 mm; the plate is 3 mm
+ * thick), uniform: through the default gate too. */
+Test(cad_assembly, step_demo_assembly_at_diagonal_over_25) {
+  check_demo_assembly(&(bs_mesh_read_opts){.size = 0.2637 / 25});
 }
