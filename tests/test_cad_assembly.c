@@ -94,12 +94,18 @@ static void write_two_boxes(const char *path) {
   gmshFinalize(&ierr);
 }
 
-Test(cad_assembly, touching_boxes_conformal) {
-  char path[] = "/tmp/bs_test_cad_XXXXXX.brep";
+/* path (a mkstemps template ending in ".brep") becomes a new file holding
+ * the two boxes of write_two_boxes. */
+static void two_boxes_file(char *path) {
   int fd = mkstemps(path, 5);
   cr_assert(fd >= 0);
   close(fd);
   write_two_boxes(path);
+}
+
+Test(cad_assembly, touching_boxes_conformal) {
+  char path[] = "/tmp/bs_test_cad_XXXXXX.brep";
+  two_boxes_file(path);
   bs_mesh *m = NULL;
   bs_error err = {0};
   int rc = bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.25}, &m, &err);
@@ -125,10 +131,7 @@ Test(cad_assembly, touching_boxes_conformal) {
  * (0.061 m) would give some 10^5 tets. */
 Test(cad_assembly, touching_boxes_own_size_kept) {
   char path[] = "/tmp/bs_test_cad_XXXXXX.brep";
-  int fd = mkstemps(path, 5);
-  cr_assert(fd >= 0);
-  close(fd);
-  write_two_boxes(path);
+  two_boxes_file(path);
   bs_mesh *m = NULL;
   bs_error err = {0};
   int rc = bs_mesh_read(path, NULL, &m, &err);
