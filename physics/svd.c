@@ -231,9 +231,12 @@ int bs_polar3(const double F[9], double R[9]) {
  * the next one: it rotates nothing again). Lanes that bs_svd3 treats
  * specially (non-finite, zero, or scaled with |exponent| >= 1000) go through
  * bs_svd3 itself; so does every matrix on a CPU without AVX2, and the last
- * n mod 8. Two groups of four run together (svd3_avx2): a sweep is a chain
- * of square roots and divisions whose latency, not the arithmetic, bounds a
- * single group, and two independent chains overlap. (A portable version
+ * n mod 4. Two or three groups of four run together (svd3_avx2_groups): a
+ * sweep is a chain of square roots and divisions whose latency, not the
+ * arithmetic, bounds a single group, and independent chains overlap
+ * (two groups are much faster than one; three, on batches of 12, were
+ * hardly faster than two, so the batches of BS_MATERIAL_BATCH = 8 use two,
+ * and a last 4 to 7 one). (A portable version
  * written for the compiler's auto-vectorizer got two lanes per register in
  * the sweeps and none in the epilogue.) */
 #define L 4
@@ -330,20 +333,6 @@ AVX2_FN static inline void avx2_rot_apply(v4 B[9], v4 W[9], int p, int q, v4 c, 
   }
 }
 
-/* One Jacobi rotation of the column pair (p, q) in every active lane of two
- * groups of 4 matrices (B0, W0) and (B1, W1), whose independent chains of
- * square roots and divisions then overlap; returns the mask of the lanes
- * that rotated (of either group). */
-AVX2_FN static inline v4 avx2_rotate2(v4 B0[9], v4 W0[9], v4 B1[9], v4 W1[9], int p, int q) {
-  v4 c0, s0, c1, s1;
-  const v4 act0 = avx2_rot_coef(B0, p, q, &c0, &s0), act1 = avx2_rot_coef(B1, p, q, &c1, &s1);
-  const v4 any = _mm256_or_pd(act0, act1);
-  if (_mm256_movemask_pd(any) == 0) return any;
-  avx2_rot_apply(B0, W0, p, q, c0, s0, act0);
-  avx2_rot_apply(B1, W1, p, q, c1, s1, act1);
-  return any;
-}
-
 /* After the sweeps: sort, make V a rotation, build U and sigma (bs_svd3's
  * epilogue), and store the 4 lanes. */
 AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], double *restrict U,
@@ -423,22 +412,51 @@ AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], do
   }
 }
 
-/* Eight matrices as two groups of four: load, sweeps while any lane of
- * either group still rotates (a converged lane is unchanged by them), finish. */
-AVX2_FN static void svd3_avx2(const double *restrict F, double *restrict U, double *restrict sigma,
-                              double *restrict V, int *restrict special) {
-  v4 B0[9], W0[9], B1[9], W1[9];
-  double isc[2 * L];
-  avx2_load(F, B0, W0, isc, special);
-  avx2_load(F + 9 * L, B1, W1, isc + L, special + L);
+/* G groups of 4 matrices (B[g], W[g]) together: their independent chains of
+ * square roots and divisions overlap. One Jacobi rotation of the column pair
+ * (p, q) in every active lane of every group; returns the mask of the lanes
+ * that rotated (of any group). */
+AVX2_FN static inline __attribute__((always_inline)) v4 avx2_rotate_groups(v4 B[][9], v4 W[][9], const int G, int p,
+                                                                           int q) {
+  v4 c[3], s[3], act[3], any = _mm256_setzero_pd();
+  for (int g = 0; g < G; g++) {
+    act[g] = avx2_rot_coef(B[g], p, q, &c[g], &s[g]);
+    any = _mm256_or_pd(any, act[g]);
+  }
+  if (_mm256_movemask_pd(any) == 0) return any;
+  for (int g = 0; g < G; g++) avx2_rot_apply(B[g], W[g], p, q, c[g], s[g], act[g]);
+  return any;
+}
+
+/* G (1 to 3) groups of four matrices: load,
+ * sweeps while any lane of any group still rotates (a converged lane is
+ * unchanged by them), finish. */
+AVX2_FN static inline __attribute__((always_inline)) void svd3_avx2_groups(const double *restrict F,
+                                                                           double *restrict U, double *restrict sigma,
+                                                                           double *restrict V, int *restrict special,
+                                                                           const int G) {
+  v4 B[3][9], W[3][9];
+  double isc[3 * L];
+  for (int g = 0; g < G; g++) avx2_load(F + 9 * L * g, B[g], W[g], isc + L * g, special + L * g);
   for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
-    v4 rot = avx2_rotate2(B0, W0, B1, W1, 0, 1);
-    rot = _mm256_or_pd(rot, avx2_rotate2(B0, W0, B1, W1, 0, 2));
-    rot = _mm256_or_pd(rot, avx2_rotate2(B0, W0, B1, W1, 1, 2));
+    v4 rot = avx2_rotate_groups(B, W, G, 0, 1);
+    rot = _mm256_or_pd(rot, avx2_rotate_groups(B, W, G, 0, 2));
+    rot = _mm256_or_pd(rot, avx2_rotate_groups(B, W, G, 1, 2));
     if (_mm256_movemask_pd(rot) == 0) break; /* no lane rotated: every lane converged */
   }
-  avx2_finish(B0, W0, isc, U, sigma, V);
-  avx2_finish(B1, W1, isc + L, U + 9 * L, sigma + 3 * L, V + 9 * L);
+  for (int g = 0; g < G; g++)
+    avx2_finish(B[g], W[g], isc + L * g, U + 9 * L * g, sigma + 3 * L * g, V + 9 * L * g);
+}
+
+/* 12, 8 or 4 matrices (G = 3, 2, 1 groups). */
+AVX2_FN static void svd3_avx2_12(const double *F, double *U, double *sigma, double *V, int *special) {
+  svd3_avx2_groups(F, U, sigma, V, special, 3);
+}
+AVX2_FN static void svd3_avx2_8(const double *F, double *U, double *sigma, double *V, int *special) {
+  svd3_avx2_groups(F, U, sigma, V, special, 2);
+}
+AVX2_FN static void svd3_avx2_4(const double *F, double *U, double *sigma, double *V, int *special) {
+  svd3_avx2_groups(F, U, sigma, V, special, 1);
 }
 
 /* bs_polar3 on 4 matrices (bs_polar_avx2). */
@@ -461,13 +479,18 @@ void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V) 
   int i = 0;
 #ifdef BS_SVD_AVX2
   if (__builtin_cpu_supports("avx2"))
-    for (; i + 2 * L <= n; i += 2 * L) {
-      int special[2 * L];
-      svd3_avx2(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i, special);
-      for (int l = 0; l < 2 * L; l++)
+    while (i + L <= n) {
+      const int G = n - i >= 3 * L ? 3 : n - i >= 2 * L ? 2 : 1;
+      int special[3 * L];
+      double *Ui = U + 9 * (size_t)i, *si = sigma + 3 * (size_t)i, *Vi = V + 9 * (size_t)i;
+      if (G == 3) svd3_avx2_12(F + 9 * (size_t)i, Ui, si, Vi, special);
+      else if (G == 2) svd3_avx2_8(F + 9 * (size_t)i, Ui, si, Vi, special);
+      else svd3_avx2_4(F + 9 * (size_t)i, Ui, si, Vi, special);
+      for (int l = 0; l < G * L; l++)
         if (special[l])
           bs_svd3(F + 9 * (size_t)(i + l), U + 9 * (size_t)(i + l), sigma + 3 * (size_t)(i + l),
                   V + 9 * (size_t)(i + l));
+      i += G * L;
     }
 #endif
   for (; i < n; i++) bs_svd3(F + 9 * (size_t)i, U + 9 * (size_t)i, sigma + 3 * (size_t)i, V + 9 * (size_t)i);
