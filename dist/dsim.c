@@ -58,6 +58,8 @@ int bs_dsim_check(const bs_scene *sc, bs_error *err) {
   bs_lin_kind k = sc->solver.min.linear;
   if (k != BS_LIN_CG && k != BS_LIN_PCG && k != BS_LIN_AMG)
     return refuse(sc, err, "solver.linear", "only cg, pcg and amg are available");
+  if (sc->solver.min.globalization != BS_GLOBAL_LINE_SEARCH)
+    return refuse(sc, err, "solver.globalization", "only line_search runs (Steihaug's CG is serial)");
   if (k == BS_LIN_AMG && !sc->solver.amg_at_rest)
     return refuse(sc, err, "solver.amg_matrix", "GAMG is built from the rest-state Hessian only (\"rest\")");
   return check_body(sc, &sc->bodies[0], err);

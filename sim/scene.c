@@ -631,15 +631,18 @@ static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
 /* The solver's string keys. */
 static int parse_solver_choices(ctx *c, const cJSON *so, bs_scene *s) {
   int st, method = (int)s->solver.method, linear = (int)s->solver.min.linear;
-  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC, backend = (int)s->backend;
+  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC, backend = (int)s->backend,
+      glob = (int)s->solver.min.globalization;
   if ((st = get_enum(c, so, "solver", "solver", "method", parse_method, &method)) ||
       (st = get_enum(c, so, "solver", "solver", "linear", parse_linear, &linear)) ||
       (st = get_choice(c, so, "solver", "solver", "cg_precision", &s->solver.min.cg_single)) ||
       (st = get_choice(c, so, "solver", "solver", "amg_matrix", &current)) ||
       (st = get_choice(c, so, "solver", "solver", "cg_forcing", &s->solver.min.forcing_ew)) ||
       (st = get_choice(c, so, "solver", "solver", "mode", &stat)) ||
-      (st = get_choice(c, so, "solver", "solver", "backend", &backend)))
+      (st = get_choice(c, so, "solver", "solver", "backend", &backend)) ||
+      (st = get_choice(c, so, "solver", "solver", "globalization", &glob)))
     return st;
+  s->solver.min.globalization = (bs_globalization)glob;
   s->backend = (bs_scene_backend)backend;
   s->solver.method = (bs_method)method;
   s->solver.min.linear = (bs_lin_kind)linear;
@@ -656,6 +659,7 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
   if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor)) ||
       (st = get_int(c, so, "solver", "solver", "amg_rebuild_every", &s->solver.min.amg_rebuild_every)) ||
       (st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol)) || (st = parse_sigma(c, so, s)) ||
+      (st = get_num(c, so, "solver", "tr_radius", 0, &s->solver.min.tr_radius)) ||
       (st = get_num(c, so, "solver", "rtol", 0, &s->solver.min.rtol)) ||
       (st = get_num(c, so, "solver", "load_rtol", 0, &s->solver.min.load_rtol)) ||
       (st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill)) ||
@@ -666,6 +670,8 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
       (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||
       (st = get_choice(c, so, "solver", "solver", "project_hessian", &s->project_hessian)))
     return st;
+  if (!(s->solver.min.tr_radius > 0))
+    return fail(c, "solver.tr_radius", "must be > 0 (m), got %g", s->solver.min.tr_radius);
   return 0;
 }
 

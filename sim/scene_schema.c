@@ -72,6 +72,11 @@ const bs_schema_key bs_schema_keys_[] = {
     {"solver", "cg_forcing", STR, .choices = CHOICES("paper", "eisenstat_walker", "adaptive"), .def = "\"adaptive\"",
      .doc = "CG forcing terms: the paper's, or also capped by Eisenstat and Walker's choice 2 (always, or "
             "adaptive: after a full Newton step)"},
+    {"solver", "globalization", STR, .choices = CHOICES("line_search", "trust_region"), .def = "\"line_search\"",
+     .doc = "how a step is found from the Newton direction: the paper's line search, or Steihaug's CG in a trust "
+            "region (follows negative curvature; linear cg, pcg or amg)"},
+    {"solver", "tr_radius", NUM, .range = "(0, )", .def = "0.1",
+     .doc = "trust_region: the first radius of each step's solve, as an RMS displacement per free vertex (m)"},
     {"solver", "cg_downhill", BOOL, .def = "true",
      .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
     {"solver", "cg_precision", STR, .choices = CHOICES("double", "single"), .def = "\"double\"",

@@ -110,6 +110,8 @@ typedef struct bs_lin_stats {
   int single_overflow; /* 1: a value overflowed single precision; this solve ran in double   */
   int downhill_iterate; /* k > 0: the answer is CG's iterate k, the last that passed the       */
                         /* downhill test (bs_linsolve_set_downhill); 0: the usual answer       */
+  int boundary;         /* 1: the answer lies on the trust-region boundary ||x|| = radius     */
+                        /* (bs_linsolve_set_radius)                                           */
 } bs_lin_stats;
 
 typedef struct bs_linsolve bs_linsolve; /* workspace sized once for a pattern */
@@ -154,6 +156,20 @@ int bs_linsolve_set_single(bs_linsolve *ls, int on, bs_error *err);
  * (BS_ENOMEM) and copies into it only when an iterate that passed is followed
  * by one that fails. kappa = 0 (the default) turns it off and frees it. */
 int bs_linsolve_set_downhill(bs_linsolve *ls, double kappa, bs_error *err);
+
+/* CG, PCG and AMG workspaces (BS_EINPUT for another kind when radius > 0):
+ * radius > 0 (in x's units) makes the following solves Steihaug's truncated
+ * CG for the trust region ||x||_2 <= radius (Nocedal & Wright, Algorithm
+ * 7.2): on negative curvature (p^T A p <= 0), or when an iterate leaves the
+ * ball, the answer is the point where the current direction p crosses the
+ * boundary (stats.boundary = 1, and stats.indefinite = 1 for the first
+ * case); otherwise the usual answer. The downhill replacement
+ * (bs_linsolve_set_downhill) is not applied to a boundary answer: every
+ * point of Steihaug's path decreases the model. The norm is the Euclidean
+ * one for PCG and AMG too (Steihaug's theory takes the preconditioner's
+ * norm; with it ||x_k|| grows monotonically, here it need not). Nothing is
+ * allocated; radius = 0 (the default) turns it off. */
+int bs_linsolve_set_radius(bs_linsolve *ls, double radius, bs_error *err);
 
 /* AMG workspaces only (BS_EINPUT otherwise): builds the BoomerAMG hierarchy
  * from P (SPD on the free dofs of mask; P's pattern size must match) and keeps

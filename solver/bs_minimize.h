@@ -94,6 +94,23 @@
  * for fast convergence; any symmetric matrix still gives a descent method
  * through step 5.
  *
+ * Trust region (added; opts.globalization = trust_region, Nocedal & Wright
+ * Algorithms 4.1 and 7.2): steps 4-9 become: solve H p = -g by Steihaug's
+ * truncated CG in the ball ||p|| <= Delta (bs_linsolve_set_radius: negative
+ * curvature and an iterate leaving the ball both end on the boundary, so the
+ * curvature CG finds is followed, not discarded); if p is not a descent
+ * direction, the Cauchy-like step -Delta g / ||g||; the trial point y =
+ * P(x + p) and rho = (E(x) - E(y)) / m, m = -(g.p + p.H p / 2) the decrease
+ * the quadratic model predicts. rho < 1/4 (or E(y) not evaluable): Delta =
+ * min(Delta, ||p||) / 4; rho > 3/4 with p on the boundary: Delta = min(2
+ * Delta, clamp). y is accepted when rho > 1e-4, else the same system is
+ * solved again in the smaller ball, up to max_ls trial steps per iteration
+ * (then BS_MIN_LINE_SEARCH, or BS_MIN_FLOOR when the predicted decrease is
+ * below the rounding level of E). Each solve starts at Delta_0
+ * (opts.tr_radius). The forcing terms, the tolerances and the floor watch
+ * are those of the line search; trial steps count as ls_evaluations, a step
+ * taken has alpha 1 and trace's ls_status WOLFE.
+ *
  * The baseline bs_newton (section 2): x <- x - H^-1 g with MINRES to relative
  * tolerance opts.newton_rel_tol (default 1e-10), no line search, no clamp.
  * The hooks, when given, are applied as in bs_minimize (projection of the
@@ -194,6 +211,7 @@ typedef struct bs_min_iter {
   int lin_iterations;    /* Krylov iterations of the Newton solve                     */
   int lin_indefinite;    /* 1: CG/PCG stopped on negative curvature                   */
   int lin_downhill_iterate; /* k > 0: dx is CG's iterate k (opts.cg_downhill)          */
+  int lin_boundary;      /* 1: trust_region's CG answer lies on the boundary            */
   int cholmod_fallback;  /* 1: CHOLMOD found H not positive definite, CG was used     */
   bs_lsearch_status ls_status; /* WOLFE, CAPPED (best decreasing point) or NOISE     */
                          /* (bs_newton has no line search and leaves it 0)           */
@@ -253,6 +271,17 @@ typedef struct bs_objective {
   int quadratic;
 } bs_objective;
 
+/* How an iteration finds its step from the Newton direction (bs_minimize). */
+typedef enum {
+  BS_GLOBAL_LINE_SEARCH = 0, /* the paper's: downhill check, clamp, strong Wolfe line search */
+  BS_GLOBAL_TRUST_REGION = 1 /* Steihaug's truncated CG in a trust region (see "Trust region") */
+} bs_globalization;
+
+/* "line_search", "trust_region"; "unknown" for a value outside the enum. */
+const char *bs_globalization_name(bs_globalization g);
+/* The names above into *out; BS_EINPUT naming the string otherwise. */
+int bs_globalization_parse(const char *name, bs_globalization *out, bs_error *err);
+
 typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default() */
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
   double rtol;         /* added, default 0 (off): also converged when ||g|| < rtol ||g_0||, */
@@ -303,6 +332,11 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
                        /* factor times the post-setup one (see "AMG reuse"); default 3;     */
                        /* 0: never (>= 0, else 0 or >= 1)                                   */
   int amg_rebuild_every; /* added: AMG rebuild every N bs_minimize calls; 0 (default): no  */
+  bs_globalization globalization; /* added, default line_search (the paper's); trust_region */
+                       /* needs linear cg, pcg or amg and no vecops (see "Trust region")   */
+  double tr_radius;    /* added: trust_region's radius at each solve's start, as an RMS   */
+                       /* length per free vertex (units of x): Delta_0 = tr_radius sqrt(free */
+                       /* vertices), at most clamp; default 0.1 (> 0)                      */
 } bs_minimize_opts;
 
 /* Fills the defaults listed above. */
@@ -342,6 +376,9 @@ typedef struct bs_minimize_stats {
   int amg_setups;                            /* added: AMG hierarchies built (linear = amg) */
   int downhill_iterates;                     /* added: Newton directions that are an earlier */
                                              /* CG iterate (opts.cg_downhill)              */
+  int tr_rejections;                         /* added: trust_region trial steps rejected   */
+  int tr_boundary;                           /* added: accepted steps on the boundary      */
+  double tr_radius;                          /* added: trust_region radius at the end      */
   double t_amg_setup;                        /* added: seconds in AMG setups (in t_linear) */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
   double grad_norm, E;                       /* final                                      */

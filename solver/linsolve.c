@@ -32,6 +32,7 @@ struct bs_linsolve {
   double *minv;               /* PCG: 9n, inverse diagonal blocks         */
   float *val32;               /* CG kinds, single precision: 9 nnzb + 4    */
   double kappa;               /* CG kinds: downhill test (0: off)          */
+  double radius;              /* CG kinds: trust-region radius (0: off)    */
   double *xs;                 /* CG kinds with kappa > 0: 3n, the last
                                  iterate that passed it                    */
   bs_amg *amg;                /* AMG-PCG: the BoomerAMG V-cycle            */
@@ -294,6 +295,52 @@ static double cg_update(int32_t n, double alpha, const double *p, const double *
   return bs_sum_parts(P.count, part_r);
 }
 
+/* a.b and b.b in one pass (deterministic sums). */
+static void dots2(int64_t N, const double *a, const double *b, double *ab, double *bb) {
+  double part_ab[BS_SUM_CHUNKS], part_bb[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(N);
+#pragma omp parallel for schedule(static) if (N > 16384)
+  for (int c = 0; c < P.count; ++c) {
+    double s = 0.0, t = 0.0;
+    for (int64_t m = bs_sum_lo(P, c); m < bs_sum_hi(P, c); ++m) {
+      s += a[m] * b[m];
+      t += b[m] * b[m];
+    }
+    part_ab[c] = s;
+    part_bb[c] = t;
+  }
+  *ab = bs_sum_parts(P.count, part_ab);
+  *bb = bs_sum_parts(P.count, part_bb);
+}
+
+/* Steihaug's step to the trust-region boundary: x += s p and r -= s q (q =
+ * A p) with s = shift + tau, where x_b = x + shift p is the iterate the step
+ * starts from (shift = 0, or -alpha to go back from an iterate outside the
+ * ball) and tau >= 0 solves ||x_b + tau p|| = radius. xx = ||x||^2 before the
+ * call. Returns the new ||r||^2. */
+static double to_boundary(int64_t N, double radius, double shift, double xx, const double *p, const double *q,
+                          double *x, double *r) {
+  double xp, pp;
+  dots2(N, x, p, &xp, &pp);
+  if (!(pp > 0.0)) return vdot(N, r, r);
+  const double xbp = xp + shift * pp, xbb = xx + 2.0 * shift * xp + shift * shift * pp;
+  const double disc = fmax(xbp * xbp + pp * (radius * radius - xbb), 0.0);
+  const double tau = fmax((-xbp + sqrt(disc)) / pp, 0.0), s = shift + tau;
+  double part[BS_SUM_CHUNKS];
+  const bs_sum_plan P = bs_sum_plan_of(N);
+#pragma omp parallel for schedule(static) if (N > 16384)
+  for (int c = 0; c < P.count; ++c) {
+    double t = 0.0;
+    for (int64_t m = bs_sum_lo(P, c); m < bs_sum_hi(P, c); ++m) {
+      x[m] += s * p[m];
+      r[m] -= s * q[m];
+      t += r[m] * r[m];
+    }
+    part[c] = t;
+  }
+  return bs_sum_parts(P.count, part);
+}
+
 /* run_cg's answer when the single-precision values overflowed (a value beyond
  * FLT_MAX): the caller solves again in double. Positive, so never a bs status. */
 #define BS_RETRY_DOUBLE 1
@@ -313,7 +360,10 @@ typedef enum {
 /* Conjugate gradient from x = 0 (Hestenes–Stiefel), optionally preconditioned
  * (pc_kind). Stops on ||r|| <= rel_tol ||b||, max_iter, or
  * p^T A p <= 0 (negative curvature: the last iterate, or b on the first
- * iteration, is returned with indefinite = 1). With ls->kappa > 0, an answer
+ * iteration, is returned with indefinite = 1). With ls->radius > 0 (Steihaug
+ * 1983; Nocedal & Wright, Algorithm 7.2) negative curvature and an iterate
+ * leaving the ball ||x|| <= radius both end on its boundary along p
+ * (boundary = 1). With ls->kappa > 0, an answer
  * that fails the downhill test b.x >= kappa ||b|| ||x|| is replaced by the
  * last iterate that passed it (kept in ls->xs; stats.downhill_iterate). */
 static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const double *b,
@@ -355,7 +405,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
      last_ok is the last iterate that passed (0: none), and ls->xs holds it
      once a later iterate has failed (xs_rr: its ||r||^2). */
   const double kappa2 = ls->kappa * ls->kappa * rr;
-  double bx = 0.0, xs_rr = rr;
+  double bx = 0.0, xs_rr = rr, xnorm2 = 0.0;
   int last_ok = 0, xs_holds = 0;
   for (int k = 0; k < max_iter; ++k) {
     /* single: product SINGLE_FROM, in double, rounds the values into val32 on
@@ -367,7 +417,10 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     if (!isfinite(pq)) return single && k > SINGLE_FROM ? BS_RETRY_DOUBLE : matrix_error(A, mask, name, err);
     if (pq <= 0.0) {
       st->indefinite = 1;
-      if (k == 0) {
+      if (ls->radius > 0.0) { /* Steihaug: along p to the boundary */
+        rr = to_boundary(N, ls->radius, 0.0, xnorm2, p, q, x, r);
+        st->boundary = 1;
+      } else if (k == 0) {
         /* No iterate yet: return the right-hand side (r still holds masked b). */
         vcopy(N, r, x);
         bs_bsr_mul(A, mask, x, q);
@@ -381,6 +434,12 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
     rr = cg_update(n, alpha, p, q, precond == PC_BLOCK_JACOBI ? ls->minv : NULL, x, r, z, &xx, &rz_new);
     st->iterations = k + 1;
     if (!isfinite(rr)) return matrix_error(A, mask, name, err);
+    if (ls->radius > 0.0 && xx >= ls->radius * ls->radius) { /* Steihaug: back to the boundary */
+      rr = to_boundary(N, ls->radius, -alpha, xx, p, q, x, r);
+      st->boundary = 1;
+      break;
+    }
+    xnorm2 = xx;
     bx += alpha * rz;
     if (kappa2 > 0.0) {
       if (bx > 0.0 && bx * bx >= kappa2 * xx) {
@@ -411,7 +470,7 @@ static int run_cg(bs_linsolve *ls, const bs_bsr *A, const uint8_t *mask, const d
   }
   /* The answer is x_{iterations} (b itself after an indefinite first
      iteration, which passes). */
-  if (kappa2 > 0.0 && st->iterations > 0 && last_ok != st->iterations && xs_holds) {
+  if (kappa2 > 0.0 && !st->boundary && st->iterations > 0 && last_ok != st->iterations && xs_holds) {
     vcopy(N, ls->xs, x);
     rr = xs_rr;
     st->downhill_iterate = last_ok;
@@ -891,6 +950,17 @@ int bs_linsolve_set_downhill(bs_linsolve *ls, double kappa, bs_error *err) {
   if (!ls->xs && !(ls->xs = bs_calloc((size_t)(ls->N > 0 ? ls->N : 1), sizeof *ls->xs, "linsolve downhill iterate", err)))
     return BS_ENOMEM;
   ls->kappa = kappa;
+  return BS_OK;
+}
+
+int bs_linsolve_set_radius(bs_linsolve *ls, double radius, bs_error *err) {
+  if (!ls) return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_radius: NULL workspace");
+  if (!(radius >= 0.0) || isinf(radius))
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_radius: radius must be finite and >= 0, got %g", radius);
+  if (radius > 0.0 && ls->kind != BS_LIN_CG && ls->kind != BS_LIN_PCG && ls->kind != BS_LIN_AMG)
+    return bs_error_set(err, BS_EINPUT, "bs_linsolve_set_radius: the workspace is for %s, not cg, pcg or amg",
+                        bs_lin_kind_name(ls->kind));
+  ls->radius = radius;
   return BS_OK;
 }
 

@@ -145,6 +145,24 @@ const char *bs_direction_name(bs_direction d) {
   return "unknown";
 }
 
+const char *bs_globalization_name(bs_globalization g) {
+  switch (g) {
+  case BS_GLOBAL_LINE_SEARCH: return "line_search";
+  case BS_GLOBAL_TRUST_REGION: return "trust_region";
+  }
+  return "unknown";
+}
+
+int bs_globalization_parse(const char *name, bs_globalization *out, bs_error *err) {
+  for (int g = BS_GLOBAL_LINE_SEARCH; g <= BS_GLOBAL_TRUST_REGION; ++g)
+    if (name && !strcmp(name, bs_globalization_name((bs_globalization)g))) {
+      *out = (bs_globalization)g;
+      return 0;
+    }
+  return bs_error_set(err, BS_EINPUT, "unknown globalization \"%s\" (expected line_search or trust_region)",
+                      name ? name : "(null)");
+}
+
 const char *bs_lsearch_status_name(bs_lsearch_status s) {
   switch (s) {
   case BS_LSEARCH_NO_DECREASE: return "no_decrease";
@@ -176,6 +194,8 @@ void bs_minimize_opts_default(bs_minimize_opts *o) {
   o->accept_noise = 0;
   o->amg_rebuild_factor = 3.0;
   o->amg_rebuild_every = 0;
+  o->globalization = BS_GLOBAL_LINE_SEARCH;
+  o->tr_radius = 0.1;
 }
 
 int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
@@ -217,6 +237,16 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
   if (!(o->newton_rel_tol > 0) || !isfinite(o->newton_rel_tol))
     return bs_error_set(err, BS_EINPUT, "minimizer option newton_rel_tol must be finite and > 0, got %g",
                         o->newton_rel_tol);
+  if ((unsigned)o->globalization > (unsigned)BS_GLOBAL_TRUST_REGION)
+    return bs_error_set(err, BS_EINPUT, "minimizer option globalization: unknown value %d", (int)o->globalization);
+  if (o->globalization == BS_GLOBAL_TRUST_REGION && o->linear != BS_LIN_CG && o->linear != BS_LIN_PCG &&
+      o->linear != BS_LIN_AMG)
+    return bs_error_set(err, BS_EINPUT,
+                        "minimizer option globalization trust_region needs linear cg, pcg or amg (Steihaug's CG), "
+                        "got %s",
+                        bs_lin_kind_name(o->linear));
+  if (!(o->tr_radius > 0) || !isfinite(o->tr_radius))
+    return bs_error_set(err, BS_EINPUT, "minimizer option tr_radius must be finite and > 0, got %g", o->tr_radius);
   if (o->hessian_extra < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option hessian_extra must be >= 0, got %lld",
                         (long long)o->hessian_extra);
@@ -258,6 +288,7 @@ static int set_krylov_opts(bs_minimizer *m, const bs_minimize_opts *o, bs_error 
     const int used = k == o->linear || (k == BS_LIN_CG && o->linear == BS_LIN_CHOLMOD);
     int rc = bs_linsolve_set_single(m->lin[k], used && o->cg_single, err);
     if (!rc) rc = bs_linsolve_set_downhill(m->lin[k], used && o->cg_downhill ? o->kappa : 0.0, err);
+    if (!rc) rc = bs_linsolve_set_radius(m->lin[k], 0.0, err); /* trust_region sets it per solve */
     if (rc) return rc;
   }
   return 0;
@@ -411,7 +442,7 @@ static void amg_judge(bs_minimizer *m, const bs_lin_stats *ls) {
 
 /* Step 4: H d = -g on the free dofs. Returns 0, 1 when the solve produced a
  * non-finite value (reason set), or a negative error. */
-static int newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
+int bs__newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
                             bs_minimize_stats *st, bs_min_iter *rec, bs_error *err) {
   const bs_minimize_opts *o = &m->opts;
   const int max_it = m->cg_cap;
@@ -461,6 +492,7 @@ static int newton_direction(bs_minimizer *m, const bs_objective *obj, const doub
   rec->lin_iterations = ls.iterations;
   rec->lin_indefinite = ls.indefinite;
   rec->lin_downhill_iterate = ls.downhill_iterate;
+  rec->lin_boundary = ls.boundary;
   return 0;
 }
 
@@ -546,7 +578,7 @@ static void no_decrease_reason(bs_minimizer *m, bs_minimize_stats *st, const bs_
 /* The floor watch (bs_minimize.h, "Rounding floor") for the iteration at
  * ||g|| = gnorm whose direction predicts the decrease -dphi0: 1 (reason
  * set) when the solve ends there at the floor. */
-static int at_floor(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double E, double gnorm,
+int bs__at_floor(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double E, double gnorm,
                     double dphi0, bs_direction dir) {
   if (!(-dphi0 <= bs__noise_level(E)) || dir == BS_DIR_NEG_GRAD) {
     m->floor_run = 0;
@@ -583,7 +615,7 @@ static int assemble(bs_minimizer *m, const bs_objective *obj, const double *x, i
 }
 
 /* The accepted iteration handed to obj->trace (before x moves to m->y). */
-static void trace_step(const bs_minimizer *m, const bs_objective *obj, const double *x, double E, double dphi0,
+void bs__trace_step(const bs_minimizer *m, const bs_objective *obj, const double *x, double E, double dphi0,
                        const bs__ls_result *ls, bs_min_iter *rec) {
   rec->ls_status = ls->status;
   rec->ls_evaluations = ls->evals;
@@ -678,13 +710,20 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     rc = assemble(m, obj, x, it, st, err);
     if (rc < 0) return rc;
     if (rc > 0) break;
+    if (o->globalization == BS_GLOBAL_TRUST_REGION) { /* steps 4-9 in a trust region */
+      rc = bs__tr_iteration(m, obj, x, &E, gnorm, it, st, &rec, err);
+      if (rc < 0) return rc;
+      if (rc > 0) break;
+      m->all_full &= m->last_full;
+      continue;
+    }
     /* Step 4: Newton direction. */
-    rc = newton_direction(m, obj, x, gnorm, it, st, &rec, err);
+    rc = bs__newton_direction(m, obj, x, gnorm, it, st, &rec, err);
     if (rc < 0) return rc;
     if (rc > 0) break;
 
     const double dphi0 = downhill_and_clamp(m, gnorm, st, &rec);
-    if (at_floor(m, obj, st, it, E, gnorm, dphi0, rec.direction)) break;
+    if (bs__at_floor(m, obj, st, it, E, gnorm, dphi0, rec.direction)) break;
 
     /* Steps 7-9: line search along the projected curve. */
     bs__ls_result ls;
@@ -702,7 +741,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     m->all_full &= m->last_full;
     if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
     const int moved = bs__many(m, free_dofs_moved(m, obj, x));
-    if (obj->trace) trace_step(m, obj, x, E, dphi0, &ls, &rec);
+    if (obj->trace) bs__trace_step(m, obj, x, E, dphi0, &ls, &rec);
     E = accept_step(m, x, &ls, st);
     if (!moved) {
       gnorm = bs__constrained_gradient(m, obj, x, m->g_raw, m->g, st, 0);

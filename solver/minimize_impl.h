@@ -29,6 +29,7 @@ struct bs_minimizer {
                               /* Newton direction, no indefinite exit, alpha = 1 at    */
                               /* its first trial (opts.forcing_ew = 2)                 */
                               /* (opts.forcing_ew)                                       */
+  double tr_radius;           /* trust_region: the current radius Delta               */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
    * direction, right-hand side, trial point, raw and projected gradient there. */
@@ -105,4 +106,22 @@ double bs__tolerance(const bs_minimize_opts *o, const bs_objective *obj, double 
 void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0,
                      double dphi0, bs_minimize_stats *st, bs__ls_result *res);
 
+/* Step 4 (minimize.c): H d = -g on the free dofs into m->d, with the
+ * forcing term of iteration it. 0, 1 when the solve produced a non-finite
+ * value (reason set), or a negative error. */
+int bs__newton_direction(bs_minimizer *m, const bs_objective *obj, const double *x, double gnorm, int it,
+                         bs_minimize_stats *st, bs_min_iter *rec, bs_error *err);
+/* The rounding-floor watch (minimize.c) for an iteration whose direction
+ * predicts the decrease -dphi0: 1 (reason set) when the solve ends there. */
+int bs__at_floor(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats *st, int it, double E, double gnorm,
+                 double dphi0, bs_direction dir);
+/* The accepted iteration handed to obj->trace (before x moves to m->y). */
+void bs__trace_step(const bs_minimizer *m, const bs_objective *obj, const double *x, double E, double dphi0,
+                    const bs__ls_result *ls, bs_min_iter *rec);
+/* Steps 4-9 of a trust-region iteration (trust_region.c, bs_minimize.h
+ * "Trust region") at x with energy *E and ||g|| = gnorm (m->g, m->g_raw
+ * and m->H at x): 0 when a step was taken (x, *E and m->g_raw at the new
+ * point), 1 when the solve ends (reason set), < 0 an error. */
+int bs__tr_iteration(bs_minimizer *m, const bs_objective *obj, double *x, double *E, double gnorm, int it,
+                     bs_minimize_stats *st, bs_min_iter *rec, bs_error *err);
 #endif

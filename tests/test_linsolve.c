@@ -679,3 +679,91 @@ Test(linsolve, downhill_iterate) {
   bs_linsolve_destroy(&ls);
   bs_bsr_destroy(&A);
 }
+
+/* The quadratic model m(x) = -b.x + x.A x / 2 (A x into ax). */
+static double model(const bs_bsr *A, const double *b, const double *x, double *ax, int64_t N) {
+  bs_bsr_mul(A, NULL, x, ax);
+  double v = 0;
+  for (int64_t e = 0; e < N; ++e) v += -b[e] * x[e] + 0.5 * x[e] * ax[e];
+  return v;
+}
+
+/* The Cauchy point: the minimizer of m along b inside the ball of radius r. */
+static double cauchy_model(const bs_bsr *A, const double *b, double r, double *x, double *ax, int64_t N) {
+  double bb = 0, bab = 0;
+  bs_bsr_mul(A, NULL, b, ax);
+  for (int64_t e = 0; e < N; ++e) bb += b[e] * b[e], bab += b[e] * ax[e];
+  const double tmax = r / sqrt(bb), t = bab > 0 ? fmin(bb / bab, tmax) : tmax;
+  for (int64_t e = 0; e < N; ++e) x[e] = t * b[e];
+  return model(A, b, x, ax, N);
+}
+
+/* Steihaug's CG (bs_linsolve_set_radius), for cg and pcg: on an SPD matrix
+ * a radius larger than the solution changes nothing; a smaller one ends on
+ * the boundary. On an indefinite matrix (the negative-curvature exit) the
+ * answer is on the boundary too. Every boundary answer is a descent
+ * direction and, for CG, lowers the model at least as much as the Cauchy
+ * point (Steihaug's first iterate). */
+Test(linsolve, trust_region_steihaug) {
+  bs_bsr *A = grid_matrix(5);
+  const int64_t N = 3 * (int64_t)A->n;
+  double *b = random_vec(N), *x = malloc(sizeof *x * N), *xd = malloc(sizeof *xd * N), *ax = malloc(sizeof *ax * N),
+         *xc = malloc(sizeof *xc * N);
+  bs_error err = {0};
+  for (int indef = 0; indef < 2; ++indef) {
+    fill_spd(A, 0.0);
+    if (indef)
+      for (int32_t i = 0; i < A->n; ++i)
+        for (int a = 0; a < 3; ++a) A->val[9 * A->diag[i] + 4 * a] -= 3.0;
+    dense_solve(A, NULL, b, xd);
+    double xdn = 0;
+    for (int64_t e = 0; e < N; ++e) xdn += xd[e] * xd[e];
+    xdn = sqrt(xdn);
+    for (int k = 0; k < 2; ++k) {
+      bs_linsolve *ls = NULL;
+      cr_assert_eq(bs_linsolve_create(A, all_kinds[k], &ls, &err), 0);
+      const char *name = bs_lin_kind_name(all_kinds[k]);
+      bs_lin_stats st;
+      for (int small = 0; small < 2; ++small) {
+        const double r = small ? 0.3 * xdn : 10 * xdn;
+        cr_assert_eq(bs_linsolve_set_radius(ls, r, &err), 0, "%s", err.msg);
+        cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-10, 1000, x, &st, &err), 0, "%s", err.msg);
+        double xn = 0, bx = 0;
+        for (int64_t e = 0; e < N; ++e) xn += x[e] * x[e], bx += b[e] * x[e];
+        xn = sqrt(xn);
+        cr_assert_gt(bx, 0.0, "%s indef %d small %d: b.x = %g", name, indef, small, bx);
+        if (!indef && !small) {
+          cr_assert_eq(st.boundary, 0, "%s: the solution lies inside the ball", name);
+          cr_assert_lt(rel_diff(N, x, xd), 1e-8, "%s: error %g", name, rel_diff(N, x, xd));
+          continue;
+        }
+        cr_assert_eq(st.boundary, 1, "%s indef %d small %d", name, indef, small);
+        if (!indef || !small) /* (in the small ball of the indefinite matrix either exit can come first) */
+          cr_assert_eq(st.indefinite, indef, "%s indef %d small %d", name, indef, small);
+        cr_assert_float_eq(xn, r, 1e-10 * r, "%s indef %d small %d: ||x|| = %.15g, radius %.15g", name, indef,
+                           small, xn, r);
+        /* (PCG's path starts along M^-1 b: its guarantee is in M's norm, so only a decrease is asserted) */
+        const double mx = model(A, b, x, ax, N), mc = k == 0 ? cauchy_model(A, b, r, xc, ax, N) : 0.0;
+        cr_assert_leq(mx, mc + 1e-12 * fabs(mc), "%s indef %d small %d: model %.15g above the Cauchy point's %.15g",
+                      name, indef, small, mx, mc);
+      }
+      cr_assert_eq(bs_linsolve_set_radius(ls, 0.0, &err), 0);
+      cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-10, 1000, x, &st, &err), 0, "%s", err.msg);
+      cr_assert_eq(st.boundary, 0);
+      cr_assert_neq(bs_linsolve_set_radius(ls, -1.0, &err), 0);
+      cr_assert(strstr(err.msg, "radius"), "%s", err.msg);
+      bs_linsolve_destroy(&ls);
+    }
+  }
+  bs_linsolve *ls = NULL;
+  cr_assert_eq(bs_linsolve_create(A, BS_LIN_MINRES, &ls, &err), 0);
+  cr_assert_neq(bs_linsolve_set_radius(ls, 1.0, &err), 0);
+  cr_assert(strstr(err.msg, "minres"), "%s", err.msg);
+  bs_linsolve_destroy(&ls);
+  free(b);
+  free(x);
+  free(xd);
+  free(ax);
+  free(xc);
+  bs_bsr_destroy(&A);
+}

@@ -1712,3 +1712,99 @@ Test(minimize, adaptive_forcing_starts_from_the_last_full_solve) {
   cr_assert_lt(adaptive[1], 0.1 * paper[1], "the second solve starts at %g (paper %g)", adaptive[1], paper[1]);
   cr_assert_leq(ia[1], ip[1], "adaptive: %d iterations, paper: %d", ia[1], ip[1]);
 }
+
+/* globalization trust_region (Steihaug's CG, bs_minimize.h "Trust region"):
+ * the 12-D Rosenbrock from its usual start converges to the minimizer, with
+ * steps on the boundary of a first radius (0.2) shorter than the way there,
+ * and with plain CG and PCG alike. */
+Test(minimize, trust_region_rosenbrock) {
+  for (int pcg = 0; pcg < 2; ++pcg) {
+    const int32_t n = 4;
+    bs_bsr *P = pattern_chain(n);
+    fx f;
+    fx_init(&f, n, ev_rosenN);
+    bs_minimize_opts o;
+    bs_minimize_opts_default(&o);
+    o.tol = 1e-8;
+    o.linear = pcg ? BS_LIN_PCG : BS_LIN_CG;
+    o.globalization = BS_GLOBAL_TRUST_REGION;
+    bs_minimizer *m = NULL;
+    bs_error err = {0};
+    cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+    bs_objective obj = make_obj(&f, NULL);
+    double x[12];
+    for (int k = 0; k < 12; ++k) x[k] = k % 2 ? 1.0 : -1.2;
+    bs_minimize_stats st;
+    cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.reason, BS_MIN_CONVERGED, "pcg %d: %s", pcg, st.reason_text);
+    for (int k = 0; k < 12; ++k) cr_assert_float_eq(x[k], 1.0, 1e-7, "pcg %d: x[%d] = %.12g", pcg, k, x[k]);
+    cr_assert_gt(st.tr_boundary, 0, "pcg %d: no step reached the first radius", pcg);
+    cr_assert_lt(st.iterations, 100, "pcg %d: %d iterations", pcg, st.iterations);
+    cr_assert_eq(f.n_rec, st.iterations, "one trace record per step taken");
+    cr_assert_eq(f.bad_point, 0);
+    cr_assert_eq(f.bad_decrease, 0);
+    bs_minimizer_destroy(&m);
+    bs_bsr_destroy(&P);
+  }
+}
+
+/* From the top of the double well, where the Hessian is negative definite,
+ * CG's first curvature is negative: the trust-region step follows it to the
+ * boundary (the line search gets CG's right-hand side, a short -grad E). */
+Test(minimize, trust_region_negative_curvature) {
+  const int32_t n = 2;
+  bs_bsr *P = pattern_chain(n);
+  fx f;
+  fx_init(&f, n, ev_well);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-10;
+  o.globalization = BS_GLOBAL_TRUST_REGION;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  double x[6];
+  for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.1 * k);
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(x[k], 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
+  cr_assert(f.has_first);
+  cr_assert_eq(f.first.lin_indefinite, 1);
+  cr_assert_eq(f.first.lin_boundary, 1);
+  /* The first step is -Delta_0 g / ||g|| (CG's first direction is -g): g.d = -Delta_0 ||g||, Delta_0 = 0.1 sqrt(2). */
+  double x0[6], g0[6] = {0}, E0;
+  for (int k = 0; k < 6; ++k) x0[k] = 0.01 * (1 + 0.1 * k);
+  ev_well(&f, x0, &E0, g0, NULL);
+  const double want = -0.1 * sqrt(2.0) * sqrt(dot(6, g0, g0));
+  cr_assert_float_eq(f.first.dphi0, want, 1e-12 * fabs(want), "g.d = %.15g, expected %.15g", f.first.dphi0, want);
+  cr_assert_eq(f.bad_decrease, 0);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* trust_region needs a Krylov solver and a positive radius: the errors name
+ * the option. */
+Test(minimize, trust_region_options) {
+  bs_bsr *P = pattern_chain(2);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.globalization = BS_GLOBAL_TRUST_REGION;
+  o.linear = BS_LIN_CHOLMOD;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "trust_region") && strstr(err.msg, "cholmod"), "%s", err.msg);
+  o.linear = BS_LIN_CG;
+  o.tr_radius = 0;
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "tr_radius"), "%s", err.msg);
+  bs_globalization g;
+  cr_assert_eq(bs_globalization_parse("trust_region", &g, &err), 0);
+  cr_assert_eq(g, BS_GLOBAL_TRUST_REGION);
+  cr_assert_str_eq(bs_globalization_name(BS_GLOBAL_LINE_SEARCH), "line_search");
+  cr_assert_eq(bs_globalization_parse("dogleg", &g, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "dogleg"), "%s", err.msg);
+  bs_bsr_destroy(&P);
+}
