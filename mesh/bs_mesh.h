@@ -117,13 +117,16 @@ typedef struct bs_mesh_read_opts {
                     short creases are ignored); 0: BS_MESH_FEATURE_ANGLE;
                     < 0: none                                           */
   int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_CGAL (0,
-                    CGAL's Mesh_3) or BS_SURFACE_GMSH (Gmsh reparametrises
-                    and remeshes the surface; kept for comparison)      */
+                    CGAL's Mesh_3), BS_SURFACE_REMESH (CGAL's isotropic
+                    remeshing of the surface at the size, then Gmsh's HXT
+                    volume mesher on two threads and Gmsh's optimisers) or
+                    BS_SURFACE_GMSH (Gmsh reparametrises and remeshes the
+                    surface; kept for comparison)                       */
 } bs_mesh_read_opts;
 
 #define BS_MESH_MIN_DIHEDRAL 10.0
 #define BS_MESH_FEATURE_ANGLE 60.0
-enum { BS_SURFACE_CGAL = 0, BS_SURFACE_GMSH = 1 };
+enum { BS_SURFACE_CGAL = 0, BS_SURFACE_GMSH = 1, BS_SURFACE_REMESH = 2 };
 
 /* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
  * refinement multiplies by 8), and by default no more than this machine's

@@ -101,6 +101,8 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
                         (long long)nt);
   int rc = check_size(path, pts, np, tris, nt, h, opts, err);
   if (rc) return rc;
+  if (opts && opts->surface_mesher == BS_SURFACE_REMESH)
+    return bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
   bs_shim_mesh3_opts o = mesh3_opts(h, opts);
   bs_shim_mesh3_out r;
   rc = bs_shim_mesh_surface(path, pts, np, tris, nt, &o, &r, err);
