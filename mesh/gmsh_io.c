@@ -832,15 +832,18 @@ int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, con
   gmshOptionSetNumber("General.NumThreads", threads > 0 ? threads : 1, &ierr);
   gmshOptionSetNumber("Mesh.Algorithm3D", algo3d, &ierr);
   rc = add_discrete_surface(path, pts, np, tris, nt, err);
-  double t0 = bs_seconds();
   if (!rc) rc = surface_to_volume(path, 0.0, opts, err);
-  if (getenv("BS_REMESH_DEBUG")) fprintf(stderr, "DEBUG volume %.2f s\n", bs_seconds() - t0);
   const double gate = bs__mesh_gate(opts);
   if (!rc && gate > 0) rc = optimise(path, gate, 0, err);
-  if (getenv("BS_REMESH_DEBUG")) fprintf(stderr, "DEBUG optimise %.2f s\n", bs_seconds() - t0);
   gmsh_quiet();
   if (!rc) rc = model_to_mesh(path, 0, out, err);
   gmsh_end();
+  /* A void in the volume shows as boundary faces the soup does not have. */
+  if (!rc && (*out)->n_faces != nt)
+    rc = bs_error_set(err, BS_EGMSH,
+                      "%s: Gmsh's volume mesh has %d boundary triangles where the surface has %lld (it left a void "
+                      "inside)",
+                      path, (*out)->n_faces, (long long)nt);
   if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
   if (rc) bs_mesh_destroy(out);
   return rc;

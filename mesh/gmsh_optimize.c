@@ -14,7 +14,6 @@
  * boundary); HXT gives 18.6 and 16.6, and 13.7 to 16.2 on the others.
  */
 #include <float.h>
-#include <stdio.h>
 #include <stdlib.h>
 
 #include <gmshc.h>
@@ -83,7 +82,6 @@ static int optimise_rounds(const char *path, double gate, double *best, bs_error
     if (netgen) gmshModelMeshOptimize("Netgen", 0, 1, NULL, 0, &ierr);
     if (ierr) netgen = 0, ierr = 0; /* Gmsh built without Netgen, or it gave up: Gmsh's own optimiser goes on */
     double now = model_min_dihedral(path, err, &rc);
-    if (getenv("BS_REMESH_DEBUG")) fprintf(stderr, "DEBUG round %d: %.3f\n", r, now);
     int stalled = now < *best + 0.01;
     *best = now;
     if (rc || stalled) break;
