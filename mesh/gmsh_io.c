@@ -823,7 +823,7 @@ static int optimise(const char *path, double gate, int finer, bs_error *err) {
 
 /* The volume inside a closed soup whose triangles are kept as the boundary
  * (see mesh_internal.h), meshed by Gmsh with Mesh.Algorithm3D = algo3d on
- * `threads` threads and optimised towards the gate. */
+ * `threads` threads and optimised towards the gate (not held to it). */
 int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, int algo3d, int threads, bs_mesh **out, bs_error *err) {
   *out = NULL;
@@ -844,7 +844,6 @@ int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, con
                       "%s: Gmsh's volume mesh has %d boundary triangles where the surface has %lld (it left a void "
                       "inside)",
                       path, (*out)->n_faces, (long long)nt);
-  if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
   if (rc) bs_mesh_destroy(out);
   return rc;
 }

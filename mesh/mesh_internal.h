@@ -117,7 +117,9 @@ int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const
  * Gmsh with the soup's triangles as its boundary (a discrete surface; sizes
  * interpolated from the boundary), Mesh.Algorithm3D = algo3d (1 Delaunay,
  * 10 HXT) and General.NumThreads = threads, then Gmsh's optimisers towards
- * bs__mesh_gate(opts) and the gate itself. Takes the Gmsh lock. */
+ * bs__mesh_gate(opts) (the caller holds the mesh to the gate). Refuses
+ * (BS_EGMSH) a mesh whose boundary has another number of triangles than the
+ * soup (a void inside). Takes the Gmsh lock. */
 int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, int algo3d, int threads, bs_mesh **out, bs_error *err);
 

@@ -45,6 +45,8 @@ int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, c
                                  out, err);
   bs_shim_free(r.points);
   bs_shim_free(r.tris);
+  if (!rc) rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err);
+  if (rc) bs_mesh_destroy(out);
   return rc;
 }
 
