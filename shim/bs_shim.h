@@ -366,8 +366,9 @@ int bs_shim_sharp_edges(const double *points, int64_t n_points, const int32_t *t
 typedef struct bs_shim_remesh_opts {
   double size;            /* target edge length h (> 0), in the points' units            */
   double feature_angle;   /* degrees: sharp edges (faces turning by more than this) are
-                             split to <= 4/3 h and kept when the surface is CAD-like (as
-                             bs_shim_mesh3_opts.feature_angle); <= 0: none              */
+                             kept when the surface is CAD-like (as
+                             bs_shim_mesh3_opts.feature_angle): remeshed only along
+                             their chains, never flipped; <= 0: none                    */
   double feature_min_length; /* <= 0: 2 h (see bs_shim_mesh3_opts)                      */
   int iterations;         /* isotropic_remeshing iterations; <= 0: 3                    */
 } bs_shim_remesh_opts;

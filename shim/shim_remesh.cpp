@@ -3,9 +3,13 @@
 //
 // The soup becomes a closed, outward Surface_mesh (shim_surface_mesh.cpp);
 // when the surface is CAD-like (shim_features.cpp) its sharp edges are split
-// to at most 4/3 h and protected; then
+// to at most 4/3 h and constrained; then
 // CGAL::Polygon_mesh_processing::isotropic_remeshing (split, collapse, flip,
 // tangential relaxation, projection onto the input) for a few iterations.
+// Constrained edges are split and collapsed only along their chains and never
+// flipped (protect_constraints(false)); protect_constraints(true), which
+// leaves them untouched, made the fandisk at diagonal / 36 fold through
+// itself.
 // The result is checked again: closed by construction, and free of
 // self-intersections (a part thinner than about h can fold through itself).
 // Deterministic; sequential. Every extern "C" entry catches every exception;
@@ -72,19 +76,27 @@ int remesh(const char *name, const double *pts, int64_t np, const int32_t *tris,
                                      &n_long);
   out->n_features = cad ? n_long : 0;
   auto sharp = sm.add_property_map<Surface::Edge_index, bool>("e:bs_protect", false).first;
+  auto corner = sm.add_property_map<Surface::Vertex_index, bool>("v:bs_corner", false).first;
   if (cad) {
     PMP::detect_sharp_edges(sm, o.feature_angle, sharp);
     std::vector<Surface::Edge_index> constrained;
     for (auto e : sm.edges())
       if (sharp[e]) constrained.push_back(e);
     PMP::split_long_edges(constrained, 4.0 / 3.0 * h, sm, CGAL::parameters::edge_is_constrained_map(sharp));
+    for (auto v : sm.vertices()) { // where chains end or meet: kept where they are
+      int k = 0;
+      for (auto g : CGAL::halfedges_around_source(v, sm)) k += sharp[sm.edge(g)] ? 1 : 0;
+      corner[v] = k != 0 && k != 2;
+    }
   }
   const unsigned iters = o.iterations > 0 ? (unsigned)o.iterations : 3u;
   PMP::isotropic_remeshing(faces(sm), h, sm,
                            CGAL::parameters::number_of_iterations(iters)
                                .edge_is_constrained_map(sharp)
+                               .vertex_is_constrained_map(corner)
                                .protect_constraints(false));
   sm.remove_property_map(sharp);
+  sm.remove_property_map(corner);
   sm.collect_garbage();
   if (PMP::does_self_intersect(sm))
     return bs_error_set(err, BS_EINPUT,
