@@ -23,8 +23,10 @@
 #include <unistd.h>
 
 #include "bs_mesh.h"
+#include "bs_scene.h"
 #include "bs_shim.h"
 #include "cli_util.h"
+#include "scene_fixture.h"
 
 typedef struct soup {
   double *x;
@@ -207,4 +209,24 @@ Test(mesh_remesh, fandisk_keeps_sharp_edges) {
   cr_expect_gt(worst[1], 2 * worst[0], "without features the edges are as close (%g vs %g)", worst[1], worst[0]);
   bs_shim_free(seg);
   soup_free(&s);
+}
+
+/* bodies[].mesher: parsed into BS_SURFACE_* (auto when absent); another word
+ * is refused naming the key and the choices. */
+Test(mesh_remesh, scene_mesher) {
+  bs_scene *s = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  cr_assert_eq(bs_scene_parse(bs_test_good_scene, "good.json", 0, NULL, &s, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->bodies[0].mesher, BS_SURFACE_AUTO);
+  bs_scene_destroy(&s);
+  const char *set = "bodies.0.mesher=\"remesh\"";
+  cr_assert_eq(bs_scene_parse(bs_test_good_scene, "good.json", 1, &set, &s, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->bodies[0].mesher, BS_SURFACE_REMESH);
+  bs_scene_destroy(&s);
+  set = "bodies.0.mesher=\"tetgen\"";
+  cr_expect_eq(bs_scene_parse(bs_test_good_scene, "good.json", 1, &set, &s, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "bodies.0.mesher") && strstr(err.msg, "tetgen") && strstr(err.msg, "remesh"), "%s",
+            err.msg);
+  bs_scene_destroy(&s);
 }
