@@ -9,6 +9,7 @@
 static const char *mesh_help =
     "usage: bigstep mesh info FILE [--size H] [--min-dihedral DEG] [--refine N] [--reorder metis|rcm]\n"
     "                         [--merge-coincident] [--close-holes] [--max-hole F]\n"
+    "                         [--mesher auto|cgal|remesh]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
@@ -23,6 +24,10 @@ static const char *mesh_help =
     "                 optimise until every tet's smallest dihedral angle is at\n"
     "                 least DEG degrees, else fail naming the worst region\n"
     "                 (default 10; 0: no gate)\n"
+    "  --mesher M     closed surfaces at --size: cgal (CGAL Mesh_3), remesh (CGAL\n"
+    "                 remeshes the surface at H, Gmsh HXT meshes the volume)\n"
+    "                 or auto (default: remesh when H asks for more\n"
+    "                 than about 2e5 tets, else or if it is refused cgal)\n"
     "  --refine N     uniform 1->8 refinements after reading (info, convert)\n"
     "  --levels N     refinements to apply (refine; default 1)\n"
     "  --reorder M    renumber vertices (info): metis or rcm\n"
@@ -86,7 +91,7 @@ typedef struct mesh_args {
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
   double size, min_dihedral; /* min_dihedral: < 0 none, 0 default */
-  int refine, levels, have_order, merge, close_holes;
+  int refine, levels, have_order, merge, close_holes, mesher; /* mesher: BS_SURFACE_* */
   double max_hole;
   bs_order order;
 } mesh_args;
@@ -101,6 +106,9 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
     if (bs_parse_double(val, &a->min_dihedral) || !(a->min_dihedral >= 0 && a->min_dihedral < 70.5))
       return bs_app_usage_error("mesh", "--min-dihedral must be a number of degrees in [0, 70.5), got '%s'", val);
     if (a->min_dihedral == 0) a->min_dihedral = -1; /* no gate */
+  } else if (!strcmp(flag, "--mesher")) {
+    if (bs_mesh_parse_mesher(val, &a->mesher))
+      return bs_app_usage_error("mesh", "--mesher must be auto, cgal or remesh, got '%s'", val);
   } else if (!strcmp(flag, "--refine") && strcmp(sub, "refine") && strcmp(sub, "reorder")) {
     if (bs_parse_int(val, 0, 6, &a->refine))
       return bs_app_usage_error("mesh", "--refine must be an integer 0..6, got '%s'", val);
@@ -214,7 +222,7 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_surface_report rep = {0};
   bs_mesh_read_opts o = {.size = a.size, .refine = !strcmp(a.sub, "refine") ? a.levels : a.refine,
                          .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
-                         .min_dihedral = a.min_dihedral, .report = &rep};
+                         .min_dihedral = a.min_dihedral, .report = &rep, .surface_mesher = a.mesher};
   if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
     if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then meshing failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);

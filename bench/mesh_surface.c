@@ -1,6 +1,8 @@
 /* bench/mesh_surface.c — closed surfaces meshed into tets by CGAL's Mesh_3
- * (the shim, as bs_mesh_read does it) and by Gmsh (reparametrised surface)
- * on the same input and size: a table of tets, seconds, tets per second,
+ * (the shim, as bs_mesh_read does it; row "cgal"), by CGAL's isotropic
+ * surface remeshing then Gmsh's HXT and optimisers to the 10 degree gate
+ * (bs_mesh_read with BS_SURFACE_REMESH; row "remesh") and by Gmsh
+ * (reparametrised surface; row "gmsh") on the same input and size: a table of tets, seconds, tets per second,
  * smallest dihedral angle, smallest radius ratio, volume error against the
  * surface's enclosed volume and the two-sided sampled Hausdorff distance of
  * the boundary to the input (in units of h).
@@ -12,7 +14,7 @@
  *   --rounds R (perturb + exude rounds, 3)     --target DEG (sliver bound, 10)
  *   --feature DEG (feature angle, 60; 0 none)  --distance F (facet_distance = h / F, 10)
  *   --facet F (facet_size = edge_size = h / F, 1)
- *   --no-perturb  --no-exude  --no-gmsh
+ *   --no-perturb  --no-exude  --no-cgal  --no-remesh  --no-gmsh
  * Seconds are wall-clock of one run: on a busy machine, say so beside them.
  * Never run by the test suite. */
 #include <math.h>
@@ -22,6 +24,8 @@
 
 #include "bs_mesh.h"
 #include "bs_shim.h"
+
+enum { RUN_CGAL = 1, RUN_GMSH = 2, RUN_REMESH = 4 };
 
 typedef struct row {
   double h, seconds, dmin, refined, rmin, vol_err, haus;
@@ -103,16 +107,40 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
   bs_mesh_destroy(&m);
 }
 
-static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, double *dist_frac, double *facet_frac, int *first) {
+/* The remesh path as bs_mesh_read runs it (CGAL isotropic remeshing, Gmsh
+ * HXT, Gmsh's optimisers to the default gate); a gate failure is printed. */
+static void run_remesh(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, row *r) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh_read_opts o = {.size = r->h, .surface_mesher = BS_SURFACE_REMESH};
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  int rc = bs_mesh_read(path, &o, &m, &err);
+  r->seconds = bs_seconds() - t0;
+  r->refined = NAN;
+  r->features = 0;
+  if (rc) {
+    printf("%-28s remesh failed after %.1f s: %.300s\n", path, r->seconds, err.msg);
+    return;
+  }
+  measure(m, p, np, t, nt, r);
+  print_row(path, "remesh", r);
+  bs_mesh_destroy(&m);
+}
+
+static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, double *dist_frac, double *facet_frac,
+                      int *first) {
   *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
                             .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
-  *gmsh = 1;
+  *which = RUN_CGAL | RUN_GMSH | RUN_REMESH;
   *dist_frac = 10;
   *facet_frac = 1;
   int i = 1;
   for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
-    if (!strcmp(a, "--no-gmsh")) *gmsh = 0;
+    if (!strcmp(a, "--no-gmsh")) *which &= ~RUN_GMSH;
+    else if (!strcmp(a, "--no-cgal")) *which &= ~RUN_CGAL;
+    else if (!strcmp(a, "--no-remesh")) *which &= ~RUN_REMESH;
     else if (!strcmp(a, "--no-perturb")) o->perturb = 0;
     else if (!strcmp(a, "--no-exude")) o->exude = 0;
     else if (!strcmp(a, "--smoother") && ++i)
@@ -134,9 +162,9 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, d
 
 int main(int argc, char **argv) {
   bs_shim_mesh3_opts o;
-  int gmsh, first;
+  int which, first;
   double dist_frac, facet_frac;
-  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &first)) {
+  if (parse_opts(argc, argv, &o, &which, &dist_frac, &facet_frac, &first)) {
     fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
     return 2;
   }
@@ -162,8 +190,9 @@ int main(int argc, char **argv) {
     o.size = r.h;
     o.facet_distance = r.h / dist_frac;
     o.facet_size = r.h / facet_frac;
-    if (!run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
-    if (gmsh) run_gmsh(path, p, np, t, nt, &r);
+    if ((which & RUN_CGAL) && !run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
+    if (which & RUN_REMESH) run_remesh(path, p, np, t, nt, &r);
+    if (which & RUN_GMSH) run_gmsh(path, p, np, t, nt, &r);
     bs_shim_free(p);
     bs_shim_free(t);
     fflush(stdout);

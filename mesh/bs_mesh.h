@@ -116,14 +116,27 @@ typedef struct bs_mesh_read_opts {
                     edges are long chains, bs_shim_mesh3_opts; a scan's
                     short creases are ignored); 0: BS_MESH_FEATURE_ANGLE;
                     < 0: none                                           */
-  int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_CGAL (0,
-                    CGAL's Mesh_3) or BS_SURFACE_GMSH (Gmsh reparametrises
-                    and remeshes the surface; kept for comparison)      */
+  int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_AUTO (0:
+                    the remesh path when the size asks for more than about
+                    2e5 tets (6 V / h^3), Mesh_3 otherwise or when the
+                    remesh path is refused), BS_SURFACE_CGAL (CGAL's
+                    Mesh_3), BS_SURFACE_REMESH (CGAL's isotropic remeshing
+                    of the surface at the size, then Gmsh's HXT volume
+                    mesher and Gmsh's optimisers) or
+                    BS_SURFACE_GMSH (Gmsh reparametrises and remeshes the
+                    surface; kept for comparison)                       */
 } bs_mesh_read_opts;
 
 #define BS_MESH_MIN_DIHEDRAL 10.0
 #define BS_MESH_FEATURE_ANGLE 60.0
-enum { BS_SURFACE_CGAL = 0, BS_SURFACE_GMSH = 1 };
+enum { BS_SURFACE_AUTO = 0, BS_SURFACE_GMSH = 1, BS_SURFACE_REMESH = 2, BS_SURFACE_CGAL = 3 };
+/* The mesher named by s ("auto", "cgal" or "remesh": the --mesher option and
+ * the scene key bodies[].mesher) into *mesher (BS_SURFACE_*); 0, or -1 (s
+ * NULL or another word; *mesher untouched).
+ * Example: int m; if (bs_mesh_parse_mesher(arg, &m)) usage(); o.surface_mesher = m; */
+int bs_mesh_parse_mesher(const char *s, int *mesher);
+/* The name bs_mesh_parse_mesher reads for mesher ("auto" for any other value). */
+const char *bs_mesh_mesher_name(int mesher);
 
 /* Limits of a mesh job: at most BS_MESH_MAX_TETS tets (indices are int32 and
  * refinement multiplies by 8), and by default no more than this machine's

@@ -821,6 +821,33 @@ static int optimise(const char *path, double gate, int finer, bs_error *err) {
   return rc;
 }
 
+/* The volume inside a closed soup whose triangles are kept as the boundary
+ * (see mesh_internal.h), meshed by Gmsh with Mesh.Algorithm3D = algo3d on
+ * `threads` threads and optimised towards the gate (not held to it). */
+int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                            const bs_mesh_read_opts *opts, int algo3d, int threads, bs_mesh **out, bs_error *err) {
+  *out = NULL;
+  int rc = gmsh_begin(path, err), ierr = 0;
+  if (rc) return rc;
+  gmshOptionSetNumber("General.NumThreads", threads > 0 ? threads : 1, &ierr);
+  gmshOptionSetNumber("Mesh.Algorithm3D", algo3d, &ierr);
+  rc = add_discrete_surface(path, pts, np, tris, nt, err);
+  if (!rc) rc = surface_to_volume(path, 0.0, opts, err);
+  const double gate = bs__mesh_gate(opts);
+  if (!rc && gate > 0) rc = optimise(path, gate, 0, err);
+  gmsh_quiet();
+  if (!rc) rc = model_to_mesh(path, 0, out, err);
+  gmsh_end();
+  /* A void in the volume shows as boundary faces the soup does not have. */
+  if (!rc && (*out)->n_faces != nt)
+    rc = bs_error_set(err, BS_EGMSH,
+                      "%s: Gmsh's volume mesh has %d boundary triangles where the surface has %lld (it left a void "
+                      "inside)",
+                      path, (*out)->n_faces, (long long)nt);
+  if (rc) bs_mesh_destroy(out);
+  return rc;
+}
+
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;

@@ -94,6 +94,35 @@ void bs__tet_quality(const double *const p[4], bs__tet_measures *out);
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
+/* surface_remesh.c: the "remesh" mesher (BS_SURFACE_REMESH): the closed
+ * soup remeshed by CGAL at opts->size (bs_shim_remesh_surface), its volume
+ * meshed by Gmsh's HXT (one thread) from those triangles
+ * (bs__gmsh_surface_volume), optimised and held to the gate. The size has
+ * been checked (as bs__mesh_closed_surface does). Groups (3, 1, "body") and
+ * (2, 1, "surface_1"). Errors name path: the shim's refusals (a surface
+ * that folds through itself once remeshed), Gmsh's failure, the gate. */
+int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                              const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
+/* surface_remesh.c: the choice of mesher for a checked closed soup at
+ * opts->size (see the file's comment): when the remesh path is chosen
+ * (BS_SURFACE_REMESH; BS_SURFACE_AUTO above a tet count) it meshes into *out
+ * and sets *done = 1, returning its status (in auto mode a BS_EINPUT refusal
+ * gives *done = 0 and BS_OK instead: err cleared, Mesh_3's turn); *done = 0
+ * and BS_OK: the caller meshes with Mesh_3. */
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, int *done, bs_mesh **out, bs_error *err);
+
+/* gmsh_io.c: the volume inside a closed soup (outward triangles) meshed by
+ * Gmsh with the soup's triangles as its boundary (a discrete surface; sizes
+ * interpolated from the boundary), Mesh.Algorithm3D = algo3d (1 Delaunay,
+ * 10 HXT) and General.NumThreads = threads, then Gmsh's optimisers towards
+ * bs__mesh_gate(opts) (the caller holds the mesh to the gate). Refuses
+ * (BS_EGMSH) a mesh whose boundary has another number of triangles than the
+ * soup (a void inside). Takes the Gmsh lock. */
+int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                            const bs_mesh_read_opts *opts, int algo3d, int threads, bs_mesh **out, bs_error *err);
+
 /* gmsh_optimize.c: inside a Gmsh session whose model has a 3-D mesh, runs
  * gmshModelMeshOptimize ("" then "Netgen", Mesh.OptimizeThreshold raised each
  * round) until the smallest dihedral angle of its tets reaches gate degrees

@@ -101,6 +101,9 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
                         (long long)nt);
   int rc = check_size(path, pts, np, tris, nt, h, opts, err);
   if (rc) return rc;
+  int done = 0; /* the remesh path (surface_remesh.c) when opts ask for it or the size is large */
+  rc = bs__mesh_surface_auto(path, pts, np, tris, nt, opts, &done, out, err);
+  if (done || rc) return rc;
   bs_shim_mesh3_opts o = mesh3_opts(h, opts);
   bs_shim_mesh3_out r;
   rc = bs_shim_mesh_surface(path, pts, np, tris, nt, &o, &r, err);

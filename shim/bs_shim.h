@@ -356,6 +356,50 @@ int bs_shim_surface_distance(const double *pa, int64_t na, const int32_t *ta, in
 int bs_shim_sharp_edges(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris, double angle,
                         double **segments, int64_t *n_edges, bs_error *err);
 
+/* ==========================================================================
+ * Isotropic surface remeshing (shim_remesh.cpp, shim_features.cpp): a closed
+ * surface's triangles replaced by near-equilateral ones of a target edge
+ * length, the first step of the "remesh" volume mesher (mesh/surface_remesh.c
+ * hands the result to Gmsh as a discrete surface).
+ * ========================================================================== */
+
+typedef struct bs_shim_remesh_opts {
+  double size;            /* target edge length h (> 0), in the points' units            */
+  double feature_angle;   /* degrees: sharp edges (faces turning by more than this) are
+                             kept when the surface is CAD-like (as
+                             bs_shim_mesh3_opts.feature_angle): remeshed only along
+                             their chains, never flipped; <= 0: none                    */
+  double feature_min_length; /* <= 0: 2 h (see bs_shim_mesh3_opts)                      */
+  int iterations;         /* isotropic_remeshing iterations; <= 0: 3                    */
+} bs_shim_remesh_opts;
+
+typedef struct bs_shim_remesh_out {
+  double *points;         /* 3 * n_points (free with bs_shim_free)                       */
+  int64_t n_points;
+  int32_t *tris;          /* 3 * n_tris, 0-based, outward (counter-clockwise seen from
+                             outside), a closed 2-manifold (free with bs_shim_free)     */
+  int64_t n_tris;
+  int64_t n_features;     /* sharp-edge chains protected (0: remeshed as a smooth surface) */
+} bs_shim_remesh_out;
+
+/* Remeshes the closed surface (points, tris; the same requirements as
+ * bs_shim_mesh_surface: orientable, closed, 2-manifold, no
+ * self-intersection) with CGAL::Polygon_mesh_processing::isotropic_remeshing
+ * at edge length opts->size for opts->iterations iterations, its vertices
+ * projected back onto the input; the sharp edges of a CAD-like surface are
+ * protected. Deterministic and sequential. Errors (the message starts with
+ * `name`): BS_EINPUT (the input refusals of bs_shim_mesh_surface; size <= 0;
+ * the remeshed surface intersects itself, which happens where the part is
+ * thinner than about h; CGAL's failure with its text), BS_ENUMERIC,
+ * BS_ENOMEM. On error *out is zeroed.
+ * Example:
+ *   bs_shim_remesh_opts o = {.size = 1.0, .feature_angle = 60, .iterations = 3};
+ *   bs_shim_remesh_out r;
+ *   if (!bs_shim_remesh_surface("scan.off", x, nx, t, nt, &o, &r, &err)) {
+ *     ...; bs_shim_free(r.points); bs_shim_free(r.tris); } */
+int bs_shim_remesh_surface(const char *name, const double *points, int64_t n_points, const int32_t *tris,
+                           int64_t n_tris, const bs_shim_remesh_opts *opts, bs_shim_remesh_out *out, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -102,6 +102,7 @@ typedef struct bs_scene_body {
   double min_dihedral;     /* quality gate (degrees) of a mesh bigstep makes [10]; 0: none */
   int refine;              /* uniform refinements [0], 0..6                     */
   int close_holes;         /* a surface mesh (.off .obj .ply): close its small holes [0] */
+  int mesher;              /* a closed surface at mesh_size: BS_SURFACE_AUTO / CGAL / REMESH [auto] */
   bs_order reorder;
   double translate[3], rotate[3] /* axis * angle (degrees) */, scale[3];
   int n_materials;         /* [0] is the default; others by group name          */

@@ -240,6 +240,14 @@ static int get_choice_str(ctx *c, const cJSON *obj, const char *where, const cha
   return bad_choice(c, w, k, buf);
 }
 
+/* bodies[].mesher as BS_SURFACE_* (bs_mesh_parse_mesher): *out untouched when absent. */
+static int get_mesher(ctx *c, const cJSON *obj, const char *where, int *out) {
+  char buf[64];
+  int st = get_choice_str(c, obj, where, "bodies[]", "mesher", buf, sizeof buf);
+  if (!st && buf[0]) bs_mesh_parse_mesher(buf, out);
+  return st;
+}
+
 /* The same as an index into the choices: *out untouched when absent. */
 static int get_choice(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key, int *out) {
   char buf[64];
@@ -503,7 +511,7 @@ static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *
   if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size)) ||
       (st = get_num(c, o, where, "min_dihedral", 0, &b->min_dihedral)) ||
       (st = get_int(c, o, where, "bodies[]", "refine", &b->refine)) ||
-      (st = get_bool(c, o, where, "close_holes", &b->close_holes)) ||
+      (st = get_bool(c, o, where, "close_holes", &b->close_holes)) || (st = get_mesher(c, o, where, &b->mesher)) ||
       (st = get_choice(c, o, where, "bodies[]", "reorder", &reorder)))
     return st;
   b->reorder = (bs_order)reorder;

@@ -96,6 +96,9 @@ const bs_schema_key bs_schema_keys_[] = {
     {"bodies[]", "min_dihedral", NUM, .range = "[0, 70.5)", .def = "10",
      .doc = "quality gate (degrees) for a mesh bigstep makes (not a .msh): optimised until every tet's smallest "
             "dihedral angle reaches it, else an error naming the worst region; 0: no gate"},
+    {"bodies[]", "mesher", STR, .choices = CHOICES("auto", "cgal", "remesh"), .def = "\"auto\"",
+     .doc = "a closed surface at mesh_size: cgal (CGAL Mesh_3), remesh (CGAL remeshes the surface, Gmsh HXT meshes "
+            "the volume) or auto (remesh above about 2e5 tets, else or if refused cgal)"},
     {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", .doc = "uniform 1-to-8 refinements"},
     {"bodies[]", "close_holes", BOOL, .def = "false",
      .doc = "a surface (.off, .obj, .ply): close holes up to 0.2 of its bounding-box diagonal (else an open one is refused)"},

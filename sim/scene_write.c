@@ -152,6 +152,7 @@ static void write_body(writer *w, cJSON *o, const bs_scene_body *b) {
   num(w, o, "min_dihedral", b->min_dihedral);
   num(w, o, "refine", b->refine);
   boolean(w, o, "close_holes", b->close_holes);
+  str(w, o, "mesher", bs_mesh_mesher_name(b->mesher));
   str(w, o, "reorder", choice("bodies[]", "reorder", (int)b->reorder));
   vec3(w, o, "scale", b->scale);
   vec3(w, o, "rotate", b->rotate);

@@ -39,7 +39,7 @@ int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
   if (!strcmp(bd->mesh, "box")) st = bs_mesh_create_box_refined(bd->box_size, bd->box_cells, bd->refine, out, err);
   else {
     bs_mesh_read_opts o = {.size = bd->mesh_size, .refine = bd->refine, .max_tets = bs_memory_max_tets(sc),
-                           .close_holes = bd->close_holes,
+                           .close_holes = bd->close_holes, .surface_mesher = bd->mesher,
                            .min_dihedral = bd->min_dihedral > 0 ? bd->min_dihedral : -1};
     st = bs_mesh_read(bd->mesh, &o, out, err);
   }

@@ -38,7 +38,7 @@ static void expect_same_file(const char *p, const char *q, const char *where) {
 
 static void expect_same_body(const bs_scene_body *a, const bs_scene_body *b, const char *where) {
   expect_same_file(a->mesh, b->mesh, where);
-  EQ3(box_cells); EQ3(box_size); EQ(mesh_size); EQ(refine); EQ(close_holes); EQ(reorder); EQ3(translate); EQ3(rotate); EQ3(scale);
+  EQ3(box_cells); EQ3(box_size); EQ(mesh_size); EQ(refine); EQ(close_holes); EQ(mesher); EQ(reorder); EQ3(translate); EQ3(rotate); EQ3(scale);
   EQ3(velocity); EQ3(angular_velocity); EQ(init); EQ(init_seed); EQ(n_materials); EQ(n_scripts);
   if (a->init != BS_INIT_REST) EQ3(init_lo);
   if (a->init == BS_INIT_RANDOM) EQ3(init_hi);

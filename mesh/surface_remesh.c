@@ -1,0 +1,205 @@
+/* surface_remesh.c — the "remesh" mesher for a closed surface at a size
+ * (bs__mesh_remeshed_surface, bs__mesh_surface_auto; see mesh_internal.h):
+ * CGAL's isotropic remeshing of the surface at edge length h (the shim,
+ * bs_shim_remesh_surface; sharp edges kept on a CAD-like surface), then
+ * Gmsh's HXT volume mesher on those triangles (one thread), with Gmsh's
+ * optimisers towards the gate (bs__gmsh_surface_volume). The volume mesher
+ * sees a surface of well-shaped triangles of size h, so its tets are sized
+ * h throughout (Gmsh interpolates the size from the boundary). Tets under
+ * the gate that no optimiser moves because their four vertices lie on the
+ * boundary and two of their faces are boundary triangles (caps across a
+ * nearly flat surface edge) are removed, which flips that surface edge
+ * (peel_caps); then the gate.
+ *
+ * Which mesher (opts->surface_mesher): BS_SURFACE_CGAL always Mesh_3,
+ * BS_SURFACE_REMESH always this path, BS_SURFACE_AUTO this path when the
+ * size asks for more than BS_REMESH_AUTO_TETS tets (6 V / h^3), Mesh_3
+ * below that or when this path is refused (the gate not met, or the surface
+ * folds through itself once remeshed). Below that count Mesh_3 is fast
+ * enough and stays closer to the surface (its facet distance h / 10); above
+ * it Mesh_3's perturber stalls under the gate for minutes while this path
+ * meets the gate without optimising.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_shim.h"
+#include "mesh_internal.h"
+
+#define BS_REMESH_ITERATIONS 3
+/* Gmsh 4.8.4's HXT on two threads left voids in the volume (extra boundary
+ * triangles; 2 of 4 runs of the elephant at diagonal / 60) and was slower on
+ * a shared two-core machine (1M tets: 8.6 s against 6.6 s): one thread. */
+#define BS_REMESH_THREADS 1
+#define BS_REMESH_AUTO_TETS 2e5
+#define BS_GMSH_HXT 10
+
+/* m's tets but those with drop[t] into a new mesh with the default groups
+ * (3, 1, "body") and (2, 1, "surface_1"), its whole boundary. */
+static int without_tets(const char *path, const bs_mesh *m, const char *drop, bs_mesh **out, bs_error *err) {
+  int32_t *tets = malloc(4 * (size_t)m->n_tets * sizeof *tets), n = 0;
+  bs_mesh *m0 = NULL;
+  if (!tets) return bs_error_set(err, BS_ENOMEM, "%s: out of memory for the tets", path);
+  for (int32_t t = 0; t < m->n_tets; t++)
+    if (!drop[t]) memcpy(tets + 4 * (size_t)n++, m->tets + 4 * (size_t)t, 4 * sizeof *tets);
+  int rc = bs_mesh_create(m->n_vertices, m->x, n, tets, 0, NULL, &m0, err);
+  int32_t *body = rc ? NULL : malloc((size_t)n * sizeof *body);
+  int32_t *surf = rc ? NULL : malloc(3 * (size_t)m0->n_faces * sizeof *surf);
+  if (!rc && (!body || !surf)) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the groups", path);
+  if (!rc) {
+    for (int32_t t = 0; t < n; t++) body[t] = t;
+    memcpy(surf, m0->faces, 3 * (size_t)m0->n_faces * sizeof *surf);
+    bs_group g[2] = {{.dim = 2, .tag = 1, .name = "surface_1", .n_elems = m0->n_faces, .elems = surf},
+                     {.dim = 3, .tag = 1, .name = "body", .n_elems = n, .elems = body}};
+    rc = bs_mesh_create(m0->n_vertices, m0->x, n, tets, 2, g, out, err);
+  }
+  if (rc) bs_error_prefix(err, "%s", path);
+  free(tets);
+  free(body);
+  free(surf);
+  bs_mesh_destroy(&m0);
+  return rc;
+}
+
+static int cmp_u64(const void *a, const void *b) {
+  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
+static uint64_t edge_key(int32_t a, int32_t b) {
+  return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
+}
+
+/* Marks in drop the caps under the gate: tets with two boundary faces (so
+ * four boundary vertices), their two other vertices c, d not joined by a
+ * boundary edge, no vertex shared with another marked cap. Removing one
+ * flips the surface edge between its two boundary faces to c-d. */
+static int32_t mark_caps(const bs_mesh *m, double gate, const uint64_t *bedges, char *drop, int32_t *fa,
+                         int32_t *fb, char *used) {
+  int32_t n = 0;
+  for (int32_t f = 0; f < m->n_faces; f++) {
+    int32_t t = m->face_tet[f];
+    if (fa[t] < 0) fa[t] = f;
+    else fb[t] = f;
+  }
+  for (int32_t t = 0; t < m->n_tets; t++) {
+    const int32_t *v = m->tets + 4 * (size_t)t;
+    if (fb[t] < 0 || used[v[0]] || used[v[1]] || used[v[2]] || used[v[3]]) continue;
+    const double *p[4] = {m->x + 3 * (size_t)v[0], m->x + 3 * (size_t)v[1], m->x + 3 * (size_t)v[2],
+                          m->x + 3 * (size_t)v[3]};
+    bs__tet_measures q;
+    bs__tet_quality(p, &q);
+    if (q.dihedral_min >= gate) continue;
+    int32_t other[2], k = 0; /* the vertex of each boundary face not in the other */
+    for (int i = 0; i < 3; i++) {
+      const int32_t a = m->faces[3 * (size_t)fa[t] + i], b = m->faces[3 * (size_t)fb[t] + i];
+      const int32_t *g = m->faces + 3 * (size_t)fb[t], *h = m->faces + 3 * (size_t)fa[t];
+      if (a != g[0] && a != g[1] && a != g[2] && k < 2) other[k++] = a;
+      if (b != h[0] && b != h[1] && b != h[2] && k < 2) other[k++] = b;
+    }
+    uint64_t key = edge_key(other[0], other[1]);
+    if (k != 2 || bsearch(&key, bedges, (size_t)m->n_edges, sizeof key, cmp_u64)) continue;
+    drop[t] = 1, n++;
+    for (int i = 0; i < 4; i++) used[v[i]] = 1;
+  }
+  return n;
+}
+
+/* Removes the caps under the gate (mark_caps) from *m, in up to three
+ * passes: tets whose four vertices lie on the boundary and that no optimiser
+ * moves. The volume changes by the caps' own (flat) volume. */
+static int peel_caps(const char *path, double gate, bs_mesh **m, bs_error *err) {
+  int rc = BS_OK;
+  for (int pass = 0; !rc && pass < 3; pass++) {
+    const bs_mesh *c = *m;
+    uint64_t *be = malloc(((size_t)c->n_edges + 1) * sizeof *be);
+    char *drop = calloc((size_t)c->n_tets + 1, 1), *used = calloc((size_t)c->n_vertices + 1, 1);
+    int32_t *fa = malloc(((size_t)c->n_tets + 1) * sizeof *fa), *fb = malloc(((size_t)c->n_tets + 1) * sizeof *fb);
+    int32_t n = 0;
+    if (!be || !drop || !used || !fa || !fb) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
+    if (!rc) {
+      for (int32_t e = 0; e < c->n_edges; e++) be[e] = edge_key(c->edges[2 * e], c->edges[2 * e + 1]);
+      qsort(be, (size_t)c->n_edges, sizeof *be, cmp_u64);
+      for (int32_t t = 0; t < c->n_tets; t++) fa[t] = fb[t] = -1;
+      n = mark_caps(c, gate, be, drop, fa, fb, used);
+    }
+    bs_mesh *next = NULL;
+    if (!rc && n > 0) rc = without_tets(path, c, drop, &next, err);
+    if (next) bs_mesh_destroy(m), *m = next;
+    free(be), free(drop), free(used), free(fa), free(fb);
+    if (n == 0) break;
+  }
+  return rc;
+}
+
+int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                              const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  *out = NULL;
+  const double fa = opts ? opts->feature_angle : 0.0;
+  bs_shim_remesh_opts o = {.size = opts ? opts->size : 0.0,
+                           .feature_angle = fa < 0 ? 0.0 : (fa > 0 ? fa : BS_MESH_FEATURE_ANGLE),
+                           .iterations = BS_REMESH_ITERATIONS};
+  bs_shim_remesh_out r;
+  int rc = bs_shim_remesh_surface(path, pts, np, tris, nt, &o, &r, err);
+  if (!rc)
+    rc = bs__gmsh_surface_volume(path, r.points, r.n_points, r.tris, r.n_tris, opts, BS_GMSH_HXT, BS_REMESH_THREADS,
+                                 out, err);
+  bs_shim_free(r.points);
+  bs_shim_free(r.tris);
+  const double gate = bs__mesh_gate(opts);
+  if (!rc && gate > 0) rc = peel_caps(path, gate, out, err);
+  if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
+  if (rc) bs_mesh_destroy(out);
+  return rc;
+}
+
+/* |volume| enclosed by the soup's triangles (divergence theorem). */
+static double enclosed_volume(const double *p, const int32_t *t, int64_t nt) {
+  double v = 0;
+  for (int64_t f = 0; f < nt; f++) {
+    const double *a = p + 3 * t[3 * f], *b = p + 3 * t[3 * f + 1], *c = p + 3 * t[3 * f + 2];
+    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return fabs(v / 6.0);
+}
+
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, int *done, bs_mesh **out, bs_error *err) {
+  *done = 0;
+  *out = NULL;
+  const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
+  const double h = opts ? opts->size : 0.0;
+  if (mesher == BS_SURFACE_CGAL || !(h > 0)) return BS_OK;
+  if (mesher == BS_SURFACE_AUTO && 6.0 * enclosed_volume(pts, tris, nt) / (h * h * h) <= BS_REMESH_AUTO_TETS)
+    return BS_OK;
+  int rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
+  if (rc == BS_EINPUT && mesher == BS_SURFACE_AUTO) {
+    bs_error_clear(err); /* refused: Mesh_3 meshes it */
+    return BS_OK;
+  }
+  *done = 1;
+  return rc;
+}
+
+static const struct {
+  const char *name;
+  int value;
+} mesher_names[] = {{"auto", BS_SURFACE_AUTO}, {"cgal", BS_SURFACE_CGAL}, {"remesh", BS_SURFACE_REMESH}};
+#define N_MESHERS (sizeof mesher_names / sizeof mesher_names[0])
+
+const char *bs_mesh_mesher_name(int mesher) {
+  for (size_t i = 0; i < N_MESHERS; i++)
+    if (mesher_names[i].value == mesher) return mesher_names[i].name;
+  return "auto";
+}
+
+int bs_mesh_parse_mesher(const char *s, int *mesher) {
+  for (size_t i = 0; s && i < N_MESHERS; i++)
+    if (!strcmp(s, mesher_names[i].name)) {
+      *mesher = mesher_names[i].value;
+      return 0;
+    }
+  return -1;
+}
