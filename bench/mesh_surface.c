@@ -12,6 +12,9 @@
  *   --rounds R (perturb + exude rounds, 3)     --target DEG (sliver bound, 10)
  *   --feature DEG (feature angle, 60; 0 none)  --distance F (facet_distance = h / F, 10)
  *   --facet F (facet_size = edge_size = h / F, 1)
+ *   --sizing K (local size from the thickness: K elements across thin parts; 0 none)
+ *   --grad G (its gradation, 0.5)              --floor F (its floor h / F, 8)
+ *   --angle A (facet_angle, 25)                --radius-edge R (cell_radius_edge_ratio, 3)
  *   --no-perturb  --no-exude  --no-gmsh
  * Seconds are wall-clock of one run: on a busy machine, say so beside them.
  * Never run by the test suite. */
@@ -24,7 +27,7 @@
 #include "bs_shim.h"
 
 typedef struct row {
-  double h, seconds, dmin, refined, rmin, vol_err, haus;
+  double h, seconds, dmin, refined, rmin, vol_err, haus, local_min, local_frac;
   int64_t tets, features;
 } row;
 
@@ -57,8 +60,9 @@ static void measure(const bs_mesh *m, const double *p, int64_t np, const int32_t
 }
 
 static void print_row(const char *input, const char *mesher, const row *r) {
-  printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.2f %8.4f %9.2e %7.3f %5lld\n", input, mesher, r->h,
-         (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h, (long long)r->features);
+  printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.3f %8.4f %9.2e %7.3f %5lld %6.3f %5.3f\n", input, mesher, r->h,
+         (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h,
+         (long long)r->features, r->local_min, r->local_frac);
 }
 
 static int run_cgal(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt,
@@ -73,6 +77,8 @@ static int run_cgal(const char *path, const double *p, int64_t np, const int32_t
   r->seconds = bs_seconds() - t0;
   r->refined = out.refined_dihedral;
   r->features = out.n_features;
+  r->local_min = out.local_size_min / r->h;
+  r->local_frac = out.local_fraction;
   bs_shim_free(out.x);
   bs_shim_free(out.tets);
   if (rc) {
@@ -94,6 +100,7 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
   r->seconds = bs_seconds() - t0;
   r->refined = NAN;
   r->features = 0;
+  r->local_min = r->local_frac = NAN;
   if (rc) {
     printf("%-28s gmsh   failed: %.200s\n", path, err.msg);
     return;
@@ -103,12 +110,14 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
   bs_mesh_destroy(&m);
 }
 
-static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, double *dist_frac, double *facet_frac, int *first) {
+static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, double *dist_frac, double *facet_frac,
+                      double *floor_frac, int *first) {
   *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
                             .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
   *gmsh = 1;
   *dist_frac = 10;
   *facet_frac = 1;
+  *floor_frac = 8;
   int i = 1;
   for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
@@ -123,6 +132,11 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, d
     else if (!strcmp(a, "--feature") && ++i) o->feature_angle = atof(v);
     else if (!strcmp(a, "--distance") && ++i) *dist_frac = atof(v);
     else if (!strcmp(a, "--facet") && ++i) *facet_frac = atof(v);
+    else if (!strcmp(a, "--sizing") && ++i) o->thickness_elements = atof(v);
+    else if (!strcmp(a, "--angle") && ++i) o->facet_angle = atof(v);
+    else if (!strcmp(a, "--radius-edge") && ++i) o->radius_edge = atof(v);
+    else if (!strcmp(a, "--grad") && ++i) o->size_gradation = atof(v);
+    else if (!strcmp(a, "--floor") && ++i) *floor_frac = atof(v);
     else {
       fprintf(stderr, "bench_mesh_surface: unknown option %s\n", a);
       return 2;
@@ -135,13 +149,13 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, d
 int main(int argc, char **argv) {
   bs_shim_mesh3_opts o;
   int gmsh, first;
-  double dist_frac, facet_frac;
-  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &first)) {
+  double dist_frac, facet_frac, floor_frac;
+  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &floor_frac, &first)) {
     fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
     return 2;
   }
-  printf("%-28s %-6s %10s %9s %8s %9s %8s %8s %8s %9s %7s %5s\n", "input", "mesher", "h", "tets", "seconds", "tets/s",
-         "refined", "dih.min", "rr.min", "vol.err", "haus/h", "feat");
+  printf("%-28s %-6s %10s %9s %8s %9s %8s %8s %8s %9s %7s %5s %6s %5s\n", "input", "mesher", "h", "tets", "seconds", "tets/s",
+         "refined", "dih.min", "rr.min", "vol.err", "haus/h", "feat", "lmin/h", "lfrac");
   for (int a = first; a < argc; a++) {
     char path[1024];
     snprintf(path, sizeof path, "%s", argv[a]);
@@ -162,6 +176,7 @@ int main(int argc, char **argv) {
     o.size = r.h;
     o.facet_distance = r.h / dist_frac;
     o.facet_size = r.h / facet_frac;
+    o.min_size = r.h / floor_frac;
     if (!run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
     if (gmsh) run_gmsh(path, p, np, t, nt, &r);
     bs_shim_free(p);

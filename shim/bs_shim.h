@@ -303,6 +303,14 @@ typedef struct bs_shim_mesh3_opts {
   int perturb, exude;     /* 1: sliver perturbation / exudation after smoothing         */
   double target_dihedral; /* degrees: the perturber's and exuder's sliver bound         */
   int max_rounds;         /* perturb + exude rounds while below target and improving (>= 1) */
+  double thickness_elements; /* > 0: a local size from the surface's thickness t (inward along
+                             the normal to the opposite side): cell, facet and edge size
+                             min(h, max(min_size, t / this)), graded; <= 0: h everywhere */
+  double size_gradation;  /* the local size grows at most this much per unit length away
+                             from thin parts; <= 0: 0.5                                 */
+  double min_size;        /* the local size's floor; <= 0: h / 8                        */
+  double facet_angle;     /* degrees: boundary triangles' smallest angle bound; <= 0: 25 */
+  double radius_edge;     /* cells' circumradius / shortest edge bound; <= 0: 3           */
 } bs_shim_mesh3_opts;
 
 typedef struct bs_shim_mesh3_out {
@@ -314,6 +322,8 @@ typedef struct bs_shim_mesh3_out {
   double refined_dihedral;/* smallest dihedral angle (degrees) after refinement         */
   double dihedral;        /* ... after the optimisers                                    */
   int64_t n_features;     /* sharp-edge chains kept (0: meshed as a smooth surface)      */
+  double local_size_min;  /* the local size's smallest value on the surface (h without it) */
+  double local_fraction;  /* fraction of the surface samples where it is under h        */
 } bs_shim_mesh3_out;
 
 /* Meshes the volume inside the closed surface (points, tris) at opts->size

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "bs_shim.h"
+#include "shim_local_size.hpp"
 #include "shim_surface_mesh.hpp"
 
 namespace {
@@ -167,6 +168,31 @@ int export_mesh(const C3t3 &c3t3, const char *name, double **xo, int64_t *nvo, i
   return BS_OK;
 }
 
+// Mesh_3's refinement of the domain to the criteria of o: sizes h, or the
+// thickness field (shim_local_size.hpp) when o.thickness_elements > 0.
+C3t3 refine(const Surface &sm, const Domain &domain, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out) {
+  namespace P = CGAL::parameters;
+  const double h = o.size;
+  const double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0;
+  const double fs = o.facet_size > 0 ? o.facet_size : h;
+  const double fa = o.facet_angle > 0 ? o.facet_angle : 25, re = o.radius_edge > 0 ? o.radius_edge : 3;
+  out->local_size_min = h;
+  out->local_fraction = 0;
+  if (!(o.thickness_elements > 0)) {
+    Criteria criteria(P::edge_size = fs, P::facet_angle = fa, P::facet_size = fs, P::facet_distance = dist,
+                      P::cell_radius_edge_ratio = re, P::cell_size = h);
+    return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+  }
+  const double floor = o.min_size > 0 ? std::min(o.min_size, h) : h / 8;
+  const bs_shim::Local_size field(sm, {h, o.thickness_elements, o.size_gradation > 0 ? o.size_gradation : 0.5, floor});
+  out->local_size_min = field.min_sample_size();
+  out->local_fraction = field.fraction_refined();
+  const bs_shim::Scaled_size facet{field, fs / h};
+  Criteria criteria(P::edge_size = facet, P::facet_angle = fa, P::facet_size = facet, P::facet_distance = dist,
+                    P::cell_radius_edge_ratio = re, P::cell_size = field);
+  return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+}
+
 int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                  const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out, bs_error *err) {
   Surface sm;
@@ -181,12 +207,7 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
   Domain domain(sm);
   if (cad) domain.detect_features(o.feature_angle);
   out->n_features = cad ? n_long : 0;
-  namespace P = CGAL::parameters;
-  const double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0;
-  const double fs = o.facet_size > 0 ? o.facet_size : h;
-  Criteria criteria(P::edge_size = fs, P::facet_angle = 25, P::facet_size = fs, P::facet_distance = dist,
-                    P::cell_radius_edge_ratio = 3, P::cell_size = h);
-  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+  C3t3 c3t3 = refine(sm, domain, o, out);
   out->refined_dihedral = min_dihedral(c3t3);
   optimise(c3t3, domain, o, &out->dihedral);
   return export_mesh(c3t3, name, &out->x, &out->n_vertices, &out->tets, &out->n_tets, err);
