@@ -12,9 +12,10 @@
  *   --rounds R (perturb + exude rounds, 3)     --target DEG (sliver bound, 10)
  *   --feature DEG (feature angle, 60; 0 none)  --distance F (facet_distance = h / F, 10)
  *   --facet F (facet_size = edge_size = h / F, 1)
- *   --sizing K (local size from the thickness: K elements across thin parts; 0 none)
- *   --grad G (its gradation, 0.5)              --floor F (its floor h / F, 8)
- *   --angle A (facet_angle, 25)                --radius-edge R (cell_radius_edge_ratio, 3)
+ *   scans (not CAD-like) only: --scan-distance F (facet_distance h / F, 25), --angle A
+ *   (facet_angle, 30), --radius-edge R (cell_radius_edge_ratio, 2), --sizing K (local size
+ *   from the thickness: K elements across thin parts, 2; 0 none), --grad G (its
+ *   gradation, 0.5), --floor F (its floor h / F, 8)
  *   --no-perturb  --no-exude  --no-gmsh
  * Seconds are wall-clock of one run: on a busy machine, say so beside them.
  * Never run by the test suite. */
@@ -111,13 +112,16 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
 }
 
 static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, double *dist_frac, double *facet_frac,
-                      double *floor_frac, int *first) {
+                      double *floor_frac, double *scan_frac, int *first) {
   *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
-                            .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
+                            .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3,
+                            .scan_facet_angle = 30, .scan_radius_edge = 2, .thickness_elements = 2,
+                            .size_gradation = 0.5};
   *gmsh = 1;
   *dist_frac = 10;
   *facet_frac = 1;
   *floor_frac = 8;
+  *scan_frac = 25;
   int i = 1;
   for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
@@ -133,8 +137,9 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, d
     else if (!strcmp(a, "--distance") && ++i) *dist_frac = atof(v);
     else if (!strcmp(a, "--facet") && ++i) *facet_frac = atof(v);
     else if (!strcmp(a, "--sizing") && ++i) o->thickness_elements = atof(v);
-    else if (!strcmp(a, "--angle") && ++i) o->facet_angle = atof(v);
-    else if (!strcmp(a, "--radius-edge") && ++i) o->radius_edge = atof(v);
+    else if (!strcmp(a, "--angle") && ++i) o->scan_facet_angle = atof(v);
+    else if (!strcmp(a, "--radius-edge") && ++i) o->scan_radius_edge = atof(v);
+    else if (!strcmp(a, "--scan-distance") && ++i) *scan_frac = atof(v);
     else if (!strcmp(a, "--grad") && ++i) o->size_gradation = atof(v);
     else if (!strcmp(a, "--floor") && ++i) *floor_frac = atof(v);
     else {
@@ -149,8 +154,8 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *gmsh, d
 int main(int argc, char **argv) {
   bs_shim_mesh3_opts o;
   int gmsh, first;
-  double dist_frac, facet_frac, floor_frac;
-  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &floor_frac, &first)) {
+  double dist_frac, facet_frac, floor_frac, scan_frac;
+  if (parse_opts(argc, argv, &o, &gmsh, &dist_frac, &facet_frac, &floor_frac, &scan_frac, &first)) {
     fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
     return 2;
   }
@@ -177,6 +182,7 @@ int main(int argc, char **argv) {
     o.facet_distance = r.h / dist_frac;
     o.facet_size = r.h / facet_frac;
     o.min_size = r.h / floor_frac;
+    o.scan_facet_distance = r.h / scan_frac;
     if (!run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
     if (gmsh) run_gmsh(path, p, np, t, nt, &r);
     bs_shim_free(p);

@@ -19,7 +19,11 @@
  * smoothing, then perturbation and exudation in rounds towards the gate, at
  * least the default gate (a relaxed gate still gets a good mesh) and at most
  * BS_MESH3_MAX_TARGET: CGAL's perturber reaches 10 to 15 degrees; asked
- * for more it works on nearly every tet for minutes and rarely gets there. */
+ * for more it works on nearly every tet for minutes and rarely gets there.
+ * A scan (not CAD-like) gets facet distance h / 25, facet angle 30,
+ * radius-edge 2 and the thickness size field (2 elements across thin parts,
+ * floor h / 8): at h / 10 and radius-edge 3 its curved and thin parts lose
+ * about 3% of its volume, and finer facet distances alone leave slivers. */
 #define BS_MESH3_MAX_TARGET 15.0
 static bs_shim_mesh3_opts mesh3_opts(double h, const bs_mesh_read_opts *opts) {
   double fa = opts ? opts->feature_angle : 0.0;
@@ -32,7 +36,13 @@ static bs_shim_mesh3_opts mesh3_opts(double h, const bs_mesh_read_opts *opts) {
                               .perturb = 1,
                               .exude = 1,
                               .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
-                              .max_rounds = 3};
+                              .max_rounds = 3,
+                              .scan_facet_distance = h / 25.0,
+                              .scan_facet_angle = 30,
+                              .scan_radius_edge = 2,
+                              .thickness_elements = 2,
+                              .size_gradation = 0.5,
+                              .min_size = h / 8.0};
 }
 
 /* Volume enclosed by the soup's triangles (divergence theorem; its sign

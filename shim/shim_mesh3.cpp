@@ -168,17 +168,22 @@ int export_mesh(const C3t3 &c3t3, const char *name, double **xo, int64_t *nvo, i
   return BS_OK;
 }
 
-// Mesh_3's refinement of the domain to the criteria of o: sizes h, or the
-// thickness field (shim_local_size.hpp) when o.thickness_elements > 0.
-C3t3 refine(const Surface &sm, const Domain &domain, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out) {
+// Mesh_3's refinement of the domain to the criteria of o: sizes h, or for a
+// scan (not cad) its own criteria and the thickness field
+// (shim_local_size.hpp) when o.thickness_elements > 0.
+C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out) {
   namespace P = CGAL::parameters;
   const double h = o.size;
-  const double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0;
+  double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0, fa = 25, re = 3;
   const double fs = o.facet_size > 0 ? o.facet_size : h;
-  const double fa = o.facet_angle > 0 ? o.facet_angle : 25, re = o.radius_edge > 0 ? o.radius_edge : 3;
+  if (!cad) {
+    if (o.scan_facet_distance > 0) dist = o.scan_facet_distance;
+    if (o.scan_facet_angle > 0) fa = o.scan_facet_angle;
+    if (o.scan_radius_edge > 0) re = o.scan_radius_edge;
+  }
   out->local_size_min = h;
   out->local_fraction = 0;
-  if (!(o.thickness_elements > 0)) {
+  if (cad || !(o.thickness_elements > 0)) {
     Criteria criteria(P::edge_size = fs, P::facet_angle = fa, P::facet_size = fs, P::facet_distance = dist,
                       P::cell_radius_edge_ratio = re, P::cell_size = h);
     return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
@@ -207,7 +212,7 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
   Domain domain(sm);
   if (cad) domain.detect_features(o.feature_angle);
   out->n_features = cad ? n_long : 0;
-  C3t3 c3t3 = refine(sm, domain, o, out);
+  C3t3 c3t3 = refine(sm, domain, cad, o, out);
   out->refined_dihedral = min_dihedral(c3t3);
   optimise(c3t3, domain, o, &out->dihedral);
   return export_mesh(c3t3, name, &out->x, &out->n_vertices, &out->tets, &out->n_tets, err);
