@@ -66,7 +66,7 @@ struct Local_size::Data {
   Data(std::vector<Point> &&p, const Local_size_opts &opts)
       : pts(std::move(p)), o(opts),
         tree(boost::counting_iterator<std::size_t>(0), boost::counting_iterator<std::size_t>(pts.size()),
-             Kd_tree::Splitter(), Traits(CGAL::make_property_map(const_cast<const std::vector<Point> &>(pts)))) {
+             Kd_tree::Splitter(), Traits(CGAL::make_property_map(std::as_const(pts)))) {
     tree.build();
   }
 };

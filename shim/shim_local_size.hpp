@@ -3,7 +3,10 @@
 //
 // At sample points of the surface (its vertices and its faces' centroids)
 // the thickness t is the distance from the point, inward along the negated
-// normal, to the first other face the ray meets (a CGAL AABB tree). The size
+// normal, to the nearest face the ray crosses whose normal is turned more
+// than 120 degrees from the sample's (the opposite side of a slab; not a
+// neighbouring face, nor the other face of a re-entrant corner), found with
+// a CGAL AABB tree; +inf (size h) when there is none. The size
 // there is s = clamp(t / across, floor, h): `across` elements through a
 // part thinner than across * h. The samples' sizes are then graded: s(q) <=
 // s(q') + g |q - q'| over a graph of each sample's nearest neighbours

@@ -212,13 +212,15 @@ Test(mesh_surface, fandisk_keeps_sharp_edges) {
 }
 
 /* The shim's tets come positively oriented (bs_shim_orient3d) and the mesh
- * is the same on a second run (sequential, seeded). STL goes through it too. */
+ * is the same on a second run (sequential, seeded; with the scan criteria
+ * and the thickness field). STL goes through it too. */
 Test(mesh_surface, shim_orientation_and_determinism) {
   char path[1024];
   soup s;
   soup_or_skip("data/meshes/sphere.off", path, sizeof path, &s);
   bs_shim_mesh3_opts o = {.size = s.diag / 8, .feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT,
-                          .smooth_iterations = 5, .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 2};
+                          .smooth_iterations = 5, .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 2,
+                          .scan_facet_angle = 30, .scan_radius_edge = 2, .thickness_elements = 2};
   bs_shim_mesh3_out r[2];
   bs_error err;
   bs_error_clear(&err);
