@@ -305,10 +305,10 @@ typedef struct bs_shim_mesh3_opts {
   int max_rounds;         /* perturb + exude rounds while below target and improving (>= 1) */
   /* A surface that is not CAD-like (a scan: meshed without features) has
      its own criteria: its thin parts and curved regions lose volume at
-     facet distance h / 10 and radius-edge 3. Fields <= 0 take the default. */
+     facet distance h / 10 and radius-edge 3. All zero: as a CAD part. */
   double scan_facet_distance; /* <= 0: facet_distance                                   */
-  double scan_facet_angle;    /* degrees, boundary triangles' smallest-angle bound; 25 */
-  double scan_radius_edge;    /* cells' circumradius / shortest-edge bound; 3           */
+  double scan_facet_angle;    /* degrees, boundary triangles' smallest-angle bound; <= 0: 25 */
+  double scan_radius_edge;    /* cells' circumradius / shortest-edge bound; <= 0: 3 */
   double thickness_elements;  /* > 0: a local size from the scan's thickness t (inward along
                                  the normal to the opposite side): cell, facet and edge size
                                  min(h, max(min_size, t / this)), graded; <= 0: h everywhere */
