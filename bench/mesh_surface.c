@@ -14,6 +14,10 @@
  *   --rounds R (perturb + exude rounds, 3)     --target DEG (sliver bound, 10)
  *   --feature DEG (feature angle, 60; 0 none)  --distance F (facet_distance = h / F, 10)
  *   --facet F (facet_size = edge_size = h / F, 1)
+ *   scans (not CAD-like) only: --scan-distance F (facet_distance h / F, 25), --angle A
+ *   (facet_angle, 30), --radius-edge R (cell_radius_edge_ratio, 2), --sizing K (local size
+ *   from the thickness: K elements across thin parts, 2; 0 none), --grad G (its
+ *   gradation, 0.5), --floor F (its floor h / F, 8)
  *   --no-perturb  --no-exude  --no-cgal  --no-remesh  --no-gmsh
  * Seconds are wall-clock of one run: on a busy machine, say so beside them.
  * Never run by the test suite. */
@@ -28,7 +32,7 @@
 enum { RUN_CGAL = 1, RUN_GMSH = 2, RUN_REMESH = 4 };
 
 typedef struct row {
-  double h, seconds, dmin, refined, rmin, vol_err, haus;
+  double h, seconds, dmin, refined, rmin, vol_err, haus, local_min, local_frac;
   int64_t tets, features;
 } row;
 
@@ -61,8 +65,9 @@ static void measure(const bs_mesh *m, const double *p, int64_t np, const int32_t
 }
 
 static void print_row(const char *input, const char *mesher, const row *r) {
-  printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.2f %8.4f %9.2e %7.3f %5lld\n", input, mesher, r->h,
-         (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h, (long long)r->features);
+  printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.3f %8.4f %9.2e %7.3f %5lld %6.3f %5.3f\n", input, mesher, r->h,
+         (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h,
+         (long long)r->features, r->local_min, r->local_frac);
 }
 
 static int run_cgal(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt,
@@ -77,6 +82,8 @@ static int run_cgal(const char *path, const double *p, int64_t np, const int32_t
   r->seconds = bs_seconds() - t0;
   r->refined = out.refined_dihedral;
   r->features = out.n_features;
+  r->local_min = out.local_size_min / r->h;
+  r->local_frac = out.local_fraction;
   bs_shim_free(out.x);
   bs_shim_free(out.tets);
   if (rc) {
@@ -98,6 +105,7 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
   r->seconds = bs_seconds() - t0;
   r->refined = NAN;
   r->features = 0;
+  r->local_min = r->local_frac = NAN;
   if (rc) {
     printf("%-28s gmsh   failed: %.200s\n", path, err.msg);
     return;
@@ -119,6 +127,7 @@ static void run_remesh(const char *path, const double *p, int64_t np, const int3
   r->seconds = bs_seconds() - t0;
   r->refined = NAN;
   r->features = 0;
+  r->local_min = r->local_frac = NAN;
   if (rc) {
     printf("%-28s remesh failed after %.1f s: %.300s\n", path, r->seconds, err.msg);
     return;
@@ -129,12 +138,16 @@ static void run_remesh(const char *path, const double *p, int64_t np, const int3
 }
 
 static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, double *dist_frac, double *facet_frac,
-                      int *first) {
+                      double *floor_frac, double *scan_frac, int *first) {
   *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
-                            .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
+                            .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3,
+                            .scan_facet_angle = 30, .scan_radius_edge = 2, .thickness_elements = 2,
+                            .size_gradation = 0.5};
   *which = RUN_CGAL | RUN_GMSH | RUN_REMESH;
   *dist_frac = 10;
   *facet_frac = 1;
+  *floor_frac = 8;
+  *scan_frac = 25;
   int i = 1;
   for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
@@ -151,6 +164,12 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
     else if (!strcmp(a, "--feature") && ++i) o->feature_angle = atof(v);
     else if (!strcmp(a, "--distance") && ++i) *dist_frac = atof(v);
     else if (!strcmp(a, "--facet") && ++i) *facet_frac = atof(v);
+    else if (!strcmp(a, "--sizing") && ++i) o->thickness_elements = atof(v);
+    else if (!strcmp(a, "--angle") && ++i) o->scan_facet_angle = atof(v);
+    else if (!strcmp(a, "--radius-edge") && ++i) o->scan_radius_edge = atof(v);
+    else if (!strcmp(a, "--scan-distance") && ++i) *scan_frac = atof(v);
+    else if (!strcmp(a, "--grad") && ++i) o->size_gradation = atof(v);
+    else if (!strcmp(a, "--floor") && ++i) *floor_frac = atof(v);
     else {
       fprintf(stderr, "bench_mesh_surface: unknown option %s\n", a);
       return 2;
@@ -163,13 +182,13 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
 int main(int argc, char **argv) {
   bs_shim_mesh3_opts o;
   int which, first;
-  double dist_frac, facet_frac;
-  if (parse_opts(argc, argv, &o, &which, &dist_frac, &facet_frac, &first)) {
+  double dist_frac, facet_frac, floor_frac, scan_frac;
+  if (parse_opts(argc, argv, &o, &which, &dist_frac, &facet_frac, &floor_frac, &scan_frac, &first)) {
     fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
     return 2;
   }
-  printf("%-28s %-6s %10s %9s %8s %9s %8s %8s %8s %9s %7s %5s\n", "input", "mesher", "h", "tets", "seconds", "tets/s",
-         "refined", "dih.min", "rr.min", "vol.err", "haus/h", "feat");
+  printf("%-28s %-6s %10s %9s %8s %9s %8s %8s %8s %9s %7s %5s %6s %5s\n", "input", "mesher", "h", "tets", "seconds", "tets/s",
+         "refined", "dih.min", "rr.min", "vol.err", "haus/h", "feat", "lmin/h", "lfrac");
   for (int a = first; a < argc; a++) {
     char path[1024];
     snprintf(path, sizeof path, "%s", argv[a]);
@@ -190,6 +209,8 @@ int main(int argc, char **argv) {
     o.size = r.h;
     o.facet_distance = r.h / dist_frac;
     o.facet_size = r.h / facet_frac;
+    o.min_size = r.h / floor_frac;
+    o.scan_facet_distance = r.h / scan_frac;
     if ((which & RUN_CGAL) && !run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
     if (which & RUN_REMESH) run_remesh(path, p, np, t, nt, &r);
     if (which & RUN_GMSH) run_gmsh(path, p, np, t, nt, &r);

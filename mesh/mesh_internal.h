@@ -86,6 +86,10 @@ typedef struct bs__tet_measures {
 } bs__tet_measures;
 void bs__tet_quality(const double *const p[4], bs__tet_measures *out);
 
+/* Volume enclosed by the soup's nt triangles (divergence theorem; its sign
+ * follows their orientation; surface_mesh.c). */
+double bs__soup_volume(const double *p, const int32_t *t, int64_t nt);
+
 /* surface_mesh.c: the volume inside a closed surface soup (from a file
  * `path`, already read) meshed by CGAL's Mesh_3 at opts->size > 0, then
  * held to the quality gate (bs_mesh_dihedral_gate). Groups (3, 1, "body")

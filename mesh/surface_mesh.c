@@ -19,25 +19,46 @@
  * smoothing, then perturbation and exudation in rounds towards the gate, at
  * least the default gate (a relaxed gate still gets a good mesh) and at most
  * BS_MESH3_MAX_TARGET: CGAL's perturber reaches 10 to 15 degrees; asked
- * for more it works on nearly every tet for minutes and rarely gets there. */
+ * for more it works on nearly every tet for minutes and rarely gets there.
+ * A scan (not CAD-like) meshed coarser than BS_MESH3_SCAN_FINE of its
+ * bounding-box diagonal gets facet distance max(h / 25, diagonal / 900),
+ * facet angle 30, radius-edge 2 and the thickness size field (2 elements
+ * across thin parts, floor h / 8): at h / 10 and radius-edge 3 its curved and
+ * thin parts lose about 3% of its volume at diagonal / 35 (the chords' sag,
+ * which scales with the facet distance over the diagonal), and finer facet
+ * distances alone leave slivers. Finer than that, h / 10 is already within
+ * about 1% and a scan is meshed as a CAD part is. */
 #define BS_MESH3_MAX_TARGET 15.0
-static bs_shim_mesh3_opts mesh3_opts(double h, const bs_mesh_read_opts *opts) {
+#define BS_MESH3_SCAN_FINE (1.0 / 90.0)
+static bs_shim_mesh3_opts mesh3_opts(double h, const double *pts, int64_t np, const bs_mesh_read_opts *opts) {
   double fa = opts ? opts->feature_angle : 0.0;
   double gate = bs__mesh_gate(opts);
-  return (bs_shim_mesh3_opts){.size = h,
-                              .facet_distance = h / 10.0,
-                              .feature_angle = fa < 0 ? 0.0 : (fa > 0 ? fa : BS_MESH_FEATURE_ANGLE),
-                              .smoother = BS_SHIM_SMOOTH_ODT,
-                              .smooth_iterations = 10,
-                              .perturb = 1,
-                              .exude = 1,
-                              .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
-                              .max_rounds = 3};
+  double lo[3], hi[3];
+  bs_bbox(np, pts, lo, hi);
+  const double diag = bs_bbox_diagonal(lo, hi);
+  bs_shim_mesh3_opts o = {.size = h,
+                          .facet_distance = h / 10.0,
+                          .feature_angle = fa < 0 ? 0.0 : (fa > 0 ? fa : BS_MESH_FEATURE_ANGLE),
+                          .smoother = BS_SHIM_SMOOTH_ODT,
+                          .smooth_iterations = 10,
+                          .perturb = 1,
+                          .exude = 1,
+                          .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
+                          .max_rounds = 3};
+  if (h > BS_MESH3_SCAN_FINE * diag) {
+    o.scan_facet_distance = fmax(h / 25.0, BS_MESH3_SCAN_FINE * diag / 10.0);
+    o.scan_facet_angle = 30;
+    o.scan_radius_edge = 2;
+    o.thickness_elements = 2;
+    o.size_gradation = 0.5;
+    o.min_size = h / 8.0;
+  }
+  return o;
 }
 
 /* Volume enclosed by the soup's triangles (divergence theorem; its sign
  * follows their orientation). */
-static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
+double bs__soup_volume(const double *p, const int32_t *t, int64_t nt) {
   double v = 0;
   for (int64_t f = 0; f < nt; f++) {
     const double *a = p + 3 * t[3 * f], *b = p + 3 * t[3 * f + 1], *c = p + 3 * t[3 * f + 2];
@@ -62,7 +83,7 @@ static int check_size(const char *path, const double *pts, int64_t np, const int
       if (tris[3 * f + k] < 0 || tris[3 * f + k] >= np)
         return bs_error_set(err, BS_EINPUT, "%s: triangle %lld refers to point %d of %lld", path, (long long)f,
                             tris[3 * f + k], (long long)np);
-  return bs__check_mesh_size(fabs(soup_volume(pts, tris, nt)), h, opts, path, err);
+  return bs__check_mesh_size(fabs(bs__soup_volume(pts, tris, nt)), h, opts, path, err);
 }
 
 /* The mesh of the shim's arrays with the default groups. */
@@ -104,7 +125,7 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   int done = 0; /* the remesh path (surface_remesh.c) when opts ask for it or the size is large */
   rc = bs__mesh_surface_auto(path, pts, np, tris, nt, opts, &done, out, err);
   if (done || rc) return rc;
-  bs_shim_mesh3_opts o = mesh3_opts(h, opts);
+  bs_shim_mesh3_opts o = mesh3_opts(h, pts, np, opts);
   bs_shim_mesh3_out r;
   rc = bs_shim_mesh_surface(path, pts, np, tris, nt, &o, &r, err);
   if (!rc) rc = build_mesh(path, &r, out, err);

@@ -155,16 +155,6 @@ int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, c
   return rc;
 }
 
-/* |volume| enclosed by the soup's triangles (divergence theorem). */
-static double enclosed_volume(const double *p, const int32_t *t, int64_t nt) {
-  double v = 0;
-  for (int64_t f = 0; f < nt; f++) {
-    const double *a = p + 3 * t[3 * f], *b = p + 3 * t[3 * f + 1], *c = p + 3 * t[3 * f + 2];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  return fabs(v / 6.0);
-}
-
 int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                           const bs_mesh_read_opts *opts, int *done, bs_mesh **out, bs_error *err) {
   *done = 0;
@@ -172,7 +162,7 @@ int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const
   const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
   const double h = opts ? opts->size : 0.0;
   if (mesher == BS_SURFACE_CGAL || !(h > 0)) return BS_OK;
-  if (mesher == BS_SURFACE_AUTO && 6.0 * enclosed_volume(pts, tris, nt) / (h * h * h) <= BS_REMESH_AUTO_TETS)
+  if (mesher == BS_SURFACE_AUTO && 6.0 * fabs(bs__soup_volume(pts, tris, nt)) / (h * h * h) <= BS_REMESH_AUTO_TETS)
     return BS_OK;
   int rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
   if (rc == BS_EINPUT && mesher == BS_SURFACE_AUTO) {

@@ -303,6 +303,18 @@ typedef struct bs_shim_mesh3_opts {
   int perturb, exude;     /* 1: sliver perturbation / exudation after smoothing         */
   double target_dihedral; /* degrees: the perturber's and exuder's sliver bound         */
   int max_rounds;         /* perturb + exude rounds while below target and improving (>= 1) */
+  /* A surface that is not CAD-like (a scan: meshed without features) has
+     its own criteria: its thin parts and curved regions lose volume at
+     facet distance h / 10 and radius-edge 3. All zero: as a CAD part. */
+  double scan_facet_distance; /* <= 0: facet_distance                                   */
+  double scan_facet_angle;    /* degrees, boundary triangles' smallest-angle bound; <= 0: 25 */
+  double scan_radius_edge;    /* cells' circumradius / shortest-edge bound; <= 0: 3 */
+  double thickness_elements;  /* > 0: a local size from the scan's thickness t (inward along
+                                 the normal to the opposite side): cell, facet and edge size
+                                 min(h, max(min_size, t / this)), graded; <= 0: h everywhere */
+  double size_gradation;      /* the local size grows at most this much per unit length
+                                 away from thin parts; <= 0: 0.5                         */
+  double min_size;            /* the local size's floor; <= 0: h / 8                     */
 } bs_shim_mesh3_opts;
 
 typedef struct bs_shim_mesh3_out {
@@ -314,13 +326,16 @@ typedef struct bs_shim_mesh3_out {
   double refined_dihedral;/* smallest dihedral angle (degrees) after refinement         */
   double dihedral;        /* ... after the optimisers                                    */
   int64_t n_features;     /* sharp-edge chains kept (0: meshed as a smooth surface)      */
+  double local_size_min;  /* the local size's smallest value on the surface (h without it) */
+  double local_fraction;  /* fraction of the surface samples where it is under h        */
 } bs_shim_mesh3_out;
 
 /* Meshes the volume inside the closed surface (points, tris) at opts->size
  * with CGAL's Mesh_3 on a Polyhedral_mesh_domain_with_features_3, its
  * features detected (detect_features) when the surface is CAD-like: criteria
  * edge_size = facet_size = cell_size = h, facet_angle 25 degrees,
- * facet_distance, cell_radius_edge_ratio 3; then the optimisers of opts.
+ * facet_distance, cell_radius_edge_ratio 3 (a scan: the scan_* criteria and
+ * the thickness size field when asked); then the optimisers of opts.
  * Sequential and seeded: the same input gives the same mesh. The surface
  * must be an orientable, closed 2-manifold without self-intersections (an
  * inconsistently oriented soup is oriented first). `name` (the file) starts

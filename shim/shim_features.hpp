@@ -1,6 +1,6 @@
 // shim_features.hpp — sharp edges of a closed Surface_mesh and whether they
 // make the surface CAD-like (not public API; C++ only). Used by the surface
-// remesher (shim_remesh.cpp); the same test Mesh_3's domain uses to decide
+// remesher (shim_remesh.cpp) and by Mesh_3 (shim_mesh3.cpp) to decide
 // whether to protect features.
 #ifndef BS_SHIM_FEATURES_HPP
 #define BS_SHIM_FEATURES_HPP

@@ -42,6 +42,8 @@
 #include <vector>
 
 #include "bs_shim.h"
+#include "shim_local_size.hpp"
+#include "shim_features.hpp"
 #include "shim_surface_mesh.hpp"
 
 namespace {
@@ -52,49 +54,6 @@ typedef CGAL::Polyhedral_mesh_domain_with_features_3<K, Surface> Domain;
 typedef CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type Tr;
 typedef CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index> C3t3;
 typedef CGAL::Mesh_criteria_3<Tr> Criteria;
-
-// The sharp edges of sm (faces turning by more than angle degrees) chained
-// between the vertices where chains end or branch (closed loops as they
-// are). A CAD part's sharp edges are long chains; a scan's creases are many
-// short ones: the surface is taken as CAD-like when the chains of length >=
-// min_length make at least 80% of the sharp edges' length. Returns that
-// answer; *n_long: how many such chains.
-bool cad_like(Surface &sm, double angle, double min_length, int64_t *n_long) {
-  auto sharp = sm.add_property_map<Surface::Edge_index, bool>("e:bs_sharp", false).first;
-  CGAL::Polygon_mesh_processing::detect_sharp_edges(sm, angle, sharp);
-  std::vector<int> degree(sm.number_of_vertices(), 0);
-  for (auto e : sm.edges())
-    if (sharp[e]) degree[sm.source(sm.halfedge(e))]++, degree[sm.target(sm.halfedge(e))]++;
-  std::vector<char> used(sm.number_of_edges(), 0);
-  double long_len = 0, all_len = 0;
-  *n_long = 0;
-  // Walks from halfedge h (a sharp edge leaving its source) until a vertex of degree != 2 or the start.
-  auto walk = [&](Surface::Halfedge_index h) {
-    double len = 0;
-    for (;;) {
-      used[sm.edge(h)] = 1;
-      len += std::sqrt(CGAL::squared_distance(sm.point(sm.source(h)), sm.point(sm.target(h))));
-      const auto v = sm.target(h);
-      if (degree[v] != 2) break;
-      Surface::Halfedge_index next;
-      bool found = false;
-      for (auto g : CGAL::halfedges_around_source(v, sm))
-        if (sharp[sm.edge(g)] && !used[sm.edge(g)]) next = g, found = true;
-      if (!found) break; // a closed loop is back at its start
-      h = next;
-    }
-    all_len += len;
-    if (len >= min_length) long_len += len, ++*n_long;
-  };
-  for (auto v : sm.vertices())
-    if (degree[v] != 0 && degree[v] != 2)
-      for (auto g : CGAL::halfedges_around_source(v, sm))
-        if (sharp[sm.edge(g)] && !used[sm.edge(g)]) walk(g);
-  for (auto e : sm.edges())
-    if (sharp[e] && !used[e]) walk(sm.halfedge(e));
-  sm.remove_property_map(sharp);
-  return all_len > 0 && long_len >= 0.8 * all_len;
-}
 
 // Smallest dihedral angle (degrees) of the complex's cells; 90 when empty.
 double min_dihedral(const C3t3 &c3t3) { return CGAL::to_double(CGAL::Mesh_3::minimum_dihedral_angle_in_c3t3(c3t3)); }
@@ -167,6 +126,36 @@ int export_mesh(const C3t3 &c3t3, const char *name, double **xo, int64_t *nvo, i
   return BS_OK;
 }
 
+// Mesh_3's refinement of the domain to the criteria of o: sizes h, or for a
+// scan (not cad) its own criteria and the thickness field
+// (shim_local_size.hpp) when o.thickness_elements > 0.
+C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out) {
+  namespace P = CGAL::parameters;
+  const double h = o.size;
+  double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0, fa = 25, re = 3;
+  const double fs = o.facet_size > 0 ? o.facet_size : h;
+  if (!cad) {
+    if (o.scan_facet_distance > 0) dist = o.scan_facet_distance;
+    if (o.scan_facet_angle > 0) fa = o.scan_facet_angle;
+    if (o.scan_radius_edge > 0) re = o.scan_radius_edge;
+  }
+  out->local_size_min = h;
+  out->local_fraction = 0;
+  if (cad || !(o.thickness_elements > 0)) {
+    Criteria criteria(P::edge_size = fs, P::facet_angle = fa, P::facet_size = fs, P::facet_distance = dist,
+                      P::cell_radius_edge_ratio = re, P::cell_size = h);
+    return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+  }
+  const double floor = o.min_size > 0 ? std::min(o.min_size, h) : h / 8;
+  const bs_shim::Local_size field(sm, {h, o.thickness_elements, o.size_gradation > 0 ? o.size_gradation : 0.5, floor});
+  out->local_size_min = field.min_sample_size();
+  out->local_fraction = field.fraction_refined();
+  const bs_shim::Scaled_size facet{field, fs / h};
+  Criteria criteria(P::edge_size = facet, P::facet_angle = fa, P::facet_size = facet, P::facet_distance = dist,
+                    P::cell_radius_edge_ratio = re, P::cell_size = field);
+  return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+}
+
 int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                  const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out, bs_error *err) {
   Surface sm;
@@ -177,16 +166,11 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
   CGAL::get_default_random() = CGAL::Random(0);
   int64_t n_long = 0;
   const bool cad = o.feature_angle > 0 &&
-                   cad_like(sm, o.feature_angle, o.feature_min_length > 0 ? o.feature_min_length : 2 * h, &n_long);
+                   bs_shim::cad_like(sm, o.feature_angle, o.feature_min_length > 0 ? o.feature_min_length : 2 * h, &n_long);
   Domain domain(sm);
   if (cad) domain.detect_features(o.feature_angle);
   out->n_features = cad ? n_long : 0;
-  namespace P = CGAL::parameters;
-  const double dist = o.facet_distance > 0 ? o.facet_distance : h / 10.0;
-  const double fs = o.facet_size > 0 ? o.facet_size : h;
-  Criteria criteria(P::edge_size = fs, P::facet_angle = 25, P::facet_size = fs, P::facet_distance = dist,
-                    P::cell_radius_edge_ratio = 3, P::cell_size = h);
-  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+  C3t3 c3t3 = refine(sm, domain, cad, o, out);
   out->refined_dihedral = min_dihedral(c3t3);
   optimise(c3t3, domain, o, &out->dihedral);
   return export_mesh(c3t3, name, &out->x, &out->n_vertices, &out->tets, &out->n_tets, err);
