@@ -119,7 +119,8 @@ typedef struct bs_mesh_read_opts {
   int surface_mesher; /* closed surfaces at size > 0: BS_SURFACE_AUTO (0:
                     the remesh path when the size asks for more than about
                     2e5 tets (6 V / h^3), Mesh_3 otherwise or when the
-                    remesh path is refused), BS_SURFACE_CGAL (CGAL's
+                    remesh path is refused; and the remesh path when Mesh_3's
+                    mesh fails the gate), BS_SURFACE_CGAL (CGAL's
                     Mesh_3), BS_SURFACE_REMESH (CGAL's isotropic remeshing
                     of the surface at the size, then Gmsh's HXT volume
                     mesher and Gmsh's optimisers) or

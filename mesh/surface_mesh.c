@@ -131,7 +131,18 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   if (!rc) rc = build_mesh(path, &r, out, err);
   bs_shim_free(r.x);
   bs_shim_free(r.tets);
+  const int gated = !rc; /* the mesh exists: a failure from here on is the gate's */
   if (!rc) rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err);
   if (rc) bs_mesh_destroy(out);
+  if (rc == BS_EINPUT && gated && (!opts || opts->surface_mesher == BS_SURFACE_AUTO)) {
+    /* auto: Mesh_3 under the gate, the remesh path may meet it (the camel at
+       diagonal / 40 to / 50); if it does not either, Mesh_3's message stands */
+    bs_error e2;
+    bs_error_clear(&e2);
+    if (!bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) {
+      bs_error_clear(err);
+      return BS_OK;
+    }
+  }
   return rc;
 }

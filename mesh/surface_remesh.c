@@ -15,7 +15,8 @@
  * BS_SURFACE_REMESH always this path, BS_SURFACE_AUTO this path when the
  * size asks for more than BS_REMESH_AUTO_TETS tets (6 V / h^3), Mesh_3
  * below that or when this path is refused (the gate not met, or the surface
- * folds through itself once remeshed). Below that count Mesh_3 is fast
+ * folds through itself once remeshed), and this path again when Mesh_3's
+ * mesh fails the gate (surface_mesh.c). Below that count Mesh_3 is fast
  * enough and stays closer to the surface (its facet distance h / 10); above
  * it Mesh_3's perturber stalls under the gate for minutes while this path
  * meets the gate without optimising.
