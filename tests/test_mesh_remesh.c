@@ -27,84 +27,9 @@
 #include "bs_shim.h"
 #include "cli_util.h"
 #include "scene_fixture.h"
+#include "soup_util.h"
 
-typedef struct soup {
-  double *x;
-  int32_t *t;
-  int64_t np, nt;
-  double diag, volume;
-} soup;
-
-/* The soup of rel (its path into path), or the test is skipped without it. */
-static void soup_or_skip(const char *rel, char *path, size_t n, soup *s) {
-  snprintf(path, n, "%s/%s", BS_SOURCE_DIR, rel);
-  if (access(path, R_OK) != 0) cr_skip_test("%s missing (bash setup.sh extracts it from libcgal-demo)", rel);
-  bs_error err;
-  bs_error_clear(&err);
-  *s = (soup){0};
-  cr_assert_eq(bs_shim_read_surface(path, &s->x, &s->np, &s->t, &s->nt, &err), 0, "%s", err.msg);
-  double lo[3], hi[3], v = 0;
-  bs_bbox(s->np, s->x, lo, hi);
-  s->diag = bs_bbox_diagonal(lo, hi);
-  for (int64_t f = 0; f < s->nt; f++) {
-    const double *a = s->x + 3 * s->t[3 * f], *b = s->x + 3 * s->t[3 * f + 1], *c = s->x + 3 * s->t[3 * f + 2];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  s->volume = fabs(v) / 6.0;
-}
-
-static void soup_free(soup *s) {
-  bs_shim_free(s->x);
-  bs_shim_free(s->t);
-}
-
-/* Two-sided sampled Hausdorff distance between m's boundary and the soup. */
-static double hausdorff(const bs_mesh *m, const soup *s, double spacing) {
-  bs_error err;
-  bs_error_clear(&err);
-  double d1 = -1, d2 = -1;
-  cr_assert_eq(bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, s->x, s->np, s->t, s->nt, spacing,
-                                        &d1, NULL, &err),
-               0, "%s", err.msg);
-  cr_assert_eq(bs_shim_surface_distance(s->x, s->np, s->t, s->nt, m->x, m->n_vertices, m->faces, m->n_faces, spacing,
-                                        &d2, NULL, &err),
-               0, "%s", err.msg);
-  return fmax(d1, d2);
-}
-
-/* Meshes rel at h = diagonal / n through the remesh path and checks what
- * every such mesh must hold: bs_mesh_check, no inverted tet, the gate,
- * volume and Hausdorff bounds, the default groups. */
-static void remesh_checked(const char *rel, double n, double vol_tol, double haus_over_h) {
-  char path[1024];
-  soup s;
-  soup_or_skip(rel, path, sizeof path, &s);
-  const double h = s.diag / n;
-  bs_mesh_read_opts o = {.size = h, .surface_mesher = BS_SURFACE_REMESH};
-  bs_mesh *m = NULL;
-  bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_mesh_check(m, &err), 0, "%s", err.msg);
-  bs_mesh_quality q;
-  bs_mesh_quality_compute(m, NULL, &q);
-  cr_log_info("%s at h %g: %d tets, %d vertices, dihedral min %.3f, radius ratio min %.4f, volume %.6g vs %.6g", rel, h,
-              m->n_tets, m->n_vertices, q.dihedral_min, q.radius_ratio_min, bs_mesh_volume(m), s.volume);
-  cr_expect_eq(q.n_inverted, 0, "%d inverted tets", q.n_inverted);
-  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "min dihedral %g under the default gate", q.dihedral_min);
-  const double rel_err = fabs(bs_mesh_volume(m) - s.volume) / s.volume;
-  cr_expect_leq(rel_err, vol_tol, "volume %g vs the surface's %g: %.3g%% off", bs_mesh_volume(m), s.volume,
-                100 * rel_err);
-  const double d = hausdorff(m, &s, h / 4);
-  cr_log_info("%s: Hausdorff distance %g = %.3f h", rel, d, d / h);
-  cr_expect_leq(d, haus_over_h * h, "Hausdorff distance %g = %.3f h", d, d / h);
-  cr_expect_not_null(bs_mesh_group(m, "body"));
-  cr_expect_not_null(bs_mesh_group(m, "surface_1"));
-  bs_mesh_destroy(&m);
-  soup_free(&s);
-}
-
-Test(mesh_remesh, elephant_scan) { remesh_checked("data/meshes/elephant.off", 100, 0.01, 0.75); }
+Test(mesh_remesh, elephant_scan) { mesh_checked_with("data/meshes/elephant.off", 100, BS_SURFACE_REMESH, 0.01, 0.75); }
 
 /* An open surface is refused by bs_mesh_read (the repair, before any
  * mesher) and by the shim itself, each message naming the file. */
