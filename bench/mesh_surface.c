@@ -95,10 +95,16 @@ static int run_cgal(const char *path, const double *p, int64_t np, const int32_t
   return 0;
 }
 
-static void run_gmsh(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, row *r) {
+/* One bs_mesh_read of path at r->h through mesher (BS_SURFACE_*, named
+ * label in the table) with the given gate (-1: none), timed and measured;
+ * a refusal is printed with its message. Gmsh's row: its reparametrised
+ * surface, no gate (raw Gmsh); remesh: CGAL isotropic remeshing, Gmsh HXT
+ * and Gmsh's optimisers to the default gate. */
+static void run_read(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, int mesher,
+                     double gate, const char *label, row *r) {
   bs_error err;
   bs_error_clear(&err);
-  bs_mesh_read_opts o = {.size = r->h, .min_dihedral = -1, .surface_mesher = BS_SURFACE_GMSH};
+  bs_mesh_read_opts o = {.size = r->h, .min_dihedral = gate, .surface_mesher = mesher};
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
   int rc = bs_mesh_read(path, &o, &m, &err);
@@ -107,33 +113,11 @@ static void run_gmsh(const char *path, const double *p, int64_t np, const int32_
   r->features = 0;
   r->local_min = r->local_frac = NAN;
   if (rc) {
-    printf("%-28s gmsh   failed: %.200s\n", path, err.msg);
+    printf("%-28s %-6s failed after %.1f s: %.300s\n", path, label, r->seconds, err.msg);
     return;
   }
   measure(m, p, np, t, nt, r);
-  print_row(path, "gmsh", r);
-  bs_mesh_destroy(&m);
-}
-
-/* The remesh path as bs_mesh_read runs it (CGAL isotropic remeshing, Gmsh
- * HXT, Gmsh's optimisers to the default gate); a gate failure is printed. */
-static void run_remesh(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, row *r) {
-  bs_error err;
-  bs_error_clear(&err);
-  bs_mesh_read_opts o = {.size = r->h, .surface_mesher = BS_SURFACE_REMESH};
-  bs_mesh *m = NULL;
-  double t0 = bs_seconds();
-  int rc = bs_mesh_read(path, &o, &m, &err);
-  r->seconds = bs_seconds() - t0;
-  r->refined = NAN;
-  r->features = 0;
-  r->local_min = r->local_frac = NAN;
-  if (rc) {
-    printf("%-28s remesh failed after %.1f s: %.300s\n", path, r->seconds, err.msg);
-    return;
-  }
-  measure(m, p, np, t, nt, r);
-  print_row(path, "remesh", r);
+  print_row(path, label, r);
   bs_mesh_destroy(&m);
 }
 
@@ -212,8 +196,8 @@ int main(int argc, char **argv) {
     o.min_size = r.h / floor_frac;
     o.scan_facet_distance = r.h / scan_frac;
     if ((which & RUN_CGAL) && !run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
-    if (which & RUN_REMESH) run_remesh(path, p, np, t, nt, &r);
-    if (which & RUN_GMSH) run_gmsh(path, p, np, t, nt, &r);
+    if (which & RUN_REMESH) run_read(path, p, np, t, nt, BS_SURFACE_REMESH, 0, "remesh", &r);
+    if (which & RUN_GMSH) run_read(path, p, np, t, nt, BS_SURFACE_GMSH, -1, "gmsh", &r);
     bs_shim_free(p);
     bs_shim_free(t);
     fflush(stdout);

@@ -90,10 +90,17 @@ void bs__tet_quality(const double *const p[4], bs__tet_measures *out);
  * follows their orientation; surface_mesh.c). */
 double bs__soup_volume(const double *p, const int32_t *t, int64_t nt);
 
+/* surface_mesh.c: the mesh of nv vertices x and nt tets (copied) with the
+ * groups of Gmsh's discrete surfaces, (3, 1, "body") every tet and (2, 1,
+ * "surface_1") its whole boundary; errors (bs_mesh_create's) name path. */
+int bs__mesh_default_groups(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets,
+                            bs_mesh **out, bs_error *err);
+
 /* surface_mesh.c: the volume inside a closed surface soup (from a file
- * `path`, already read) meshed by CGAL's Mesh_3 at opts->size > 0, then
- * held to the quality gate (bs_mesh_dihedral_gate). Groups (3, 1, "body")
- * and (2, 1, "surface_1"). BS_EINPUT naming path: size absurd for the
+ * `path`, already read) meshed at opts->size > 0 by CGAL's Mesh_3 or the
+ * remesh path (opts->surface_mesher; auto: see surface_mesh.c), then held
+ * to the quality gate (bs_mesh_dihedral_gate). Groups (3, 1, "body") and
+ * (2, 1, "surface_1"). BS_EINPUT naming path: size absurd for the
  * surface's bounding box, too many tets, the shim's refusals, the gate. */
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
@@ -107,15 +114,6 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
  * that folds through itself once remeshed), Gmsh's failure, the gate. */
 int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                               const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
-
-/* surface_remesh.c: the choice of mesher for a checked closed soup at
- * opts->size (see the file's comment): when the remesh path is chosen
- * (BS_SURFACE_REMESH; BS_SURFACE_AUTO above a tet count) it meshes into *out
- * and sets *done = 1, returning its status (in auto mode a BS_EINPUT refusal
- * gives *done = 0 and BS_OK instead: err cleared, Mesh_3's turn); *done = 0
- * and BS_OK: the caller meshes with Mesh_3. */
-int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
-                          const bs_mesh_read_opts *opts, int *done, bs_mesh **out, bs_error *err);
 
 /* gmsh_io.c: the volume inside a closed soup (outward triangles) meshed by
  * Gmsh with the soup's triangles as its boundary (a discrete surface; sizes

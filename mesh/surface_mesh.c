@@ -1,6 +1,17 @@
 /* surface_mesh.c — a closed surface (a soup read by the shim) meshed into a
- * volume by CGAL's Mesh_3 at a target size, optimised, held to the gate
- * (bs__mesh_closed_surface, see mesh_internal.h).
+ * volume at a target size, held to the gate (bs__mesh_closed_surface, see
+ * mesh_internal.h): by CGAL's Mesh_3 (here), or by the remesh path
+ * (surface_remesh.c), as opts->surface_mesher says.
+ *
+ * The choice: BS_SURFACE_CGAL always Mesh_3, BS_SURFACE_REMESH always the
+ * remesh path, BS_SURFACE_AUTO the remesh path first when the size asks for
+ * more than BS_REMESH_AUTO_TETS tets (6 V / h^3), Mesh_3 first below that,
+ * and the other one when the first refuses (BS_EINPUT: the gate not met, a
+ * surface that folds through itself once remeshed, CGAL's failure); when
+ * both refuse, Mesh_3's message is the one returned. Below that count
+ * Mesh_3 is fast enough and stays closer to the surface (its facet distance
+ * h / 10); above it Mesh_3's perturber stalls under the gate for minutes
+ * while the remesh path meets the gate without optimising.
  *
  * The size is checked against the surface first: larger than its bounding
  * box's diagonal gives no interior at all, and the tets it would make
@@ -30,12 +41,10 @@
  * about 1% and a scan is meshed as a CAD part is. */
 #define BS_MESH3_MAX_TARGET 15.0
 #define BS_MESH3_SCAN_FINE (1.0 / 90.0)
-static bs_shim_mesh3_opts mesh3_opts(double h, const double *pts, int64_t np, const bs_mesh_read_opts *opts) {
+#define BS_REMESH_AUTO_TETS 2e5
+static bs_shim_mesh3_opts mesh3_opts(double h, double diag, const bs_mesh_read_opts *opts) {
   double fa = opts ? opts->feature_angle : 0.0;
   double gate = bs__mesh_gate(opts);
-  double lo[3], hi[3];
-  bs_bbox(np, pts, lo, hi);
-  const double diag = bs_bbox_diagonal(lo, hi);
   bs_shim_mesh3_opts o = {.size = h,
                           .facet_distance = h / 10.0,
                           .feature_angle = fa < 0 ? 0.0 : (fa > 0 ? fa : BS_MESH_FEATURE_ANGLE),
@@ -67,11 +76,13 @@ double bs__soup_volume(const double *p, const int32_t *t, int64_t nt) {
   return v / 6.0;
 }
 
+/* The size h against the surface (its diagonal and |enclosed volume| into
+ * *diag and *volume). */
 static int check_size(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
-                      const bs_mesh_read_opts *opts, bs_error *err) {
+                      const bs_mesh_read_opts *opts, double *diag_out, double *volume, bs_error *err) {
   double lo[3], hi[3];
   bs_bbox(np, pts, lo, hi);
-  const double diag = bs_bbox_diagonal(lo, hi);
+  const double diag = *diag_out = bs_bbox_diagonal(lo, hi);
   if (!(h > 0) || !isfinite(h)) return bs_error_set(err, BS_EINPUT, "%s: mesh size %g must be > 0", path, h);
   if (h > diag)
     return bs_error_set(err, BS_EINPUT,
@@ -83,20 +94,20 @@ static int check_size(const char *path, const double *pts, int64_t np, const int
       if (tris[3 * f + k] < 0 || tris[3 * f + k] >= np)
         return bs_error_set(err, BS_EINPUT, "%s: triangle %lld refers to point %d of %lld", path, (long long)f,
                             tris[3 * f + k], (long long)np);
-  return bs__check_mesh_size(fabs(bs__soup_volume(pts, tris, nt)), h, opts, path, err);
+  *volume = fabs(bs__soup_volume(pts, tris, nt));
+  return bs__check_mesh_size(*volume, h, opts, path, err);
 }
 
-/* The mesh of the shim's arrays with the default groups. */
-static int build_mesh(const char *path, const bs_shim_mesh3_out *r, bs_mesh **out, bs_error *err) {
+int bs__mesh_default_groups(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets,
+                            bs_mesh **out, bs_error *err) {
   bs_mesh *m0 = NULL;
-  if (r->n_vertices > BS_MESH_MAX_TETS || r->n_tets > BS_MESH_MAX_TETS)
-    return bs_error_set(err, BS_EINPUT, "%s: %lld tets exceed the 32-bit index range", path, (long long)r->n_tets);
-  int rc = bs_mesh_create((int32_t)r->n_vertices, r->x, (int32_t)r->n_tets, r->tets, 0, NULL, &m0, err);
+  int rc = bs_mesh_create(nv, x, nt, tets, 0, NULL, &m0, err);
   if (rc) {
     bs_error_prefix(err, "%s", path);
     return rc;
   }
-  int32_t *body = malloc((size_t)m0->n_tets * sizeof *body), *surf = malloc(3 * (size_t)m0->n_faces * sizeof *surf);
+  int32_t *body = malloc(((size_t)m0->n_tets + 1) * sizeof *body);
+  int32_t *surf = malloc((3 * (size_t)m0->n_faces + 1) * sizeof *surf);
   if (!body || !surf) {
     rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the mesh's groups", path);
   } else {
@@ -113,6 +124,23 @@ static int build_mesh(const char *path, const bs_shim_mesh3_out *r, bs_mesh **ou
   return rc;
 }
 
+/* The Mesh_3 path: the shim's mesh at h with the default groups, held to
+ * the gate. */
+static int mesh3_path(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
+                      double diag, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  bs_shim_mesh3_opts o = mesh3_opts(h, diag, opts);
+  bs_shim_mesh3_out r;
+  int rc = bs_shim_mesh_surface(path, pts, np, tris, nt, &o, &r, err);
+  if (!rc && (r.n_vertices > BS_MESH_MAX_TETS || r.n_tets > BS_MESH_MAX_TETS))
+    rc = bs_error_set(err, BS_EINPUT, "%s: %lld tets exceed the 32-bit index range", path, (long long)r.n_tets);
+  if (!rc) rc = bs__mesh_default_groups(path, (int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, out, err);
+  bs_shim_free(r.x);
+  bs_shim_free(r.tets);
+  if (!rc) rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err);
+  if (rc) bs_mesh_destroy(out);
+  return rc;
+}
+
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   *out = NULL;
@@ -120,29 +148,45 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   if (np <= 0 || nt <= 0)
     return bs_error_set(err, BS_EINPUT, "%s: the surface is empty (%lld points, %lld triangles)", path, (long long)np,
                         (long long)nt);
-  int rc = check_size(path, pts, np, tris, nt, h, opts, err);
+  double diag = 0, volume = 0;
+  int rc = check_size(path, pts, np, tris, nt, h, opts, &diag, &volume, err);
   if (rc) return rc;
-  int done = 0; /* the remesh path (surface_remesh.c) when opts ask for it or the size is large */
-  rc = bs__mesh_surface_auto(path, pts, np, tris, nt, opts, &done, out, err);
-  if (done || rc) return rc;
-  bs_shim_mesh3_opts o = mesh3_opts(h, pts, np, opts);
-  bs_shim_mesh3_out r;
-  rc = bs_shim_mesh_surface(path, pts, np, tris, nt, &o, &r, err);
-  if (!rc) rc = build_mesh(path, &r, out, err);
-  bs_shim_free(r.x);
-  bs_shim_free(r.tets);
-  const int gated = !rc; /* the mesh exists: a failure from here on is the gate's */
-  if (!rc) rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err);
-  if (rc) bs_mesh_destroy(out);
-  if (rc == BS_EINPUT && gated && (!opts || opts->surface_mesher == BS_SURFACE_AUTO)) {
-    /* auto: Mesh_3 under the gate, the remesh path may meet it (the camel at
-       diagonal / 40 to / 50); if it does not either, Mesh_3's message stands */
-    bs_error e2;
-    bs_error_clear(&e2);
-    if (!bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) {
-      bs_error_clear(err);
-      return BS_OK;
+  const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
+  if (mesher == BS_SURFACE_REMESH) return bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
+  if (mesher != BS_SURFACE_AUTO) return mesh3_path(path, pts, np, tris, nt, h, diag, opts, out, err);
+  /* auto: the likelier path first, the other when it refuses */
+  bs_error e2;
+  bs_error_clear(&e2);
+  if (6.0 * volume / (h * h * h) > BS_REMESH_AUTO_TETS) {
+    if ((rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) != BS_EINPUT) {
+      if (rc) *err = e2;
+      return rc;
     }
+    return mesh3_path(path, pts, np, tris, nt, h, diag, opts, out, err);
   }
-  return rc;
+  rc = mesh3_path(path, pts, np, tris, nt, h, diag, opts, out, err);
+  if (rc != BS_EINPUT || bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) return rc;
+  bs_error_clear(err);
+  return BS_OK;
+}
+
+static const struct {
+  const char *name;
+  int value;
+} mesher_names[] = {{"auto", BS_SURFACE_AUTO}, {"cgal", BS_SURFACE_CGAL}, {"remesh", BS_SURFACE_REMESH}};
+#define N_MESHERS (sizeof mesher_names / sizeof mesher_names[0])
+
+const char *bs_mesh_mesher_name(int mesher) {
+  for (size_t i = 0; i < N_MESHERS; i++)
+    if (mesher_names[i].value == mesher) return mesher_names[i].name;
+  return "auto";
+}
+
+int bs_mesh_parse_mesher(const char *s, int *mesher) {
+  for (size_t i = 0; s && i < N_MESHERS; i++)
+    if (!strcmp(s, mesher_names[i].name)) {
+      *mesher = mesher_names[i].value;
+      return 0;
+    }
+  return -1;
 }

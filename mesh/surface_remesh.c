@@ -1,5 +1,6 @@
 /* surface_remesh.c — the "remesh" mesher for a closed surface at a size
- * (bs__mesh_remeshed_surface, bs__mesh_surface_auto; see mesh_internal.h):
+ * (bs__mesh_remeshed_surface, see mesh_internal.h; surface_mesh.c chooses
+ * between it and Mesh_3):
  * CGAL's isotropic remeshing of the surface at edge length h (the shim,
  * bs_shim_remesh_surface; sharp edges kept on a CAD-like surface), then
  * Gmsh's HXT volume mesher on those triangles (one thread), with Gmsh's
@@ -10,16 +11,6 @@
  * boundary and two of their faces are boundary triangles (caps across a
  * nearly flat surface edge) are removed, which flips that surface edge
  * (peel_caps); then the gate.
- *
- * Which mesher (opts->surface_mesher): BS_SURFACE_CGAL always Mesh_3,
- * BS_SURFACE_REMESH always this path, BS_SURFACE_AUTO this path when the
- * size asks for more than BS_REMESH_AUTO_TETS tets (6 V / h^3), Mesh_3
- * below that or when this path is refused (the gate not met, or the surface
- * folds through itself once remeshed), and this path again when Mesh_3's
- * mesh fails the gate (surface_mesh.c). Below that count Mesh_3 is fast
- * enough and stays closer to the surface (its facet distance h / 10); above
- * it Mesh_3's perturber stalls under the gate for minutes while this path
- * meets the gate without optimising.
  */
 #include <math.h>
 #include <stdint.h>
@@ -34,33 +25,17 @@
  * triangles; 2 of 4 runs of the elephant at diagonal / 60) and was slower on
  * a shared two-core machine (1M tets: 8.6 s against 6.6 s): one thread. */
 #define BS_REMESH_THREADS 1
-#define BS_REMESH_AUTO_TETS 2e5
 #define BS_GMSH_HXT 10
 
 /* m's tets but those with drop[t] into a new mesh with the default groups
- * (3, 1, "body") and (2, 1, "surface_1"), its whole boundary. */
+ * (bs__mesh_default_groups). */
 static int without_tets(const char *path, const bs_mesh *m, const char *drop, bs_mesh **out, bs_error *err) {
   int32_t *tets = malloc(4 * (size_t)m->n_tets * sizeof *tets), n = 0;
-  bs_mesh *m0 = NULL;
   if (!tets) return bs_error_set(err, BS_ENOMEM, "%s: out of memory for the tets", path);
   for (int32_t t = 0; t < m->n_tets; t++)
     if (!drop[t]) memcpy(tets + 4 * (size_t)n++, m->tets + 4 * (size_t)t, 4 * sizeof *tets);
-  int rc = bs_mesh_create(m->n_vertices, m->x, n, tets, 0, NULL, &m0, err);
-  int32_t *body = rc ? NULL : malloc((size_t)n * sizeof *body);
-  int32_t *surf = rc ? NULL : malloc(3 * (size_t)m0->n_faces * sizeof *surf);
-  if (!rc && (!body || !surf)) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the groups", path);
-  if (!rc) {
-    for (int32_t t = 0; t < n; t++) body[t] = t;
-    memcpy(surf, m0->faces, 3 * (size_t)m0->n_faces * sizeof *surf);
-    bs_group g[2] = {{.dim = 2, .tag = 1, .name = "surface_1", .n_elems = m0->n_faces, .elems = surf},
-                     {.dim = 3, .tag = 1, .name = "body", .n_elems = n, .elems = body}};
-    rc = bs_mesh_create(m0->n_vertices, m0->x, n, tets, 2, g, out, err);
-  }
-  if (rc) bs_error_prefix(err, "%s", path);
+  int rc = bs__mesh_default_groups(path, m->n_vertices, m->x, n, tets, out, err);
   free(tets);
-  free(body);
-  free(surf);
-  bs_mesh_destroy(&m0);
   return rc;
 }
 
@@ -154,43 +129,4 @@ int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, c
   if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
   if (rc) bs_mesh_destroy(out);
   return rc;
-}
-
-int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
-                          const bs_mesh_read_opts *opts, int *done, bs_mesh **out, bs_error *err) {
-  *done = 0;
-  *out = NULL;
-  const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
-  const double h = opts ? opts->size : 0.0;
-  if (mesher == BS_SURFACE_CGAL || !(h > 0)) return BS_OK;
-  if (mesher == BS_SURFACE_AUTO && 6.0 * fabs(bs__soup_volume(pts, tris, nt)) / (h * h * h) <= BS_REMESH_AUTO_TETS)
-    return BS_OK;
-  int rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
-  if (rc == BS_EINPUT && mesher == BS_SURFACE_AUTO) {
-    bs_error_clear(err); /* refused: Mesh_3 meshes it */
-    return BS_OK;
-  }
-  *done = 1;
-  return rc;
-}
-
-static const struct {
-  const char *name;
-  int value;
-} mesher_names[] = {{"auto", BS_SURFACE_AUTO}, {"cgal", BS_SURFACE_CGAL}, {"remesh", BS_SURFACE_REMESH}};
-#define N_MESHERS (sizeof mesher_names / sizeof mesher_names[0])
-
-const char *bs_mesh_mesher_name(int mesher) {
-  for (size_t i = 0; i < N_MESHERS; i++)
-    if (mesher_names[i].value == mesher) return mesher_names[i].name;
-  return "auto";
-}
-
-int bs_mesh_parse_mesher(const char *s, int *mesher) {
-  for (size_t i = 0; s && i < N_MESHERS; i++)
-    if (!strcmp(s, mesher_names[i].name)) {
-      *mesher = mesher_names[i].value;
-      return 0;
-    }
-  return -1;
 }

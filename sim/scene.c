@@ -678,8 +678,6 @@ static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
       (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||
       (st = get_choice(c, so, "solver", "solver", "project_hessian", &s->project_hessian)))
     return st;
-  if (!(s->solver.min.tr_radius > 0))
-    return fail(c, "solver.tr_radius", "must be > 0 (m), got %g", s->solver.min.tr_radius);
   return 0;
 }
 

@@ -123,6 +123,12 @@ static int check_solver(const bs_scene *s, bs_error *err) {
                m->amg_rebuild_factor);
   if (!(m->sigma > 0) || !isfinite(m->sigma))
     return bad(s, err, "solver.%s: must be > 0, got %g", m->sigma_auto ? "cg_sigma_scale" : "cg_sigma", m->sigma);
+  if (!(m->tr_radius > 0) || !isfinite(m->tr_radius))
+    return bad(s, err, "solver.tr_radius: must be > 0 (m), got %g", m->tr_radius);
+  if (m->globalization == BS_GLOBAL_TRUST_REGION && m->linear != BS_LIN_CG && m->linear != BS_LIN_PCG &&
+      m->linear != BS_LIN_AMG)
+    return bad(s, err, "solver.globalization: trust_region needs solver.linear cg, pcg or amg (Steihaug's CG), got %s",
+               bs_lin_kind_name(m->linear));
   if (s->load_steps < 1) return bad(s, err, "solver.load_steps: must be an integer in [1, 100000], got %d", s->load_steps);
   return 0;
 }

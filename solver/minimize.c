@@ -661,6 +661,7 @@ static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_mini
      * steps in exact arithmetic; allow for rounding. */
     int64_t free_dofs = 0;
     for (int32_t v = 0; v < m->n; ++v) free_dofs += (!obj->mask || obj->mask[v]) ? 3 : 0;
+    m->free_vertices = free_dofs / 3;
     if (m->has_vops) free_dofs = (int64_t)bs__msum(m, (double)free_dofs); /* ghosts counted too: a cap only */
     const int64_t auto_it = 2 * free_dofs + 100;
     m->cg_cap = o->cg_max_iter > 0 ? o->cg_max_iter : (int)(auto_it > 1000000000 ? 1000000000 : auto_it);

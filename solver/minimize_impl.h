@@ -30,6 +30,7 @@ struct bs_minimizer {
                               /* its first trial (opts.forcing_ew = 2)                 */
                               /* (opts.forcing_ew)                                       */
   double tr_radius;           /* trust_region: the current radius Delta               */
+  int64_t free_vertices;      /* vertices the mask leaves free (set at a solve's start) */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */
   /* 3n vectors: raw gradient of E' at x, gradient of E at x (masked, projected),
    * direction, right-hand side, trial point, raw and projected gradient there. */

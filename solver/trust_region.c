@@ -79,11 +79,8 @@ int bs__tr_iteration(bs_minimizer *m, const bs_objective *obj, double *x, double
   if (m->has_vops)
     return bs_error_set(err, BS_EINPUT, "minimizer: globalization trust_region is not available with vecops "
                                         "(the distributed backend); use line_search");
-  if (it == 0) {
-    int64_t free_v = 0;
-    for (int32_t v = 0; v < m->n; ++v) free_v += !obj->mask || obj->mask[v];
-    m->tr_radius = fmin(o->tr_radius * sqrt((double)(free_v > 0 ? free_v : 1)), o->clamp);
-  }
+  if (it == 0) /* Delta_0: tr_radius RMS per free vertex */
+    m->tr_radius = fmin(o->tr_radius * sqrt((double)(m->free_vertices > 0 ? m->free_vertices : 1)), o->clamp);
   for (int trial = 1;; ++trial) {
     double dg, dn;
     int rc = tr_direction(m, obj, x, gnorm, it, st, rec, &dg, &dn, err);
