@@ -571,24 +571,34 @@ Test(minimize, cg_single_converges) {
   }
 }
 
-Test(minimize, negative_curvature_start) {
+/* The 2-vertex double well from near its top (the Hessian negative
+ * definite there) with globalization g, tolerance 1e-10: converges to
+ * 1/sqrt(2) in every dof; f holds the trace records. */
+static void well_from_the_top(bs_globalization g, fx *f, bs_minimize_stats *st) {
   const int32_t n = 2;
   bs_bsr *P = pattern_chain(n);
-  fx f;
-  fx_init(&f, n, ev_well);
+  fx_init(f, n, ev_well);
   bs_minimize_opts o;
   bs_minimize_opts_default(&o);
   o.tol = 1e-10;
+  o.globalization = g;
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-  bs_objective obj = make_obj(&f, NULL);
+  bs_objective obj = make_obj(f, NULL);
   double x[6];
   for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.1 * k);
-  bs_minimize_stats st;
-  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
-  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st->reason, BS_MIN_CONVERGED, "%s", st->reason_text);
   for (int k = 0; k < 6; ++k) cr_assert_float_eq(x[k], 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+Test(minimize, negative_curvature_start) {
+  fx f;
+  bs_minimize_stats st;
+  well_from_the_top(BS_GLOBAL_LINE_SEARCH, &f, &st);
   cr_assert_gt(st.indefinite_exits, 0);
   /* CG's indefinite exit on the first iteration returned the right-hand side
    * -grad E: a descent direction, kept by the downhill check. */
@@ -600,8 +610,6 @@ Test(minimize, negative_curvature_start) {
   cr_assert_eq(st.fallback_neg_dx, 0, "CG never needs -dx (paper 3.1)");
   cr_assert_gt(st.alpha_max, 1.0, "the rhs direction is short: alpha grows");
   cr_assert_eq(f.bad_wolfe, 0);
-  bs_minimizer_destroy(&m);
-  bs_bsr_destroy(&P);
 }
 
 Test(minimize, alpha_above_one_when_the_step_undershoots) {
@@ -1752,24 +1760,9 @@ Test(minimize, trust_region_rosenbrock) {
  * CG's first curvature is negative: the trust-region step follows it to the
  * boundary (the line search gets CG's right-hand side, a short -grad E). */
 Test(minimize, trust_region_negative_curvature) {
-  const int32_t n = 2;
-  bs_bsr *P = pattern_chain(n);
   fx f;
-  fx_init(&f, n, ev_well);
-  bs_minimize_opts o;
-  bs_minimize_opts_default(&o);
-  o.tol = 1e-10;
-  o.globalization = BS_GLOBAL_TRUST_REGION;
-  bs_minimizer *m = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
-  bs_objective obj = make_obj(&f, NULL);
-  double x[6];
-  for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.1 * k);
   bs_minimize_stats st;
-  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
-  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
-  for (int k = 0; k < 6; ++k) cr_assert_float_eq(x[k], 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
+  well_from_the_top(BS_GLOBAL_TRUST_REGION, &f, &st);
   cr_assert(f.has_first);
   cr_assert_eq(f.first.lin_indefinite, 1);
   cr_assert_eq(f.first.lin_boundary, 1);
@@ -1780,8 +1773,6 @@ Test(minimize, trust_region_negative_curvature) {
   const double want = -0.1 * sqrt(2.0) * sqrt(dot(6, g0, g0));
   cr_assert_float_eq(f.first.dphi0, want, 1e-12 * fabs(want), "g.d = %.15g, expected %.15g", f.first.dphi0, want);
   cr_assert_eq(f.bad_decrease, 0);
-  bs_minimizer_destroy(&m);
-  bs_bsr_destroy(&P);
 }
 
 /* trust_region needs a Krylov solver and a positive radius: the errors name
