@@ -19,6 +19,13 @@
  *   from the thickness: K elements across thin parts, 2; 0 none), --grad G (its
  *   gradation, 0.5), --floor F (its floor h / F, 8)
  *   --no-perturb  --no-exude  --no-cgal  --no-remesh  --no-gmsh
+ *   --close-holes (close small holes, as `bigstep mesh --close-holes`)
+ *   --auto (a row "auto": bs_mesh_read with the library's defaults, the
+ *   mesher auto and the gate, as `bigstep mesh info FILE --size H`)
+ * Every input is read and repaired as bs_mesh_read does it
+ * (bs_surface_prepare: self-intersections removed, duplicates merged); the
+ * volume and the Hausdorff distance are measured against the repaired
+ * surface.
  * Seconds are wall-clock of one run: on a busy machine, say so beside them.
  * Never run by the test suite. */
 #include <math.h>
@@ -29,7 +36,7 @@
 #include "bs_mesh.h"
 #include "bs_shim.h"
 
-enum { RUN_CGAL = 1, RUN_GMSH = 2, RUN_REMESH = 4 };
+enum { RUN_CGAL = 1, RUN_GMSH = 2, RUN_REMESH = 4, RUN_AUTO = 8 };
 
 typedef struct row {
   double h, seconds, dmin, refined, rmin, vol_err, haus, local_min, local_frac;
@@ -101,10 +108,10 @@ static int run_cgal(const char *path, const double *p, int64_t np, const int32_t
  * surface, no gate (raw Gmsh); remesh: CGAL isotropic remeshing, Gmsh HXT
  * and Gmsh's optimisers to the default gate. */
 static void run_read(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt, int mesher,
-                     double gate, const char *label, row *r) {
+                     double gate, int close_holes, const char *label, row *r) {
   bs_error err;
   bs_error_clear(&err);
-  bs_mesh_read_opts o = {.size = r->h, .min_dihedral = gate, .surface_mesher = mesher};
+  bs_mesh_read_opts o = {.size = r->h, .min_dihedral = gate, .surface_mesher = mesher, .close_holes = close_holes};
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
   int rc = bs_mesh_read(path, &o, &m, &err);
@@ -122,7 +129,7 @@ static void run_read(const char *path, const double *p, int64_t np, const int32_
 }
 
 static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, double *dist_frac, double *facet_frac,
-                      double *floor_frac, double *scan_frac, int *first) {
+                      double *floor_frac, double *scan_frac, int *close_holes, int *first) {
   *o = (bs_shim_mesh3_opts){.feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10,
                             .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3,
                             .scan_facet_angle = 30, .scan_radius_edge = 2, .thickness_elements = 2,
@@ -132,6 +139,7 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
   *facet_frac = 1;
   *floor_frac = 8;
   *scan_frac = 25;
+  *close_holes = 0;
   int i = 1;
   for (; i < argc && !strncmp(argv[i], "--", 2); i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "";
@@ -140,6 +148,8 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
     else if (!strcmp(a, "--no-remesh")) *which &= ~RUN_REMESH;
     else if (!strcmp(a, "--no-perturb")) o->perturb = 0;
     else if (!strcmp(a, "--no-exude")) o->exude = 0;
+    else if (!strcmp(a, "--close-holes")) *close_holes = 1;
+    else if (!strcmp(a, "--auto")) *which |= RUN_AUTO;
     else if (!strcmp(a, "--smoother") && ++i)
       o->smoother = !strcmp(v, "lloyd") ? BS_SHIM_SMOOTH_LLOYD : !strcmp(v, "none") ? BS_SHIM_SMOOTH_NONE : BS_SHIM_SMOOTH_ODT;
     else if (!strcmp(a, "--iters") && ++i) o->smooth_iterations = atoi(v);
@@ -165,9 +175,9 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
 
 int main(int argc, char **argv) {
   bs_shim_mesh3_opts o;
-  int which, first;
+  int which, first, close_holes;
   double dist_frac, facet_frac, floor_frac, scan_frac;
-  if (parse_opts(argc, argv, &o, &which, &dist_frac, &facet_frac, &floor_frac, &scan_frac, &first)) {
+  if (parse_opts(argc, argv, &o, &which, &dist_frac, &facet_frac, &floor_frac, &scan_frac, &close_holes, &first)) {
     fprintf(stderr, "usage: bench_mesh_surface [options] FILE:N ... (see the file's comment)\n");
     return 2;
   }
@@ -184,7 +194,8 @@ int main(int argc, char **argv) {
     int64_t np = 0, nt = 0;
     bs_error err;
     bs_error_clear(&err);
-    if (bs_shim_read_surface(path, &p, &np, &t, &nt, &err)) {
+    bs_mesh_read_opts ro = {.close_holes = close_holes};
+    if (bs_surface_prepare(path, &p, &np, &t, &nt, &ro, NULL, &err)) {
       printf("%-28s        failed: %s\n", path, err.msg);
       continue;
     }
@@ -196,8 +207,9 @@ int main(int argc, char **argv) {
     o.min_size = r.h / floor_frac;
     o.scan_facet_distance = r.h / scan_frac;
     if ((which & RUN_CGAL) && !run_cgal(path, p, np, t, nt, &o, &r)) print_row(path, "cgal", &r);
-    if (which & RUN_REMESH) run_read(path, p, np, t, nt, BS_SURFACE_REMESH, 0, "remesh", &r);
-    if (which & RUN_GMSH) run_read(path, p, np, t, nt, BS_SURFACE_GMSH, -1, "gmsh", &r);
+    if (which & RUN_AUTO) run_read(path, p, np, t, nt, BS_SURFACE_AUTO, 0, close_holes, "auto", &r);
+    if (which & RUN_REMESH) run_read(path, p, np, t, nt, BS_SURFACE_REMESH, 0, close_holes, "remesh", &r);
+    if (which & RUN_GMSH) run_read(path, p, np, t, nt, BS_SURFACE_GMSH, -1, close_holes, "gmsh", &r);
     bs_shim_free(p);
     bs_shim_free(t);
     fflush(stdout);

@@ -115,6 +115,29 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
 int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                               const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
+/* manifold.c: the number of connected components of a soup's triangles
+ * (points joined by triangle edges; points in no triangle not counted)
+ * whose enclosed |volume| is at least min_volume; parent: np scratch
+ * entries. -1 when out of memory. */
+int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, int64_t nt, double min_volume,
+                            int32_t *parent);
+
+/* manifold.c: BS_EINPUT naming path, the counts and the first place of
+ * each fault, unless m's boundary is a closed 2-manifold (every boundary
+ * edge in exactly two boundary triangles, every boundary vertex's triangles
+ * one fan) with `components` connected components (<= 0: not checked);
+ * BS_ENOMEM. */
+int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components, bs_error *err);
+
+/* surface_remesh.c: the volume inside a closed soup whose triangles are
+ * kept as its boundary, meshed by Gmsh's HXT (one thread) and optimised
+ * (bs__gmsh_surface_volume), the caps under the gate that no optimiser
+ * moves removed (four boundary vertices, two boundary faces: the surface
+ * edge between them flipped), then held to the gate. Groups (3, 1, "body")
+ * and (2, 1, "surface_1"). Errors name path: Gmsh's failure, the gate. */
+int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                        const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
 /* gmsh_io.c: the volume inside a closed soup (outward triangles) meshed by
  * Gmsh with the soup's triangles as its boundary (a discrete surface; sizes
  * interpolated from the boundary), Mesh.Algorithm3D = algo3d (1 Delaunay,

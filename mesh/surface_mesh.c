@@ -13,6 +13,14 @@
  * h / 10); above it Mesh_3's perturber stalls under the gate for minutes
  * while the remesh path meets the gate without optimising.
  *
+ * A Mesh_3 mesh must have a boundary that is a closed 2-manifold with as
+ * many components as the surface has of at least one tet's volume (the
+ * shim fills the small cavities and pinches Mesh_3 leaves; what remains is
+ * refused by manifold.c's check); one under the gate is meshed again inside
+ * its own boundary by Gmsh's HXT and optimisers (hxt_inside_mesh3), which
+ * keeps Mesh_3's surface (its volume and distance to the input) where the
+ * remesh path would cut thin parts.
+ *
  * The size is checked against the surface first: larger than its bounding
  * box's diagonal gives no interior at all, and the tets it would make
  * (6 V / h^3 for the enclosed volume V) must fit this machine
@@ -124,8 +132,78 @@ int bs__mesh_default_groups(const char *path, int32_t nv, const double *x, int32
   return rc;
 }
 
+/* m's boundary triangles as a soup of their own points (the boundary
+ * vertices only, renumbered), malloc'ed into *pts and *tris. */
+static int boundary_soup(const char *path, const bs_mesh *m, double **pts, int64_t *np, int32_t **tris,
+                         bs_error *err) {
+  int32_t *id = malloc(((size_t)m->n_vertices + 1) * sizeof *id), n = 0;
+  *pts = malloc((3 * (size_t)m->n_vertices + 1) * sizeof **pts);
+  *tris = malloc((3 * (size_t)m->n_faces + 1) * sizeof **tris);
+  if (!id || !*pts || !*tris) {
+    free(id), free(*pts), free(*tris);
+    *pts = NULL, *tris = NULL;
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory for the mesh's boundary", path);
+  }
+  for (int32_t v = 0; v < m->n_vertices; v++) id[v] = -1;
+  for (size_t k = 0; k < 3 * (size_t)m->n_faces; k++) {
+    const int32_t v = m->faces[k];
+    if (id[v] < 0) {
+      memcpy(*pts + 3 * (size_t)n, m->x + 3 * (size_t)v, 3 * sizeof **pts);
+      id[v] = n++;
+    }
+    (*tris)[k] = id[v];
+  }
+  *np = n;
+  free(id);
+  return BS_OK;
+}
+
+/* BS_EINPUT unless m's boundary is a closed 2-manifold with as many
+ * components as the soup has of at least a regular tet's volume at size h
+ * (h^3 / (6 sqrt 2): a smaller one, a bubble or a crumb, has no tet at
+ * that size) (bs__boundary_manifold). */
+static int manifold_like(const char *path, const bs_mesh *m, const double *pts, int64_t np, const int32_t *tris,
+                         int64_t nt, double h, bs_error *err) {
+  int32_t *parent = malloc(((size_t)np + 1) * sizeof *parent);
+  const int64_t n = parent ? bs__soup_components(pts, np, tris, nt, h * h * h / (6.0 * sqrt(2.0)), parent) : -1;
+  free(parent);
+  if (n < 0) return bs_error_set(err, BS_ENOMEM, "%s: out of memory to count the surface's components", path);
+  return bs__boundary_manifold(m, path, n, err);
+}
+
+/* A Mesh_3 mesh under the gate meshed again inside its own boundary by
+ * Gmsh's HXT and optimisers (bs__mesh_hxt_inside): Mesh_3's surface, close
+ * to the input (its facet distance), is kept, and the slivers its perturber
+ * and exuder leave where the surface is finely divided (thin and curved
+ * parts) are not remade. On BS_EINPUT from there, *err keeps Mesh_3's
+ * gate message. */
+static int hxt_inside_mesh3(const char *path, bs_mesh **m, const bs_mesh_read_opts *opts, bs_error *err) {
+  double *bp = NULL;
+  int32_t *bt = NULL;
+  int64_t nbp = 0;
+  bs_mesh *again = NULL;
+  bs_error e2;
+  bs_error_clear(&e2);
+  if (boundary_soup(path, *m, &bp, &nbp, &bt, &e2)) {
+    *err = e2;
+    return e2.code ? e2.code : BS_ENOMEM;
+  }
+  int rc = bs__mesh_hxt_inside(path, bp, nbp, bt, (*m)->n_faces, opts, &again, &e2);
+  free(bp), free(bt);
+  if (rc == BS_EINPUT || rc == BS_EGMSH) return BS_EINPUT; /* Mesh_3's message stays in *err */
+  if (rc) {
+    *err = e2;
+    return rc;
+  }
+  bs_mesh_destroy(m);
+  *m = again;
+  bs_error_clear(err);
+  return BS_OK;
+}
+
 /* The Mesh_3 path: the shim's mesh at h with the default groups, held to
- * the gate. */
+ * the gate, meshed again inside its boundary when under it
+ * (hxt_inside_mesh3). */
 static int mesh3_path(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
                       double diag, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   bs_shim_mesh3_opts o = mesh3_opts(h, diag, opts);
@@ -136,7 +214,9 @@ static int mesh3_path(const char *path, const double *pts, int64_t np, const int
   if (!rc) rc = bs__mesh_default_groups(path, (int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, out, err);
   bs_shim_free(r.x);
   bs_shim_free(r.tets);
-  if (!rc) rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err);
+  if (!rc) rc = manifold_like(path, *out, pts, np, tris, nt, h, err);
+  if (!rc && (rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err)) == BS_EINPUT)
+    rc = hxt_inside_mesh3(path, out, opts, err);
   if (rc) bs_mesh_destroy(out);
   return rc;
 }

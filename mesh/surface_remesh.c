@@ -110,6 +110,20 @@ static int peel_caps(const char *path, double gate, bs_mesh **m, bs_error *err) 
   return rc;
 }
 
+int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                        const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  int rc = bs__gmsh_surface_volume(path, pts, np, tris, nt, opts, BS_GMSH_HXT, BS_REMESH_THREADS, out, err);
+  const double gate = bs__mesh_gate(opts);
+  if (!rc && gate > 0) rc = peel_caps(path, gate, out, err);
+  int32_t *parent = rc ? NULL : malloc(((size_t)np + 1) * sizeof *parent);
+  if (!rc && !parent) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
+  if (!rc) rc = bs__boundary_manifold(*out, path, bs__soup_components(pts, np, tris, nt, 0.0, parent), err);
+  free(parent);
+  if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
+  if (rc) bs_mesh_destroy(out);
+  return rc;
+}
+
 int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                               const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   *out = NULL;
@@ -119,14 +133,8 @@ int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, c
                            .iterations = BS_REMESH_ITERATIONS};
   bs_shim_remesh_out r;
   int rc = bs_shim_remesh_surface(path, pts, np, tris, nt, &o, &r, err);
-  if (!rc)
-    rc = bs__gmsh_surface_volume(path, r.points, r.n_points, r.tris, r.n_tris, opts, BS_GMSH_HXT, BS_REMESH_THREADS,
-                                 out, err);
+  if (!rc) rc = bs__mesh_hxt_inside(path, r.points, r.n_points, r.tris, r.n_tris, opts, out, err);
   bs_shim_free(r.points);
   bs_shim_free(r.tris);
-  const double gate = bs__mesh_gate(opts);
-  if (!rc && gate > 0) rc = peel_caps(path, gate, out, err);
-  if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
-  if (rc) bs_mesh_destroy(out);
   return rc;
 }

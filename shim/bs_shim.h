@@ -328,14 +328,24 @@ typedef struct bs_shim_mesh3_out {
   int64_t n_features;     /* sharp-edge chains kept (0: meshed as a smooth surface)      */
   double local_size_min;  /* the local size's smallest value on the surface (h without it) */
   double local_fraction;  /* fraction of the surface samples where it is under h        */
+  int64_t n_filled;       /* cells outside Mesh_3's complex added to it so that its
+                             boundary is a closed 2-manifold (see bs_shim_mesh_surface) */
 } bs_shim_mesh3_out;
+
+/* The most cells filled at once by bs_shim_mesh_surface's manifold repair. */
+#define BS_SHIM_MESH3_FILL_CELLS 16
 
 /* Meshes the volume inside the closed surface (points, tris) at opts->size
  * with CGAL's Mesh_3 on a Polyhedral_mesh_domain_with_features_3, its
  * features detected (detect_features) when the surface is CAD-like: criteria
  * edge_size = facet_size = cell_size = h, facet_angle 25 degrees,
  * facet_distance, cell_radius_edge_ratio 3 (a scan: the scan_* criteria and
- * the thickness size field when asked); then the optimisers of opts.
+ * the thickness size field when asked); then the optimisers of opts; then
+ * the complex is made a closed 2-manifold: outside cells enclosed by it in
+ * a component of at most BS_SHIM_MESH3_FILL_CELLS cells (a cavity Mesh_3
+ * leaves where a flat cell under a curved surface has its circumcentre
+ * outside), and the smaller outside wedges around an edge or a vertex where
+ * two parts of the body touch, are added to it (out->n_filled).
  * Sequential and seeded: the same input gives the same mesh. The surface
  * must be an orientable, closed 2-manifold without self-intersections (an
  * inconsistently oriented soup is oriented first). `name` (the file) starts

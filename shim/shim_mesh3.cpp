@@ -39,6 +39,7 @@
 #include <exception>
 #include <new>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "bs_shim.h"
@@ -89,6 +90,132 @@ void optimise(C3t3 &c3t3, const Domain &domain, const bs_shim_mesh3_opts &o, dou
     }
   }
   *achieved = best;
+}
+
+// The cells outside the complex that leave its boundary other than a closed
+// 2-manifold, added to it (Mesh_3 keeps the cells whose circumcentre is
+// inside; at a coarse size a flat cell just under a curved scan's surface
+// can have its circumcentre outside): small enclosed cavities (an
+// outside component of cells reaching no infinite cell), and at an edge or
+// a vertex whose outside cells form several separate wedges (two parts of
+// the body touching along the edge, or at the vertex), every wedge but the
+// one reaching the outside (or the largest). Only components of at most
+// max_cells cells are filled: a larger one is a cavity or a gap of the
+// input. Returns the count of cells added.
+typedef std::unordered_set<Tr::Cell_handle> Cell_set;
+
+bool outside(const C3t3 &c3t3, Tr::Cell_handle c) { return !c3t3.is_in_complex(c); }
+
+// The outside cells (inside ones, with out = false) of `cells` in groups
+// joined by a facet whose cells are both in `cells` and on the same side
+// (their star around an edge or a vertex).
+std::vector<std::vector<Tr::Cell_handle>> outside_groups(const C3t3 &c3t3, const std::vector<Tr::Cell_handle> &cells,
+                                                         bool out = true) {
+  std::vector<std::vector<Tr::Cell_handle>> groups;
+  const auto n_out = std::count_if(cells.begin(), cells.end(), [&](Tr::Cell_handle c) { return outside(c3t3, c); });
+  if (n_out == 0 || n_out == (long)cells.size()) return groups; /* not on the boundary */
+  Cell_set in_star(cells.begin(), cells.end()), seen;
+  for (Tr::Cell_handle c0 : cells) {
+    if (outside(c3t3, c0) != out || seen.count(c0)) continue;
+    std::vector<Tr::Cell_handle> g{c0}, stack{c0};
+    seen.insert(c0);
+    while (!stack.empty()) {
+      Tr::Cell_handle c = stack.back();
+      stack.pop_back();
+      for (int i = 0; i < 4; i++) {
+        Tr::Cell_handle n = c->neighbor(i);
+        if (in_star.count(n) && outside(c3t3, n) == out && seen.insert(n).second) g.push_back(n), stack.push_back(n);
+      }
+    }
+    groups.push_back(std::move(g));
+  }
+  return groups;
+}
+
+bool has_infinite(const Tr &tr, const std::vector<Tr::Cell_handle> &g) {
+  return std::any_of(g.begin(), g.end(), [&](Tr::Cell_handle c) { return tr.is_infinite(c); });
+}
+
+// Fills the group if it is small and has no infinite cell.
+int fill_all(C3t3 &c3t3, const std::vector<Tr::Cell_handle> &g, C3t3::Subdomain_index sd, std::size_t max_cells) {
+  const Tr &tr = c3t3.triangulation();
+  if (g.size() > max_cells || has_infinite(tr, g)) return 0;
+  for (Tr::Cell_handle c : g) c3t3.add_to_complex(c, sd);
+  return (int)g.size();
+}
+
+// Fills every group but one (the one with an infinite cell, else the
+// largest) if all those are small; returns the cells added.
+int fill_groups(C3t3 &c3t3, const std::vector<std::vector<Tr::Cell_handle>> &groups, C3t3::Subdomain_index sd,
+                std::size_t max_cells) {
+  if (groups.size() < 2) return 0;
+  const Tr &tr = c3t3.triangulation();
+  std::size_t keep = 0;
+  for (std::size_t k = 1; k < groups.size(); k++)
+    if (has_infinite(tr, groups[k]) || (!has_infinite(tr, groups[keep]) && groups[k].size() > groups[keep].size()))
+      keep = k;
+  for (std::size_t k = 0; k < groups.size(); k++)
+    if (k != keep && (groups[k].size() > max_cells || has_infinite(tr, groups[k]))) return 0;
+  int added = 0;
+  for (std::size_t k = 0; k < groups.size(); k++)
+    if (k != keep) added += fill_all(c3t3, groups[k], sd, max_cells);
+  return added;
+}
+
+// Enclosed outside components (no infinite cell) of at most max_cells cells.
+int fill_cavities(C3t3 &c3t3, C3t3::Subdomain_index sd, std::size_t max_cells) {
+  const Tr &tr = c3t3.triangulation();
+  Cell_set seen;
+  int added = 0;
+  for (auto c0 = tr.finite_cells_begin(); c0 != tr.finite_cells_end(); ++c0) {
+    Tr::Cell_handle h = c0;
+    if (!outside(c3t3, h) || !seen.insert(h).second) continue;
+    std::vector<Tr::Cell_handle> g{h}, stack{h};
+    bool open = false;
+    while (!stack.empty()) {
+      Tr::Cell_handle c = stack.back();
+      stack.pop_back();
+      for (int i = 0; i < 4; i++) {
+        Tr::Cell_handle n = c->neighbor(i);
+        if (!outside(c3t3, n) || !seen.insert(n).second) continue;
+        open = open || tr.is_infinite(n);
+        stack.push_back(n);
+        if (g.size() <= max_cells) g.push_back(n);
+      }
+    }
+    if (open || g.size() > max_cells) continue;
+    for (Tr::Cell_handle c : g) c3t3.add_to_complex(c, sd), added++;
+  }
+  return added;
+}
+
+int fill_pinches(C3t3 &c3t3, std::size_t max_cells) {
+  Tr &tr = c3t3.triangulation();
+  if (c3t3.number_of_cells_in_complex() == 0) return 0;
+  const C3t3::Subdomain_index sd = c3t3.subdomain_index(c3t3.cells_in_complex_begin());
+  int total = fill_cavities(c3t3, sd, max_cells);
+  for (int pass = 0; pass < 4; pass++) {
+    int added = 0;
+    for (auto e = tr.finite_edges_begin(); e != tr.finite_edges_end(); ++e) {
+      std::vector<Tr::Cell_handle> star;
+      Tr::Cell_circulator cc = tr.incident_cells(*e), end = cc;
+      do star.push_back(cc); while (++cc != end);
+      auto groups = outside_groups(c3t3, star);
+      added += fill_groups(c3t3, groups, sd, max_cells);
+    }
+    for (auto v = tr.finite_vertices_begin(); v != tr.finite_vertices_end(); ++v) {
+      std::vector<Tr::Cell_handle> star;
+      tr.incident_cells(v, std::back_inserter(star));
+      auto groups = outside_groups(c3t3, star);
+      /* two inside cones touching at v, the outside around them one group:
+         filled whole when small (v becomes an inner vertex) */
+      if (groups.size() == 1 && outside_groups(c3t3, star, false).size() > 1) added += fill_all(c3t3, groups[0], sd, max_cells);
+      else added += fill_groups(c3t3, groups, sd, max_cells);
+    }
+    total += added;
+    if (!added) break;
+  }
+  return total;
 }
 
 // The complex's vertices and cells as C arrays (cells oriented as CGAL's
@@ -181,6 +308,8 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
   C3t3 c3t3 = refine(sm, domain, cad, o, out);
   out->refined_dihedral = min_dihedral(c3t3);
   optimise(c3t3, domain, o, &out->dihedral);
+  out->n_filled = fill_pinches(c3t3, BS_SHIM_MESH3_FILL_CELLS);
+  if (out->n_filled) out->dihedral = min_dihedral(c3t3);
   return export_mesh(c3t3, name, &out->x, &out->n_vertices, &out->tets, &out->n_tets, err);
 }
 

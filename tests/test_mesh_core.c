@@ -558,3 +558,46 @@ Test(mesh_core, box_64_cubed) {
   cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
   bs_mesh_destroy(&m);
 }
+
+/* bs__boundary_manifold: one tet is a closed 2-manifold with one
+ * component; two tets joined by an edge or by a vertex only are refused
+ * (bs_mesh_check accepts both), naming the edge's midpoint or the vertex;
+ * two separate tets are two components, refused when one is expected. */
+Test(mesh_core, boundary_manifold_refuses_pinches) {
+  static const double x[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, /* tet A: 0 1 2 3 */
+                             1, 1, 1, 2, 1, 0, 1, 2, 0,           /* 4 5 6 */
+                             5, 5, 5, 6, 5, 5, 5, 6, 5, 5, 5, 6}; /* 7 8 9 10: far away */
+  static const int32_t one[] = {0, 1, 2, 3};
+  static const int32_t by_edge[] = {0, 1, 2, 3, 1, 2, 4, 5}; /* shares edge 1-2 only */
+  static const int32_t by_vertex[] = {0, 1, 2, 3, 3, 4, 5, 6}; /* shares vertex 3 only */
+  static const int32_t apart[] = {0, 1, 2, 3, 7, 8, 9, 10};
+  bs_mesh *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_mesh_create(4, x, 1, one, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, "one.msh", 1, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+
+  cr_assert_eq(bs_mesh_create(6, x, 2, by_edge, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, "edge.msh", 1, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "edge.msh") && strstr(err.msg, "1 edges in more than two") &&
+                strstr(err.msg, "(0.5, 0.5, 0)"),
+            "%s", err.msg);
+  bs_mesh_destroy(&m);
+
+  cr_assert_eq(bs_mesh_create(7, x, 2, by_vertex, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, "vertex.msh", 1, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "0 edges") && strstr(err.msg, "1 vertices where two parts") && strstr(err.msg, "(0, 0, 1)"),
+            "%s", err.msg);
+  bs_mesh_destroy(&m);
+
+  cr_assert_eq(bs_mesh_create(11, x, 2, apart, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, "apart.msh", 2, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, "apart.msh", 1, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "2 boundary components where the surface has 1"), "%s", err.msg);
+  /* a soup's components, those under a volume left out */
+  int32_t parent[11];
+  cr_expect_eq(bs__soup_components(m->x, m->n_vertices, m->faces, m->n_faces, 0.0, parent), 2);
+  cr_expect_eq(bs__soup_components(m->x, m->n_vertices, m->faces, m->n_faces, 1.0 / 6.0 + 1e-9, parent), 0);
+  bs_mesh_destroy(&m);
+}
