@@ -12,6 +12,7 @@
 
 #include "bs_mesh.h"
 #include "bs_shim.h"
+#include "mesh_internal.h"
 
 typedef struct soup {
   double *x;
@@ -66,7 +67,8 @@ static inline double hausdorff(const bs_mesh *m, const soup *s, double spacing) 
 }
 
 /* Meshes rel at h = diagonal / n with the mesher (BS_SURFACE_*) and checks
- * what every such mesh must hold: bs_mesh_check, no inverted tet, the gate,
+ * what every such mesh must hold: bs_mesh_check, no inverted tet, a
+ * boundary that is a closed 2-manifold (bs__boundary_manifold), the gate,
  * volume and Hausdorff bounds, the default groups. */
 static inline void mesh_checked_with(const char *rel, double n, int mesher, double vol_tol, double haus_over_h) {
   char path[1024];
@@ -84,6 +86,7 @@ static inline void mesh_checked_with(const char *rel, double n, int mesher, doub
   cr_log_info("%s at h %g: %d tets, %d vertices, dihedral min %.3f, radius ratio min %.4f, volume %.6g vs %.6g", rel,
               *h, m->n_tets, m->n_vertices, q.dihedral_min, q.radius_ratio_min, bs_mesh_volume(m), s->volume);
   cr_expect_eq(q.n_inverted, 0, "%d inverted tets", q.n_inverted);
+  cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "min dihedral %g under the default gate", q.dihedral_min);
   double rel_err = fabs(bs_mesh_volume(m) - s->volume) / s->volume;
   cr_expect_leq(rel_err, vol_tol, "volume %g vs the surface's %g: %.3g%% off", bs_mesh_volume(m), s->volume,
