@@ -15,15 +15,6 @@ static int32_t root(int32_t *p, int32_t a) {
   return a;
 }
 
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return x < y ? -1 : x > y;
-}
-
-static uint64_t pair_key(int32_t a, int32_t b) {
-  return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
-}
-
 int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, int64_t nt, double min_volume,
                             int32_t *parent) {
   for (int64_t v = 0; v < np; v++) parent[v] = (int32_t)v;
@@ -51,8 +42,8 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
 static int32_t odd_edges(const bs_mesh *m, uint64_t *keys, double at[3]) {
   const size_t n = 3 * (size_t)m->n_faces;
   for (int32_t f = 0; f < m->n_faces; f++)
-    for (int k = 0; k < 3; k++) keys[3 * (size_t)f + k] = pair_key(m->faces[3 * f + k], m->faces[3 * f + (k + 1) % 3]);
-  qsort(keys, n, sizeof *keys, cmp_u64);
+    for (int k = 0; k < 3; k++) keys[3 * (size_t)f + k] = bs__edge_key(m->faces[3 * f + k], m->faces[3 * f + (k + 1) % 3]);
+  qsort(keys, n, sizeof *keys, bs__cmp_u64);
   int32_t bad = 0;
   for (size_t i = 0, j; i < n; i = j) {
     for (j = i; j < n && keys[j] == keys[i]; j++) {
@@ -82,7 +73,7 @@ static int32_t pinched_vertices(const bs_mesh *m, const int32_t *ptr, const int3
       for (int k = 0; k < 3; k++)
         if (f[k] != v) scratch[n++] = (uint64_t)(uint32_t)f[k] << 32 | (uint32_t)i;
     }
-    qsort(scratch, n, sizeof *scratch, cmp_u64);
+    qsort(scratch, n, sizeof *scratch, bs__cmp_u64);
     for (size_t i = 1; i < n; i++)
       if (scratch[i] >> 32 == scratch[i - 1] >> 32) {
         int32_t a = root(parent, (int32_t)(scratch[i] & 0xffffffffu)), b = root(parent, (int32_t)(scratch[i - 1] & 0xffffffffu));

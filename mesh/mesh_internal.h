@@ -115,6 +115,16 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
 int bs__mesh_remeshed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                               const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
+/* An edge (a, b) as one sortable key, the smaller index in the high half,
+ * and qsort's comparison of such keys. */
+static inline uint64_t bs__edge_key(int32_t a, int32_t b) {
+  return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
+}
+static inline int bs__cmp_u64(const void *a, const void *b) {
+  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+  return x < y ? -1 : x > y;
+}
+
 /* manifold.c: the number of connected components of a soup's triangles
  * (points joined by triangle edges; points in no triangle not counted)
  * whose enclosed |volume| is at least min_volume; parent: np scratch

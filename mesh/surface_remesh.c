@@ -39,15 +39,6 @@ static int without_tets(const char *path, const bs_mesh *m, const char *drop, bs
   return rc;
 }
 
-static int cmp_u64(const void *a, const void *b) {
-  uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-  return x < y ? -1 : x > y;
-}
-
-static uint64_t edge_key(int32_t a, int32_t b) {
-  return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
-}
-
 /* Marks in drop the caps under the gate: tets with two boundary faces (so
  * four boundary vertices), their two other vertices c, d not joined by a
  * boundary edge, no vertex shared with another marked cap. Removing one
@@ -75,8 +66,8 @@ static int32_t mark_caps(const bs_mesh *m, double gate, const uint64_t *bedges, 
       if (a != g[0] && a != g[1] && a != g[2] && k < 2) other[k++] = a;
       if (b != h[0] && b != h[1] && b != h[2] && k < 2) other[k++] = b;
     }
-    uint64_t key = edge_key(other[0], other[1]);
-    if (k != 2 || bsearch(&key, bedges, (size_t)m->n_edges, sizeof key, cmp_u64)) continue;
+    uint64_t key = bs__edge_key(other[0], other[1]);
+    if (k != 2 || bsearch(&key, bedges, (size_t)m->n_edges, sizeof key, bs__cmp_u64)) continue;
     drop[t] = 1, n++;
     for (int i = 0; i < 4; i++) used[v[i]] = 1;
   }
@@ -96,8 +87,8 @@ static int peel_caps(const char *path, double gate, bs_mesh **m, bs_error *err) 
     int32_t n = 0;
     if (!be || !drop || !used || !fa || !fb) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
     if (!rc) {
-      for (int32_t e = 0; e < c->n_edges; e++) be[e] = edge_key(c->edges[2 * e], c->edges[2 * e + 1]);
-      qsort(be, (size_t)c->n_edges, sizeof *be, cmp_u64);
+      for (int32_t e = 0; e < c->n_edges; e++) be[e] = bs__edge_key(c->edges[2 * e], c->edges[2 * e + 1]);
+      qsort(be, (size_t)c->n_edges, sizeof *be, bs__cmp_u64);
       for (int32_t t = 0; t < c->n_tets; t++) fa[t] = fb[t] = -1;
       n = mark_caps(c, gate, be, drop, fa, fb, used);
     }
