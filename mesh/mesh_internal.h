@@ -143,8 +143,10 @@ int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components
  * kept as its boundary, meshed by Gmsh's HXT (one thread) and optimised
  * (bs__gmsh_surface_volume), the caps under the gate that no optimiser
  * moves removed (four boundary vertices, two boundary faces: the surface
- * edge between them flipped), then held to the gate. Groups (3, 1, "body")
- * and (2, 1, "surface_1"). Errors name path: Gmsh's failure, the gate. */
+ * edge between them flipped), its boundary checked to be a closed
+ * 2-manifold with the soup's components (bs__boundary_manifold), then held
+ * to the gate. Groups (3, 1, "body") and (2, 1, "surface_1"). Errors name
+ * path: Gmsh's failure, the manifold check, the gate. */
 int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                         const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 

@@ -107,9 +107,10 @@ int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const i
   const double gate = bs__mesh_gate(opts);
   if (!rc && gate > 0) rc = peel_caps(path, gate, out, err);
   int32_t *parent = rc ? NULL : malloc(((size_t)np + 1) * sizeof *parent);
-  if (!rc && !parent) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory", path);
-  if (!rc) rc = bs__boundary_manifold(*out, path, bs__soup_components(pts, np, tris, nt, 0.0, parent), err);
+  const int64_t n_comp = parent ? bs__soup_components(pts, np, tris, nt, 0.0, parent) : -1;
   free(parent);
+  if (!rc && n_comp < 0) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory to count the surface's components", path);
+  if (!rc) rc = bs__boundary_manifold(*out, path, n_comp, err);
   if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
   if (rc) bs_mesh_destroy(out);
   return rc;
