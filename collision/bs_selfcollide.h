@@ -210,9 +210,10 @@ double bs_self_pair_energy(int nv, const double *y, double k, double *g, double 
 
 /* Projects the m x m matrix H (row-major, 1 <= m <= 12; its symmetric part
  * is used) onto the positive semidefinite cone in place: V diag(max(lambda,
- * 0)) V^T from its eigen-decomposition (cyclic Jacobi). Returns the number of
- * negative eigenvalues clamped; with none, H is left untouched (bit for bit).
- * -1 for m out of range. */
+ * 0)) V^T from its eigen-decomposition (cyclic Jacobi), exactly symmetric.
+ * Returns the number of negative eigenvalues (those below -1e-12 times the
+ * largest in magnitude: rounding of a zero eigenvalue does not count); with
+ * none, H is left untouched (bit for bit). -1 for m out of range. */
 int bs_self_psd_project(int m, double *H);
 
 #ifdef __cplusplus

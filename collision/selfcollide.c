@@ -373,15 +373,17 @@ int bs_self_psd_project(int m, double *H) {
   for (int i = 0; i < m; i++)
     for (int j = 0; j < m; j++) A[i * m + j] = 0.5 * (H[i * m + j] + H[j * m + i]);
   jacobi_eigen(m, A, V);
-  int neg = 0;
-  for (int k = 0; k < m; k++) neg += A[k * m + k] < 0;
+  double big = 0;
+  for (int k = 0; k < m; k++) big = fmax(big, fabs(A[k * m + k]));
+  int neg = 0; /* eigenvalues below the rounding level of the largest */
+  for (int k = 0; k < m; k++) neg += A[k * m + k] < -1e-12 * big;
   if (neg == 0) return 0; /* H unchanged, bit for bit */
   for (int i = 0; i < m; i++)
-    for (int j = 0; j < m; j++) {
+    for (int j = i; j < m; j++) {
       double s = 0;
       for (int k = 0; k < m; k++)
         if (A[k * m + k] > 0) s += V[i * m + k] * A[k * m + k] * V[j * m + k];
-      H[i * m + j] = s;
+      H[i * m + j] = H[j * m + i] = s;
     }
   return neg;
 }
