@@ -19,7 +19,8 @@
  *      returned at the feasible iterate x (constrained problems only).
  *   2. g = grad E(x): g' with fixed dofs zeroed, then project_gradient(x, g)
  *      when given (section 3.2: E = E'∘P, so grad E = J_P^T grad E' at a
- *      feasible x). Hessian H at x (objective's hessian callback).
+ *      feasible x). Hessian H at x (objective's hessian callback; its
+ *      hessian_convexified after negative curvature, see "Convexified model").
  *   3. stop when ||g|| < tol (at least one iteration when opts.naive_guess).
  *   4. solve H dx = -g from a zero guess to relative tolerance
  *      min(1/2, sigma sqrt(max(||g||, tol))) (opts.sigma_auto and
@@ -79,8 +80,8 @@
  * (self-collision: the distance to a triangle falls as the triangle tilts,
  * a negative stiffness of about 3 k depth^3 / h^2 against elastic
  * stiffnesses of about E h), CG stops after a few iterations with a
- * direction 10-1000 times too long, the line search cuts it to alpha
- * 1e-4..0.3, and the far phase of an impact takes tens of such
+ * direction far too long, the line search cuts it to alpha 6e-4..0.3,
+ * and the far phase of an impact takes tens of such
  * iterations (data/scenes/paper/fig7_two_spheres.json, README). So once
  * a system of the solve has met negative curvature, the following
  * iterations solve with the convexified Hessian, and the exact one comes
