@@ -75,6 +75,15 @@
  * blocks at x, and bs_self_coupling_pairs lists the vertex pairs a collision
  * within a distance margin may couple.
  *
+ * Convexified Hessian (the term's hessian_convexified, bs_terms.h): each
+ * contact's (3 (nv + 1))^2 Hessian projected onto the positive semidefinite
+ * cone (bs_self_psd_project) before it is added. The exact one is
+ * indefinite where the primitive is a face or an edge: tilting the triangle
+ * about the closest point shortens the distance, a negative stiffness of
+ * about 3 k depth^3 / h^2 (h the triangle's size) that dwarfs the elastic
+ * one at impact depths and stops CG early (bs_minimize.h, "Convexified
+ * model", which uses this Hessian after such a stop).
+ *
  * Friction (section 5.3): for each colliding p with primitive vertices n_i
  * and closest-point barycentric weights w_i (w_0 = -1 for p), force f =
  * -dPhi/dp on p with normal n = f/|f|, Q = I - n n^T, relative velocity
@@ -198,6 +207,14 @@ double bs_self_sqdist(int nv, const double *y, double *g, double *H);
 /* Phi = k d sqrt(d + eps) for the same y, with gradient and Hessian
  * (overwritten when non-NULL). */
 double bs_self_pair_energy(int nv, const double *y, double k, double *g, double *H);
+
+/* Projects the m x m matrix H (row-major, 1 <= m <= 12; its symmetric part
+ * is used) onto the positive semidefinite cone in place: V diag(max(lambda,
+ * 0)) V^T from its eigen-decomposition (cyclic Jacobi), exactly symmetric.
+ * Returns the number of negative eigenvalues (those below -1e-12 times the
+ * largest in magnitude: rounding of a zero eigenvalue does not count); with
+ * none, H is left untouched (bit for bit). -1 for m out of range. */
+int bs_self_psd_project(int m, double *H);
 
 #ifdef __cplusplus
 }

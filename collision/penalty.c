@@ -80,7 +80,7 @@ static int penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   return BS_TERM_OK;
 }
 
-static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free};
+static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free, NULL};
 
 int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, const bs_levelset *ls, double k,
                                   int32_t n_vertices, const int32_t *vertices, bs_term **out, bs_error *err) {

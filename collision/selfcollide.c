@@ -317,6 +317,77 @@ double bs_self_pair_energy(int nv, const double *y, double k, double *g, double 
   return k * psi;
 }
 
+/* ---- projection onto the positive semidefinite cone --------------------
+ * Cyclic Jacobi (Golub & Van Loan, Matrix Computations, 4th ed., 8.5.3): A =
+ * V diag(lambda) V^T by plane rotations, each zeroing one off-diagonal pair;
+ * sweeps until the off-diagonal part is below 1e-15 of the whole in norm
+ * (quadratic convergence: about 6 sweeps at m = 12). */
+
+/* The rotation in the (p, q) plane that zeroes A[p][q], applied to A (both
+ * sides) and accumulated into V's columns. */
+static void jacobi_rotate(int m, double *A, double *V, int p, int q) {
+  const double apq = A[p * m + q];
+  if (apq == 0) return;
+  const double theta = (A[q * m + q] - A[p * m + p]) / (2 * apq);
+  const double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
+  const double c = 1 / sqrt(t * t + 1), sn = t * c;
+  for (int k = 0; k < m; k++) {
+    const double akp = A[k * m + p], akq = A[k * m + q];
+    A[k * m + p] = c * akp - sn * akq;
+    A[k * m + q] = sn * akp + c * akq;
+  }
+  for (int k = 0; k < m; k++) {
+    const double apk = A[p * m + k], aqk = A[q * m + k];
+    A[p * m + k] = c * apk - sn * aqk;
+    A[q * m + k] = sn * apk + c * aqk;
+  }
+  for (int k = 0; k < m; k++) {
+    const double vkp = V[k * m + p], vkq = V[k * m + q];
+    V[k * m + p] = c * vkp - sn * vkq;
+    V[k * m + q] = sn * vkp + c * vkq;
+  }
+}
+
+/* Eigen-decomposition of the symmetric m x m matrix A (overwritten: its
+ * diagonal ends as the eigenvalues), eigenvectors in the columns of V. */
+static void jacobi_eigen(int m, double *A, double *V) {
+  for (int i = 0; i < m * m; i++) V[i] = 0;
+  for (int i = 0; i < m; i++) V[i * m + i] = 1;
+  for (int sweep = 0; sweep < 50; sweep++) {
+    double off = 0, all = 0;
+    for (int i = 0; i < m; i++)
+      for (int j = 0; j < m; j++) {
+        const double a2 = A[i * m + j] * A[i * m + j];
+        all += a2;
+        off += i != j ? a2 : 0;
+      }
+    if (!(off > 1e-30 * all)) return; /* also ends on a zero or non-finite A */
+    for (int p = 0; p < m; p++)
+      for (int q = p + 1; q < m; q++) jacobi_rotate(m, A, V, p, q);
+  }
+}
+
+int bs_self_psd_project(int m, double *H) {
+  if (m < 1 || m > 12) return -1;
+  double A[144], V[144];
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) A[i * m + j] = 0.5 * (H[i * m + j] + H[j * m + i]);
+  jacobi_eigen(m, A, V);
+  double big = 0;
+  for (int k = 0; k < m; k++) big = fmax(big, fabs(A[k * m + k]));
+  int neg = 0; /* eigenvalues below the rounding level of the largest */
+  for (int k = 0; k < m; k++) neg += A[k * m + k] < -1e-12 * big;
+  if (neg == 0) return 0; /* H unchanged, bit for bit */
+  for (int i = 0; i < m; i++)
+    for (int j = i; j < m; j++) {
+      double s = 0;
+      for (int k = 0; k < m; k++)
+        if (A[k * m + k] > 0) s += V[i * m + k] * A[k * m + k] * V[j * m + k];
+      H[i * m + j] = H[j * m + i] = s;
+    }
+  return neg;
+}
+
 /* ---- the term --------------------------------------------------------- */
 
 typedef struct bvh_node {
@@ -790,7 +861,7 @@ static int self_gradient(const bs_term *t, const double *x, double *E, double *g
  * slot and no room left in its extra list; NULL: off the pattern). */
 typedef void (*missing_fn)(int32_t i, int32_t j, const double *B, void *ctx);
 
-static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn, void *ctx) {
+static int64_t assemble(self_data *d, const double *x, int convex, bs_bsr *H, missing_fn fn, void *ctx) {
   const bs_bsr *P = d->fem->pattern;
   int64_t missing = 0;
   for (int32_t i = 0; i < d->n_surf; i++) {
@@ -800,6 +871,7 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
     gather(x, c, y);
     bs_self_pair_energy(c->nv, y, d->k, NULL, Hl);
     int m = 3 * (c->nv + 1);
+    if (convex) bs_self_psd_project(m, Hl);
     for (int a = 0; a <= c->nv; a++)
       for (int b = 0; b <= c->nv; b++) {
         double B[9];
@@ -816,14 +888,18 @@ static int64_t assemble(self_data *d, const double *x, bs_bsr *H, missing_fn fn,
   return missing;
 }
 
-/* Not evaluable as self_eval (H untouched). */
-static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+/* Not evaluable as self_eval (H untouched). convex: each contact's Hessian
+ * projected onto the PSD cone (the term's hessian_convexified). */
+static int hessian_at(const bs_term *t, const double *x, int convex, bs_bsr *H) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
   if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
-  d->stats.missing_blocks = cnt ? assemble(d, x, H, NULL, NULL) : 0;
+  d->stats.missing_blocks = cnt ? assemble(d, x, convex, H, NULL, NULL) : 0;
   return BS_TERM_OK;
 }
+
+static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) { return hessian_at(t, x, 0, H); }
+static int self_hessian_convexified(const bs_term *t, const double *x, bs_bsr *H) { return hessian_at(t, x, 1, H); }
 
 static int self_begin_step(bs_term *t, bs_error *err) {
   (void)err;
@@ -839,7 +915,8 @@ static int self_begin_step(bs_term *t, bs_error *err) {
   return 0;
 }
 
-static const bs_term_ops self_ops = {self_value, self_gradient, self_hessian, self_begin_step, self_free};
+static const bs_term_ops self_ops = {self_value, self_gradient, self_hessian, self_begin_step, self_free,
+                                     self_hessian_convexified};
 
 /* ---- interface faces ---------------------------------------------------
  * The excluded region of surface vertex p is the union of the tets that hold
@@ -1127,7 +1204,7 @@ int bs_term_self_missing_blocks(bs_term *t, const double *x, int64_t cap, int32_
   if ((st = check_x(d, x, "self-collision missing blocks", err))) return st;
   if (detect(d, x) < 0) return bs_error_set(err, BS_EINTERNAL, "self-collision missing blocks: a query failed");
   missing_ctx c = {0, cap, pairs, blocks};
-  d->stats.missing_blocks = assemble(d, x, NULL, collect_missing, &c);
+  d->stats.missing_blocks = assemble(d, x, 0, NULL, collect_missing, &c);
   *count = c.n;
   return 0;
 }

@@ -73,6 +73,11 @@ typedef struct bs_term_ops {
   int (*hessian)(const bs_term *t, const double *x, bs_bsr *H);             /* H added        */
   int (*begin_step)(bs_term *t, bs_error *err); /* may be NULL */
   void (*destroy_data)(void *data);             /* may be NULL */
+  /* May be NULL: the Hessian with its negative curvature removed, added into H
+     (self-collision: each contact's Hessian projected onto the positive
+     semidefinite cone). The minimizer's convexified model (bs_minimize.h,
+     "Convexified model") takes it in place of hessian. */
+  int (*hessian_convexified)(const bs_term *t, const double *x, bs_bsr *H);
 } bs_term_ops;
 
 struct bs_term {

@@ -20,6 +20,7 @@ struct bs_integrator {
   double *x_n, *x_hat, *g1, *g2, *grad;
   double *gh;             /* 3n: grad E' for the Hessian projection   */
   int has_expensive;
+  int has_convexified;    /* a term offers hessian_convexified         */
   double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
 };
 
@@ -93,6 +94,7 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   for (int i = 0; i < n_terms; i++) {
     I->terms[i] = terms[i];
     if (terms[i]->expensive) I->has_expensive = 1;
+    if (terms[i]->ops->hessian_convexified) I->has_convexified = 1;
   }
   if (mask) memcpy(I->mask, mask, nv);
   else memset(I->mask, 1, nv);
@@ -203,20 +205,23 @@ static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
 }
 
 /* The active terms' Hessians added into H (a term's status when one is not
- * evaluable); dynamic_only: only the terms marked so. */
-static int terms_hessian(bs_integrator *I, const double *x, int dynamic_only, bs_bsr *H) {
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i]) && (!dynamic_only || I->terms[i]->dynamic_only)) {
-      int rc = I->terms[i]->ops->hessian(I->terms[i], x, H);
+ * evaluable); dynamic_only: only the terms marked so; convex: a term's
+ * convexified Hessian where it offers one. */
+static int terms_hessian(bs_integrator *I, const double *x, int dynamic_only, int convex, bs_bsr *H) {
+  for (int i = 0; i < I->n_terms; i++) {
+    const bs_term *t = I->terms[i];
+    if (term_active(I, t) && (!dynamic_only || t->dynamic_only)) {
+      int rc = convex && t->ops->hessian_convexified ? t->ops->hessian_convexified(t, x, H) : t->ops->hessian(t, x, H);
       if (rc) return rc;
     }
+  }
   return 0;
 }
 
 static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   bs_integrator *I = ctx;
   bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, H);
+  int rc = terms_hessian(I, x, 0, 0, H);
   if (rc) return rc;
   if (I->hooks.project_hessian) {
     double E;
@@ -230,9 +235,20 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
 static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
   bs_integrator *I = ctx;
   bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, H);
+  int rc = terms_hessian(I, x, 0, 0, H);
   if (rc) return rc;
   I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
+  return 0;
+}
+
+/* The minimizer's convexified model (bs_minimize.h): the terms' convexified
+ * Hessians where they offer one, projected as obj_hessian_g. */
+static int obj_hessian_convexified(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
+  bs_integrator *I = ctx;
+  bs_bsr_zero(H);
+  int rc = terms_hessian(I, x, 0, 1, H);
+  if (rc) return rc;
+  if (I->hooks.project_hessian) I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
   return 0;
 }
 
@@ -240,7 +256,7 @@ static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *
  * Hessians plus the PSD-projected elastic Hessian at rest or at x. */
 static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
   bs_integrator *I = ctx;
-  int rc = terms_hessian(I, x, 1, P);
+  int rc = terms_hessian(I, x, 1, 0, P);
   if (rc) return rc;
   bs_fem_elastic_hessian(I->fem, I->opts.amg_at_rest ? I->fem->mesh->x : x, 1, 1.0, P);
   return 0;
@@ -265,9 +281,9 @@ static void obj_trace(const bs_min_iter *it, void *ctx) {
   bs_integrator *I = ctx;
   char kept[32] = "";
   if (it->lin_downhill_iterate > 0) snprintf(kept, sizeof kept, " (iterate %d)", it->lin_downhill_iterate);
-  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s  alpha %.4g (%d trials)%s\n",
+  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s%s  alpha %.4g (%d trials)%s\n",
           it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
-          kept, it->alpha, it->ls_evaluations,
+          kept, it->convexified ? " (convexified)" : "", it->alpha, it->ls_evaluations,
           it->direction != BS_DIR_NEWTON ? (it->direction == BS_DIR_NEG_DX ? " fallback -dx" : " fallback -g") : "");
   fflush(I->opts.trace);
 }
@@ -305,6 +321,7 @@ void bs_step_stats_add(bs_step_stats *st, const bs_step_stats *sub) {
   st->min.ls_evaluations += sub->min.ls_evaluations;
   st->min.indefinite_exits += sub->min.indefinite_exits;
   st->min.downhill_iterates += sub->min.downhill_iterates;
+  st->min.convexified += sub->min.convexified;
   st->min.fallback_neg_dx += sub->min.fallback_neg_dx;
   st->min.fallback_neg_grad += sub->min.fallback_neg_grad;
   st->min.clamps += sub->min.clamps;
@@ -332,6 +349,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   o->register_active = I->hooks.register_active ? hook_register : NULL;
   o->project_gradient = I->hooks.project_gradient ? hook_project_gradient : NULL;
   o->hessian_g = I->hooks.project_hessian ? obj_hessian_g : NULL;
+  o->hessian_convexified = I->has_convexified ? obj_hessian_convexified : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->precond_matrix = obj_precond;
   o->trace = I->opts.trace ? obj_trace : NULL;

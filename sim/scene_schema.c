@@ -77,6 +77,10 @@ const bs_schema_key bs_schema_keys_[] = {
             "region (follows negative curvature; linear cg, pcg or amg)"},
     {"solver", "tr_radius", NUM, .range = "(0, )", .def = "0.1",
      .doc = "trust_region: the first radius of each step's solve, as an RMS displacement per free vertex (m)"},
+    {"solver", "contact_hessian", STR, .choices = CHOICES("exact", "adaptive"), .def = "\"adaptive\"",
+     .doc = "the Newton model's self-collision contacts: exact Hessians (the paper's), or adaptive: each "
+            "contact's Hessian projected onto the PSD cone after a solve met negative curvature, until a full "
+            "Newton step"},
     {"solver", "cg_downhill", BOOL, .def = "true",
      .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
     {"solver", "cg_precision", STR, .choices = CHOICES("double", "single"), .def = "\"double\"",

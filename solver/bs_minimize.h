@@ -19,7 +19,8 @@
  *      returned at the feasible iterate x (constrained problems only).
  *   2. g = grad E(x): g' with fixed dofs zeroed, then project_gradient(x, g)
  *      when given (section 3.2: E = E'∘P, so grad E = J_P^T grad E' at a
- *      feasible x). Hessian H at x (objective's hessian callback).
+ *      feasible x). Hessian H at x (objective's hessian callback; its
+ *      hessian_convexified after negative curvature, see "Convexified model").
  *   3. stop when ||g|| < tol (at least one iteration when opts.naive_guess).
  *   4. solve H dx = -g from a zero guess to relative tolerance
  *      min(1/2, sigma sqrt(max(||g||, tol))) (opts.sigma_auto and
@@ -72,6 +73,27 @@
  * "converged at the rounding floor of E", never as a failure; where a
  * larger ||g|| is not acceptable, compare stats.grad_norm with what you
  * need.
+ *
+ * Convexified model (added; opts.convexify, obj->hessian_convexified): the
+ * paper's CG returns its last iterate when it meets negative curvature
+ * (step 4). Where that curvature comes from penalty contacts pressed deep
+ * (self-collision: the distance to a triangle falls as the triangle tilts,
+ * a negative stiffness of about 3 k depth^3 / h^2 against elastic
+ * stiffnesses of about E h), CG stops after a few iterations with a
+ * direction far too long, the line search cuts it to alpha 6e-4..0.3,
+ * and the far phase of an impact takes tens of such
+ * iterations (data/scenes/paper/fig7_two_spheres.json, README). So once
+ * a system of the solve has met negative curvature, the following
+ * iterations solve with the convexified Hessian, and the exact one comes
+ * back after an iteration that took the full Newton step (a Newton
+ * direction, no negative curvature, alpha = 1 at the first trial) from a
+ * solve of at least 2 Krylov iterations (one CG iteration is a scaled
+ * gradient step, which says nothing of the model): near the solution the
+ * exact Hessian keeps Newton's fast convergence, which the convexified
+ * one loses (its clamped curvature is of the order of the elastic one at
+ * resting contacts). The direction of the iteration that met negative
+ * curvature is kept (the paper's rule). E and its gradient never change,
+ * only the model: the line search and the convergence test are as before.
  *
  * Line-search constants: c1 = 1e-4 (sufficient decrease) and c2 = 0.9
  * (curvature) by default, Nocedal & Wright's choice for Newton-type methods.
@@ -213,6 +235,8 @@ typedef struct bs_min_iter {
   int lin_downhill_iterate; /* k > 0: dx is CG's iterate k (opts.cg_downhill)          */
   int lin_boundary;      /* 1: trust_region's CG answer lies on the boundary            */
   int cholmod_fallback;  /* 1: CHOLMOD found H not positive definite, CG was used     */
+  int convexified;       /* 1: the Newton system was the convexified Hessian           */
+                         /* (opts.convexify, obj->hessian_convexified)                */
   bs_lsearch_status ls_status; /* WOLFE, CAPPED (best decreasing point) or NOISE     */
                          /* (bs_newton has no line search and leaves it 0)           */
   int ls_evaluations;    /* trial points of this line search                          */
@@ -251,6 +275,12 @@ typedef struct bs_objective {
   /* Optional (NULL): called instead of hessian, with g_raw = the unprojected gradient the
      minimizer has just computed at the same x (saves the objective recomputing it). */
   int (*hessian_g)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
+  /* Optional (NULL), added: the convexified Hessian at x (see "Convexified model"), as
+     hessian_g (g_raw given, H zeroed by the objective): the Hessian with the negative
+     curvature of the terms that offer a convexified form removed (self-collision: each
+     contact's Hessian projected onto the positive semidefinite cone). Nonzero: not
+     evaluable (BS_MIN_NONFINITE). */
+  int (*hessian_convexified)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
   /* Optional (NULL), added: with opts.linear = amg, the matrix the AMG preconditioner
      is built from, at x, assembled into P (the fem pattern, zeroed by the minimizer;
      extras are ignored): symmetric positive definite on the free dofs. Called only when
@@ -334,6 +364,11 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   int amg_rebuild_every; /* added: AMG rebuild every N bs_minimize calls; 0 (default): no  */
   bs_globalization globalization; /* added, default line_search (the paper's); trust_region */
                        /* needs linear cg, pcg or amg and no vecops (see "Trust region")   */
+  int convexify;       /* added, default 1: after a Newton system met negative curvature, */
+                       /* later iterations solve with obj->hessian_convexified (when given) */
+                       /* until one takes the full Newton step of a solve of 2 or more      */
+                       /* Krylov iterations (see "Convexified model"); 0: always the        */
+                       /* Hessian (the paper's rule alone). Line-search globalization only */
   double tr_radius;    /* added: trust_region's radius at each solve's start, as an RMS   */
                        /* length per free vertex (units of x): Delta_0 = tr_radius sqrt(free */
                        /* vertices), at most clamp; default 0.1 (> 0)                      */
@@ -376,6 +411,8 @@ typedef struct bs_minimize_stats {
   int amg_setups;                            /* added: AMG hierarchies built (linear = amg) */
   int downhill_iterates;                     /* added: Newton directions that are an earlier */
                                              /* CG iterate (opts.cg_downhill)              */
+  int convexified;                           /* added: iterations that solved with the     */
+                                             /* convexified Hessian (opts.convexify)       */
   int tr_rejections;                         /* added: trust_region trial steps rejected   */
   int tr_boundary;                           /* added: accepted steps on the boundary      */
   double tr_radius;                          /* added: trust_region radius at the end      */

@@ -196,6 +196,7 @@ void bs_minimize_opts_default(bs_minimize_opts *o) {
   o->amg_rebuild_every = 0;
   o->globalization = BS_GLOBAL_LINE_SEARCH;
   o->tr_radius = 0.1;
+  o->convexify = 1;
 }
 
 int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
@@ -207,6 +208,8 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
                         o->rtol, o->load_rtol);
   if (o->max_iter < 0)
     return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
+  if (o->convexify < 0 || o->convexify > 1)
+    return bs_error_set(err, BS_EINPUT, "minimizer option convexify must be 0 or 1, got %d", o->convexify);
   if (o->forcing_ew < 0 || o->forcing_ew > 2)
     return bs_error_set(err, BS_EINPUT, "minimizer option forcing_ew must be 0, 1 or 2, got %d", o->forcing_ew);
   if (o->newton_max_iter < 1)
@@ -607,7 +610,9 @@ static int assemble(bs_minimizer *m, const bs_objective *obj, const double *x, i
     if (rc) return rc;
   }
   double t = bs_seconds();
-  int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
+  int hrc = m->convex       ? obj->hessian_convexified(x, m->g_raw, m->H, obj->ctx)
+            : obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx)
+                             : obj->hessian(x, m->H, obj->ctx);
   st->t_assembly += bs_seconds() - t;
   if (!hrc) return 0;
   bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);
@@ -669,6 +674,7 @@ static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_mini
     st->tol_used = m->tau = bs__tolerance(o, obj, gnorm);
     m->floor_run = 0;
     m->all_full = 1;
+    m->convex = 0;
   }
   if (gnorm == 0 || (gnorm < m->tau && !(it == 0 && o->naive_guess))) {
     bs__set_reason(m, st, BS_MIN_CONVERGED, "|grad E| = %.3e < tol %.3e after %d iterations", gnorm, m->tau, it);
@@ -679,6 +685,16 @@ static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_mini
     return 1;
   }
   return 0;
+}
+
+/* The model of the next iteration (bs_minimize.h, "Convexified model"), after
+ * an iteration of the line-search loop (m->last_full set): the convexified
+ * Hessian after negative curvature, the exact one again after a full Newton
+ * step from a solve of 2 or more Krylov iterations. */
+static void update_model(bs_minimizer *m, const bs_objective *obj, const bs_min_iter *rec) {
+  if (!m->opts.convexify || !obj->hessian_convexified) return;
+  if (rec->lin_indefinite) m->convex = 1;
+  else if (m->convex && m->last_full && rec->lin_iterations > 1) m->convex = 0;
 }
 
 int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize_stats *st_out, bs_error *err) {
@@ -708,6 +724,8 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     rec.iteration = it;
     rec.grad_norm = gnorm;
 
+    rec.convexified = m->convex;
+    st->convexified += m->convex;
     rc = assemble(m, obj, x, it, st, err);
     if (rc < 0) return rc;
     if (rc > 0) break;
@@ -740,6 +758,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     m->last_full = rec.direction == BS_DIR_NEWTON && !rec.lin_indefinite && ls.status == BS_LSEARCH_WOLFE &&
                    ls.alpha == 1 && ls.evals == 1;
     m->all_full &= m->last_full;
+    update_model(m, obj, &rec);
     if (ls.status == BS_LSEARCH_NOISE) st->noise_steps++;
     const int moved = bs__many(m, free_dofs_moved(m, obj, x));
     if (obj->trace) bs__trace_step(m, obj, x, E, dphi0, &ls, &rec);

@@ -29,6 +29,8 @@ struct bs_minimizer {
                               /* Newton direction, no indefinite exit, alpha = 1 at    */
                               /* its first trial (opts.forcing_ew = 2)                 */
                               /* (opts.forcing_ew)                                       */
+  int convex;                 /* 1: the next Newton system is the convexified Hessian */
+                              /* (opts.convexify; reset at each solve's start)        */
   double tr_radius;           /* trust_region: the current radius Delta               */
   int64_t free_vertices;      /* vertices the mask leaves free (set at a solve's start) */
   double amg_base;            /* cost per decade of the first solve after setup (0: none yet) */

@@ -18,7 +18,7 @@ static const char *const bs_test_full_scene =
     "   \"newton_max_iterations\": 40,\n"
     "   \"cg_max_iterations\": 0, \"newton_k\": 1, \"mode\": \"dynamic\", \"backend\": \"serial\", \"load_steps\": 1,\n"
     "   \"project_hessian\": \"none\", \"cg_sigma\": \"auto\", \"cg_forcing\": \"paper\",\n"
-    "   \"cg_downhill\": true, \"cg_precision\": \"double\", \"amg_matrix\": \"rest\", \"amg_rebuild_factor\": 3,\n"
+    "   \"cg_downhill\": true, \"contact_hessian\": \"adaptive\", \"cg_precision\": \"double\", \"amg_matrix\": \"rest\", \"amg_rebuild_factor\": 3,\n"
     "   \"amg_rebuild_every\": 0},\n"
     " \"gravity\": [0, -9.8, 0], \"drag\": 0,\n"
     " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]}, \"mesh_size\": 0,\n"

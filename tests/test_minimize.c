@@ -4,7 +4,8 @@
  * started on negative curvature, an underestimated step (alpha > 1), the length
  * clamp, strong Wolfe checks recomputed independently, a log barrier (non-
  * evaluable points), the sphere constraint through the projection hooks, fixed
- * dofs, the lower-bound shortcut, non-finite objectives, CHOLMOD and PCG, and
+ * dofs, the lower-bound shortcut, non-finite objectives, CHOLMOD and PCG, the
+ * convexified model after negative curvature, and
  * the Newton baseline converging quadratically or failing. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -610,6 +611,127 @@ Test(minimize, negative_curvature_start) {
   cr_assert_eq(st.fallback_neg_dx, 0, "CG never needs -dx (paper 3.1)");
   cr_assert_gt(st.alpha_max, 1.0, "the rhs direction is short: alpha grows");
   cr_assert_eq(f.bad_wolfe, 0);
+}
+
+/* ---- the convexified model (opts.convexify) ------------------------------ */
+
+/* What cb_convex_trace records of each iteration. */
+typedef struct conv_rec {
+  int convexified, indefinite, krylov, full;
+} conv_rec;
+static conv_rec conv_recs[64];
+static int n_conv_recs, n_convex_calls;
+
+static void cb_convex_trace(const bs_min_iter *it, void *ctx) {
+  (void)ctx;
+  if (n_conv_recs >= 64) return;
+  conv_rec *r = &conv_recs[n_conv_recs++];
+  r->convexified = it->convexified;
+  r->indefinite = it->lin_indefinite;
+  r->krylov = it->lin_iterations;
+  r->full = it->direction == BS_DIR_NEWTON && !it->lin_indefinite && it->ls_status == BS_LSEARCH_WOLFE &&
+            it->alpha == 1 && it->ls_evaluations == 1;
+}
+
+/* Weighted double well: sum_k (1 + k) (u_k^4 - u_k^2), the wells of ev_well
+ * with distinct curvatures (so that CG takes several iterations there). */
+static int ev_wwell(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  double e = 0;
+  for (int64_t k = 0; k < 3 * (int64_t)f->n; ++k) {
+    const double c = 1.0 + (double)k;
+    e += c * (u[k] * u[k] * u[k] * u[k] - u[k] * u[k]);
+    if (g) g[k] = c * (4 * u[k] * u[k] * u[k] - 2 * u[k]);
+    if (H) hadd(H, k, k, c * (12 * u[k] * u[k] - 2));
+  }
+  *E = e;
+  return 0;
+}
+
+/* Its convexified Hessian for the test: each diagonal entry raised to at
+ * least 1 + k (the minimizer only needs a PSD model). */
+static int cb_hessian_convex(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
+  (void)g_raw;
+  fx *f = ctx;
+  n_convex_calls++;
+  bs_bsr_zero(H);
+  for (int64_t k = 0; k < 3 * (int64_t)f->n; ++k) hadd(H, k, k, (1.0 + (double)k) * fmax(12 * x[k] * x[k] - 2, 1.0));
+  return 0;
+}
+
+/* The 2-vertex weighted double well from near its top with the convexified model
+ * offered (convexify on or off, or not offered: offer 0): the records of
+ * the iterations into conv_recs; x converged. */
+static void well_convex(int convexify, int offer, double *x, bs_minimize_stats *st) {
+  bs_bsr *P = pattern_chain(2);
+  fx f;
+  fx_init(&f, 2, ev_wwell);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  cr_assert_eq(o.convexify, 1, "on by default");
+  o.tol = 1e-10;
+  o.convexify = convexify;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.trace = cb_convex_trace;
+  if (offer) obj.hessian_convexified = cb_hessian_convex;
+  n_conv_recs = n_convex_calls = 0;
+  for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.3 * k) * (k % 2 ? -1 : 1);
+  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  cr_assert_eq(st->reason, BS_MIN_CONVERGED, "%s", st->reason_text);
+  for (int k = 0; k < 6; ++k) cr_assert_float_eq(fabs(x[k]), 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
+/* From the top of the double well the first system meets negative curvature:
+ * the next iterations solve with the convexified Hessian until one takes the
+ * full Newton step of a solve of 2 or more CG iterations, then the Hessian
+ * again (bs_minimize.h, "Convexified model"); the stats count them. Off, or
+ * not offered, the model is never called and the iterates are the paper's,
+ * bit for bit. */
+Test(minimize, convexified_model_after_negative_curvature) {
+  double x[6], x_off[6], x_none[6];
+  bs_minimize_stats st, st_off, st_none;
+  well_convex(1, 1, x, &st);
+  cr_assert_eq(conv_recs[0].indefinite, 1, "the first system meets negative curvature");
+  cr_assert_eq(conv_recs[0].convexified, 0, "the first system is the Hessian");
+  int model = 0, used = 0, back = 0;
+  for (int i = 0; i < n_conv_recs; ++i) {
+    cr_expect_eq(conv_recs[i].convexified, model, "iteration %d: convexified %d, expected %d", i,
+                 conv_recs[i].convexified, model);
+    used += conv_recs[i].convexified;
+    if (conv_recs[i].indefinite) model = 1;
+    else if (model && conv_recs[i].full && conv_recs[i].krylov > 1) model = 0, back++;
+  }
+  cr_expect_gt(used, 0, "the convexified model was never used");
+  cr_expect_gt(back, 0, "the Hessian never came back");
+  for (int i = 0; i < n_conv_recs; ++i)
+    cr_log_info("iteration %d: convexified %d indefinite %d krylov %d full %d", i, conv_recs[i].convexified,
+                conv_recs[i].indefinite, conv_recs[i].krylov, conv_recs[i].full);
+  cr_expect_eq(st.convexified, used);
+  cr_expect_eq(n_convex_calls, used);
+  well_convex(0, 1, x_off, &st_off);
+  cr_expect_eq(n_convex_calls, 0);
+  cr_expect_eq(st_off.convexified, 0);
+  well_convex(1, 0, x_none, &st_none);
+  cr_expect_eq(st_none.convexified, 0);
+  cr_expect(memcmp(x_off, x_none, sizeof x_off) == 0, "convexify 0 and no model differ");
+  cr_expect_eq(st_off.iterations, st_none.iterations);
+}
+
+/* convexify outside {0, 1} is refused, naming the option. */
+Test(minimize, convexify_option_checked) {
+  bs_bsr *P = pattern_chain(2);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.convexify = 2;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "convexify"), "%s", err.msg);
+  bs_bsr_destroy(&P);
 }
 
 Test(minimize, alpha_above_one_when_the_step_undershoots) {

@@ -27,6 +27,7 @@ static void expect_same_solver(const bs_scene *a, const bs_scene *b, const char 
   EQ(solver.min.tol); EQ(solver.min.max_iter); EQ(solver.min.sigma); EQ(solver.min.sigma_auto);
   EQ(solver.min.linear); EQ(solver.min.cg_max_iter); EQ(solver.min.cg_single); EQ(solver.min.forcing_ew);
   EQ(solver.min.cg_downhill); EQ(solver.min.amg_rebuild_factor); EQ(solver.min.amg_rebuild_every);
+  EQ(solver.min.convexify);
 }
 
 /* The same file, whether the path is relative or absolute. */

@@ -2,7 +2,8 @@
  * central finite differences (O(h^2)) in the face, edge and vertex regions;
  * detection on two boxes in one mesh; the term's gradient and Hessian
  * (pattern blocks plus the missing coupling blocks) against finite
- * differences; two boxes falling onto each other end separated; friction
+ * differences; the contact Hessians' projection onto the PSD cone (the
+ * convexified model); two boxes falling onto each other end separated; friction
  * lowers kinetic energy, conserves momentum, never moves positions; error
  * paths name the culprit. */
 #include <criterion/criterion.h>
@@ -136,6 +137,68 @@ Test(self_kernel, closest_triangle_degenerate_and_energy_shape) {
   double z[6] = {0, 0, 0, 0, 0, 0}, g[6], H[36];
   cr_expect_eq(bs_self_pair_energy(1, z, 3.0, g, H), 0.0);
   for (int i = 0; i < 6; i++) cr_expect(g[i] == 0 && isfinite(H[i * 6 + i]), "finite derivatives at d = 0");
+}
+
+/* v^T A v over the m x m row-major A. */
+static double quad(int m, const double *A, const double *v) {
+  double s = 0;
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) s += v[i] * A[i * m + j] * v[j];
+  return s;
+}
+
+/* bs_self_psd_project on a known matrix: R diag(3, -2) R^T becomes
+ * R diag(3, 0) R^T (one eigenvalue clamped); a PSD matrix is left bit for
+ * bit; m out of range is refused. */
+Test(self_kernel, psd_projection_known_matrix) {
+  const double c = cos(0.3), s = sin(0.3);
+  double H[4] = {3 * c * c - 2 * s * s, 5 * c * s, 5 * c * s, 3 * s * s - 2 * c * c};
+  const double want[4] = {3 * c * c, 3 * c * s, 3 * c * s, 3 * s * s};
+  cr_assert_eq(bs_self_psd_project(2, H), 1);
+  for (int i = 0; i < 4; i++) cr_expect(fabs(H[i] - want[i]) < 1e-14, "entry %d: %.17g, want %.17g", i, H[i], want[i]);
+  double P[4] = {2, 1, 1, 2}, P0[4];
+  memcpy(P0, P, sizeof P);
+  cr_assert_eq(bs_self_psd_project(2, P), 0);
+  cr_expect(memcmp(P, P0, sizeof P) == 0, "a PSD matrix changed");
+  cr_expect_eq(bs_self_psd_project(13, P), -1);
+  cr_expect_eq(bs_self_psd_project(0, P), -1);
+}
+
+/* The contact Hessians: in the face and edge regions the exact one is
+ * indefinite (tilting the primitive shortens the distance), its projection
+ * is PSD and differs from it by a PSD matrix (only negative curvature is
+ * removed) and is projected again to itself; in the vertex region (|p - a|^2
+ * is convex) the Hessian is PSD and left bit for bit. */
+Test(self_kernel, psd_projection_of_contact_hessians) {
+  for (int want = 0; want < 3; want++)
+    for (unsigned seed = 1; seed <= 3; seed++) {
+      double y[12], H[144], Hp[144], H2[144];
+      const int nv = region_config(want, seed, y), m = 3 * (nv + 1);
+      bs_self_pair_energy(nv, y, 2.5, NULL, H);
+      memcpy(Hp, H, sizeof(double) * (size_t)(m * m));
+      const int neg = bs_self_psd_project(m, Hp);
+      double scale = 0;
+      for (int i = 0; i < m * m; i++) scale = fmax(scale, fabs(H[i]));
+      if (want == BS_SELF_VERTEX) {
+        cr_expect_eq(neg, 0, "vertex region, seed %u: %d negative eigenvalues", seed, neg);
+        cr_expect(memcmp(H, Hp, sizeof(double) * (size_t)(m * m)) == 0, "vertex region: H changed");
+        continue;
+      }
+      cr_expect_gt(neg, 0, "region %d, seed %u: the exact contact Hessian is PSD", want, seed);
+      unsigned r = 7 * seed + (unsigned)want;
+      for (int t = 0; t < 200; t++) {
+        double v[12], D[144];
+        for (int i = 0; i < m; i++) v[i] = rnd(&r);
+        for (int i = 0; i < m * m; i++) D[i] = Hp[i] - H[i];
+        cr_expect(quad(m, Hp, v) >= -1e-12 * scale, "region %d: v^T Hp v = %g", want, quad(m, Hp, v));
+        cr_expect(quad(m, D, v) >= -1e-12 * scale, "region %d: v^T (Hp - H) v = %g", want, quad(m, D, v));
+      }
+      for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) cr_expect(Hp[i * m + j] == Hp[j * m + i], "Hp not symmetric");
+      memcpy(H2, Hp, sizeof H2);
+      bs_self_psd_project(m, H2);
+      for (int i = 0; i < m * m; i++) cr_expect(fabs(H2[i] - Hp[i]) < 1e-12 * scale, "projection not idempotent");
+    }
 }
 
 /* ---- meshes ----------------------------------------------------------- */
@@ -459,6 +522,48 @@ Test(self_term, gradient_and_hessian_match_fd) {
   free(gp);
   free(gm);
   free(D);
+  world_destroy(&w);
+}
+
+/* The term's convexified Hessian (bs_terms.h hessian_convexified) at a
+ * face contact: it differs from the exact one by a PSD matrix, is itself PSD
+ * (a sum of projected contact Hessians), and leaves E and grad E alone. */
+Test(self_term, convexified_hessian_is_psd) {
+  world w;
+  world_create(&w, 1e6);
+  bs_error err;
+  int32_t p = b_face_centre(&w);
+  w.x[3 * p] = 0.93, w.x[3 * p + 1] = 0.41, w.x[3 * p + 2] = 0.57;
+  const size_t n3 = w.n3;
+  cr_assert_not_null(w.self->ops->hessian_convexified);
+  bs_bsr *H, *Hc;
+  cr_assert_eq(bs_fem_matrix(w.fem, &H, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_matrix(w.fem, &Hc, &err), 0, "%s", err.msg);
+  const double E0 = term_value(w.self, w.x);
+  term_hessian(w.self, w.x, H);
+  cr_assert_eq(w.self->ops->hessian_convexified(w.self, w.x, Hc), BS_TERM_OK);
+  cr_expect_eq(term_value(w.self, w.x), E0);
+  cr_assert_eq(bs_bsr_check(Hc, 1e-12, &err), 0, "%s", err.msg);
+  double *D = malloc(sizeof(double) * n3 * n3), *Dc = malloc(sizeof(double) * n3 * n3);
+  double *v = malloc(sizeof(double) * n3);
+  dense_from_bsr(H, D, n3);
+  dense_from_bsr(Hc, Dc, n3);
+  double scale = 0, diff = 0;
+  for (size_t i = 0; i < n3 * n3; i++) scale = fmax(scale, fabs(D[i])), diff = fmax(diff, fabs(Dc[i] - D[i]));
+  cr_expect(scale > 0 && diff > 1e-6 * scale, "no negative curvature removed (|Hc - H| = %g, |H| = %g)", diff, scale);
+  unsigned r = 11;
+  for (int t = 0; t < 100; t++) {
+    for (size_t i = 0; i < n3; i++) v[i] = rnd(&r);
+    double qc = 0, qd = 0;
+    for (size_t i = 0; i < n3; i++)
+      for (size_t j = 0; j < n3; j++) qc += v[i] * Dc[i * n3 + j] * v[j], qd += v[i] * (Dc[i * n3 + j] - D[i * n3 + j]) * v[j];
+    cr_expect(qc >= -1e-10 * scale && qd >= -1e-10 * scale, "v^T Hc v = %g, v^T (Hc - H) v = %g", qc, qd);
+  }
+  free(D);
+  free(Dc);
+  free(v);
+  bs_bsr_destroy(&H);
+  bs_bsr_destroy(&Hc);
   world_destroy(&w);
 }
 
