@@ -104,7 +104,12 @@ static void box_squeeze_frames(void) { box_squeeze_with("cg", 1e-3, 1); }
  * the iteration counts. */
 static void box_squeeze_pcg(void) { box_squeeze_with("pcg", 1e-6, 0); }
 
-/* Statics of the two backends: converged, the same iterations on 1 rank. */
+/* Statics of the two backends: converged, on 1 rank within one Newton
+ * iteration of each other (the two backends' CG reductions round
+ * differently, PETSc's against bs_sum's: beam_sag's rtol and load_rtol
+ * cases take 8 serial and 7 distributed iterations on one machine, the
+ * same count on another; as cube_stretch's adaptive forcing in
+ * test_dist_solve). */
 static void statics_both(bs_sim *s, bs_dsim *d, const char *what, bs_frame_stats *fs) {
   bs_error err = {0};
   bs_frame_stats fd;
@@ -113,8 +118,8 @@ static void statics_both(bs_sim *s, bs_dsim *d, const char *what, bs_frame_stats
   const bs_step_stats *st = &d->steps[0].st;
   CHECK(!st->failed, "%s: the distributed solve failed: %s", what, st->min.reason_text);
   if (bs_dist_size() == 1)
-    CHECK(st->min.iterations == fs->iterations, "%s: %d Newton iterations, serial %ld", what, st->min.iterations,
-          fs->iterations);
+    CHECK(labs(st->min.iterations - fs->iterations) <= 1, "%s: %d Newton iterations, serial %ld", what,
+          st->min.iterations, fs->iterations);
   if (bs_dist_rank() == 0)
     printf("  %s: Newton iterations %d (serial %ld), tolerance used %.6e (serial %.6e)\n", what, st->min.iterations,
            fs->iterations, st->min.tol_used, s->steps[0].st.min.tol_used);
