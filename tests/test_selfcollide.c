@@ -439,19 +439,50 @@ static void dense_from_bsr(const bs_bsr *H, double *D, size_t n3) {
         for (int b = 0; b < 3; b++) D[(3 * (size_t)i + a) * n3 + 3 * (size_t)H->col[s] + b] = H->val[9 * (size_t)s + 3 * a + b];
 }
 
+/* Largest central-difference errors of the term's gradient g and dense
+ * Hessian D at w->x, at steps 1e-3, 5e-4, 2.5e-4 (errg, errH); gp, gm: n3
+ * scratch. */
+static void term_fd_errors(world *w, const double *g, const double *D, double *gp, double *gm, double errg[3],
+                      double errH[3]) {
+  const size_t n3 = w->n3;
+  double h = 1e-3;
+  for (int r = 0; r < 3; r++, h /= 2) {
+    errg[r] = errH[r] = 0;
+    for (size_t i = 0; i < n3; i++) {
+      double s0 = w->x[i];
+      w->x[i] = s0 + h;
+      memset(gp, 0, sizeof(double) * n3);
+      double Ep = term_gradient(w->self, w->x, gp);
+      w->x[i] = s0 - h;
+      memset(gm, 0, sizeof(double) * n3);
+      double Em = term_gradient(w->self, w->x, gm);
+      w->x[i] = s0;
+      errg[r] = fmax(errg[r], fabs((Ep - Em) / (2 * h) - g[i]));
+      for (size_t j = 0; j < n3; j++) errH[r] = fmax(errH[r], fabs((gp[j] - gm[j]) / (2 * h) - D[j * n3 + i]));
+    }
+  }
+}
+
+/* The two boxes (stiffness 1e6) with B's face-centre vertex pushed into A
+ * through A's x = 1 face (the face region, and edge/vertex cases from B's
+ * corners), and a matrix of the fem's pattern into *H. */
+static void face_contact_world(world *w, bs_bsr **H) {
+  bs_error err;
+  world_create(w, 1e6);
+  int32_t p = b_face_centre(w);
+  w->x[3 * p] = 0.93, w->x[3 * p + 1] = 0.41, w->x[3 * p + 2] = 0.57;
+  cr_assert_eq(bs_fem_matrix(w->fem, H, &err), 0, "%s", err.msg);
+}
+
 Test(self_term, gradient_and_hessian_match_fd) {
   world w;
-  world_create(&w, 1e6);
+  bs_bsr *H;
+  face_contact_world(&w, &H);
   bs_error err;
-  int32_t p = b_face_centre(&w);
-  /* face region of A's x = 1 face, and an edge/vertex case from a B corner */
-  w.x[3 * p] = 0.93, w.x[3 * p + 1] = 0.41, w.x[3 * p + 2] = 0.57;
   size_t n3 = w.n3;
   double *g = calloc(n3, sizeof(double)), *gp = calloc(n3, sizeof(double)), *gm = calloc(n3, sizeof(double));
   double *D = malloc(sizeof(double) * n3 * n3);
   term_gradient(w.self, w.x, g);
-  bs_bsr *H;
-  cr_assert_eq(bs_fem_matrix(w.fem, &H, &err), 0, "%s", err.msg);
   term_hessian(w.self, w.x, H);
   cr_assert_eq(bs_bsr_check(H, 1e-12, &err), 0, "%s", err.msg);
   dense_from_bsr(H, D, n3);
@@ -484,27 +515,8 @@ Test(self_term, gradient_and_hessian_match_fd) {
     cr_expect(found, "missing block (%d, %d) not among the coupling pairs", i, j);
   }
   free(cp);
-  /* FD over the dofs of the involved vertices (others are exactly zero) */
-  double errg[3], errH[3], h = 1e-3;
-  for (int r = 0; r < 3; r++, h /= 2) {
-    errg[r] = errH[r] = 0;
-    for (size_t i = 0; i < n3; i++) {
-      double s0 = w.x[i];
-      w.x[i] = s0 + h;
-      memset(gp, 0, sizeof(double) * n3);
-      double Ep = term_gradient(w.self, w.x, gp);
-      w.x[i] = s0 - h;
-      memset(gm, 0, sizeof(double) * n3);
-      double Em = term_gradient(w.self, w.x, gm);
-      w.x[i] = s0;
-      double e = fabs((Ep - Em) / (2 * h) - g[i]);
-      if (e > errg[r]) errg[r] = e;
-      for (size_t j = 0; j < n3; j++) {
-        double eh = fabs((gp[j] - gm[j]) / (2 * h) - D[j * n3 + i]);
-        if (eh > errH[r]) errH[r] = eh;
-      }
-    }
-  }
+  double errg[3], errH[3];
+  term_fd_errors(&w, g, D, gp, gm, errg, errH);
   double gscale = 0;
   for (size_t i = 0; i < n3; i++) gscale = fmax(gscale, fabs(g[i]));
   cr_expect(gscale > 0);
@@ -530,14 +542,11 @@ Test(self_term, gradient_and_hessian_match_fd) {
  * (a sum of projected contact Hessians), and leaves E and grad E alone. */
 Test(self_term, convexified_hessian_is_psd) {
   world w;
-  world_create(&w, 1e6);
+  bs_bsr *H, *Hc;
+  face_contact_world(&w, &H);
   bs_error err;
-  int32_t p = b_face_centre(&w);
-  w.x[3 * p] = 0.93, w.x[3 * p + 1] = 0.41, w.x[3 * p + 2] = 0.57;
   const size_t n3 = w.n3;
   cr_assert_not_null(w.self->ops->hessian_convexified);
-  bs_bsr *H, *Hc;
-  cr_assert_eq(bs_fem_matrix(w.fem, &H, &err), 0, "%s", err.msg);
   cr_assert_eq(bs_fem_matrix(w.fem, &Hc, &err), 0, "%s", err.msg);
   const double E0 = term_value(w.self, w.x);
   term_hessian(w.self, w.x, H);
