@@ -20,6 +20,8 @@
  *   gradation, 0.5), --floor F (its floor h / F, 8)
  *   --no-perturb  --no-exude  --no-cgal  --no-remesh  --no-gmsh
  *   --close-holes (close small holes, as `bigstep mesh --close-holes`)
+ *   --where (under each row, the sample of the mesh's boundary farthest from
+ *   the input and the sample of the input farthest from the boundary)
  *   --auto (a row "auto": bs_mesh_read with the library's defaults, the
  *   mesher auto and the gate, as `bigstep mesh info FILE --size H`)
  * Every input is read and repaired as bs_mesh_read does it
@@ -40,6 +42,7 @@ enum { RUN_CGAL = 1, RUN_GMSH = 2, RUN_REMESH = 4, RUN_AUTO = 8 };
 
 typedef struct row {
   double h, seconds, dmin, refined, rmin, vol_err, haus, local_min, local_frac;
+  double far_mesh[3], far_input[3]; /* the farthest samples of each direction */
   int64_t tets, features;
 } row;
 
@@ -64,17 +67,22 @@ static void measure(const bs_mesh *m, const double *p, int64_t np, const int32_t
   double d1 = NAN, d2 = NAN;
   bs_error err;
   bs_error_clear(&err);
-  if (!bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, p, np, t, nt, r->h / 4, &d1, NULL, &err) &&
-      !bs_shim_surface_distance(p, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, r->h / 4, &d2, NULL, &err))
+  if (!bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, p, np, t, nt, r->h / 4, &d1, r->far_mesh, &err) &&
+      !bs_shim_surface_distance(p, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, r->h / 4, &d2, r->far_input, &err))
     r->haus = fmax(d1, d2);
   else
     r->haus = NAN;
 }
 
+static int print_where = 0; /* --where */
+
 static void print_row(const char *input, const char *mesher, const row *r) {
   printf("%-28s %-6s %10.4g %9lld %8.2f %9.0f %8.2f %8.3f %8.4f %9.2e %7.3f %5lld %6.3f %5.3f\n", input, mesher, r->h,
          (long long)r->tets, r->seconds, r->tets / r->seconds, r->refined, r->dmin, r->rmin, r->vol_err, r->haus / r->h,
          (long long)r->features, r->local_min, r->local_frac);
+  if (print_where)
+    printf("  farthest: mesh sample (%.5g, %.5g, %.5g) from the input, input sample (%.5g, %.5g, %.5g) from the mesh\n",
+           r->far_mesh[0], r->far_mesh[1], r->far_mesh[2], r->far_input[0], r->far_input[1], r->far_input[2]);
 }
 
 static int run_cgal(const char *path, const double *p, int64_t np, const int32_t *t, int64_t nt,
@@ -150,6 +158,7 @@ static int parse_opts(int argc, char **argv, bs_shim_mesh3_opts *o, int *which, 
     else if (!strcmp(a, "--no-exude")) o->exude = 0;
     else if (!strcmp(a, "--close-holes")) *close_holes = 1;
     else if (!strcmp(a, "--auto")) *which |= RUN_AUTO;
+    else if (!strcmp(a, "--where")) print_where = 1;
     else if (!strcmp(a, "--smoother") && ++i)
       o->smoother = !strcmp(v, "lloyd") ? BS_SHIM_SMOOTH_LLOYD : !strcmp(v, "none") ? BS_SHIM_SMOOTH_NONE : BS_SHIM_SMOOTH_ODT;
     else if (!strcmp(a, "--iters") && ++i) o->smooth_iterations = atoi(v);

@@ -216,7 +216,8 @@ Test(surface_repair, camel_self_intersections_autorefined) {
 }
 
 /* At a size, with the gate (the mesher auto): the repaired camel at
- * diagonal / 50 is under the gate through Mesh_3 (7.1 degrees), so auto
+ * diagonal / 50 is under the gate through Mesh_3 (7.1 degrees, and with the
+ * finer facet distances h / 40 and h / 55 too), so auto
  * meshes it again through the remesh path, which meets it (13.9), 2.7% short
  * of the repaired surface's volume (measured -2.67%). Cgal alone fails with
  * the gate's message naming the file. */
