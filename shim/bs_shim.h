@@ -332,7 +332,8 @@ typedef struct bs_shim_mesh3_out {
                              boundary is a closed 2-manifold (see bs_shim_mesh_surface) */
 } bs_shim_mesh3_out;
 
-/* The most cells filled at once by bs_shim_mesh_surface's manifold repair. */
+/* The most cells filled at once by bs_shim_mesh_surface's manifold repair
+ * (a wedge; a cavity of a surface in several pieces). */
 #define BS_SHIM_MESH3_FILL_CELLS 16
 
 /* Meshes the volume inside the closed surface (points, tris) at opts->size
@@ -341,11 +342,13 @@ typedef struct bs_shim_mesh3_out {
  * edge_size = facet_size = cell_size = h, facet_angle 25 degrees,
  * facet_distance, cell_radius_edge_ratio 3 (a scan: the scan_* criteria and
  * the thickness size field when asked); then the optimisers of opts; then
- * the complex is made a closed 2-manifold: outside cells enclosed by it in
- * a component of at most BS_SHIM_MESH3_FILL_CELLS cells (a cavity Mesh_3
- * leaves where a flat cell under a curved surface has its circumcentre
- * outside), and the smaller outside wedges around an edge or a vertex where
- * two parts of the body touch, are added to it (out->n_filled).
+ * the complex is made a closed 2-manifold: outside cells enclosed by it (a
+ * cavity Mesh_3 leaves where a flat cell under a curved surface has its
+ * circumcentre outside: of any size when the surface is in one piece, which
+ * encloses no void, else of at most BS_SHIM_MESH3_FILL_CELLS cells), and
+ * the smaller outside wedges (at most that many cells) around an edge or a
+ * vertex where two parts of the body touch, are added to it
+ * (out->n_filled).
  * Sequential and seeded: the same input gives the same mesh. The surface
  * must be an orientable, closed 2-manifold without self-intersections (an
  * inconsistently oriented soup is oriented first). `name` (the file) starts
