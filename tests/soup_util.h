@@ -66,16 +66,52 @@ static inline double hausdorff(const bs_mesh *m, const soup *s, double spacing) 
   return fmax(d1, d2);
 }
 
+/* The soup as bs_mesh_read meshes it: repaired by bs_surface_prepare
+ * (holes closed when close_holes), its diagonal and volume. */
+static inline void soup_read_repaired(const char *path, int close_holes, soup *s) {
+  bs_error err;
+  bs_error_clear(&err);
+  *s = (soup){0};
+  bs_mesh_read_opts o = {.close_holes = close_holes};
+  cr_assert_eq(bs_surface_prepare(path, &s->x, &s->np, &s->t, &s->nt, &o, NULL, &err), 0, "%s", err.msg);
+  double lo[3], hi[3];
+  bs_bbox(s->np, s->x, lo, hi);
+  s->diag = bs_bbox_diagonal(lo, hi);
+  s->volume = fabs(bs__soup_volume(s->x, s->t, s->nt));
+}
+
+static inline void mesh_checked_soup(const char *rel, const char *path, soup *s, bs_mesh_read_opts o, double vol_tol,
+                                     double haus_over_h);
+
 /* Meshes rel at h = diagonal / n with the mesher (BS_SURFACE_*) and checks
- * what every such mesh must hold: bs_mesh_check, no inverted tet, a
- * boundary that is a closed 2-manifold (bs__boundary_manifold), the gate,
- * volume and Hausdorff bounds, the default groups. */
+ * what every such mesh must hold (mesh_checked_soup). */
 static inline void mesh_checked_with(const char *rel, double n, int mesher, double vol_tol, double haus_over_h) {
   char path[1024];
-  soup sb, *s = &sb;
-  soup_or_skip(rel, path, sizeof path, s);
-  double hb = s->diag / n, *h = &hb;
-  bs_mesh_read_opts o = {.size = *h, .surface_mesher = mesher};
+  soup s;
+  soup_or_skip(rel, path, sizeof path, &s);
+  mesh_checked_soup(rel, path, &s, (bs_mesh_read_opts){.size = s.diag / n, .surface_mesher = mesher}, vol_tol,
+                    haus_over_h);
+}
+
+/* The same for a surface that needs the repair (holes closed when
+ * close_holes), against the repaired surface, with the mesher auto. */
+static inline void mesh_checked_repaired(const char *rel, double n, int close_holes, double vol_tol,
+                                         double haus_over_h) {
+  char path[1024];
+  soup s;
+  if (!have(rel, path, sizeof path)) cr_skip_test("%s missing (bash setup.sh extracts it from libcgal-demo)", rel);
+  soup_read_repaired(path, close_holes, &s);
+  mesh_checked_soup(rel, path, &s, (bs_mesh_read_opts){.size = s.diag / n, .close_holes = close_holes}, vol_tol,
+                    haus_over_h);
+}
+
+/* Meshes path with o and checks what every such mesh must hold:
+ * bs_mesh_check, no inverted tet, a boundary that is a closed 2-manifold
+ * (bs__boundary_manifold), the gate, volume and Hausdorff bounds against
+ * the soup s (freed), the default groups. */
+static inline void mesh_checked_soup(const char *rel, const char *path, soup *s, bs_mesh_read_opts o, double vol_tol,
+                                     double haus_over_h) {
+  double hb = o.size, *h = &hb;
   bs_mesh *m = NULL;
   bs_error err;
   bs_error_clear(&err);
