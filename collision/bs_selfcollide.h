@@ -77,7 +77,7 @@
  *
  * Convexified Hessian (the term's hessian_convexified, bs_terms.h): each
  * contact's (3 (nv + 1))^2 Hessian projected onto the positive semidefinite
- * cone (bs_self_psd_project) before it is added. The exact one is
+ * cone (bs_sym_psd_project, bs_svd.h) before it is added. The exact one is
  * indefinite where the primitive is a face or an edge: tilting the triangle
  * about the closest point shortens the distance, a negative stiffness of
  * about 3 k depth^3 / h^2 (h the triangle's size) that dwarfs the elastic
@@ -207,14 +207,6 @@ double bs_self_sqdist(int nv, const double *y, double *g, double *H);
 /* Phi = k d sqrt(d + eps) for the same y, with gradient and Hessian
  * (overwritten when non-NULL). */
 double bs_self_pair_energy(int nv, const double *y, double k, double *g, double *H);
-
-/* Projects the m x m matrix H (row-major, 1 <= m <= 12; its symmetric part
- * is used) onto the positive semidefinite cone in place: V diag(max(lambda,
- * 0)) V^T from its eigen-decomposition (cyclic Jacobi), exactly symmetric.
- * Returns the number of negative eigenvalues (those below -1e-12 times the
- * largest in magnitude: rounding of a zero eigenvalue does not count); with
- * none, H is left untouched (bit for bit). -1 for m out of range. */
-int bs_self_psd_project(int m, double *H);
 
 #ifdef __cplusplus
 }

@@ -123,3 +123,12 @@ done:
   free(ptr), free(list), free(keys), free(parent);
   return rc;
 }
+
+int bs__boundary_like_soup(const bs_mesh *m, const char *path, const double *pts, int64_t np, const int32_t *tris,
+                           int64_t nt, double min_volume, bs_error *err) {
+  int32_t *parent = malloc(((size_t)np + 1) * sizeof *parent);
+  const int64_t n = parent ? bs__soup_components(pts, np, tris, nt, min_volume, parent) : -1;
+  free(parent);
+  if (n < 0) return bs_error_set(err, BS_ENOMEM, "%s: out of memory to count the surface's components", path);
+  return bs__boundary_manifold(m, path, n, err);
+}

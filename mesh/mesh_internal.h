@@ -139,6 +139,11 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
  * BS_ENOMEM. */
 int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components, bs_error *err);
 
+/* manifold.c: bs__boundary_manifold with the soup's components of at least
+ * min_volume (bs__soup_components) as the count; BS_ENOMEM naming path. */
+int bs__boundary_like_soup(const bs_mesh *m, const char *path, const double *pts, int64_t np, const int32_t *tris,
+                           int64_t nt, double min_volume, bs_error *err);
+
 /* surface_remesh.c: the volume inside a closed soup whose triangles are
  * kept as its boundary, meshed by Gmsh's HXT (one thread) and optimised
  * (bs__gmsh_surface_volume), the caps under the gate that no optimiser

@@ -163,14 +163,10 @@ static int boundary_soup(const char *path, const bs_mesh *m, double **pts, int64
 /* BS_EINPUT unless m's boundary is a closed 2-manifold with as many
  * components as the soup has of at least a regular tet's volume at size h
  * (h^3 / (6 sqrt 2): a smaller one, a bubble or a crumb, has no tet at
- * that size) (bs__boundary_manifold). */
+ * that size) (bs__boundary_like_soup). */
 static int manifold_like(const char *path, const bs_mesh *m, const double *pts, int64_t np, const int32_t *tris,
                          int64_t nt, double h, bs_error *err) {
-  int32_t *parent = malloc(((size_t)np + 1) * sizeof *parent);
-  const int64_t n = parent ? bs__soup_components(pts, np, tris, nt, h * h * h / (6.0 * sqrt(2.0)), parent) : -1;
-  free(parent);
-  if (n < 0) return bs_error_set(err, BS_ENOMEM, "%s: out of memory to count the surface's components", path);
-  return bs__boundary_manifold(m, path, n, err);
+  return bs__boundary_like_soup(m, path, pts, np, tris, nt, h * h * h / (6.0 * sqrt(2.0)), err);
 }
 
 /* A Mesh_3 mesh under the gate meshed again inside its own boundary by

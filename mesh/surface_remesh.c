@@ -106,11 +106,7 @@ int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const i
   int rc = bs__gmsh_surface_volume(path, pts, np, tris, nt, opts, BS_GMSH_HXT, BS_REMESH_THREADS, out, err);
   const double gate = bs__mesh_gate(opts);
   if (!rc && gate > 0) rc = peel_caps(path, gate, out, err);
-  int32_t *parent = rc ? NULL : malloc(((size_t)np + 1) * sizeof *parent);
-  const int64_t n_comp = parent ? bs__soup_components(pts, np, tris, nt, 0.0, parent) : -1;
-  free(parent);
-  if (!rc && n_comp < 0) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory to count the surface's components", path);
-  if (!rc) rc = bs__boundary_manifold(*out, path, n_comp, err);
+  if (!rc) rc = bs__boundary_like_soup(*out, path, pts, np, tris, nt, 0.0, err);
   if (!rc) rc = bs_mesh_dihedral_gate(*out, gate, path, err);
   if (rc) bs_mesh_destroy(out);
   return rc;

@@ -1,11 +1,13 @@
-/* bs_svd.h — small dense decompositions for the constitutive models: the
- * signed ("inversion-aware") SVD of a 3x3 matrix and the eigen-decomposition
- * of a symmetric 3x3 matrix.
+/* bs_svd.h — small dense decompositions (constitutive models, contacts): the
+ * signed ("inversion-aware") SVD of a 3x3 matrix, the eigen-decomposition
+ * of a symmetric 3x3 matrix, and the positive semidefinite projection of a
+ * symmetric matrix of order up to 12.
  *
  * Conventions
  *  - Matrices are row-major double[9]: A[3*r + c]. Units: whatever the input
  *    carries (F is dimensionless).
- *  - Nothing allocates, prints or fails: these are total functions. A
+ *  - Nothing allocates, prints or fails: these are total functions (but
+ *    bs_sym_psd_project's order out of range, reported -1). A
  *    non-finite F gives NaN outputs at once; bs_sym3_eig on a non-finite A
  *    gives non-finite outputs after a bounded number of sweeps.
  *
@@ -70,6 +72,15 @@ void bs_polar3_batch(int n, const double *F, double *R, int *ok);
  * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
  * eigenvalues carry an absolute error of a few ulps of max |lambda|. */
 void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]);
+
+/* Projects the m x m matrix H (row-major, 1 <= m <= 12; its symmetric part
+ * is used) onto the positive semidefinite cone in place: V diag(max(lambda,
+ * 0)) V^T from its eigen-decomposition (cyclic Jacobi, sym_psd.c), exactly
+ * symmetric. Returns the number of negative eigenvalues (those below -1e-12
+ * times the largest in magnitude: rounding of a zero eigenvalue does not
+ * count); with none, H is left untouched (bit for bit). -1 for m out of
+ * range. Used for the self-collision contacts' Hessians (6x6 to 12x12). */
+int bs_sym_psd_project(int m, double *H);
 
 #ifdef __cplusplus
 }

@@ -231,25 +231,24 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   return 0;
 }
 
-/* The Hessian when the minimizer hands over grad E'(x): no second gradient. */
-static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
-  bs_integrator *I = ctx;
+/* The terms' Hessians (convex: their convexified ones where offered) at x,
+ * projected by the hook when there is one (g_raw: the unprojected gradient). */
+static int hessian_projected(bs_integrator *I, const double *x, const double *g_raw, int convex, bs_bsr *H) {
   bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, 0, H);
-  if (rc) return rc;
-  I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
-  return 0;
-}
-
-/* The minimizer's convexified model (bs_minimize.h): the terms' convexified
- * Hessians where they offer one, projected as obj_hessian_g. */
-static int obj_hessian_convexified(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
-  bs_integrator *I = ctx;
-  bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, 1, H);
+  int rc = terms_hessian(I, x, 0, convex, H);
   if (rc) return rc;
   if (I->hooks.project_hessian) I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
   return 0;
+}
+
+/* The Hessian when the minimizer hands over grad E'(x): no second gradient. */
+static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
+  return hessian_projected(ctx, x, g_raw, 0, H);
+}
+
+/* The minimizer's convexified model (bs_minimize.h). */
+static int obj_hessian_convexified(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
+  return hessian_projected(ctx, x, g_raw, 1, H);
 }
 
 /* The AMG preconditioner matrix (bs_step.h, amg_at_rest): the dynamic terms'

@@ -31,14 +31,10 @@ static inline void soup_read(const char *path, soup *s) {
   bs_error_clear(&err);
   *s = (soup){0};
   cr_assert_eq(bs_shim_read_surface(path, &s->x, &s->np, &s->t, &s->nt, &err), 0, "%s", err.msg);
-  double lo[3], hi[3], v = 0;
+  double lo[3], hi[3];
   bs_bbox(s->np, s->x, lo, hi);
   s->diag = bs_bbox_diagonal(lo, hi);
-  for (int64_t f = 0; f < s->nt; f++) {
-    const double *a = s->x + 3 * s->t[3 * f], *b = s->x + 3 * s->t[3 * f + 1], *c = s->x + 3 * s->t[3 * f + 2];
-    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
-  }
-  s->volume = fabs(v) / 6.0;
+  s->volume = fabs(bs__soup_volume(s->x, s->t, s->nt));
 }
 
 /* The soup of rel (its path into path), or the test is skipped without it. */

@@ -160,13 +160,18 @@ static bs_objective make_obj(fx *f, const uint8_t *mask) {
 
 /* One bs_minimize call of a fresh minimizer with options o on f from x
  * (no mask); asserts that the call ran (status 0) and returns its stats. */
-static void min_run(const bs_bsr *P, const bs_minimize_opts *o, fx *f, double *x, bs_minimize_stats *st) {
+static void min_run_obj(const bs_bsr *P, const bs_minimize_opts *o, const bs_objective *obj, double *x,
+                        bs_minimize_stats *st) {
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, o, &m, &err), 0, "%s", err.msg);
-  bs_objective obj = make_obj(f, NULL);
-  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_minimize(m, obj, x, st, &err), 0, "%s", err.msg);
   bs_minimizer_destroy(&m);
+}
+
+static void min_run(const bs_bsr *P, const bs_minimize_opts *o, fx *f, double *x, bs_minimize_stats *st) {
+  bs_objective obj = make_obj(f, NULL);
+  min_run_obj(P, o, &obj, x, st);
 }
 
 /* Quadratic: E = 1/2 x^T A x - b^T x. */
@@ -670,18 +675,14 @@ static void well_convex(int convexify, int offer, double *x, bs_minimize_stats *
   cr_assert_eq(o.convexify, 1, "on by default");
   o.tol = 1e-10;
   o.convexify = convexify;
-  bs_minimizer *m = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
   bs_objective obj = make_obj(&f, NULL);
   obj.trace = cb_convex_trace;
   if (offer) obj.hessian_convexified = cb_hessian_convex;
   n_conv_recs = n_convex_calls = 0;
   for (int k = 0; k < 6; ++k) x[k] = 0.01 * (1 + 0.3 * k) * (k % 2 ? -1 : 1);
-  cr_assert_eq(bs_minimize(m, &obj, x, st, &err), 0, "%s", err.msg);
+  min_run_obj(P, &o, &obj, x, st);
   cr_assert_eq(st->reason, BS_MIN_CONVERGED, "%s", st->reason_text);
   for (int k = 0; k < 6; ++k) cr_assert_float_eq(fabs(x[k]), 1 / sqrt(2.0), 1e-8, "x[%d] = %.12g", k, x[k]);
-  bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
 }
 

@@ -13,6 +13,7 @@
 
 #include "bs_fem.h"
 #include "bs_selfcollide.h"
+#include "bs_svd.h"
 #include "bs_step.h"
 #include "bs_terms.h"
 #include "test_term_eval.h"
@@ -147,21 +148,21 @@ static double quad(int m, const double *A, const double *v) {
   return s;
 }
 
-/* bs_self_psd_project on a known matrix: R diag(3, -2) R^T becomes
+/* bs_sym_psd_project on a known matrix: R diag(3, -2) R^T becomes
  * R diag(3, 0) R^T (one eigenvalue clamped); a PSD matrix is left bit for
  * bit; m out of range is refused. */
 Test(self_kernel, psd_projection_known_matrix) {
   const double c = cos(0.3), s = sin(0.3);
   double H[4] = {3 * c * c - 2 * s * s, 5 * c * s, 5 * c * s, 3 * s * s - 2 * c * c};
   const double want[4] = {3 * c * c, 3 * c * s, 3 * c * s, 3 * s * s};
-  cr_assert_eq(bs_self_psd_project(2, H), 1);
+  cr_assert_eq(bs_sym_psd_project(2, H), 1);
   for (int i = 0; i < 4; i++) cr_expect(fabs(H[i] - want[i]) < 1e-14, "entry %d: %.17g, want %.17g", i, H[i], want[i]);
   double P[4] = {2, 1, 1, 2}, P0[4];
   memcpy(P0, P, sizeof P);
-  cr_assert_eq(bs_self_psd_project(2, P), 0);
+  cr_assert_eq(bs_sym_psd_project(2, P), 0);
   cr_expect(memcmp(P, P0, sizeof P) == 0, "a PSD matrix changed");
-  cr_expect_eq(bs_self_psd_project(13, P), -1);
-  cr_expect_eq(bs_self_psd_project(0, P), -1);
+  cr_expect_eq(bs_sym_psd_project(13, P), -1);
+  cr_expect_eq(bs_sym_psd_project(0, P), -1);
 }
 
 /* The contact Hessians: in the face and edge regions the exact one is
@@ -176,7 +177,7 @@ Test(self_kernel, psd_projection_of_contact_hessians) {
       const int nv = region_config(want, seed, y), m = 3 * (nv + 1);
       bs_self_pair_energy(nv, y, 2.5, NULL, H);
       memcpy(Hp, H, sizeof(double) * (size_t)(m * m));
-      const int neg = bs_self_psd_project(m, Hp);
+      const int neg = bs_sym_psd_project(m, Hp);
       double scale = 0;
       for (int i = 0; i < m * m; i++) scale = fmax(scale, fabs(H[i]));
       if (want == BS_SELF_VERTEX) {
@@ -196,7 +197,7 @@ Test(self_kernel, psd_projection_of_contact_hessians) {
       for (int i = 0; i < m; i++)
         for (int j = 0; j < m; j++) cr_expect(Hp[i * m + j] == Hp[j * m + i], "Hp not symmetric");
       memcpy(H2, Hp, sizeof H2);
-      bs_self_psd_project(m, H2);
+      bs_sym_psd_project(m, H2);
       for (int i = 0; i < m * m; i++) cr_expect(fabs(H2[i] - Hp[i]) < 1e-12 * scale, "projection not idempotent");
     }
 }
