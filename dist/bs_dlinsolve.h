@@ -7,8 +7,8 @@
  *   BS_DPC_BJACOBI 3x3 point-block Jacobi of H, each owned diagonal block
  *                  inverted as the serial "pcg" does (bs_linsolve_block_inverse:
  *                  a block that is not SPD, e.g. left singular in the normal
- *                  of an active constraint, gets the inverse of its diagonal
- *                  or the identity, where PETSc's PCPBJACOBI would divide by
+ *                  of an active constraint, gets the pseudo-inverse of its
+ *                  absolute value, where PETSc's PCPBJACOBI would divide by
  *                  a zero pivot);
  *   BS_DPC_GAMG    one PCGAMG cycle built from a symmetric positive definite
  *                  matrix P (bs_dlin_setup) with the rigid-body near-null

@@ -104,7 +104,7 @@ void bs_dlin_info(const bs_dlin *s, int *levels, double *setup_seconds) {
 
 /* The point-block Jacobi of H: each owned diagonal block's inverse as the
  * serial pcg makes it (bs_linsolve_block_inverse: a block left singular by
- * an active constraint gets its diagonal's inverse or the identity). */
+ * an active constraint is inverted in its tangent plane). */
 static int block_jacobi_setup(bs_dlin *s, bs_error *err) {
   for (PetscInt i = 0; i < s->nb; i++) {
     const PetscInt b = 3 * (s->bstart + i), idx[3] = {b, b + 1, b + 2};

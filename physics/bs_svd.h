@@ -1,7 +1,8 @@
 /* bs_svd.h — small dense decompositions (constitutive models, contacts): the
- * signed ("inversion-aware") SVD of a 3x3 matrix, the eigen-decomposition
- * of a symmetric 3x3 matrix, and the positive semidefinite projection of a
- * symmetric matrix of order up to 12.
+ * signed ("inversion-aware") SVD of a 3x3 matrix, its polar decomposition,
+ * and the positive semidefinite projection of a symmetric matrix of order up
+ * to 12. The symmetric 3x3 eigen-decomposition, which the solver's
+ * preconditioner shares, is base/'s bs_sym3_eig (bs_sym3.h, included here).
  *
  * Conventions
  *  - Matrices are row-major double[9]: A[3*r + c]. Units: whatever the input
@@ -11,13 +12,15 @@
  *    non-finite F gives NaN outputs at once; bs_sym3_eig on a non-finite A
  *    gives non-finite outputs after a bounded number of sweeps.
  *
- * Accuracy: both routines are cyclic Jacobi methods run to machine precision.
- * bs_svd3 reconstructs F to a few ulps of ||F|| and returns U, V orthogonal to
- * a few ulps, for every F: rank 0..3, repeated, zero or tiny singular values,
+ * Accuracy: bs_svd3 is a cyclic Jacobi method run to machine precision. It
+ * reconstructs F to a few ulps of ||F|| and returns U, V orthogonal to a few
+ * ulps, for every F: rank 0..3, repeated, zero or tiny singular values,
  * inverted, and any scale from 1e-300 to 1e300.
  */
 #ifndef BS_SVD_H
 #define BS_SVD_H
+
+#include "bs_sym3.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -67,11 +70,6 @@ int bs_polar3(const double F[9], double R[9]);
  * value for matrix i. Bit for bit bs_polar3's results; on a CPU with AVX2, 4
  * matrices at a time in the lanes of AVX2 registers. */
 void bs_polar3_batch(int n, const double *F, double *R, int *ok);
-
-/* A = Q diag(lambda) Q^T for symmetric A (only the upper triangle is read),
- * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
- * eigenvalues carry an absolute error of a few ulps of max |lambda|. */
-void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]);
 
 /* Projects the m x m matrix H (row-major, 1 <= m <= 12; its symmetric part
  * is used) onto the positive semidefinite cone in place: V diag(max(lambda,

@@ -1,5 +1,6 @@
-/* svd.c — signed 3x3 SVD (one-sided Jacobi) and symmetric 3x3 eigen-
- * decomposition (two-sided Jacobi). See bs_svd.h for the contracts. */
+/* svd.c — signed 3x3 SVD (one-sided Jacobi) and polar decomposition. See
+ * bs_svd.h for the contracts (the symmetric 3x3 eigen-decomposition is
+ * base/sym3.c). */
 #include "bs_svd.h"
 #include "polar_avx2.h"
 
@@ -8,7 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-enum { SVD_MAX_SWEEPS = 24, EIG_MAX_SWEEPS = 40 };
+enum { SVD_MAX_SWEEPS = 24 };
 
 /* Off-diagonal Gram entries below this multiple of eps |b_p||b_q| count as
  * zero. A dot product of 3-vectors is only computed to ~3 eps, so a bound of
@@ -506,51 +507,3 @@ void bs_polar3_batch(int n, const double *F, double *R, int *ok) {
 }
 #undef L
 
-void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {
-  double a[9];
-  for (int i = 0; i < 3; i++)
-    for (int j = i; j < 3; j++) a[3 * i + j] = a[3 * j + i] = A[3 * i + j];
-  set_identity(Q);
-  for (int sweep = 0; sweep < EIG_MAX_SWEEPS; sweep++) {
-    int rotated = 0;
-    for (int k = 0; k < 3; k++) {
-      const int p = pair_p[k], q = pair_q[k], r = 3 - p - q;
-      const double apq = a[3 * p + q];
-      if (apq == 0.0) continue;
-      const double app = a[3 * p + p], aqq = a[3 * q + q];
-      /* Negligible against both diagonal entries: drop it (Rutishauser). */
-      if (fabs(app) + 1e3 * fabs(apq) == fabs(app) && fabs(aqq) + 1e3 * fabs(apq) == fabs(aqq)) {
-        a[3 * p + q] = a[3 * q + p] = 0.0;
-        continue;
-      }
-      const double theta = (aqq - app) / (2.0 * apq);
-      const double at = fabs(theta);
-      const double t = copysign(1.0, theta) / (at + (at < 1e100 ? sqrt(1.0 + theta * theta) : at));
-      const double c = 1.0 / sqrt(1.0 + t * t), s = c * t;
-      a[3 * p + p] = app - t * apq;
-      a[3 * q + q] = aqq + t * apq;
-      a[3 * p + q] = a[3 * q + p] = 0.0;
-      const double arp = a[3 * r + p], arq = a[3 * r + q];
-      a[3 * r + p] = a[3 * p + r] = c * arp - s * arq;
-      a[3 * r + q] = a[3 * q + r] = s * arp + c * arq;
-      for (int i = 0; i < 3; i++) {
-        const double qp = Q[3 * i + p], qq = Q[3 * i + q];
-        Q[3 * i + p] = c * qp - s * qq;
-        Q[3 * i + q] = s * qp + c * qq;
-      }
-      rotated = 1;
-    }
-    if (!rotated) break;
-  }
-  for (int i = 0; i < 3; i++) lambda[i] = a[4 * i];
-  for (int i = 0; i < 2; i++)
-    for (int j = 2; j > i; j--)
-      if (lambda[j] > lambda[j - 1]) {
-        double t = lambda[j];
-        lambda[j] = lambda[j - 1];
-        lambda[j - 1] = t;
-        swap_col(Q, j, j - 1);
-      }
-  if (det3(Q) < 0.0)
-    for (int i = 0; i < 3; i++) Q[3 * i + 2] = -Q[3 * i + 2];
-}

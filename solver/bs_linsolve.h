@@ -22,9 +22,14 @@
  * PCG preconditioner: block Jacobi with the inverse of each free 3x3 diagonal
  * block. A diagonal block that is not symmetric positive definite (Cholesky of
  * its symmetric part meets a pivot <= 1e-14 times its largest diagonal
- * magnitude) falls back to the inverse of its diagonal entries
- * if they are all positive, else to the identity for that block; so M^-1 is
- * always SPD and PCG's early exit keeps the same meaning.
+ * magnitude) gets Q diag(1/|lambda|) Q^T from the eigen-decomposition of its
+ * symmetric part (bs_sym3_eig), eigenvalues at or below 1e-12 of the largest
+ * |lambda| left out: an indefinite block (contacts) keeps its scale, and a
+ * vertex on a constraint obstacle, whose block J^T H J has a zero row and
+ * column along the normal (where the residual is zero too), is preconditioned
+ * in its tangent plane only. A zero or non-finite block gets the identity. So
+ * M^-1 is positive semidefinite, definite on every direction A acts on, and
+ * PCG's early exit keeps the same meaning.
  *
  * AMG: the same PCG (same negative-curvature exit) with z = B r, B one V-cycle
  * of a BoomerAMG hierarchy built by bs_linsolve_amg_setup from a matrix P the
@@ -93,8 +98,9 @@ int bs_lin_kind_parse(const char *name, bs_lin_kind *out, bs_error *err);
 const char *bs_lin_kind_name(bs_lin_kind k);
 
 /* The PCG preconditioner's block (above) for one 3x3 diagonal block D
- * (row-major) into Mi (row-major): the inverse of D's symmetric part, of its
- * diagonal, or the identity; returns 0, 1 or 2 for those. Shared with the
+ * (row-major) into Mi (row-major): the inverse of D's symmetric part, the
+ * pseudo-inverse of its absolute value, or the identity; returns 0, 1 or 2
+ * for those. Shared with the
  * petsc backend's point-block Jacobi (dist/bs_dlinsolve.h). Nothing
  * allocates or fails. */
 int bs_linsolve_block_inverse(const double D[9], double Mi[9]);

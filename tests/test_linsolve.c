@@ -453,10 +453,9 @@ Test(linsolve, thread_count_independence) {
 }
 
 /* Block Jacobi on block-diagonal matrices: with exact inverses PCG converges
- * in one iteration; a diagonal block that is not positive definite but has a
- * positive diagonal falls back to the inverse of its diagonal (still exact
- * here for the direction used), one with a non-positive diagonal entry to the
- * identity. */
+ * in one iteration; a diagonal block that is not positive definite gets the
+ * pseudo-inverse of its absolute value (exact here for the directions used),
+ * and a zero block the identity. */
 Test(linsolve, pcg_block_jacobi_fallbacks) {
   const int32_t ptr[] = {0, 0, 0};
   bs_bsr *A = NULL;
@@ -465,7 +464,7 @@ Test(linsolve, pcg_block_jacobi_fallbacks) {
   bs_linsolve *ls = NULL;
   cr_assert_eq(bs_linsolve_create(A, BS_LIN_PCG, &ls, &err), 0);
   bs_lin_stats st;
-  double x[6];
+  double x[6], Mi[9];
   /* Exact: two SPD blocks of very different scale. */
   const double spd0[9] = {4, 1, 0, 1, 3, 1, 0, 1, 2}, spd1[9] = {1e-3, 0, 0, 0, 2e-3, 0, 0, 0, 1e-3};
   memcpy(A->val, spd0, sizeof spd0);
@@ -474,28 +473,93 @@ Test(linsolve, pcg_block_jacobi_fallbacks) {
   cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b1, 1e-12, 10, x, &st, &err), 0, "%s", err.msg);
   cr_assert_eq(st.iterations, 1);
   cr_assert_eq(st.converged, 1);
-  /* Diagonal fallback: block 0 indefinite (eigenvalues 9, -1, 4), b along
-   * its third axis; block 1 SPD with another scale. M^-1 b is the solution. */
+  /* Indefinite block 0 (eigenvalues 9, -1, 4, the -1 along (1, -1, 0)/sqrt 2),
+   * b along its eigenvectors of 4 and -1: M^-1 = |S|^-1 gives the solution's
+   * scale on both, but the direction of -1 is one of negative curvature, so
+   * PCG stops there; along the eigenvector of 4 alone it converges at once. */
   const double ind0[9] = {4, 5, 0, 5, 4, 0, 0, 0, 4}, s1[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  cr_assert_eq(bs_linsolve_block_inverse(ind0, Mi), 1);
+  const double r2 = sqrt(0.5);
+  /* |S|^-1 (1, -1, 0)/sqrt 2 = (1, -1, 0)/sqrt 2 (|lambda| = 1); e3 -> e3/4. */
+  cr_assert_float_eq(Mi[0] * r2 - Mi[1] * r2, r2, 1e-14);
+  cr_assert_float_eq(Mi[3] * r2 - Mi[4] * r2, -r2, 1e-14);
+  cr_assert_float_eq(Mi[8], 0.25, 1e-15);
   memcpy(A->val, ind0, sizeof ind0);
   memcpy(A->val + 9, s1, sizeof s1);
   const double b2[6] = {0, 0, 1, 1, 0, 0};
   cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b2, 1e-12, 10, x, &st, &err), 0, "%s", err.msg);
-  cr_assert_eq(st.iterations, 1, "diagonal fallback: %d iterations", st.iterations);
+  cr_assert_eq(st.iterations, 1, "indefinite block: %d iterations", st.iterations);
   cr_assert_float_eq(x[2], 0.25, 1e-15);
   cr_assert_float_eq(x[3], 1.0, 1e-15);
-  /* Identity fallback (a negative diagonal entry): PCG still runs, needs two
-   * iterations for two scales, and never meets negative curvature along b. */
+  /* A negative diagonal entry: |S|^-1 = diag(1, 1/4, 1/4), exact for b here
+   * (the identity, before, took two iterations for the two scales). */
   const double neg0[9] = {-1, 0, 0, 0, 4, 0, 0, 0, 4}, two[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
   memcpy(A->val, neg0, sizeof neg0);
   memcpy(A->val + 9, two, sizeof two);
   const double b3[6] = {0, 1, 0, 1, 0, 0};
   cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b3, 1e-12, 10, x, &st, &err), 0, "%s", err.msg);
-  cr_assert_eq(st.iterations, 2, "identity fallback: %d iterations", st.iterations);
+  cr_assert_eq(st.iterations, 1, "negative diagonal entry: %d iterations", st.iterations);
   cr_assert_eq(st.converged, 1);
   cr_assert_eq(st.indefinite, 0);
   cr_assert_float_eq(x[1], 0.25, 1e-14);
   cr_assert_float_eq(x[3], 0.5, 1e-14);
+  /* A zero block: the identity. */
+  const double zero[9] = {0};
+  cr_assert_eq(bs_linsolve_block_inverse(zero, Mi), 2);
+  cr_assert(Mi[0] == 1 && Mi[4] == 1 && Mi[8] == 1 && Mi[1] == 0 && Mi[2] == 0 && Mi[5] == 0);
+  bs_linsolve_destroy(&ls);
+  bs_bsr_destroy(&A);
+}
+
+/* A vertex on a constraint obstacle: its block is P S P (P = I - n n^T, S SPD
+ * with a large stiffness) plus the inertia of the tangent plane only, singular
+ * along n, and its residual has no normal part. Block Jacobi must invert it in
+ * the tangent plane: PCG converges in one iteration on the block-diagonal
+ * system with no normal component in x, for an axis normal (a zero row and
+ * column) and for an oblique one (rounding along n). Before, such a block got
+ * the identity, 1e4 times off its scale (fig14's ground: 26x plain CG's
+ * iterations). */
+Test(linsolve, pcg_block_jacobi_constrained_vertex) {
+  const int32_t ptr[] = {0, 0, 0};
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(2, ptr, NULL, &A, &err), 0, "%s", err.msg);
+  bs_linsolve *ls = NULL;
+  cr_assert_eq(bs_linsolve_create(A, BS_LIN_PCG, &ls, &err), 0);
+  const double S[9] = {3e4, 4e3, 1e3, 4e3, 2.5e4, -2e3, 1e3, -2e3, 2e4};
+  const double s3 = 1.0 / sqrt(3.0);
+  const double normals[2][3] = {{0, 1, 0}, {s3, s3, s3}};
+  for (int c = 0; c < 2; ++c) {
+    const double *n = normals[c];
+    double P[9], PS[9], B[9];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) P[3 * a + b] = (a == b) - n[a] * n[b];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) PS[3 * a + b] = P[3 * a] * S[b] + P[3 * a + 1] * S[3 + b] + P[3 * a + 2] * S[6 + b];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        B[3 * a + b] = PS[3 * a] * P[b] + PS[3 * a + 1] * P[3 + b] + PS[3 * a + 2] * P[6 + b];
+    double Mi[9];
+    cr_assert_eq(bs_linsolve_block_inverse(B, Mi), 1, "normal %d: not the eigen fallback", c);
+    memcpy(A->val, B, sizeof B);
+    const double other[9] = {5e3, 0, 0, 0, 5e3, 0, 0, 0, 5e3};
+    memcpy(A->val + 9, other, sizeof other);
+    /* b = P (1, 2, -1): tangent. */
+    const double v[3] = {1, 2, -1}, vn = v[0] * n[0] + v[1] * n[1] + v[2] * n[2];
+    const double b[6] = {v[0] - vn * n[0], v[1] - vn * n[1], v[2] - vn * n[2], 1, 1, 1};
+    double x[6];
+    bs_lin_stats st;
+    cr_assert_eq(bs_linsolve_solve(ls, A, NULL, b, 1e-10, 20, x, &st, &err), 0, "%s", err.msg);
+    cr_assert_eq(st.converged, 1, "normal %d: not converged", c);
+    cr_assert_eq(st.iterations, 1, "normal %d: %d iterations", c, st.iterations);
+    const double xn = x[0] * n[0] + x[1] * n[1] + x[2] * n[2];
+    cr_assert(fabs(xn) <= 1e-12 * sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), "normal %d: x.n = %g", c, xn);
+    /* The answer solves the tangent system: B x = b. */
+    for (int a = 0; a < 3; ++a) {
+      const double Bx = B[3 * a] * x[0] + B[3 * a + 1] * x[1] + B[3 * a + 2] * x[2];
+      cr_assert_float_eq(Bx, b[a], 1e-9, "normal %d row %d: %g vs %g", c, a, Bx, b[a]);
+    }
+  }
   bs_linsolve_destroy(&ls);
   bs_bsr_destroy(&A);
 }
