@@ -1,6 +1,7 @@
 /* bs_vec3.h — the small 3-vector helpers every C module shares: dot, difference,
  * cross product and length of double[3] (geometry in metres, but nothing here
- * has units).
+ * has units); and three of 3x3 row-major matrices, double[9] with A[3*r + c]
+ * (identity, determinant, column swap) for the small decompositions.
  *
  * Conventions: vectors are plain double[3]; outputs come last and may alias
  * the inputs only where noted. Each helper is one fixed expression, written
@@ -49,6 +50,26 @@ static inline double bs_norm3_scaled(const double *a) {
   if (m == 0) return 0;
   const double b[3] = {a[0] / m, a[1] / m, a[2] / m};
   return m * bs_norm3(b);
+}
+
+/* A = I. */
+static inline void bs_mat3_identity(double *A) {
+  for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) ? 1.0 : 0.0;
+}
+
+/* det A, by the first row's cofactors. */
+static inline double bs_mat3_det(const double *A) {
+  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+         A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
+/* Swaps columns i and j of A. */
+static inline void bs_mat3_swap_cols(double *A, int i, int j) {
+  for (int r = 0; r < 3; r++) {
+    const double t = A[3 * r + i];
+    A[3 * r + i] = A[3 * r + j];
+    A[3 * r + j] = t;
+  }
 }
 
 #ifdef __cplusplus

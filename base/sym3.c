@@ -2,34 +2,19 @@
  * See bs_sym3.h for the contract. */
 #include "bs_sym3.h"
 
+#include "bs_vec3.h"
+
 #include <math.h>
 
 enum { EIG_MAX_SWEEPS = 40 };
 
 static const int pair_p[3] = {0, 0, 1}, pair_q[3] = {1, 2, 2};
 
-static void set_identity(double A[9]) {
-  for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) ? 1.0 : 0.0;
-}
-
-static double det3(const double A[9]) {
-  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-         A[2] * (A[3] * A[7] - A[4] * A[6]);
-}
-
-static void swap_col(double A[9], int i, int j) {
-  for (int r = 0; r < 3; r++) {
-    double t = A[3 * r + i];
-    A[3 * r + i] = A[3 * r + j];
-    A[3 * r + j] = t;
-  }
-}
-
 void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {
   double a[9];
   for (int i = 0; i < 3; i++)
     for (int j = i; j < 3; j++) a[3 * i + j] = a[3 * j + i] = A[3 * i + j];
-  set_identity(Q);
+  bs_mat3_identity(Q);
   for (int sweep = 0; sweep < EIG_MAX_SWEEPS; sweep++) {
     int rotated = 0;
     for (int k = 0; k < 3; k++) {
@@ -68,8 +53,8 @@ void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {
         double t = lambda[j];
         lambda[j] = lambda[j - 1];
         lambda[j - 1] = t;
-        swap_col(Q, j, j - 1);
+        bs_mat3_swap_cols(Q, j, j - 1);
       }
-  if (det3(Q) < 0.0)
+  if (bs_mat3_det(Q) < 0.0)
     for (int i = 0; i < 3; i++) Q[3 * i + 2] = -Q[3 * i + 2];
 }

@@ -3,6 +3,7 @@
  * base/sym3.c). */
 #include "bs_svd.h"
 #include "polar_avx2.h"
+#include "bs_vec3.h"
 
 #include <float.h>
 #include <math.h>
@@ -19,24 +20,6 @@ enum { SVD_MAX_SWEEPS = 24 };
 
 static const int pair_p[3] = {0, 0, 1}, pair_q[3] = {1, 2, 2};
 
-static void set_identity(double A[9]) {
-  for (int i = 0; i < 9; i++) A[i] = (i % 4 == 0) ? 1.0 : 0.0;
-}
-
-static double det3(const double A[9]) {
-  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-         A[2] * (A[3] * A[7] - A[4] * A[6]);
-}
-
-/* Swap columns i and j of a 3x3 matrix. */
-static void swap_col(double A[9], int i, int j) {
-  for (int r = 0; r < 3; r++) {
-    double t = A[3 * r + i];
-    A[3 * r + i] = A[3 * r + j];
-    A[3 * r + j] = t;
-  }
-}
-
 void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
   /* Scale by an exact power of two so that the largest entry is in [0.5, 1). */
   double fm = 0.0, bad = 0.0;
@@ -51,8 +34,8 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
     return;
   }
   if (fm == 0.0) {
-    set_identity(U);
-    set_identity(V);
+    bs_mat3_identity(U);
+    bs_mat3_identity(V);
     sigma[0] = sigma[1] = sigma[2] = 0.0;
     return;
   }
@@ -64,7 +47,7 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
     for (int i = 0; i < 9; i++) B[i] = F[i] * sc;
   } else
     for (int i = 0; i < 9; i++) B[i] = ldexp(F[i], -ex);
-  set_identity(V);
+  bs_mat3_identity(V);
 
   /* One-sided Jacobi: rotate column pairs (p, q) of B = F V until orthogonal. */
   for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
@@ -111,11 +94,11 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
         double t = n[j];
         n[j] = n[j - 1];
         n[j - 1] = t;
-        swap_col(B, j, j - 1);
-        swap_col(V, j, j - 1);
+        bs_mat3_swap_cols(B, j, j - 1);
+        bs_mat3_swap_cols(V, j, j - 1);
       }
   /* V a rotation: a reflection moves into the last column (and into sigma2). */
-  if (det3(V) < 0.0)
+  if (bs_mat3_det(V) < 0.0)
     for (int r = 0; r < 3; r++) {
       V[3 * r + 2] = -V[3 * r + 2];
       B[3 * r + 2] = -B[3 * r + 2];
@@ -357,7 +340,7 @@ AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], do
       W[3 * r + j - 1] = vsel(sw, y0, y1);
     }
   }
-  /* det3(V) < 0: the last columns change sign (det3 in bs_svd3's order) */
+  /* bs_mat3_det(V) < 0: the last columns change sign (det3 in bs_svd3's order) */
   const v4 det = _mm256_add_pd(
       _mm256_sub_pd(_mm256_mul_pd(W[0], _mm256_sub_pd(_mm256_mul_pd(W[4], W[8]), _mm256_mul_pd(W[5], W[7]))),
                     _mm256_mul_pd(W[1], _mm256_sub_pd(_mm256_mul_pd(W[3], W[8]), _mm256_mul_pd(W[5], W[6])))),

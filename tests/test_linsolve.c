@@ -452,17 +452,24 @@ Test(linsolve, thread_count_independence) {
   bs_bsr_destroy(&A);
 }
 
+/* A block-diagonal matrix of two vertices (no off-diagonal block; values for
+ * the caller to set) and a PCG workspace for it. */
+static void two_blocks_pcg(bs_bsr **A, bs_linsolve **ls) {
+  const int32_t ptr[] = {0, 0, 0};
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(2, ptr, NULL, A, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_linsolve_create(*A, BS_LIN_PCG, ls, &err), 0, "%s", err.msg);
+}
+
 /* Block Jacobi on block-diagonal matrices: with exact inverses PCG converges
  * in one iteration; a diagonal block that is not positive definite gets the
  * pseudo-inverse of its absolute value (exact here for the directions used),
  * and a zero block the identity. */
 Test(linsolve, pcg_block_jacobi_fallbacks) {
-  const int32_t ptr[] = {0, 0, 0};
   bs_bsr *A = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_bsr_create(2, ptr, NULL, &A, &err), 0, "%s", err.msg);
   bs_linsolve *ls = NULL;
-  cr_assert_eq(bs_linsolve_create(A, BS_LIN_PCG, &ls, &err), 0);
+  bs_error err = {0};
+  two_blocks_pcg(&A, &ls);
   bs_lin_stats st;
   double x[6], Mi[9];
   /* Exact: two SPD blocks of very different scale. */
@@ -512,20 +519,18 @@ Test(linsolve, pcg_block_jacobi_fallbacks) {
 }
 
 /* A vertex on a constraint obstacle: its block is P S P (P = I - n n^T, S SPD
- * with a large stiffness) plus the inertia of the tangent plane only, singular
- * along n, and its residual has no normal part. Block Jacobi must invert it in
+ * at a stiffness of 2e4 to 3e4), singular along n, and its residual has no
+ * normal part. Block Jacobi must invert it in
  * the tangent plane: PCG converges in one iteration on the block-diagonal
  * system with no normal component in x, for an axis normal (a zero row and
  * column) and for an oblique one (rounding along n). Before, such a block got
  * the identity, 1e4 times off its scale (fig14's ground: 26x plain CG's
  * iterations). */
 Test(linsolve, pcg_block_jacobi_constrained_vertex) {
-  const int32_t ptr[] = {0, 0, 0};
   bs_bsr *A = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_bsr_create(2, ptr, NULL, &A, &err), 0, "%s", err.msg);
   bs_linsolve *ls = NULL;
-  cr_assert_eq(bs_linsolve_create(A, BS_LIN_PCG, &ls, &err), 0);
+  bs_error err = {0};
+  two_blocks_pcg(&A, &ls);
   const double S[9] = {3e4, 4e3, 1e3, 4e3, 2.5e4, -2e3, 1e3, -2e3, 2e4};
   const double s3 = 1.0 / sqrt(3.0);
   const double normals[2][3] = {{0, 1, 0}, {s3, s3, s3}};
