@@ -9,8 +9,7 @@
  *    carries (F is dimensionless).
  *  - Nothing allocates, prints or fails: these are total functions (but
  *    bs_sym_psd_project's order out of range, reported -1). A
- *    non-finite F gives NaN outputs at once; bs_sym3_eig on a non-finite A
- *    gives non-finite outputs after a bounded number of sweeps.
+ *    non-finite F gives NaN outputs at once.
  *
  * Accuracy: bs_svd3 is a cyclic Jacobi method run to machine precision. It
  * reconstructs F to a few ulps of ||F|| and returns U, V orthogonal to a few

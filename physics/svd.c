@@ -340,7 +340,7 @@ AVX2_FN static inline void avx2_finish(v4 B[9], v4 W[9], const double isc[L], do
       W[3 * r + j - 1] = vsel(sw, y0, y1);
     }
   }
-  /* bs_mat3_det(V) < 0: the last columns change sign (det3 in bs_svd3's order) */
+  /* det V < 0: the last columns change sign (bs_mat3_det's order, as bs_svd3) */
   const v4 det = _mm256_add_pd(
       _mm256_sub_pd(_mm256_mul_pd(W[0], _mm256_sub_pd(_mm256_mul_pd(W[4], W[8]), _mm256_mul_pd(W[5], W[7]))),
                     _mm256_mul_pd(W[1], _mm256_sub_pd(_mm256_mul_pd(W[3], W[8]), _mm256_mul_pd(W[5], W[6])))),

@@ -28,8 +28,8 @@
  * vertex on a constraint obstacle, whose block J^T H J has a zero row and
  * column along the normal (where the residual is zero too), is preconditioned
  * in its tangent plane only. A zero or non-finite block gets the identity. So
- * M^-1 is positive semidefinite, definite on every direction A acts on, and
- * PCG's early exit keeps the same meaning.
+ * M^-1 is positive semidefinite (definite wherever the block is nonsingular)
+ * and PCG's early exit keeps the same meaning.
  *
  * AMG: the same PCG (same negative-curvature exit) with z = B r, B one V-cycle
  * of a BoomerAMG hierarchy built by bs_linsolve_amg_setup from a matrix P the
