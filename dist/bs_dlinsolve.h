@@ -8,7 +8,7 @@
  *                  inverted as the serial "pcg" does (bs_linsolve_block_inverse:
  *                  a block that is not SPD, e.g. left singular in the normal
  *                  of an active constraint, gets the pseudo-inverse of its
- *                  positive part, where PETSc's PCPBJACOBI would divide by
+ *                  absolute value, where PETSc's PCPBJACOBI would divide by
  *                  a zero pivot);
  *   BS_DPC_GAMG    one PCGAMG cycle built from a symmetric positive definite
  *                  matrix P (bs_dlin_setup) with the rigid-body near-null

@@ -22,16 +22,15 @@
  * PCG preconditioner: block Jacobi with the inverse of each free 3x3 diagonal
  * block. A diagonal block that is not symmetric positive definite (Cholesky of
  * its symmetric part meets a pivot <= 1e-14 times its largest diagonal
- * magnitude) gets Q diag(1/lambda) Q^T from the eigen-decomposition of its
- * symmetric part (bs_sym3_eig) over its eigenvalues above 1e-12 of the
- * largest, the zero and negative ones left out (the pseudo-inverse of its
- * positive part): a vertex on a constraint obstacle, whose block J^T H J has
- * a zero row and column along the normal (where the residual is zero too), is
- * preconditioned in its tangent plane, also on a curved obstacle, where the
- * curvature term turns the normal's zero into a small negative eigenvalue. A
- * block with no positive eigenvalue, or a non-finite one, gets the identity.
- * So M^-1 is positive semidefinite and PCG's early exit keeps the same
- * meaning (a block that is not positive definite means A is not either).
+ * magnitude) gets Q diag(1/|lambda|) Q^T from the eigen-decomposition of its
+ * symmetric part (bs_sym3_eig), eigenvalues at or below 1e-12 of the largest
+ * |lambda| left out: an indefinite block (contacts) keeps its scale, and a
+ * vertex on a constraint obstacle, whose block J^T H J has a zero row and
+ * column along the normal (where the residual is zero too), is preconditioned
+ * in its tangent plane only (on a curved obstacle the curvature term spoils
+ * this: use plain CG there). A zero or non-finite block gets the identity. So
+ * M^-1 is positive semidefinite (definite wherever the block is nonsingular)
+ * and PCG's early exit keeps the same meaning.
  *
  * AMG: the same PCG (same negative-curvature exit) with z = B r, B one V-cycle
  * of a BoomerAMG hierarchy built by bs_linsolve_amg_setup from a matrix P the
@@ -101,7 +100,7 @@ const char *bs_lin_kind_name(bs_lin_kind k);
 
 /* The PCG preconditioner's block (above) for one 3x3 diagonal block D
  * (row-major) into Mi (row-major): the inverse of D's symmetric part, the
- * pseudo-inverse of its positive part, or the identity; returns 0, 1 or 2
+ * pseudo-inverse of its absolute value, or the identity; returns 0, 1 or 2
  * for those. Shared with the
  * petsc backend's point-block Jacobi (dist/bs_dlinsolve.h). Nothing
  * allocates or fails. */

@@ -159,33 +159,35 @@ static int matrix_error(const bs_bsr *A, const uint8_t *mask, const char *what, 
 /* ---- block Jacobi ------------------------------------------------------- */
 
 /* What block_inverse made of a block. */
-typedef enum { BJ_INVERSE = 0, BJ_POS_EIGEN = 1, BJ_IDENTITY = 2 } bj_kind;
+typedef enum { BJ_INVERSE = 0, BJ_ABS_EIGEN = 1, BJ_IDENTITY = 2 } bj_kind;
 
-/* Eigenvalues at or below this fraction of a block's largest count as zero in
- * the fallback (a constraint's projection leaves its normal's eigenvalue at
- * rounding, about 1e-16 of the others). */
+/* Eigenvalues at or below this fraction of the largest |lambda| of a block
+ * count as zero in the fallback (a constraint's projection leaves its normal's
+ * eigenvalue at rounding, about 1e-16 of the others). */
 #define BJ_NULL_TOL 1e-12
 
-/* The fallback of block_inverse: Q diag(1/lambda) Q^T over the eigenvalues of
- * S above BJ_NULL_TOL times the largest, the others (zero or negative) left
- * out: the pseudo-inverse of S's positive part. A vertex on a constraint
- * obstacle has a zero row and column along the normal (J^T H J), where its
- * residual is zero too: it is preconditioned in its tangent plane (the
- * identity it got before was 1e4 times off the block's scale, and PCG took 26
- * times plain CG's iterations on fig14). On a curved obstacle the curvature
- * term couples the normal to the tangent plane with a zero normal diagonal,
- * which makes a small negative eigenvalue near the normal: 1/|lambda| there
- * gave that direction a weight 1e4 and more above the others (fig12: 110
- * solves per step, 13 failed steps), while leaving it out gives 5.00 (cg
- * 4.83). A block that is not positive definite means A is not either: CG
- * ends on negative curvature or converges on the positive part. Returns 0
- * when no eigenvalue is positive. */
-static int pos_pseudo_inverse(const double S[9], double *Mi) {
+/* The fallback of block_inverse: Q diag(1/|lambda|) Q^T over the eigenvalues
+ * of S above BJ_NULL_TOL max |lambda|, the others left out (a pseudo-inverse
+ * of |S|). Positive semidefinite, so PCG's preconditioner stays definite on
+ * the directions it acts on; an indefinite block (contacts) keeps its scale,
+ * and the normal of a vertex on a constraint obstacle (J^T H J: a zero row and
+ * column along the normal, whose residual is zero) gets nothing, where the
+ * identity made that vertex's preconditioned residual its stiffness (1e4 to
+ * 1e6 times too large) and took PCG 26 times the iterations of plain CG on
+ * fig14. On a curved constraint obstacle the curvature term couples the
+ * normal to the tangent plane with a zero normal diagonal: a small negative
+ * eigenvalue near the normal, which 1/|lambda| weights far above the others
+ * (fig12 with pcg fails steps; README, solver.linear). Leaving the negative
+ * eigenvalues out instead keeps the residual along the contacts' negative
+ * directions and costs fig14 2.5x its CG iterations. Returns 0 when no
+ * eigenvalue is above the floor (a zero block). */
+static int abs_pseudo_inverse(const double S[9], double *Mi) {
   double lam[3], Q[9];
   bs_sym3_eig(S, lam, Q);
-  if (!(lam[0] > 0.0) || !isfinite(lam[0])) return 0;
+  const double big = fmax(fabs(lam[0]), fabs(lam[2]));
+  if (!(big > 0.0) || !isfinite(big)) return 0;
   double w[3];
-  for (int k = 0; k < 3; ++k) w[k] = lam[k] > BJ_NULL_TOL * lam[0] ? 1.0 / lam[k] : 0.0;
+  for (int k = 0; k < 3; ++k) w[k] = fabs(lam[k]) > BJ_NULL_TOL * big ? 1.0 / fabs(lam[k]) : 0.0;
   for (int a = 0; a < 3; ++a)
     for (int b = a; b < 3; ++b)
       Mi[3 * a + b] = Mi[3 * b + a] =
@@ -194,9 +196,8 @@ static int pos_pseudo_inverse(const double S[9], double *Mi) {
 }
 
 /* Inverse of the symmetric part S of a 3x3 block D if S is positive definite
- * (Cholesky pivots above 1e-14 * max diagonal); else pos_pseudo_inverse;
- * else (no positive eigenvalue, or a non-finite block) the identity. Returns
- * which. */
+ * (Cholesky pivots above 1e-14 * max diagonal); else abs_pseudo_inverse;
+ * else (a zero or non-finite block) the identity. Returns which. */
 static bj_kind block_inverse(const double *D, double *Mi) {
   double S[9];
   for (int a = 0; a < 3; ++a)
@@ -242,7 +243,7 @@ static bj_kind block_inverse(const double *D, double *Mi) {
     Mi[7] = Mi[5];
     return BJ_INVERSE;
   }
-  if (isfinite(dmax) && pos_pseudo_inverse(S, Mi)) return BJ_POS_EIGEN;
+  if (isfinite(dmax) && abs_pseudo_inverse(S, Mi)) return BJ_ABS_EIGEN;
   memset(Mi, 0, 9 * sizeof *Mi);
   Mi[0] = Mi[4] = Mi[8] = 1.0;
   return BJ_IDENTITY;
