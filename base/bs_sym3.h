@@ -10,6 +10,8 @@
  * Example:
  *   double lam[3], Q[9];
  *   bs_sym3_eig(A, lam, Q);   // A = Q diag(lam) Q^T, lam[0] >= lam[1] >= lam[2]
+ *   lam[2] = fmax(lam[2], 0.0);
+ *   bs_sym3_from_eig(lam, Q, A);   // A with its negative eigenvalue clamped
  */
 #ifndef BS_SYM3_H
 #define BS_SYM3_H
@@ -22,6 +24,11 @@ extern "C" {
  * Q a rotation, lambda sorted descending. Cyclic Jacobi to machine precision:
  * eigenvalues carry an absolute error of a few ulps of max |lambda|. */
 void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]);
+
+/* A = Q diag(d) Q^T (exactly symmetric; the upper triangle is computed and
+ * mirrored): the matrix with bs_sym3_eig's vectors Q and new eigenvalues d,
+ * e.g. clamped (a PSD projection) or inverted (a pseudo-inverse). */
+void bs_sym3_from_eig(const double d[3], const double Q[9], double A[9]);
 
 #ifdef __cplusplus
 }

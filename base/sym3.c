@@ -58,3 +58,10 @@ void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {
   if (bs_mat3_det(Q) < 0.0)
     for (int i = 0; i < 3; i++) Q[3 * i + 2] = -Q[3 * i + 2];
 }
+
+void bs_sym3_from_eig(const double d[3], const double Q[9], double A[9]) {
+  for (int i = 0; i < 3; i++)
+    for (int j = i; j < 3; j++)
+      A[3 * i + j] = A[3 * j + i] =
+          d[0] * Q[3 * i] * Q[3 * j] + d[1] * Q[3 * i + 1] * Q[3 * j + 1] + d[2] * Q[3 * i + 2] * Q[3 * j + 2];
+}

@@ -374,10 +374,7 @@ static void project_blocks(double H[9], double lp[3], double lm[3]) {
   if (lam[2] < 0) {
     for (int k = 0; k < 3; k++)
       if (lam[k] < 0) lam[k] = 0;
-    for (int i = 0; i < 3; i++)
-      for (int j = i; j < 3; j++)
-        H[3 * i + j] = H[3 * j + i] =
-            lam[0] * Q[3 * i] * Q[3 * j] + lam[1] * Q[3 * i + 1] * Q[3 * j + 1] + lam[2] * Q[3 * i + 2] * Q[3 * j + 2];
+    bs_sym3_from_eig(lam, Q, H);
   }
 }
 

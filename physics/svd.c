@@ -20,36 +20,9 @@ enum { SVD_MAX_SWEEPS = 24 };
 
 static const int pair_p[3] = {0, 0, 1}, pair_q[3] = {1, 2, 2};
 
-void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
-  /* Scale by an exact power of two so that the largest entry is in [0.5, 1). */
-  double fm = 0.0, bad = 0.0;
-  for (int i = 0; i < 9; i++) {
-    const double a = fabs(F[i]);
-    if (a > fm) fm = a;
-    bad += F[i] - F[i]; /* 0, or NaN when some entry is Inf or NaN */
-  }
-  if (bad != 0.0 || bad != bad) {
-    for (int i = 0; i < 9; i++) U[i] = V[i] = NAN;
-    sigma[0] = sigma[1] = sigma[2] = NAN;
-    return;
-  }
-  if (fm == 0.0) {
-    bs_mat3_identity(U);
-    bs_mat3_identity(V);
-    sigma[0] = sigma[1] = sigma[2] = 0.0;
-    return;
-  }
-  int ex;
-  frexp(fm, &ex);
-  double B[9];
-  if (ex > -1000 && ex < 1000) {
-    const double sc = ldexp(1.0, -ex);
-    for (int i = 0; i < 9; i++) B[i] = F[i] * sc;
-  } else
-    for (int i = 0; i < 9; i++) B[i] = ldexp(F[i], -ex);
-  bs_mat3_identity(V);
-
-  /* One-sided Jacobi: rotate column pairs (p, q) of B = F V until orthogonal. */
+/* One-sided Jacobi: rotates column pairs (p, q) of B = F V (and of V) until
+ * they are orthogonal (bs_svd3's scaled B, entries <= 1). */
+static void one_sided_jacobi(double B[9], double V[9]) {
   for (int sweep = 0; sweep < SVD_MAX_SWEEPS; sweep++) {
     int rotated = 0;
     for (int k = 0; k < 3; k++) {
@@ -84,28 +57,16 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
     }
     if (!rotated) break;
   }
+}
 
-  /* Sort the columns by length, descending. */
-  double n[3];
-  for (int j = 0; j < 3; j++) n[j] = B[j] * B[j] + B[3 + j] * B[3 + j] + B[6 + j] * B[6 + j];
-  for (int i = 0; i < 2; i++)
-    for (int j = 2; j > i; j--)
-      if (n[j] > n[j - 1]) {
-        double t = n[j];
-        n[j] = n[j - 1];
-        n[j - 1] = t;
-        bs_mat3_swap_cols(B, j, j - 1);
-        bs_mat3_swap_cols(V, j, j - 1);
-      }
-  /* V a rotation: a reflection moves into the last column (and into sigma2). */
-  if (bs_mat3_det(V) < 0.0)
-    for (int r = 0; r < 3; r++) {
-      V[3 * r + 2] = -V[3 * r + 2];
-      B[3 * r + 2] = -B[3 * r + 2];
-    }
-
+/* U = [b0/|b0|, Gram-Schmidt of b1 (or any unit vector orthogonal to u0 when
+ * b1 vanishes), u0 x u1] from the sorted, oriented columns of B (squared
+ * lengths n), and the singular values of B: |b0|, |b1|, u2 . b2 (clamped to
+ * |b1|, with the sign of det F). */
+static void left_vectors(const double B[9], const double n[3], double U[9], double *s0_out, double *s1_out,
+                         double *s2_out) {
   double u0[3], u1[3], u2[3];
-  const double s0 = sqrt(n[0]); /* >= 0.5: the column holding fm */
+  const double s0 = *s0_out = sqrt(n[0]); /* >= 0.5: the column holding fm */
   for (int r = 0; r < 3; r++) u0[r] = B[3 * r] / s0;
   /* u1: b1 made orthogonal to u0 (it already is to ~eps); when b1 is
    * negligible, any unit vector orthogonal to u0. */
@@ -130,14 +91,69 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
   u2[1] = u0[2] * u1[0] - u0[0] * u1[2];
   u2[2] = u0[0] * u1[1] - u0[1] * u1[0];
 
-  double s1 = sqrt(n[1]);
+  const double s1 = *s1_out = sqrt(n[1]);
   double s2 = u2[0] * B[2] + u2[1] * B[5] + u2[2] * B[8];
   if (fabs(s2) > s1) s2 = copysign(s1, s2);
+  *s2_out = s2;
   for (int r = 0; r < 3; r++) {
     U[3 * r] = u0[r];
     U[3 * r + 1] = u1[r];
     U[3 * r + 2] = u2[r];
   }
+}
+
+void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
+  /* Scale by an exact power of two so that the largest entry is in [0.5, 1). */
+  double fm = 0.0, bad = 0.0;
+  for (int i = 0; i < 9; i++) {
+    const double a = fabs(F[i]);
+    if (a > fm) fm = a;
+    bad += F[i] - F[i]; /* 0, or NaN when some entry is Inf or NaN */
+  }
+  if (bad != 0.0 || bad != bad) {
+    for (int i = 0; i < 9; i++) U[i] = V[i] = NAN;
+    sigma[0] = sigma[1] = sigma[2] = NAN;
+    return;
+  }
+  if (fm == 0.0) {
+    bs_mat3_identity(U);
+    bs_mat3_identity(V);
+    sigma[0] = sigma[1] = sigma[2] = 0.0;
+    return;
+  }
+  int ex;
+  frexp(fm, &ex);
+  double B[9];
+  if (ex > -1000 && ex < 1000) {
+    const double sc = ldexp(1.0, -ex);
+    for (int i = 0; i < 9; i++) B[i] = F[i] * sc;
+  } else
+    for (int i = 0; i < 9; i++) B[i] = ldexp(F[i], -ex);
+  bs_mat3_identity(V);
+
+  one_sided_jacobi(B, V);
+
+  /* Sort the columns by length, descending. */
+  double n[3];
+  for (int j = 0; j < 3; j++) n[j] = B[j] * B[j] + B[3 + j] * B[3 + j] + B[6 + j] * B[6 + j];
+  for (int i = 0; i < 2; i++)
+    for (int j = 2; j > i; j--)
+      if (n[j] > n[j - 1]) {
+        double t = n[j];
+        n[j] = n[j - 1];
+        n[j - 1] = t;
+        bs_mat3_swap_cols(B, j, j - 1);
+        bs_mat3_swap_cols(V, j, j - 1);
+      }
+  /* V a rotation: a reflection moves into the last column (and into sigma2). */
+  if (bs_mat3_det(V) < 0.0)
+    for (int r = 0; r < 3; r++) {
+      V[3 * r + 2] = -V[3 * r + 2];
+      B[3 * r + 2] = -B[3 * r + 2];
+    }
+
+  double s0, s1, s2;
+  left_vectors(B, n, U, &s0, &s1, &s2);
   if (ex > -1000 && ex < 1000) {
     const double sc = ldexp(1.0, ex);
     sigma[0] = s0 * sc;

@@ -188,10 +188,7 @@ static int abs_pseudo_inverse(const double S[9], double *Mi) {
   if (!(big > 0.0) || !isfinite(big)) return 0;
   double w[3];
   for (int k = 0; k < 3; ++k) w[k] = fabs(lam[k]) > BJ_NULL_TOL * big ? 1.0 / fabs(lam[k]) : 0.0;
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b)
-      Mi[3 * a + b] = Mi[3 * b + a] =
-          w[0] * Q[3 * a] * Q[3 * b] + w[1] * Q[3 * a + 1] * Q[3 * b + 1] + w[2] * Q[3 * a + 2] * Q[3 * b + 2];
+  bs_sym3_from_eig(w, Q, Mi);
   return 1;
 }
 

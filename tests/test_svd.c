@@ -234,6 +234,12 @@ static void check_eig(const double A[9], const char *what) {
   cr_assert(fro(d) <= 1e-13 * (nA > 0 ? nA : 1), "%s: eig reconstruction %g", what, fro(d) / nA);
   cr_assert(orth_err(Q) <= 1e-13 && fabs(det3(Q) - 1) <= 1e-13, "%s: Q not a rotation", what);
   cr_assert(lam[0] >= lam[1] && lam[1] >= lam[2], "%s: eigenvalues not sorted", what);
+  /* bs_sym3_from_eig puts it back, exactly symmetric. */
+  double B[9];
+  bs_sym3_from_eig(lam, Q, B);
+  for (int i = 0; i < 9; i++) d[i] = B[i] - A[i];
+  cr_assert(fro(d) <= 1e-13 * (nA > 0 ? nA : 1), "%s: from_eig reconstruction %g", what, fro(d) / nA);
+  cr_assert(B[1] == B[3] && B[2] == B[6] && B[5] == B[7], "%s: from_eig not symmetric", what);
 }
 
 Test(svd, sym3_eig) {
