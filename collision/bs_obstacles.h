@@ -45,10 +45,22 @@
  *        A = Hess phi, hence
  *            H = J^T H' J + C,   C_jk = -[(g'.n) A_jk + n_j (A g')_k + (A g')_j n_k]
  *        with J block diagonal (J_p = I - n n^T at active vertices, I
- *        elsewhere): each block (p, q) becomes J_p^T H'_pq J_q and C_p is added
- *        to the diagonal block; the block pattern is unchanged. Several
- *        obstacles active at one vertex compose: from b = B down to 1,
- *        C <- J_b C J_b + C_b(g_b), g_{b-1} = J_b g_b, J <- J J_b.
+ *        elsewhere). Several obstacles active at one vertex compose: from
+ *        b = B down to 1, C <- J_b C J_b + C_b(g_b), g_{b-1} = J_b g_b,
+ *        J <- J J_b. The hook returns this Hessian on the tangent space of
+ *        the active pairs: each block (p, q) becomes J_p^T H'_pq J_q and
+ *        J_p^T C_p J_p is added to the diagonal block (for one obstacle
+ *        -(g'.n) J A J, the curvature term of the Hessian on the constraint
+ *        surface); the block pattern is unchanged, and the rows and columns
+ *        along an active normal are zero, so a linear solve stays in the
+ *        tangent space. H d is the exact second derivative for every d with
+ *        J d = d. Why not C itself (the paper's formula): E is constant along
+ *        the normal line of a touching vertex (P maps it to one point), yet
+ *        C n = -A g' couples the normal to the tangent plane wherever the
+ *        tangential force A g' is not zero on a curved obstacle, so the full
+ *        Hessian is indefinite (a zero n-n entry beside that coupling) in a
+ *        direction whose only effect is to rescale the tangential motion
+ *        through the curvature. On a plane A = 0 and both agree.
  *      Friction (5.1): the collision force on a vertex of an active pair at
  *      x^{n+1} is grad E'(x) - grad E(x) = n (g'_p . n), of magnitude
  *      |f| = g'_p . n (the pairs are re-labeled at x^{n+1} with the rule above).

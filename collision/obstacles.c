@@ -416,6 +416,9 @@ void bs_obstacles_project_hessian(const double *x, const double *g, bs_bsr *H, v
       any = 1;
     }
     if (any) {
+      /* C <- J^T C J: the Hessian on the tangent space (header). */
+      mat3_mul(C, J, C);
+      mat3_tmul(J, C, C);
       o->vact[p] = 1;
       memcpy(o->J + 9 * (size_t)p, J, sizeof J);
       memcpy(o->C + 9 * (size_t)p, C, sizeof C);

@@ -20,15 +20,16 @@
  * b^T x_k > 0, so the result is a descent direction of the quadratic
  * 1/2 x^T A x - b^T x at 0 (and of E when b = -grad E).
  * PCG preconditioner: block Jacobi with the inverse of each free 3x3 diagonal
- * block. A diagonal block that is not symmetric positive definite (Cholesky of
- * its symmetric part meets a pivot <= 1e-14 times its largest diagonal
- * magnitude) gets Q diag(1/|lambda|) Q^T from the eigen-decomposition of its
- * symmetric part (bs_sym3_eig), eigenvalues at or below 1e-12 of the largest
- * |lambda| left out: an indefinite block (contacts) keeps its scale, and a
- * vertex on a constraint obstacle, whose block J^T H J has a zero row and
- * column along the normal (where the residual is zero too), is preconditioned
- * in its tangent plane only (on a curved obstacle the curvature term spoils
- * this: use plain CG there). A zero or non-finite block gets the identity. So
+ * block. A diagonal block that is not clearly symmetric positive definite
+ * (Cholesky of its symmetric part meets a pivot <= 1e-6 times its largest
+ * diagonal magnitude: a smaller pivot can be rounding) gets Q diag(1/|lambda|)
+ * Q^T from the eigen-decomposition of its symmetric part (bs_sym3_eig),
+ * eigenvalues at or below 1e-12 of the largest |lambda| left out: a definite
+ * block gets its inverse, an indefinite block (contacts) keeps its scale, and
+ * a vertex on a constraint obstacle, whose block has a zero row and column
+ * along the normal (bs_obstacles.h: the Hessian on the tangent space; the
+ * residual is zero there too), is preconditioned in its tangent plane only.
+ * A zero or non-finite block gets the identity. So
  * M^-1 is positive semidefinite (definite wherever the block is nonsingular)
  * and PCG's early exit keeps the same meaning.
  *

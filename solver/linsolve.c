@@ -166,21 +166,28 @@ typedef enum { BJ_INVERSE = 0, BJ_ABS_EIGEN = 1, BJ_IDENTITY = 2 } bj_kind;
  * eigenvalue at rounding, about 1e-16 of the others). */
 #define BJ_NULL_TOL 1e-12
 
+/* Cholesky pivots at or below this fraction of the largest diagonal entry
+ * send a block to the fallback. Rounding in a nearly singular block can leave
+ * a positive last pivot of up to about eps/tau of the diagonal after a pivot
+ * of tau (1e-7 at most of 1e5 projected blocks P S P with random normals,
+ * 5e-8 on the block of a vertex of fig12 on its torus); a tolerance above
+ * sqrt(eps) rejects those, where 1e-14 inverted them into an indefinite,
+ * 1e7-times-too-large preconditioner block and PCG stalled. A definite block
+ * sent to the fallback still gets its exact inverse there. */
+#define BJ_PIVOT_TOL 1e-6
+
 /* The fallback of block_inverse: Q diag(1/|lambda|) Q^T over the eigenvalues
  * of S above BJ_NULL_TOL max |lambda|, the others left out (a pseudo-inverse
  * of |S|). Positive semidefinite, so PCG's preconditioner stays definite on
  * the directions it acts on; an indefinite block (contacts) keeps its scale,
- * and the normal of a vertex on a constraint obstacle (J^T H J: a zero row and
- * column along the normal, whose residual is zero) gets nothing, where the
- * identity made that vertex's preconditioned residual its stiffness (1e4 to
- * 1e6 times too large) and took PCG 26 times the iterations of plain CG on
- * fig14. On a curved constraint obstacle the curvature term couples the
- * normal to the tangent plane with a zero normal diagonal: a small negative
- * eigenvalue near the normal, which 1/|lambda| weights far above the others
- * (fig12 with pcg fails steps; README, solver.linear). Leaving the negative
- * eigenvalues out instead keeps the residual along the contacts' negative
- * directions and costs fig14 2.5x its CG iterations. Returns 0 when no
- * eigenvalue is above the floor (a zero block). */
+ * and the normal of a vertex on a constraint obstacle (a zero row and column
+ * along the normal, whose residual is zero: bs_obstacles.h) gets nothing,
+ * where the identity made that vertex's preconditioned residual its stiffness
+ * (1e4 to 1e6 times too large) and took PCG 26 times the iterations of plain
+ * CG on fig14. Leaving the negative eigenvalues out instead keeps the
+ * residual along the contacts' negative directions and costs fig14 2.5x its
+ * CG iterations. Returns 0 when no eigenvalue is above the floor (a zero
+ * block). */
 static int abs_pseudo_inverse(const double S[9], double *Mi) {
   double lam[3], Q[9];
   bs_sym3_eig(S, lam, Q);
@@ -193,14 +200,14 @@ static int abs_pseudo_inverse(const double S[9], double *Mi) {
 }
 
 /* Inverse of the symmetric part S of a 3x3 block D if S is positive definite
- * (Cholesky pivots above 1e-14 * max diagonal); else abs_pseudo_inverse;
+ * (Cholesky pivots above BJ_PIVOT_TOL * max diagonal); else abs_pseudo_inverse;
  * else (a zero or non-finite block) the identity. Returns which. */
 static bj_kind block_inverse(const double *D, double *Mi) {
   double S[9];
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) S[3 * a + b] = 0.5 * (D[3 * a + b] + D[3 * b + a]);
   const double dmax = fmax(fabs(S[0]), fmax(fabs(S[4]), fabs(S[8])));
-  const double floor_ = 1e-14 * dmax;
+  const double floor_ = BJ_PIVOT_TOL * dmax;
   /* Cholesky S = L L^T. */
   int spd = dmax > 0.0 && isfinite(dmax);
   double l00 = 0, l10 = 0, l20 = 0, l11 = 0, l21 = 0, l22 = 0;

@@ -17,6 +17,7 @@
 #include "bs_penalty.h"
 #include "bs_step.h"
 #include "bs_terms.h"
+#include "bs_vec3.h"
 #include "test_term_eval.h"
 
 typedef struct sim {
@@ -301,6 +302,9 @@ Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
     for (int k = 0; k < 3; k++) d[3 * p + k] = (touch && !act) ? 0 : urand(&seed) - 0.5;
     touching_inactive += touch && !act;
   }
+  /* the hook's H is the Hessian on the tangent space of the active pairs:
+   * exact along directions with J d = d */
+  bs_obstacles_project_gradient(x, d, s.obs);
   /* grad E = J^T g' from the hook */
   memcpy(gE, g, sizeof(double) * n3);
   bs_obstacles_project_gradient(x, gE, s.obs);
@@ -354,18 +358,35 @@ Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
     double *gp = malloc(sizeof(double) * n3);
     memcpy(gp, gE, sizeof(double) * n3);
     exact_grad_E(&s, L, w2, gE, w3, w4);
+    for (size_t i = 0; i < n3; i++) gp[i] = (gp[i] - gE[i]) / (2 * h);
+    /* FD mutated the recorded pairs: restore the labels at x, then compare
+     * on the tangent space (J^T of the FD Hessian column) */
+    bs_obstacles_register_active(x, g, s.obs);
+    bs_obstacles_project_gradient(x, gp, s.obs);
     double e = 0, ec = 0;
     for (size_t i = 0; i < n3; i++) {
-      double fd = (gp[i] - gE[i]) / (2 * h);
-      e += (fd - Hd[i]) * (fd - Hd[i]);
-      ec += (fd - HdJ[i]) * (fd - HdJ[i]);
+      e += (gp[i] - Hd[i]) * (gp[i] - Hd[i]);
+      ec += (gp[i] - HdJ[i]) * (gp[i] - HdJ[i]);
     }
     free(gp);
     eh[r] = sqrt(e) / nHd;
     if (r == 2) ecurv = sqrt(ec) / nHd;
-    /* FD mutated the recorded pairs: restore the labels at x */
-    bs_obstacles_register_active(x, g, s.obs);
   }
+  /* rows and columns along an active normal are zero: (H v)_p . n_p = 0 for
+   * any v (the paper's full curvature term C couples n_p to the tangent
+   * plane, C n = -A g') */
+  for (size_t i = 0; i < n3; i++) w3[i] = urand(&seed) - 0.5;
+  bs_bsr_mul(H, NULL, w3, w4);
+  double hv_max = 0, hv_n = 0;
+  for (size_t i = 0; i < n3; i++) hv_max = fmax(hv_max, fabs(w4[i]));
+  for (int32_t p = 0; p < s.nv; p++) {
+    double gn[3];
+    double phi = bs_levelset_eval(L, s.step.time, x + 3 * p, gn, NULL);
+    if (!(fabs(phi) < tol) || bs_dot3(g + 3 * p, gn) < 0) continue;
+    hv_n = fmax(hv_n, fabs(bs_dot3(w4 + 3 * p, gn)));
+  }
+  cr_log_info("normal rows: max |(H v)_p . n_p| %.3e against max |H v| %.3e\n", hv_n, hv_max);
+  cr_assert(hv_n <= 1e-12 * hv_max, "an active normal's row is not zero: %g against %g", hv_n, hv_max);
   for (int r = 0; r < 3; r++)
     cr_log_info("h %.1e: gradient %.3e, Hessian %.3e, d^T H d %.3e\n", hs[r], eg[r], eh[r], ev[r]);
   cr_log_info("without the curvature term: %.3e; touching inactive %d, active %d\n", ecurv, touching_inactive, na);
