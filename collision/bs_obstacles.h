@@ -53,8 +53,9 @@
  *        -(g'.n) J A J, the curvature term of the Hessian on the constraint
  *        surface); the block pattern is unchanged, and the rows and columns
  *        along an active normal are zero, so a linear solve stays in the
- *        tangent space. H d is the exact second derivative for every d with
- *        J d = d. Why not C itself (the paper's formula): E is constant along
+ *        tangent space. d^T H d is E's exact second derivative along every d
+ *        with J d = d (and H d = J^T H_E d, H_E the full Hessian, for one
+ *        obstacle per vertex: the test's FD check). Why not C itself (the paper's formula): E is constant along
  *        the normal line of a touching vertex (P maps it to one point), yet
  *        C n = -A g' couples the normal to the tangent plane wherever the
  *        tangential force A g' is not zero on a curved obstacle, so the full
