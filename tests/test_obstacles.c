@@ -250,37 +250,150 @@ static void exact_grad_E(sim *s, const bs_levelset *ls, const double *y, double 
   }
 }
 
-Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
-  sim s;
+/* A 2x2x2-cell body pressed onto a sphere (constraint): step data with
+ * x_hat a little above the rest shape, dt = 1/24, and a feasible x (the body
+ * perturbed, its bottom layer pushed into the sphere and projected). Returns
+ * the sphere; xn, xh are the step's (freed by the caller). */
+static const bs_levelset *sphere_contact(sim *s, double **xn, double **xh, unsigned *seed) {
   double lo[3] = {-0.2, 0.0, -0.2}, hi[3] = {0.2, 0.3, 0.2}, grav[3] = {0, -40, 0};
-  sim_create(&s, lo, hi, 2, 2e3, grav);
+  sim_create(s, lo, hi, 2, 2e3, grav);
   const double R = 0.5, cen[3] = {0, -R, 0};
   bs_levelset *ls;
   bs_error err;
   cr_assert_eq(bs_levelset_create_sphere(cen, R, &ls, &err), 0);
-  const bs_levelset *L = ls;
-  add(&s, ls, BS_COLLIDE_CONSTRAINT, 0, 0);
-  sim_finish(&s, 1e-6, 1);
-  size_t n3 = 3 * (size_t)s.nv;
-  /* step data: x_hat a little above the rest shape, dt = 1/24 */
-  double *xn = malloc(sizeof(double) * n3), *xh = malloc(sizeof(double) * n3);
-  unsigned seed = 3;
+  add(s, ls, BS_COLLIDE_CONSTRAINT, 0, 0);
+  sim_finish(s, 1e-6, 1);
+  size_t n3 = 3 * (size_t)s->nv;
+  *xn = malloc(sizeof(double) * n3);
+  *xh = malloc(sizeof(double) * n3);
   for (size_t i = 0; i < n3; i++) {
-    xn[i] = s.mesh->x[i];
-    xh[i] = s.mesh->x[i] + 0.01 * (urand(&seed) - 0.5);
+    (*xn)[i] = s->mesh->x[i];
+    (*xh)[i] = s->mesh->x[i] + 0.01 * (urand(seed) - 0.5);
   }
-  s.step.dt = 1.0 / 24;
-  s.step.time = 1.0 / 24;
-  s.step.x_n = xn;
-  s.step.x_hat = xh;
-  s.step.load = 1;
-  /* a feasible x: the body perturbed, its bottom layer (y = 0) pressed onto the
-   * sphere (projected), the rest outside */
-  double *x = s.x;
-  for (size_t i = 0; i < n3; i++) x[i] = s.mesh->x[i] + 0.004 * (urand(&seed) - 0.5);
-  for (int32_t p = 0; p < s.nv; p++)
-    if (s.mesh->x[3 * p + 1] == 0) x[3 * p + 1] -= 0.05; /* into the sphere */
-  bs_obstacles_project(x, s.obs);
+  s->step.dt = 1.0 / 24;
+  s->step.time = 1.0 / 24;
+  s->step.x_n = *xn;
+  s->step.x_hat = *xh;
+  s->step.load = 1;
+  double *x = s->x;
+  for (size_t i = 0; i < n3; i++) x[i] = s->mesh->x[i] + 0.004 * (urand(seed) - 0.5);
+  for (int32_t p = 0; p < s->nv; p++)
+    if (s->mesh->x[3 * p + 1] == 0) x[3 * p + 1] -= 0.05; /* into the sphere */
+  bs_obstacles_project(x, s->obs);
+  return ls;
+}
+
+/* Whether vertex p of x is in an active pair of the sphere (touching within
+ * tol, g'.n >= 0); asserts feasibility; n: the normal. */
+static int sphere_active(const sim *s, const bs_levelset *L, const double *x, const double *g, int32_t p,
+                         double tol, int *touch, double n[3]) {
+  double phi = bs_levelset_eval(L, s->step.time, x + 3 * p, n, NULL);
+  cr_assert(phi > -1e-12, "x not feasible at vertex %d (phi %g)", p, phi);
+  *touch = fabs(phi) < tol;
+  return *touch && bs_dot3(g + 3 * p, n) >= 0;
+}
+
+/* A random direction, zero on touching-but-inactive vertices (which could
+ * separate or be projected: E has a kink there), on the tangent space of the
+ * active pairs (J d = d: where the hook's H is exact). Returns the number of
+ * touching-but-inactive vertices. */
+static int tangent_direction(sim *s, const bs_levelset *L, const double *g, double tol, unsigned *seed, double *d) {
+  int touching_inactive = 0;
+  for (int32_t p = 0; p < s->nv; p++) {
+    double n[3];
+    int touch, act = sphere_active(s, L, s->x, g, p, tol, &touch, n);
+    for (int k = 0; k < 3; k++) d[3 * p + k] = (touch && !act) ? 0 : urand(seed) - 0.5;
+    touching_inactive += touch && !act;
+  }
+  bs_obstacles_project_gradient(s->x, d, s->obs);
+  return touching_inactive;
+}
+
+/* J^T H' J d, the Hessian without the curvature term, for contrast (v: scratch). */
+static void hessian_without_curvature(sim *s, const double *d, double *v, double *out) {
+  bs_error err;
+  memcpy(v, d, sizeof(double) * 3 * (size_t)s->nv);
+  bs_obstacles_project_gradient(s->x, v, s->obs); /* J symmetric per vertex */
+  bs_bsr *H2;
+  cr_assert_eq(bs_fem_matrix(s->fem, &H2, &err), 0);
+  for (int i = 0; i < s->n_terms; i++) term_hessian(s->terms[i], s->x, H2);
+  bs_bsr_mul(H2, NULL, v, out);
+  bs_obstacles_project_gradient(s->x, out, s->obs);
+  bs_bsr_destroy(&H2);
+}
+
+/* Rows and columns along an active normal are zero: (H v)_p . n_p = 0 for any
+ * v (the paper's full curvature term C couples n_p to the tangent plane,
+ * C n = -A g'). v, Hv: scratch. */
+static void check_normal_rows(sim *s, const bs_levelset *L, const bs_bsr *H, const double *g, double tol,
+                              unsigned *seed, double *v, double *Hv) {
+  size_t n3 = 3 * (size_t)s->nv;
+  for (size_t i = 0; i < n3; i++) v[i] = urand(seed) - 0.5;
+  bs_bsr_mul(H, NULL, v, Hv);
+  double hv_max = 0, hv_n = 0;
+  for (size_t i = 0; i < n3; i++) hv_max = fmax(hv_max, fabs(Hv[i]));
+  for (int32_t p = 0; p < s->nv; p++) {
+    double n[3];
+    int touch;
+    if (sphere_active(s, L, s->x, g, p, tol, &touch, n)) hv_n = fmax(hv_n, fabs(bs_dot3(Hv + 3 * p, n)));
+  }
+  cr_log_info("normal rows: max |(H v)_p . n_p| %.3e against max |H v| %.3e\n", hv_n, hv_max);
+  cr_assert(hv_n <= 1e-12 * hv_max, "an active normal's row is not zero: %g against %g", hv_n, hv_max);
+}
+
+/* The FD check at one h along d: value, slope and Hessian of E = E' o P. */
+typedef struct fd_check {
+  sim *s;
+  const bs_levelset *L;
+  const double *g, *d, *Hd, *HdJ; /* g': the raw gradient at x */
+  double E0, gEd, dHd, nHd;
+  double *w1, *w2, *w3, *w4, *gE; /* scratch */
+} fd_check;
+
+/* Relative errors at h: eg (slope), ev (d^T H d), eh (H d against J^T of the
+ * gradient's central difference), ec (the same for J^T H' J d). */
+static void fd_errors(const fd_check *c, double h, double *eg, double *ev, double *eh, double *ec) {
+  sim *s = c->s;
+  const double *x = s->x;
+  size_t n3 = 3 * (size_t)s->nv;
+  for (size_t i = 0; i < n3; i++) {
+    c->w1[i] = x[i] + h * c->d[i];
+    c->w2[i] = x[i] - h * c->d[i];
+  }
+  memcpy(c->w3, c->w1, sizeof(double) * n3); /* value FD of E'(P(.)) */
+  bs_obstacles_project(c->w3, s->obs);
+  double Ep = sim_value(s, c->w3);
+  memcpy(c->w3, c->w2, sizeof(double) * n3);
+  bs_obstacles_project(c->w3, s->obs);
+  double Em = sim_value(s, c->w3);
+  *eg = fabs((Ep - Em) / (2 * h) - c->gEd) / fabs(c->gEd);
+  *ev = fabs((Ep - 2 * c->E0 + Em) / (h * h) - c->dHd) / fabs(c->dHd);
+  /* gradient FD: exact grad E at x +- h d */
+  double *gp = malloc(sizeof(double) * n3);
+  exact_grad_E(s, c->L, c->w1, gp, c->w3, c->w4);
+  exact_grad_E(s, c->L, c->w2, c->gE, c->w3, c->w4);
+  for (size_t i = 0; i < n3; i++) gp[i] = (gp[i] - c->gE[i]) / (2 * h);
+  /* FD mutated the recorded pairs: restore the labels at x, then compare on
+   * the tangent space (J^T of the FD Hessian column) */
+  bs_obstacles_register_active(x, c->g, s->obs);
+  bs_obstacles_project_gradient(x, gp, s->obs);
+  double e = 0, ecu = 0;
+  for (size_t i = 0; i < n3; i++) {
+    e += (gp[i] - c->Hd[i]) * (gp[i] - c->Hd[i]);
+    ecu += (gp[i] - c->HdJ[i]) * (gp[i] - c->HdJ[i]);
+  }
+  free(gp);
+  *eh = sqrt(e) / c->nHd;
+  *ec = sqrt(ecu) / c->nHd;
+}
+
+Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
+  sim s;
+  double *xn, *xh;
+  unsigned seed = 3;
+  const bs_levelset *L = sphere_contact(&s, &xn, &xh, &seed);
+  size_t n3 = 3 * (size_t)s.nv;
+  const double *x = s.x;
   double *g = malloc(sizeof(double) * n3), *gE = malloc(sizeof(double) * n3), *d = malloc(sizeof(double) * n3);
   double *w1 = malloc(sizeof(double) * n3), *w2 = malloc(sizeof(double) * n3), *w3 = malloc(sizeof(double) * n3);
   double *w4 = malloc(sizeof(double) * n3), *Hd = malloc(sizeof(double) * n3), *HdJ = malloc(sizeof(double) * n3);
@@ -288,23 +401,8 @@ Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
   bs_obstacles_register_active(x, g, s.obs);
   int32_t na = bs_obstacles_active_count(s.obs);
   cr_assert(na >= 5, "only %d active pairs: the test needs vertices pressed on the sphere", na);
-  /* direction: random, zero on touching-but-inactive vertices (which could
-   * separate or be projected: E has a kink there) */
-  double tol = 1e-9;
-  int touching_inactive = 0;
-  for (int32_t p = 0; p < s.nv; p++) {
-    double phi = bs_levelset_eval(L, s.step.time, x + 3 * p, NULL, NULL);
-    cr_assert(phi > -1e-12, "x not feasible at vertex %d (phi %g)", p, phi);
-    double gn[3];
-    bs_levelset_eval(L, s.step.time, x + 3 * p, gn, NULL);
-    int touch = fabs(phi) < tol;
-    int act = touch && (g[3 * p] * gn[0] + g[3 * p + 1] * gn[1] + g[3 * p + 2] * gn[2] >= 0);
-    for (int k = 0; k < 3; k++) d[3 * p + k] = (touch && !act) ? 0 : urand(&seed) - 0.5;
-    touching_inactive += touch && !act;
-  }
-  /* the hook's H is the Hessian on the tangent space of the active pairs:
-   * exact along directions with J d = d */
-  bs_obstacles_project_gradient(x, d, s.obs);
+  const double tol = 1e-9;
+  int touching_inactive = tangent_direction(&s, L, g, tol, &seed, d);
   /* grad E = J^T g' from the hook */
   memcpy(gE, g, sizeof(double) * n3);
   bs_obstacles_project_gradient(x, gE, s.obs);
@@ -312,81 +410,22 @@ Test(obstacles, projected_gradient_and_hessian_match_finite_differences) {
   for (size_t i = 0; i < n3; i++) gEd += gE[i] * d[i];
   /* Hessian of E from the hook */
   bs_bsr *H;
+  bs_error err;
   cr_assert_eq(bs_fem_matrix(s.fem, &H, &err), 0, "%s", err.msg);
   for (int i = 0; i < s.n_terms; i++) term_hessian(s.terms[i], x, H);
-  bs_bsr_mul(H, NULL, d, w1); /* H' d, for the version without the curvature term */
   bs_obstacles_project_hessian(x, g, H, s.obs);
   cr_assert_eq(bs_bsr_check(H, 1e-12, &err), 0, "%s", err.msg);
   bs_bsr_mul(H, NULL, d, Hd);
-  /* J^T H' J d without curvature, for contrast: J d first */
-  {
-    double *Jd = w2;
-    memcpy(Jd, d, sizeof(double) * n3);
-    bs_obstacles_project_gradient(x, Jd, s.obs); /* J symmetric per vertex */
-    bs_bsr *H2;
-    cr_assert_eq(bs_fem_matrix(s.fem, &H2, &err), 0);
-    for (int i = 0; i < s.n_terms; i++) term_hessian(s.terms[i], x, H2);
-    bs_bsr_mul(H2, NULL, Jd, HdJ);
-    bs_obstacles_project_gradient(x, HdJ, s.obs);
-    bs_bsr_destroy(&H2);
-  }
-  double E0 = sim_value(&s, x);
+  hessian_without_curvature(&s, d, w2, HdJ);
   double dHd = 0, nHd = 0;
   for (size_t i = 0; i < n3; i++) {
     dHd += d[i] * Hd[i];
     nHd += Hd[i] * Hd[i];
   }
-  nHd = sqrt(nHd);
+  fd_check c = {&s, L, g, d, Hd, HdJ, sim_value(&s, x), gEd, dHd, sqrt(nHd), w1, w2, w3, w4, gE};
   double hs[3] = {2e-4, 1e-4, 5e-5}, eg[3], eh[3], ev[3], ecurv = 0;
-  for (int r = 0; r < 3; r++) {
-    double h = hs[r];
-    for (size_t i = 0; i < n3; i++) {
-      w1[i] = x[i] + h * d[i];
-      w2[i] = x[i] - h * d[i];
-    }
-    /* value FD of E'(P(.)) */
-    memcpy(w3, w1, sizeof(double) * n3);
-    bs_obstacles_project(w3, s.obs);
-    double Ep = sim_value(&s, w3);
-    memcpy(w3, w2, sizeof(double) * n3);
-    bs_obstacles_project(w3, s.obs);
-    double Em = sim_value(&s, w3);
-    eg[r] = fabs((Ep - Em) / (2 * h) - gEd) / fabs(gEd);
-    ev[r] = fabs((Ep - 2 * E0 + Em) / (h * h) - dHd) / fabs(dHd);
-    /* gradient FD: exact grad E at x +- h d */
-    exact_grad_E(&s, L, w1, gE, w3, w4);
-    double *gp = malloc(sizeof(double) * n3);
-    memcpy(gp, gE, sizeof(double) * n3);
-    exact_grad_E(&s, L, w2, gE, w3, w4);
-    for (size_t i = 0; i < n3; i++) gp[i] = (gp[i] - gE[i]) / (2 * h);
-    /* FD mutated the recorded pairs: restore the labels at x, then compare
-     * on the tangent space (J^T of the FD Hessian column) */
-    bs_obstacles_register_active(x, g, s.obs);
-    bs_obstacles_project_gradient(x, gp, s.obs);
-    double e = 0, ec = 0;
-    for (size_t i = 0; i < n3; i++) {
-      e += (gp[i] - Hd[i]) * (gp[i] - Hd[i]);
-      ec += (gp[i] - HdJ[i]) * (gp[i] - HdJ[i]);
-    }
-    free(gp);
-    eh[r] = sqrt(e) / nHd;
-    if (r == 2) ecurv = sqrt(ec) / nHd;
-  }
-  /* rows and columns along an active normal are zero: (H v)_p . n_p = 0 for
-   * any v (the paper's full curvature term C couples n_p to the tangent
-   * plane, C n = -A g') */
-  for (size_t i = 0; i < n3; i++) w3[i] = urand(&seed) - 0.5;
-  bs_bsr_mul(H, NULL, w3, w4);
-  double hv_max = 0, hv_n = 0;
-  for (size_t i = 0; i < n3; i++) hv_max = fmax(hv_max, fabs(w4[i]));
-  for (int32_t p = 0; p < s.nv; p++) {
-    double gn[3];
-    double phi = bs_levelset_eval(L, s.step.time, x + 3 * p, gn, NULL);
-    if (!(fabs(phi) < tol) || bs_dot3(g + 3 * p, gn) < 0) continue;
-    hv_n = fmax(hv_n, fabs(bs_dot3(w4 + 3 * p, gn)));
-  }
-  cr_log_info("normal rows: max |(H v)_p . n_p| %.3e against max |H v| %.3e\n", hv_n, hv_max);
-  cr_assert(hv_n <= 1e-12 * hv_max, "an active normal's row is not zero: %g against %g", hv_n, hv_max);
+  for (int r = 0; r < 3; r++) fd_errors(&c, hs[r], &eg[r], &ev[r], &eh[r], &ecurv);
+  check_normal_rows(&s, L, H, g, tol, &seed, w3, w4);
   for (int r = 0; r < 3; r++)
     cr_log_info("h %.1e: gradient %.3e, Hessian %.3e, d^T H d %.3e\n", hs[r], eg[r], eh[r], ev[r]);
   cr_log_info("without the curvature term: %.3e; touching inactive %d, active %d\n", ecurv, touching_inactive, na);
