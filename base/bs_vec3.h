@@ -72,6 +72,20 @@ static inline void bs_mat3_swap_cols(double *A, int i, int j) {
   }
 }
 
+/* Sorts key[0..2] descending (a stable bubble sort), swapping the columns of
+ * A, and of B when not NULL, with their keys. */
+static inline void bs_mat3_sort_cols_desc(double key[3], double *A, double *B) {
+  for (int i = 0; i < 2; i++)
+    for (int j = 2; j > i; j--)
+      if (key[j] > key[j - 1]) {
+        const double t = key[j];
+        key[j] = key[j - 1];
+        key[j - 1] = t;
+        bs_mat3_swap_cols(A, j, j - 1);
+        if (B) bs_mat3_swap_cols(B, j, j - 1);
+      }
+}
+
 #ifdef __cplusplus
 }
 #endif

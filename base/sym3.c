@@ -5,6 +5,7 @@
 #include "bs_vec3.h"
 
 #include <math.h>
+#include <stddef.h>
 
 enum { EIG_MAX_SWEEPS = 40 };
 
@@ -47,14 +48,7 @@ void bs_sym3_eig(const double A[9], double lambda[3], double Q[9]) {
     if (!rotated) break;
   }
   for (int i = 0; i < 3; i++) lambda[i] = a[4 * i];
-  for (int i = 0; i < 2; i++)
-    for (int j = 2; j > i; j--)
-      if (lambda[j] > lambda[j - 1]) {
-        double t = lambda[j];
-        lambda[j] = lambda[j - 1];
-        lambda[j - 1] = t;
-        bs_mat3_swap_cols(Q, j, j - 1);
-      }
+  bs_mat3_sort_cols_desc(lambda, Q, NULL);
   if (bs_mat3_det(Q) < 0.0)
     for (int i = 0; i < 3; i++) Q[3 * i + 2] = -Q[3 * i + 2];
 }

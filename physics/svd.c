@@ -136,15 +136,7 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]) {
   /* Sort the columns by length, descending. */
   double n[3];
   for (int j = 0; j < 3; j++) n[j] = B[j] * B[j] + B[3 + j] * B[3 + j] + B[6 + j] * B[6 + j];
-  for (int i = 0; i < 2; i++)
-    for (int j = 2; j > i; j--)
-      if (n[j] > n[j - 1]) {
-        double t = n[j];
-        n[j] = n[j - 1];
-        n[j - 1] = t;
-        bs_mat3_swap_cols(B, j, j - 1);
-        bs_mat3_swap_cols(V, j, j - 1);
-      }
+  bs_mat3_sort_cols_desc(n, B, V);
   /* V a rotation: a reflection moves into the last column (and into sigma2). */
   if (bs_mat3_det(V) < 0.0)
     for (int r = 0; r < 3; r++) {

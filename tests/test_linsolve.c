@@ -536,9 +536,9 @@ Test(linsolve, pcg_block_jacobi_constrained_vertex) {
    * plane, for which Cholesky's last pivot is rounding amplified to 5e-8 of
    * the diagonal: positive, so that a pivot floor of 1e-14 took it for
    * definite and inverted it (PCG then stalled on fig12) */
-  const double Ss[3][9] = {{3e4, 4e3, 1e3, 4e3, 2.5e4, -2e3, 1e3, -2e3, 2e4},
-                           {3e4, 4e3, 1e3, 4e3, 2.5e4, -2e3, 1e3, -2e3, 2e4},
-                           {8.047e3, -6.623e3, 2.217e3, -6.623e3, 5.489e3, -1.144e3, 2.217e3, -1.144e3, 1.254e4}};
+  const double S0[9] = {3e4, 4e3, 1e3, 4e3, 2.5e4, -2e3, 1e3, -2e3, 2e4};
+  const double S12[9] = {8.047e3, -6.623e3, 2.217e3, -6.623e3, 5.489e3, -1.144e3, 2.217e3, -1.144e3, 1.254e4};
+  const double *Ss[3] = {S0, S0, S12};
   const double s3 = 1.0 / sqrt(3.0);
   const double normals[3][3] = {
       {0, 1, 0}, {s3, s3, s3}, {0.75993535957892966, 0.64999865291034864, 2.1826017016860337e-05}};
