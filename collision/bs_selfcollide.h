@@ -97,9 +97,10 @@
  * Units: k in J/m^3 (N/m^2), d in m^2, energy in J, margin and depths in m,
  * mu dimensionless, dt in s, v in m/s.
  *
- * Threads: detection and the closest-primitive searches run in OpenMP over
- * surface vertices (independent results); sums and scatters are sequential
- * in vertex order, so results do not depend on the thread count. One term is
+ * Threads: detection, the closest-primitive searches, the box refit and the
+ * contacts' local Hessians (with their PSD projections, in batches of 256)
+ * run in OpenMP (independent results); sums and scatters are sequential in
+ * vertex order, so results do not depend on the thread count. One term is
  * evaluated by one thread at a time.
  *
  * Ownership: the term (free with bs_term_destroy) keeps pointers to the fem

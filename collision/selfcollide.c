@@ -37,6 +37,10 @@
  * split has depth log2(n_tets / LEAF) + 1); PAR_MIN: surface vertices below
  * which detection runs on one thread (a parallel region costs more). */
 enum { LEAF = 4, STACK = 128, PAR_MIN = 2048 };
+/* Contacts whose Hessians are computed (and PSD-projected) in one parallel
+ * pass before they are added, in order, into H; HESS_PAR_MIN: fewer run
+ * serially (a projection costs tens of microseconds). */
+enum { HESS_BATCH = 256, HESS_PAR_MIN = 8 };
 
 /* ---- small vector helpers -------------------------------------------- */
 /* [a]x, the matrix of b -> a x b. */
@@ -356,6 +360,8 @@ typedef struct self_data {
   int64_t *if_ptr;      /* n_surf + 1: CSR of the interface faces below     */
   int32_t *if_face;     /* 3 if_ptr[n_surf]: vertices of each interface face */
   contact *con;
+  int32_t *active;      /* n_surf: the contacts of a Hessian, in order     */
+  double *hl;           /* HESS_BATCH * 144: their local Hessians          */
   int failed;           /* a shim call failed (non-finite input)            */
   /* the last detection: positions and result, reused when detect is called
      again at the same positions (value then gradient then Hessian at one
@@ -382,6 +388,8 @@ static void self_free(void *p) {
   free(d->if_ptr);
   free(d->if_face);
   free(d->con);
+  free(d->active);
+  free(d->hl);
   free(d->x_last);
   free(d);
 }
@@ -458,32 +466,38 @@ static void bvh_rebuild(self_data *d, const double *x) {
   d->stats.t_rebuild += bs_seconds() - t0;
 }
 
-/* Refits every box to x: children have larger indices than their parent. */
+/* Refits every box to x: the leaves in parallel (min and max are exact in
+ * any order), then the inner nodes from the last to the first (children have
+ * larger indices than their parent). */
 static void bvh_refit(self_data *d, const double *x) {
   double t0 = bs_seconds();
   const int32_t *tets = d->mesh->tets;
-  for (int32_t i = d->n_nodes - 1; i >= 0; i--) {
+  const int32_t nn = d->n_nodes;
+#pragma omp parallel for schedule(static) num_threads(d->nthreads) if (nn >= 4 * PAR_MIN)
+  for (int32_t i = 0; i < nn; i++) {
     bvh_node *nd = &d->nodes[i];
+    if (nd->left >= 0) continue;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    if (nd->left < 0) {
-      for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-        const int32_t *tv = tets + 4 * d->order[j];
-        for (int a = 0; a < 4; a++)
-          for (int k = 0; k < 3; k++) {
-            double c = x[3 * tv[a] + k];
-            lo[k] = c < lo[k] ? c : lo[k];
-            hi[k] = c > hi[k] ? c : hi[k];
-          }
-      }
-    } else {
-      const bvh_node *l = &d->nodes[nd->left], *r = &d->nodes[nd->right];
-      for (int k = 0; k < 3; k++) {
-        lo[k] = l->lo[k] < r->lo[k] ? l->lo[k] : r->lo[k];
-        hi[k] = l->hi[k] > r->hi[k] ? l->hi[k] : r->hi[k];
-      }
+    for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
+      const int32_t *tv = tets + 4 * d->order[j];
+      for (int a = 0; a < 4; a++)
+        for (int k = 0; k < 3; k++) {
+          double c = x[3 * tv[a] + k];
+          lo[k] = c < lo[k] ? c : lo[k];
+          hi[k] = c > hi[k] ? c : hi[k];
+        }
     }
     memcpy(nd->lo, lo, sizeof lo);
     memcpy(nd->hi, hi, sizeof hi);
+  }
+  for (int32_t i = nn - 1; i >= 0; i--) {
+    bvh_node *nd = &d->nodes[i];
+    if (nd->left < 0) continue;
+    const bvh_node *l = &d->nodes[nd->left], *r = &d->nodes[nd->right];
+    for (int k = 0; k < 3; k++) {
+      nd->lo[k] = l->lo[k] < r->lo[k] ? l->lo[k] : r->lo[k];
+      nd->hi[k] = l->hi[k] > r->hi[k] ? l->hi[k] : r->hi[k];
+    }
   }
   d->stats.t_refit += bs_seconds() - t0;
 }
@@ -791,29 +805,50 @@ static int self_gradient(const bs_term *t, const double *x, double *E, double *g
  * slot and no room left in its extra list; NULL: off the pattern). */
 typedef void (*missing_fn)(int32_t i, int32_t j, const double *B, void *ctx);
 
-static int64_t assemble(self_data *d, const double *x, int convex, bs_bsr *H, missing_fn fn, void *ctx) {
-  const bs_bsr *P = d->fem->pattern;
-  int64_t missing = 0;
-  for (int32_t i = 0; i < d->n_surf; i++) {
-    const contact *c = &d->con[i];
-    if (c->nv == 0) continue;
-    double y[12], Hl[144];
+/* The local Hessians of the contacts active[0..n) into hl (144 each, row
+ * stride 3 (nv + 1)), projected onto the PSD cone when convex; in parallel,
+ * each the same whatever the thread count. */
+static void local_hessians(const self_data *d, const double *x, int convex, const int32_t *active, int n, double *hl) {
+#pragma omp parallel for schedule(dynamic, 4) num_threads(d->nthreads) if (n >= HESS_PAR_MIN)
+  for (int i = 0; i < n; i++) {
+    const contact *c = &d->con[active[i]];
+    double y[12], *Hl = hl + 144 * (size_t)i;
     gather(x, c, y);
     bs_self_pair_energy(c->nv, y, d->k, NULL, Hl);
-    int m = 3 * (c->nv + 1);
-    if (convex) bs_sym_psd_project(m, Hl);
-    for (int a = 0; a <= c->nv; a++)
-      for (int b = 0; b <= c->nv; b++) {
-        double B[9];
-        for (int r = 0; r < 3; r++)
-          for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
-        if (H) { /* its slot, else H's extra list */
-          missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) == BS_BSR_DROPPED;
-        } else if (a != b && bs_bsr_slot(P, c->v[a], c->v[b]) < 0) {
-          missing++;
-          if (fn) fn(c->v[a], c->v[b], B, ctx);
-        }
+    if (convex) bs_sym_psd_project(3 * (c->nv + 1), Hl);
+  }
+}
+
+/* Adds contact c's local Hessian Hl into H, or with H NULL visits its blocks
+ * off the fem pattern P; returns the blocks that found no place. */
+static int64_t place(const contact *c, const double *Hl, const bs_bsr *P, bs_bsr *H, missing_fn fn, void *ctx) {
+  const int m = 3 * (c->nv + 1);
+  int64_t missing = 0;
+  for (int a = 0; a <= c->nv; a++)
+    for (int b = 0; b <= c->nv; b++) {
+      double B[9];
+      for (int r = 0; r < 3; r++)
+        for (int q = 0; q < 3; q++) B[3 * r + q] = Hl[(3 * a + r) * m + 3 * b + q];
+      if (H) { /* its slot, else H's extra list */
+        missing += bs_bsr_add_block(H, c->v[a], c->v[b], B) == BS_BSR_DROPPED;
+      } else if (a != b && bs_bsr_slot(P, c->v[a], c->v[b]) < 0) {
+        missing++;
+        if (fn) fn(c->v[a], c->v[b], B, ctx);
       }
+    }
+  return missing;
+}
+
+static int64_t assemble(self_data *d, const double *x, int convex, bs_bsr *H, missing_fn fn, void *ctx) {
+  int32_t n = 0;
+  for (int32_t i = 0; i < d->n_surf; i++)
+    if (d->con[i].nv > 0) d->active[n++] = i;
+  int64_t missing = 0;
+  for (int32_t b0 = 0; b0 < n; b0 += HESS_BATCH) {
+    const int nb = n - b0 < HESS_BATCH ? (int)(n - b0) : HESS_BATCH;
+    local_hessians(d, x, convex, d->active + b0, nb, d->hl);
+    for (int i = 0; i < nb; i++)
+      missing += place(&d->con[d->active[b0 + i]], d->hl + 144 * (size_t)i, d->fem->pattern, H, fn, ctx);
   }
   return missing;
 }
@@ -1012,6 +1047,8 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     d->coll_tet = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision surface", err);
     d->hint = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision surface", err);
     d->con = bs_calloc((size_t)d->n_surf + 1, sizeof(contact), "the self-collision contacts", err);
+    d->active = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision contacts", err);
+    d->hl = bs_calloc(144 * (size_t)HESS_BATCH, sizeof(double), "the self-collision contact Hessians", err);
     d->nodes = bs_calloc(2 * (size_t)m->n_tets + 1, sizeof(bvh_node), "the tet hierarchy", err);
     d->order = bs_calloc((size_t)m->n_tets + 1, sizeof(int32_t), "the tet hierarchy", err);
     d->cent = bs_calloc(3 * (size_t)m->n_tets + 1, sizeof(double), "the tet hierarchy", err);
@@ -1021,7 +1058,7 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
     d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->nodes || !d->order || !d->cent || !d->cand ||
+    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->nodes || !d->order || !d->cent || !d->cand ||
         !d->x_last)
       st = BS_ENOMEM;
   }

@@ -15,8 +15,9 @@
  * dofs); NULL means all free.
  *
  * Extra blocks: a matrix may reserve room for blocks outside its pattern
- * (bs_bsr_reserve_extra), kept as an unsorted list of (i, j, block) with
- * i != j; duplicates are allowed and add up. They are for couplings that a
+ * (bs_bsr_reserve_extra), kept as a list of (i, j, block) with i != j, in
+ * the order of insertion until bs_bsr_index_extra sorts it by rows;
+ * duplicates are allowed and add up. They are for couplings that a
  * fixed pattern cannot foresee (self-collision: a vertex and the triangle it
  * penetrates, which need not share a tet). bs_bsr_add_block puts a block in
  * its slot when the pattern has it, else in the list; bs_bsr_zero empties the
@@ -62,6 +63,10 @@ typedef struct bs_bsr {
   int64_t cap_extra; /* room reserved by bs_bsr_reserve_extra (0: none)                    */
   int32_t *extra_ij; /* 2 * cap_extra: block e is (extra_ij[2e], extra_ij[2e+1]), i != j    */
   double *extra_val; /* 9 * cap_extra: block e row-major, as in val                        */
+  int64_t n_indexed;   /* extras the row index below was built for (bs_bsr_index_extra)  */
+  int32_t *extra_ptr;  /* n + 1 (with room reserved): row i's extras are extra_ptr[i] ..    */
+                       /* extra_ptr[i+1]-1 of the list once indexed                         */
+  int32_t *extra_perm; /* cap_extra: scratch of bs_bsr_index_extra                          */
 } bs_bsr;
 
 /* Pattern from a vertex adjacency graph in CSR (adj_ptr: n + 1 offsets, adj:
@@ -81,7 +86,8 @@ int32_t bs_bsr_slot(const bs_bsr *A, int32_t i, int32_t j);
 void bs_bsr_zero(bs_bsr *A);
 
 /* Reserves room for cap >= 0 extra blocks (replacing any earlier reservation
- * and its blocks). BS_EINPUT for a negative cap, BS_ENOMEM. */
+ * and its blocks). BS_EINPUT for a negative cap or one of 2^31 or more,
+ * BS_ENOMEM. */
 int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err);
 
 /* Where bs_bsr_add_block put a block. */
@@ -99,15 +105,26 @@ const char *bs_bsr_placement_name(bs_bsr_placement p);
  * Sequential: one thread at a time per matrix. */
 bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double B[9]);
 
+/* Sorts the extra list by rows in place (a stable counting sort: list order
+ * kept within a row; O(n + n_extra), no allocation) and indexes it, so that
+ * the products add row i's extras in the thread of row i. Call it once the
+ * list is complete (the minimizer does after each Hessian); adding a block
+ * afterwards voids the index until the next call (the products then add the
+ * extras serially); values may change in place. */
+void bs_bsr_index_extra(bs_bsr *A);
+
 /* y = A x. With mask (n bytes, 1 = free, 0 = constrained; NULL = all free):
  * y_i = sum over free j of A_ij x_j for free i, and y_i = 0 for constrained i.
- * x and y have 3n entries and must not overlap. OpenMP over rows; the extra
- * blocks are added afterwards, sequentially in list order. */
+ * x and y have 3n entries and must not overlap. OpenMP over rows; y_i gets
+ * row i's extra blocks after its pattern blocks, in list order (the same
+ * arithmetic whether or not the list is indexed: by row i's thread when it
+ * is, else in one serial pass after the rows). */
 void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 
 /* bs_bsr_mul, returning x . y over the free entries (constrained entries of x
  * are skipped, so a non-finite one does not leak in), the dot fused into the
- * product's row loop when there are no extra blocks (one pass over y, not two). */
+ * product's row loop when there are no extra blocks (one pass over y, not two;
+ * with extras it is a second pass, summed over the 3n entries). */
 double bs_bsr_mul_dot(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 
 /* Single-precision values for Krylov solvers (bs_linsolve_set_single): val32

@@ -33,6 +33,8 @@ void bs_bsr_destroy(bs_bsr **A) {
   free((*A)->val);
   free((*A)->extra_ij);
   free((*A)->extra_val);
+  free((*A)->extra_ptr);
+  free((*A)->extra_perm);
   free(*A);
   *A = NULL;
 }
@@ -135,26 +137,71 @@ void bs_bsr_zero(bs_bsr *A) {
   A->n_extra = 0;
 }
 
-int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err) {
-  if (!A) return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: matrix is NULL");
-  if (cap < 0) return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: cap = %lld is negative", (long long)cap);
+static void free_extra(bs_bsr *A) {
   free(A->extra_ij);
   free(A->extra_val);
-  A->extra_ij = NULL;
+  free(A->extra_ptr);
+  free(A->extra_perm);
+  A->extra_ij = A->extra_ptr = A->extra_perm = NULL;
   A->extra_val = NULL;
-  A->n_extra = A->cap_extra = 0;
+  A->n_extra = A->cap_extra = A->n_indexed = 0;
+}
+
+int bs_bsr_reserve_extra(bs_bsr *A, int64_t cap, bs_error *err) {
+  if (!A) return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: matrix is NULL");
+  if (cap < 0 || cap > INT32_MAX)
+    return bs_error_set(err, BS_EINPUT, "bs_bsr_reserve_extra: cap = %lld is negative or 2^31 or more",
+                        (long long)cap);
+  free_extra(A);
   if (cap == 0) return BS_OK;
   A->extra_ij = bs_calloc(2 * (size_t)cap, sizeof *A->extra_ij, "bs_bsr extra blocks", err);
   A->extra_val = bs_calloc(9 * (size_t)cap, sizeof *A->extra_val, "bs_bsr extra blocks", err);
-  if (!A->extra_ij || !A->extra_val) {
-    free(A->extra_ij);
-    free(A->extra_val);
-    A->extra_ij = NULL;
-    A->extra_val = NULL;
+  A->extra_perm = bs_calloc((size_t)cap, sizeof *A->extra_perm, "bs_bsr extra blocks", err);
+  A->extra_ptr = bs_calloc((size_t)A->n + 1, sizeof *A->extra_ptr, "bs_bsr extra blocks", err);
+  if (!A->extra_ij || !A->extra_val || !A->extra_perm || !A->extra_ptr) {
+    free_extra(A);
     return BS_ENOMEM;
   }
   A->cap_extra = cap;
   return BS_OK;
+}
+
+/* Moves the extras into the order of perm (position k gets the block at
+ * perm[k]) by following its cycles; perm is spent (its entries end negative). */
+static void permute_extra(bs_bsr *A, int32_t *perm) {
+  int32_t *ij = A->extra_ij;
+  double *val = A->extra_val;
+  for (int32_t k = 0; k < (int32_t)A->n_extra; ++k) {
+    if (perm[k] < 0) continue; /* placed */
+    int32_t tij[2] = {ij[2 * k], ij[2 * k + 1]};
+    double tval[9];
+    memcpy(tval, val + 9 * (int64_t)k, sizeof tval);
+    for (int32_t cur = k;;) {
+      const int32_t src = perm[cur];
+      perm[cur] = -1 - src;
+      if (src == k) {
+        ij[2 * cur] = tij[0], ij[2 * cur + 1] = tij[1];
+        memcpy(val + 9 * (int64_t)cur, tval, sizeof tval);
+        break;
+      }
+      ij[2 * cur] = ij[2 * src], ij[2 * cur + 1] = ij[2 * src + 1];
+      memcpy(val + 9 * (int64_t)cur, val + 9 * (int64_t)src, sizeof tval);
+      cur = src;
+    }
+  }
+}
+
+void bs_bsr_index_extra(bs_bsr *A) {
+  if (!A || A->n_extra == 0) return;
+  int32_t *ptr = A->extra_ptr, *perm = A->extra_perm;
+  memset(ptr, 0, ((size_t)A->n + 1) * sizeof *ptr);
+  for (int64_t e = 0; e < A->n_extra; ++e) ptr[A->extra_ij[2 * e] + 1]++;
+  for (int32_t i = 0; i < A->n; ++i) ptr[i + 1] += ptr[i];
+  for (int64_t e = 0; e < A->n_extra; ++e) perm[ptr[A->extra_ij[2 * e]]++] = (int32_t)e; /* ptr[i]: row i's end */
+  for (int32_t i = A->n; i > 0; --i) ptr[i] = ptr[i - 1];
+  ptr[0] = 0;
+  permute_extra(A, perm);
+  A->n_indexed = A->n_extra;
 }
 
 const char *bs_bsr_placement_name(bs_bsr_placement p) {
@@ -176,24 +223,49 @@ bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double 
   return BS_BSR_EXTRA;
 }
 
-/* y += extra blocks x (sequential, list order), honouring the mask. */
-static void mul_extra(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+/* y_i (3 doubles) += A's extra block e times x_j (block (i, j)), unless
+ * column j is masked. */
+static inline __attribute__((always_inline)) void add_extra(const bs_bsr *A, const uint8_t *mask, const double *x,
+                                                            int64_t e, double *yi) {
+  const int32_t j = A->extra_ij[2 * e + 1];
+  if (mask && !mask[j]) return;
+  const double *a = A->extra_val + 9 * e, *xj = x + 3 * (int64_t)j;
+  yi[0] += a[0] * xj[0] + a[1] * xj[1] + a[2] * xj[2];
+  yi[1] += a[3] * xj[0] + a[4] * xj[1] + a[5] * xj[2];
+  yi[2] += a[6] * xj[0] + a[7] * xj[1] + a[8] * xj[2];
+}
+
+/* Whether the extras go row by row: the list is indexed (bs_bsr_index_extra). */
+static inline int rows_have_extra(const bs_bsr *A) { return A->n_extra > 0 && A->n_indexed == A->n_extra; }
+
+/* Whether row i has extras to add in the row loop. */
+static inline int extra_of(const bs_bsr *A, int32_t i) {
+  return rows_have_extra(A) && A->extra_ptr[i + 1] > A->extra_ptr[i];
+}
+
+/* y_i += row i's extras (consecutive in the indexed list), in list order (row
+ * i is free: the caller zeroes a constrained one). Not inlined, so that its
+ * arithmetic is serial_extra's (no contraction into the AVX2 callers' FMA). */
+static __attribute__((noinline)) void row_extra(const bs_bsr *A, const uint8_t *mask, const double *x, int32_t i,
+                                                double *yi) {
+  for (int32_t e = A->extra_ptr[i]; e < A->extra_ptr[i + 1]; ++e) add_extra(A, mask, x, e, yi);
+}
+
+/* The extras of a list that is not indexed: serially, in list order, after
+ * the rows (a masked row's y_i is 0 and stays so). */
+static void serial_extra(const bs_bsr *A, const uint8_t *mask, const double *x, double *y) {
+  if (A->n_extra == 0 || rows_have_extra(A)) return;
   for (int64_t e = 0; e < A->n_extra; ++e) {
-    const int32_t i = A->extra_ij[2 * e], j = A->extra_ij[2 * e + 1];
-    if (mask && (!mask[i] || !mask[j])) continue;
-    const double *a = A->extra_val + 9 * e, *xj = x + 3 * (int64_t)j;
-    double *yi = y + 3 * (int64_t)i;
-    yi[0] += a[0] * xj[0] + a[1] * xj[1] + a[2] * xj[2];
-    yi[1] += a[3] * xj[0] + a[4] * xj[1] + a[5] * xj[2];
-    yi[2] += a[6] * xj[0] + a[7] * xj[1] + a[8] * xj[2];
+    const int32_t i = A->extra_ij[2 * e];
+    if (!mask || mask[i]) add_extra(A, mask, x, e, y + 3 * (int64_t)i);
   }
 }
 
-/* The tail of the products with a dot: the extra blocks, then the dot as a
- * separate pass (y changed after the row loop's fused one). */
+/* The dot of a product with extra blocks: a separate pass over the 3n
+ * entries (the row loops fuse it only when there are none). */
 static double mul_tail(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, double xy) {
   if (A->n_extra == 0) return xy;
-  mul_extra(A, mask, x, y);
+  serial_extra(A, mask, x, y);
   const int64_t N = 3 * (int64_t)A->n;
   double part[BS_SUM_CHUNKS];
   const bs_sum_plan P = bs_sum_plan_of(N);
@@ -219,6 +291,11 @@ static inline __attribute__((always_inline)) double row_plain(const bs_bsr *A, c
     y0 += a[0] * x0 + a[1] * x1 + a[2] * x2;
     y1 += a[3] * x0 + a[4] * x1 + a[5] * x2;
     y2 += a[6] * x0 + a[7] * x1 + a[8] * x2;
+  }
+  if (extra_of(A, i)) {
+    double t[3] = {y0, y1, y2};
+    row_extra(A, NULL, x, i, t);
+    y0 = t[0], y1 = t[1], y2 = t[2];
   }
   y[3 * (int64_t)i] = y0;
   y[3 * (int64_t)i + 1] = y1;
@@ -252,6 +329,11 @@ static inline __attribute__((always_inline)) double row_masked(const bs_bsr *A, 
     y2 = f ? y2 + t2 : y2;
   }
   const int f = mask[i] != 0;
+  if (f && extra_of(A, i)) {
+    double t[3] = {y0, y1, y2};
+    row_extra(A, mask, x, i, t);
+    y0 = t[0], y1 = t[1], y2 = t[2];
+  }
   y0 = f ? y0 : 0.0;
   y1 = f ? y1 : 0.0;
   y2 = f ? y2 : 0.0;
@@ -308,6 +390,12 @@ __attribute__((target("avx2,fma"), always_inline)) static inline double row_avx2
   __m256d r = _mm256_add_pd(_mm256_permute2f128_pd(h01, h22, 0x20), _mm256_permute2f128_pd(h01, h22, 0x31));
   const int f = !mask || mask[i] != 0;
   if (!f) r = z;
+  if (f && extra_of(A, i)) {
+    double t[4];
+    _mm256_storeu_pd(t, r);
+    row_extra(A, mask, x, i, t);
+    r = _mm256_loadu_pd(t);
+  }
   _mm256_maskstore_pd(y + 3 * (int64_t)i, m3, r);
   if (!fuse || !f) return 0.0;
   double yi[4];
@@ -373,7 +461,7 @@ static double mul_impl(const bs_bsr *A, const uint8_t *mask, const double *x, do
     }
   }
   if (!dot) {
-    if (A->n_extra > 0) mul_extra(A, mask, x, y);
+    serial_extra(A, mask, x, y);
     return 0.0;
   }
   return mul_tail(A, mask, x, y, fuse ? bs_sum_parts(P.count, part) : 0.0);
@@ -420,6 +508,11 @@ int64_t bs_bsr_val32_count(const bs_bsr *A) { return 9 * A->nnzb + 4; }
         y2 = f ? y2 + t2 : y2;                                                                         \
       }                                                                                                \
       const int f = !mask || mask[i] != 0;                                                             \
+      if (f && extra_of(A, i)) {                                                                  \
+        double t_[3] = {y0, y1, y2};                                                                   \
+        row_extra(A, mask, x, i, t_);                                                                  \
+        y0 = t_[0], y1 = t_[1], y2 = t_[2];                                                            \
+      }                                                                                                \
       y0 = f ? y0 : 0.0;                                                                               \
       y1 = f ? y1 : 0.0;                                                                               \
       y2 = f ? y2 : 0.0;                                                                               \
@@ -496,6 +589,7 @@ __attribute__((target("avx2,fma"), always_inline)) static inline double row32_av
   double yi[4];
   _mm256_storeu_pd(yi, acc);
   const int f = !mask || mask[i] != 0;
+  if (f && extra_of(A, i)) row_extra(A, mask, x, i, yi);
   const double y0 = f ? yi[0] : 0.0, y1 = f ? yi[1] : 0.0, y2 = f ? yi[2] : 0.0;
   y[3 * (int64_t)i] = y0;
   y[3 * (int64_t)i + 1] = y1;

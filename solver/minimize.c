@@ -613,6 +613,7 @@ static int assemble(bs_minimizer *m, const bs_objective *obj, const double *x, i
   int hrc = m->convex       ? obj->hessian_convexified(x, m->g_raw, m->H, obj->ctx)
             : obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx)
                              : obj->hessian(x, m->H, obj->ctx);
+  if (!hrc) bs_bsr_index_extra(m->H); /* its extras then go row by row in the products */
   st->t_assembly += bs_seconds() - t;
   if (!hrc) return 0;
   bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);

@@ -112,6 +112,7 @@ static int newton_step(bs_minimizer *m, const bs_objective *obj, const double *x
   const int64_t N = m->n3;
   double t = bs_seconds();
   int hrc = obj->hessian_g ? obj->hessian_g(x, m->g_raw, m->H, obj->ctx) : obj->hessian(x, m->H, obj->ctx);
+  if (!hrc) bs_bsr_index_extra(m->H);
   st->t_assembly += bs_seconds() - t;
   if (hrc) {
     bs__set_reason(m, st, BS_MIN_NONFINITE, "Hessian not evaluable at iteration %d (callback returned %d)", it, hrc);

@@ -444,3 +444,100 @@ Test(bsr, single_precision_values) {
   bs_bsr_destroy(&A);
   bs_bsr_destroy(&R);
 }
+
+/* Indexed extras (bs_bsr_index_extra): the list sorted by rows with each
+ * row's blocks in their list order, and every product (plain, masked, with a
+ * dot, the single-precision ones) bit for bit the one of the unindexed list
+ * (added serially after the rows), with 1 and 3 threads; a block added after
+ * the index voids it and still enters the product; zero empties both. */
+static void products(const bs_bsr *A, const uint8_t *mask, const double *x, double *y, float *v32, double *dots) {
+  const int64_t N = 3 * (int64_t)A->n;
+  bs_bsr_mul(A, mask, x, y);
+  dots[0] = bs_bsr_mul_dot(A, mask, x, y + N);
+  dots[1] = bs_bsr_mul_dot_round32(A, mask, x, y + 2 * N, v32);
+  dots[2] = bs_bsr_mul_dot32(A, v32, mask, x, y + 3 * N);
+}
+
+static void extra_list_copy(const bs_bsr *A, int32_t *ij, double *val) {
+  memcpy(ij, A->extra_ij, 2 * (size_t)A->n_extra * sizeof *ij);
+  memcpy(val, A->extra_val, 9 * (size_t)A->n_extra * sizeof *val);
+}
+
+/* A's list is ij/val stably sorted by row. */
+static void assert_sorted_copy(const bs_bsr *A, const int32_t *ij, const double *val) {
+  int64_t k = 0;
+  for (int32_t i = 0; i < A->n; ++i) {
+    cr_assert_eq(A->extra_ptr[i], k, "row %d starts at %d, not %lld", i, A->extra_ptr[i], (long long)k);
+    for (int64_t e = 0; e < A->n_extra; ++e)
+      if (ij[2 * e] == i) {
+        cr_assert(A->extra_ij[2 * k] == i && A->extra_ij[2 * k + 1] == ij[2 * e + 1], "position %lld", (long long)k);
+        cr_assert_eq(memcmp(A->extra_val + 9 * k, val + 9 * e, 9 * sizeof *val), 0, "position %lld", (long long)k);
+        ++k;
+      }
+  }
+  cr_assert_eq(k, A->n_extra);
+}
+
+Test(bsr, indexed_extras_keep_every_product) {
+  int32_t *ptr, *adj;
+  const int32_t n = 3000, ne = 4000;
+  random_graph(n, 6, &ptr, &adj);
+  bs_bsr *A = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_bsr_create(n, ptr, adj, &A, &err), 0, "%s", err.msg);
+  fill_random(A);
+  cr_assert_eq(bs_bsr_reserve_extra(A, ne + 1, &err), 0, "%s", err.msg);
+  double B[9];
+  while (A->n_extra < ne) { /* rows and columns at random, duplicates included */
+    const int32_t i = (int32_t)((urand() + 1.0) * 0.5 * n) % n, j = (int32_t)((urand() + 1.0) * 0.25 * n) % n;
+    for (int e = 0; e < 9; ++e) B[e] = urand();
+    if (i != j && bs_bsr_slot(A, i, j) < 0) cr_assert_eq(bs_bsr_add_block(A, i, j, B), BS_BSR_EXTRA);
+  }
+  const int64_t N = 3 * (int64_t)n;
+  double *x = malloc(N * sizeof *x), *y0 = malloc(4 * N * sizeof *y0), *y1 = malloc(4 * N * sizeof *y1);
+  float *v32 = malloc((size_t)bs_bsr_val32_count(A) * sizeof *v32);
+  int32_t *ij = malloc(2 * (size_t)ne * sizeof *ij);
+  double *val = malloc(9 * (size_t)ne * sizeof *val);
+  uint8_t *mask = malloc((size_t)n);
+  for (int64_t k = 0; k < N; ++k) x[k] = urand();
+  for (int32_t i = 0; i < n; ++i) mask[i] = (uint8_t)(i % 7 != 3);
+  extra_list_copy(A, ij, val);
+  const int nt = omp_get_max_threads();
+  for (int masked = 0; masked < 2; ++masked) {
+    double d0[3], d1[3];
+    A->n_indexed = -1; /* not indexed (the first pass: in list order; the second: sorted already) */
+    omp_set_num_threads(1);
+    products(A, masked ? mask : NULL, x, y0, v32, d0);
+    bs_bsr_index_extra(A);
+    omp_set_num_threads(3);
+    products(A, masked ? mask : NULL, x, y1, v32, d1);
+    omp_set_num_threads(nt);
+    cr_assert_eq(memcmp(y0, y1, 4 * N * sizeof *y0), 0, "masked %d: the indexed products differ", masked);
+    cr_assert_eq(memcmp(d0, d1, sizeof d0), 0, "masked %d: the dots differ", masked);
+  }
+  assert_sorted_copy(A, ij, val);
+  /* the block added after the index enters the product */
+  bs_bsr_index_extra(A);
+  bs_bsr_mul(A, NULL, x, y0);
+  for (int e = 0; e < 9; ++e) B[e] = 0.0;
+  B[0] = 1.0;
+  cr_assert_eq(bs_bsr_add_block(A, 0, n - 1, B), BS_BSR_EXTRA);
+  bs_bsr_mul(A, NULL, x, y1);
+  cr_assert(fabs(y1[0] - y0[0] - x[3 * (n - 1)]) <= 1e-14 * (1 + fabs(y1[0])), "%.17g vs %.17g", y1[0] - y0[0],
+            x[3 * (n - 1)]);
+  bs_bsr_zero(A);
+  cr_assert_eq(A->n_extra, 0);
+  bs_bsr_index_extra(A);
+  bs_bsr_mul(A, NULL, x, y0);
+  for (int64_t k = 0; k < N; ++k) cr_assert_eq(y0[k], 0.0);
+  free(mask);
+  free(val);
+  free(ij);
+  free(v32);
+  free(x);
+  free(y0);
+  free(y1);
+  free(ptr);
+  free(adj);
+  bs_bsr_destroy(&A);
+}

@@ -8,6 +8,7 @@
  * paths name the culprit. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -575,6 +576,73 @@ Test(self_term, convexified_hessian_is_psd) {
   bs_bsr_destroy(&H);
   bs_bsr_destroy(&Hc);
   world_destroy(&w);
+}
+
+/* Many contacts (more than one batch of the parallel contact Hessians): two
+ * 10^3-cell boxes overlapping by 0.35. The Hessian, exact and convexified, is
+ * the same bit for bit with 1 and 3 threads, symmetric, and holds every
+ * contact's blocks (the extras are the missing blocks). */
+typedef struct overlap {
+  bs_mesh *mesh;
+  bs_fem *fem;
+  bs_term *self;
+  int32_t contacts;
+} overlap;
+
+static void overlap_create(overlap *o, int threads) {
+  bs_error err;
+  double loA[3] = {0, 0, 0}, hiA[3] = {1, 1, 1}, loB[3] = {0.9337, 0.0311, 0.0523}, hiB[3] = {1.9337, 1.0311, 1.0523};
+  int32_t nA;
+  o->mesh = two_boxes(loA, hiA, 12, loB, hiB, 12, &nA);
+  bs_material mat;
+  cr_assert_eq(bs_material_init(BS_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, &mat, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_create(o->mesh, 1, &mat, NULL, &o->fem, &err), 0, "%s", err.msg);
+  const int nt = omp_get_max_threads();
+  omp_set_num_threads(threads); /* the term's thread count is the one at its creation */
+  cr_assert_eq(bs_term_self_create(o->fem, NULL, 1e6, &o->self, &err), 0, "%s", err.msg);
+  omp_set_num_threads(nt);
+  double depth;
+  cr_assert_eq(bs_term_self_detect(o->self, o->mesh->x, &o->contacts, &depth, &err), 0, "%s", err.msg);
+}
+
+static void overlap_destroy(overlap *o) {
+  bs_term_destroy(&o->self);
+  bs_fem_destroy(&o->fem);
+  bs_mesh_destroy(&o->mesh);
+}
+
+static bs_bsr *overlap_hessian(const overlap *o, int convex) {
+  bs_error err;
+  bs_bsr *H;
+  cr_assert_eq(bs_fem_matrix(o->fem, &H, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_bsr_reserve_extra(H, o->self->hessian_extra, &err), 0, "%s", err.msg);
+  cr_assert_eq((convex ? o->self->ops->hessian_convexified : o->self->ops->hessian)(o->self, o->mesh->x, H),
+               BS_TERM_OK);
+  int64_t missing = -1;
+  cr_assert_eq(bs_term_self_missing_blocks(o->self, o->mesh->x, 0, NULL, NULL, &missing, &err), 0, "%s", err.msg);
+  cr_expect_eq(H->n_extra, missing, "%lld extras, %lld missing blocks", (long long)H->n_extra, (long long)missing);
+  cr_assert_eq(bs_bsr_check(H, 1e-12, &err), 0, "%s", err.msg);
+  return H;
+}
+
+Test(self_term, many_contacts_same_hessian_with_any_thread_count) {
+  overlap o1, o3;
+  overlap_create(&o1, 1);
+  overlap_create(&o3, 3);
+  cr_assert(o1.contacts > 256 && o1.contacts == o3.contacts, "%d and %d contacts (more than a batch of 256 wanted)",
+            o1.contacts, o3.contacts);
+  for (int convex = 0; convex < 2; convex++) {
+    bs_bsr *H1 = overlap_hessian(&o1, convex), *H3 = overlap_hessian(&o3, convex);
+    cr_assert(H1->n_extra > 0 && H1->n_extra == H3->n_extra);
+    cr_assert_eq(memcmp(H1->val, H3->val, 9 * (size_t)H1->nnzb * sizeof(double)), 0, "convex %d: values differ",
+                 convex);
+    cr_assert_eq(memcmp(H1->extra_val, H3->extra_val, 9 * (size_t)H1->n_extra * sizeof(double)), 0,
+                 "convex %d: extras differ", convex);
+    bs_bsr_destroy(&H1);
+    bs_bsr_destroy(&H3);
+  }
+  overlap_destroy(&o1);
+  overlap_destroy(&o3);
 }
 
 Test(self_term, coupling_pairs_by_margin) {
