@@ -19,21 +19,28 @@
  *    hierarchy over tet boxes: its topology is built at creation and rebuilt
  *    at each begin_step (at xⁿ), its boxes are refit at every evaluation;
  *  - the primitive of a colliding p is the feature (triangle interior, edge
- *    or vertex) of the closest triangle among the boundary triangles that do
- *    not have p as a vertex and p's interface faces: the faces of p's
- *    excluded tets (those holding p or an edge neighbour) that they share
- *    with a tet outside that set, listed once at creation (about 100 per
- *    vertex). So the distance is to the boundary of the region where p
- *    collides, and it is 0 wherever p enters that region: through the
- *    surface, or through its own excluded neighbourhood (a vertex pushed
- *    through its own body then meets Phi = 0 at the crossing and is pushed
- *    back towards its neighbourhood, where without the interface faces Phi
- *    jumped to k times the cube of its depth below the surface: ~4e4 J in
- *    test self_detect/leaving_the_neighbourhood_is_continuous). Elsewhere
- *    little changes: p's own body's triangles next to p (about an edge
- *    away) are primitives as in the paper, and they are usually nearer than
- *    its interface faces (one to two edges), so a vertex deep in another
- *    body is mostly measured as before. The search starts from the distance to the triangle p collided
+ *    or vertex) of the closest triangle among the boundary triangles none of
+ *    whose vertices is p or an edge neighbour of p (the others lie on p's
+ *    excluded tets) and p's interface faces: the faces of p's excluded tets
+ *    that they share with a tet outside that set, listed once at creation
+ *    (about 100 per vertex). So the distance is to the boundary of the
+ *    region where p collides, and it is 0 wherever p enters that region:
+ *    through the surface, or through its own excluded neighbourhood (a
+ *    vertex pushed through its own body then meets Phi = 0 at the crossing
+ *    and is pushed back towards its neighbourhood, where without the
+ *    interface faces Phi jumped to k times the cube of its depth below the
+ *    surface: ~4e4 J in test self_detect/leaving_the_neighbourhood_is_continuous).
+ *    The paper takes every boundary triangle without p: then a surface
+ *    vertex inside another body within about an edge of that body's surface
+ *    was measured to its own surface next to it (its neighbours' triangles,
+ *    about half an edge away on a structured grid), pushed along that
+ *    surface instead of out of the other body, and on a symmetric mesh
+ *    equidistant from two such triangles, where the force switched between
+ *    them (test self_term/many_contacts_same_hessian_with_any_thread_count:
+ *    two 12^3-cell boxes overlapping by 0.8 of a cell: H v and the central
+ *    difference of the gradient along v differed by 3.9e3 max |H v| at
+ *    h = 1e-5 and ten times that at 1e-6, a jump; 5e-10 with this rule).
+ *    The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
  *    and gathers every triangle within that distance from the AABB tree of

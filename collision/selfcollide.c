@@ -583,7 +583,13 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
   return -1;
 }
 
-static int tri_has(const int32_t *f, int32_t v) { return f[0] == v || f[1] == v || f[2] == v; }
+/* Whether boundary triangle f has p or an edge neighbour of p (near_vertex's
+ * set, the row of p in the fem's pattern P) as a vertex: then its tet is in
+ * p's excluded neighbourhood, and it is not on the boundary of the region
+ * where p collides. */
+static int tri_near(const bs_bsr *P, int32_t pv, const int32_t *f) {
+  return bs_bsr_slot(P, pv, f[0]) >= 0 || bs_bsr_slot(P, pv, f[1]) >= 0 || bs_bsr_slot(P, pv, f[2]) >= 0;
+}
 
 static double tri_dist2(const double *x, const int32_t *f, const double *p) {
   double w[3], wf[3];
@@ -656,10 +662,10 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   }
   double r = -1;
   int32_t h = d->hint[i];
-  if (h >= 0 && !tri_has(m->faces + 3 * h, pv)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
+  if (h >= 0 && !tri_near(d->fem->pattern, pv, m->faces + 3 * h)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
   if (r < 0) {
     int32_t e = rest_estimate(d, x, pv, d->coll_tet[i]);
-    if (e >= 0 && !tri_has(m->faces + 3 * e, pv)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
+    if (e >= 0 && !tri_near(d->fem->pattern, pv, m->faces + 3 * e)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
   }
   if (r < 0) r = d->h_min;
   if (iface && sqrt(ib) < r) r = sqrt(ib);
@@ -671,7 +677,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
     int32_t bt = -1;
     for (int64_t j = 0; j < cnt; j++) {
       int32_t f = buf[j];
-      if (tri_has(m->faces + 3 * f, pv)) continue;
+      if (tri_near(d->fem->pattern, pv, m->faces + 3 * f)) continue;
       double dd = tri_dist2(x, m->faces + 3 * f, p);
       if (dd < best || (dd == best && f < bt)) best = dd, bt = f;
     }
@@ -1258,7 +1264,7 @@ int bs_self_coupling_pairs(const bs_fem *fem, const double *x, double margin, in
     }
     for (int64_t j = 0; j < cnt && !st; j++) {
       const int32_t *f = m->faces + 3 * buf[j];
-      if (tri_has(f, pv) || tri_dist2(x, f, p) > margin * margin) continue;
+      if (tri_near(fem->pattern, pv, f) || tri_dist2(x, f, p) > margin * margin) continue;
       for (int a = 0; a < 3; a++) {
         if (bs_bsr_slot(fem->pattern, pv, f[a]) >= 0) continue;
         if (n == cap) {

@@ -625,6 +625,34 @@ static bs_bsr *overlap_hessian(const overlap *o, int convex) {
   return H;
 }
 
+/* max |H v - (g(x + h v) - g(x - h v)) / 2h| over |H v| for 3 random v. */
+static double overlap_fd_error(const overlap *o, const bs_bsr *H, double h) {
+  const size_t n3 = 3 * (size_t)o->mesh->n_vertices;
+  double *x = malloc(n3 * sizeof *x), *v = malloc(n3 * sizeof *v), *Hv = malloc(n3 * sizeof *Hv);
+  double *gp = malloc(n3 * sizeof *gp), *gm = malloc(n3 * sizeof *gm), worst = 0;
+  unsigned r = 5;
+  for (int t = 0; t < 3; t++) {
+    for (size_t i = 0; i < n3; i++) v[i] = rnd(&r);
+    bs_bsr_mul(H, NULL, v, Hv);
+    for (size_t i = 0; i < n3; i++) x[i] = o->mesh->x[i] + h * v[i];
+    memset(gp, 0, n3 * sizeof *gp);
+    term_gradient(o->self, x, gp);
+    for (size_t i = 0; i < n3; i++) x[i] = o->mesh->x[i] - h * v[i];
+    memset(gm, 0, n3 * sizeof *gm);
+    term_gradient(o->self, x, gm);
+    double e = 0, s = 0;
+    for (size_t i = 0; i < n3; i++) e = fmax(e, fabs(Hv[i] - (gp[i] - gm[i]) / (2 * h))), s = fmax(s, fabs(Hv[i]));
+    cr_assert(s > 0);
+    worst = fmax(worst, e / s);
+  }
+  free(x);
+  free(v);
+  free(Hv);
+  free(gp);
+  free(gm);
+  return worst;
+}
+
 Test(self_term, many_contacts_same_hessian_with_any_thread_count) {
   overlap o1, o3;
   overlap_create(&o1, 1);
@@ -638,6 +666,10 @@ Test(self_term, many_contacts_same_hessian_with_any_thread_count) {
                  convex);
     cr_assert_eq(memcmp(H1->extra_val, H3->extra_val, 9 * (size_t)H1->n_extra * sizeof(double)), 0,
                  "convex %d: extras differ", convex);
+    if (!convex) {
+      const double e1 = overlap_fd_error(&o3, H3, 1e-5), e2 = overlap_fd_error(&o3, H3, 1e-6);
+      cr_expect(e2 < 1e-5 && e2 < 0.1 * e1 + 1e-9, "FD errors %g (h 1e-5), %g (h 1e-6)", e1, e2);
+    }
     bs_bsr_destroy(&H1);
     bs_bsr_destroy(&H3);
   }
