@@ -40,7 +40,9 @@
  *    two 12^3-cell boxes overlapping by 0.8 of a cell: H v and the central
  *    difference of the gradient along v differed by 3.9e3 max |H v| at
  *    h = 1e-5 and ten times that at 1e-6, a jump; 5e-10 with this rule).
- *    The search starts from the distance to the triangle p collided
+ *    More than about two edges inside another body, p is still measured to
+ *    its own surface beyond its neighbours (sqrt 2 edges away on such a
+ *    grid), with the same switches. The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
  *    and gathers every triangle within that distance from the AABB tree of

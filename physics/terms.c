@@ -262,8 +262,10 @@ static int damping_gradient(const bs_term *t, const double *x, double *E, double
 static int damping_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   damping_data *dd = t->data;
   double c = 1.0 / t->step->dt;
-  size_t nv = 9 * (size_t)H->nnzb;
-  for (size_t i = 0; i < nv; i++) H->val[i] += c * dd->D->val[i];
+  const int64_t nv = 9 * H->nnzb;
+  const double *Dv = dd->D->val;
+#pragma omp parallel for schedule(static) if (nv > 65536)
+  for (int64_t i = 0; i < nv; i++) H->val[i] += c * Dv[i];
   return BS_TERM_OK;
 }
 static const bs_term_ops damping_ops = {damping_value, damping_gradient, damping_hessian, damping_begin,
