@@ -109,8 +109,8 @@ bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double 
  * kept within a row; O(n + n_extra), no allocation) and indexes it, so that
  * the products add row i's extras in the thread of row i. Call it once the
  * list is complete (the minimizer does after each Hessian); adding a block
- * afterwards voids the index until the next call (the products then add the
- * extras serially); values may change in place. */
+ * or bs_bsr_zero voids the index until the next call (the products then add
+ * the extras serially); values may change in place. */
 void bs_bsr_index_extra(bs_bsr *A);
 
 /* y = A x. With mask (n bytes, 1 = free, 0 = constrained; NULL = all free):

@@ -135,6 +135,7 @@ void bs_bsr_zero(bs_bsr *A) {
   for (int32_t i = 0; i < n; ++i)
     memset(v + 9 * (int64_t)rp[i], 0, 9 * (size_t)(rp[i + 1] - rp[i]) * sizeof *v);
   A->n_extra = 0;
+  A->n_indexed = -1;
 }
 
 static void free_extra(bs_bsr *A) {
@@ -217,6 +218,7 @@ bs_bsr_placement bs_bsr_add_block(bs_bsr *A, int32_t i, int32_t j, const double 
   }
   if (i < 0 || i >= A->n || j < 0 || j >= A->n || A->n_extra >= A->cap_extra) return BS_BSR_DROPPED;
   const int64_t e = A->n_extra++;
+  A->n_indexed = -1; /* the index, if any, misses this block */
   A->extra_ij[2 * e] = i;
   A->extra_ij[2 * e + 1] = j;
   memcpy(A->extra_val + 9 * e, B, 9 * sizeof *B);

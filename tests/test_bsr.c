@@ -525,11 +525,21 @@ Test(bsr, indexed_extras_keep_every_product) {
   bs_bsr_mul(A, NULL, x, y1);
   cr_assert(fabs(y1[0] - y0[0] - x[3 * (n - 1)]) <= 1e-14 * (1 + fabs(y1[0])), "%.17g vs %.17g", y1[0] - y0[0],
             x[3 * (n - 1)]);
+  /* zero voids the index: as many blocks again (ne + 1), in other rows, not
+     indexed */
+  bs_bsr_index_extra(A);
   bs_bsr_zero(A);
   cr_assert_eq(A->n_extra, 0);
   bs_bsr_index_extra(A);
   bs_bsr_mul(A, NULL, x, y0);
   for (int64_t k = 0; k < N; ++k) cr_assert_eq(y0[k], 0.0);
+  for (int64_t e = ne - 1; e >= 0; --e) cr_assert_eq(bs_bsr_add_block(A, ij[2 * e + 1], ij[2 * e], B), BS_BSR_EXTRA);
+  cr_assert_eq(bs_bsr_add_block(A, n - 1, 0, B), BS_BSR_EXTRA);
+  cr_assert_eq(A->n_extra, ne + 1);
+  bs_bsr_mul(A, NULL, x, y0);
+  bs_bsr_index_extra(A);
+  bs_bsr_mul(A, NULL, x, y1);
+  cr_assert_eq(memcmp(y0, y1, N * sizeof *y0), 0, "a stale index was used after zero");
   free(mask);
   free(val);
   free(ij);
