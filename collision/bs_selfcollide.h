@@ -33,7 +33,7 @@
  *    The paper takes every boundary triangle without p: then a surface
  *    vertex inside another body within about an edge of that body's surface
  *    was measured to its own surface next to it (its neighbours' triangles,
- *    about half an edge away on a structured grid), pushed along that
+ *    less than an edge away on a structured grid), pushed along that
  *    surface instead of out of the other body, and on a symmetric mesh
  *    equidistant from two such triangles, where the force switched between
  *    them (test self_term/many_contacts_same_hessian_with_any_thread_count:
