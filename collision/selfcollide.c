@@ -538,13 +538,15 @@ static int surely_outside(const double *p, const double *a, const double *b, con
   return 0;
 }
 
-/* Whether tet tv is in the excluded neighbourhood of vertex pv: one of its
- * vertices is pv or an edge neighbour of pv (the fem's pattern row of pv,
- * which holds pv and every vertex sharing a tet with it). See the header. */
-static int near_vertex(const self_data *d, int32_t pv, const int32_t *tv) {
-  const bs_bsr *P = d->fem->pattern;
-  for (int a = 0; a < 4; a++)
-    if (bs_bsr_slot(P, pv, tv[a]) >= 0) return 1;
+/* Whether one of the n vertices v is pv or an edge neighbour of pv (the
+ * row of pv in the fem's pattern P, which holds pv and every vertex sharing a
+ * tet with it). A tet (n = 4) with such a vertex is in pv's excluded
+ * neighbourhood, and so is the tet of a boundary triangle (n = 3) with one,
+ * which is then not on the boundary of the region where pv collides. See the
+ * header. */
+static int near_vertex(const bs_bsr *P, int32_t pv, const int32_t *v, int n) {
+  for (int a = 0; a < n; a++)
+    if (bs_bsr_slot(P, pv, v[a]) >= 0) return 1;
   return 0;
 }
 
@@ -570,7 +572,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
       int32_t t = d->order[j];
       const int32_t *tv = tets + 4 * t;
-      if (near_vertex(d, pv, tv)) continue;
+      if (near_vertex(d->fem->pattern, pv, tv, 4)) continue;
       if (surely_outside(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                          x + 3 * (size_t)tv[3]))
         continue;
@@ -581,14 +583,6 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
     }
   }
   return -1;
-}
-
-/* Whether boundary triangle f has p or an edge neighbour of p (near_vertex's
- * set, the row of p in the fem's pattern P) as a vertex: then its tet is in
- * p's excluded neighbourhood, and it is not on the boundary of the region
- * where p collides. */
-static int tri_near(const bs_bsr *P, int32_t pv, const int32_t *f) {
-  return bs_bsr_slot(P, pv, f[0]) >= 0 || bs_bsr_slot(P, pv, f[1]) >= 0 || bs_bsr_slot(P, pv, f[2]) >= 0;
 }
 
 static double tri_dist2(const double *x, const int32_t *f, const double *p) {
@@ -644,11 +638,12 @@ static void set_contact(contact *c, const double *x, int32_t pv, const int32_t *
 }
 
 /* The closest admissible primitive of surface vertex i (index into surf):
- * over the boundary triangles without p and p's interface faces (a full scan
- * of its short list). Returns 0, or -1 on a shim error. c->nv = 0 when none
- * exists. */
+ * over the boundary triangles with neither p nor an edge neighbour of p as a
+ * vertex and p's interface faces (a full scan of its short list). Returns 0,
+ * or -1 on a shim error. c->nv = 0 when none exists. */
 static int closest_primitive(self_data *d, const double *x, int32_t i, double diag, int32_t *buf) {
   const bs_mesh *m = d->mesh;
+  const bs_bsr *P = d->fem->pattern;
   int32_t pv = d->surf[i];
   const double *p = x + 3 * (size_t)pv;
   contact *c = &d->con[i];
@@ -662,10 +657,10 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   }
   double r = -1;
   int32_t h = d->hint[i];
-  if (h >= 0 && !tri_near(d->fem->pattern, pv, m->faces + 3 * h)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
+  if (h >= 0 && !near_vertex(P, pv, m->faces + 3 * h, 3)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
   if (r < 0) {
     int32_t e = rest_estimate(d, x, pv, d->coll_tet[i]);
-    if (e >= 0 && !tri_near(d->fem->pattern, pv, m->faces + 3 * e)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
+    if (e >= 0 && !near_vertex(P, pv, m->faces + 3 * e, 3)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
   }
   if (r < 0) r = d->h_min;
   if (iface && sqrt(ib) < r) r = sqrt(ib);
@@ -677,7 +672,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
     int32_t bt = -1;
     for (int64_t j = 0; j < cnt; j++) {
       int32_t f = buf[j];
-      if (tri_near(d->fem->pattern, pv, m->faces + 3 * f)) continue;
+      if (near_vertex(P, pv, m->faces + 3 * f, 3)) continue;
       double dd = tri_dist2(x, m->faces + 3 * f, p);
       if (dd < best || (dd == best && f < bt)) best = dd, bt = f;
     }
@@ -1264,9 +1259,9 @@ int bs_self_coupling_pairs(const bs_fem *fem, const double *x, double margin, in
     }
     for (int64_t j = 0; j < cnt && !st; j++) {
       const int32_t *f = m->faces + 3 * buf[j];
-      if (tri_near(fem->pattern, pv, f) || tri_dist2(x, f, p) > margin * margin) continue;
+      /* a triangle with no vertex near p: each of its vertices pairs with p off the pattern */
+      if (near_vertex(fem->pattern, pv, f, 3) || tri_dist2(x, f, p) > margin * margin) continue;
       for (int a = 0; a < 3; a++) {
-        if (bs_bsr_slot(fem->pattern, pv, f[a]) >= 0) continue;
         if (n == cap) {
           int32_t *nb = realloc(out, sizeof(int32_t) * 4 * (size_t)cap);
           if (!nb) {
