@@ -165,6 +165,11 @@ double bs_integrator_energy(bs_integrator *I, const double *x);
 void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c);
 void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c);
 
+/* The stop flag of the integrator's solves (bs_minimizer_set_stop; NULL:
+ * none): a step whose solve it stops ends with reason BS_MIN_STOPPED and
+ * failed = 1, at a state that is not the step's solution (undo it). */
+void bs_integrator_set_stop(bs_integrator *I, volatile sig_atomic_t *stop);
+
 #ifdef __cplusplus
 }
 #endif

@@ -357,6 +357,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
 
 void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c) { bs_minimizer_get_carry(I->min, c); }
 void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c) { bs_minimizer_set_carry(I->min, c); }
+void bs_integrator_set_stop(bs_integrator *I, volatile sig_atomic_t *stop) { bs_minimizer_set_stop(I->min, stop); }
 
 double bs_integrator_energy(bs_integrator *I, const double *x) {
   double E;
@@ -517,6 +518,7 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
     I->step->load = (double)l / load_steps;
     if ((rc = run_solver(I, x, 1, &sub, err))) break;
     bs_step_stats_add(st, &sub);
+    if (sub.min.reason == BS_MIN_STOPPED) break; /* the later load steps are not taken */
   }
   I->static_mode = 0;
   I->step->load = 1.0;

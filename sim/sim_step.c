@@ -36,34 +36,49 @@ static void record(const bs_sim *s, bs_sim_step *rec) {
   rec->st.min.reason_text = rec->reason;
 }
 
-/* One frame, checking *stop (may be NULL) before every step; a frame cut
- * short is undone from the snapshot (6n doubles: x then v; NULL when no stop
- * can come) and BS_SIM_STOPPED returned. */
-static int advance_frame(bs_sim *s, volatile sig_atomic_t *stop, double *snap, bs_frame_stats *fs, bs_error *err) {
+/* The state at a frame's start (or before a static solve): x, v (6n
+ * doubles), the time and the minimizer's carry. */
+typedef struct frame_snap {
+  double *xv, time;
+  bs_min_carry carry;
+} frame_snap;
+
+static void snap_take(const bs_sim *s, frame_snap *sn) {
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  memcpy(sn->xv, s->x, sizeof(double) * n3);
+  memcpy(sn->xv + n3, s->v, sizeof(double) * n3);
+  sn->time = s->time;
+  bs_integrator_get_carry(s->integrator, &sn->carry);
+}
+
+/* Puts the snapshot back and returns BS_SIM_STOPPED. */
+static int snap_undo(bs_sim *s, const frame_snap *sn) {
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  memcpy(s->x, sn->xv, sizeof(double) * n3);
+  memcpy(s->v, sn->xv + n3, sizeof(double) * n3);
+  s->time = sn->time;
+  bs_integrator_set_carry(s->integrator, &sn->carry);
+  return BS_SIM_STOPPED;
+}
+
+/* One frame, checking *stop (may be NULL) before every step, and through the
+ * integrator's stop flag between Newton iterations; a frame cut short is
+ * undone from the snapshot (sn NULL when no stop can come) and
+ * BS_SIM_STOPPED returned. */
+static int advance_frame(bs_sim *s, volatile sig_atomic_t *stop, frame_snap *sn, bs_frame_stats *fs, bs_error *err) {
   const bs_scene *sc = s->scene;
   const int f = s->frame + 1;
-  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
   if (sc->mode != BS_MODE_DYNAMIC) return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
-  const double t0 = s->time;
-  if (snap) {
-    memcpy(snap, s->x, sizeof(double) * n3);
-    memcpy(snap + n3, s->v, sizeof(double) * n3);
-  }
+  if (sn) snap_take(s, sn);
   for (int k = 0; k < sc->steps_per_frame; k++) {
-    if (stop && *stop) {
-      if (snap && k > 0) {
-        memcpy(s->x, snap, sizeof(double) * n3);
-        memcpy(s->v, snap + n3, sizeof(double) * n3);
-      }
-      s->time = t0;
-      return BS_SIM_STOPPED;
-    }
+    if (stop && *stop && sn) return snap_undo(s, sn);
     bs_sim_step *rec = &s->steps[k];
     int st = bs_integrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
     if (st) {
       bs_error_prefix(err, "frame %d step %d", f, k);
       return st;
     }
+    if (rec->st.min.reason == BS_MIN_STOPPED && sn) return snap_undo(s, sn);
     s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
     record(s, rec);
   }
@@ -137,7 +152,7 @@ int bs_sim_run(bs_sim *s, bs_frame_fn on_frame, void *ctx, bs_run_totals *totals
 }
 
 /* The frames from s->frame to the scene's last; snap: advance_frame's. */
-static int run_frames(bs_sim *s, const bs_sim_run_opts *o, double *snap, bs_run_totals *totals, bs_error *err) {
+static int run_frames(bs_sim *s, const bs_sim_run_opts *o, frame_snap *snap, bs_run_totals *totals, bs_error *err) {
   bs_frame_stats fs;
   while (s->frame < s->scene->frames) {
     int st = advance_frame(s, o->stop, snap, &fs, err);
@@ -159,18 +174,23 @@ int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, 
     frame_sums(s, 0, &fs);
     if (o->on_frame && (st = o->on_frame(s, &fs, o->ctx, err))) return st;
   }
-  if (sc->mode == BS_MODE_STATIC) {
-    if (o->resume) return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
-    if (o->stop && *o->stop) return BS_SIM_STOPPED;
-    if ((st = bs_sim_statics(s, &fs, err))) return st;
-    bs_run_totals_add(totals, &fs);
-    return o->on_frame ? o->on_frame(s, &fs, o->ctx, err) : 0;
-  }
-  double *snap = NULL;
-  if (o->stop && sc->steps_per_frame > 1 &&
-      !(snap = bs_calloc(6 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
+  if (sc->mode == BS_MODE_STATIC && o->resume)
+    return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
+  if (o->stop && *o->stop) return BS_SIM_STOPPED;
+  frame_snap snap = {NULL, 0, {0, 0}};
+  if (o->stop && !(snap.xv = bs_calloc(6 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
     return BS_ENOMEM;
-  st = run_frames(s, o, snap, totals, err);
-  free(snap);
+  bs_integrator_set_stop(s->integrator, o->stop);
+  if (sc->mode == BS_MODE_STATIC) {
+    if (snap.xv) snap_take(s, &snap);
+    st = bs_sim_statics(s, &fs, err);
+    if (!st && snap.xv && s->steps[0].st.min.reason == BS_MIN_STOPPED) st = snap_undo(s, &snap), s->frame = 0;
+    if (!st) bs_run_totals_add(totals, &fs);
+    if (!st && o->on_frame) st = o->on_frame(s, &fs, o->ctx, err);
+  } else {
+    st = run_frames(s, o, snap.xv ? &snap : NULL, totals, err);
+  }
+  bs_integrator_set_stop(s->integrator, NULL);
+  free(snap.xv);
   return st;
 }

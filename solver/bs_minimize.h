@@ -190,6 +190,7 @@
 #ifndef BS_MINIMIZE_H
 #define BS_MINIMIZE_H
 
+#include <signal.h>
 #include <stdint.h>
 
 #include "bs_base.h"
@@ -386,15 +387,17 @@ typedef enum {
   BS_MIN_STEPS_DONE,    /* bs_newton with k_steps > 0 took its k steps, ||g|| >= tol        */
   BS_MIN_DIVERGED,      /* bs_newton: ||g|| grew BS_NEWTON_GROWTH-fold, or did not halve    */
                         /* over BS_NEWTON_WINDOW iterations                                 */
-  BS_MIN_FLOOR          /* converged at the rounding floor of E: a CONVERGED state (see     */
+  BS_MIN_FLOOR,         /* converged at the rounding floor of E: a CONVERGED state (see     */
                         /* "Rounding floor" above), ||g|| >= tol                            */
+  BS_MIN_STOPPED        /* the stop flag (bs_minimizer_set_stop) was set: x is the iterate  */
+                        /* reached, E no higher than at the start, not a solution          */
 } bs_min_reason;
 #define BS_FLOOR_WINDOW 3
 #define BS_NEWTON_GROWTH 1e2
 #define BS_NEWTON_WINDOW 20
 
 /* "converged", "max_iter", "stalled", "line_search", "nonfinite", "steps_done",
- * "diverged", "converged_floor". */
+ * "diverged", "converged_floor", "stopped". */
 const char *bs_min_reason_name(bs_min_reason r);
 
 /* 1 for the reasons that mean x is a solution: CONVERGED and FLOOR. */
@@ -442,6 +445,14 @@ void bs_minimizer_amg_reset(bs_minimizer *m);
 
 /* The options in force. */
 const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m);
+
+/* A flag (a signal handler's, say; NULL: none, the default) that bs_minimize
+ * and bs_newton read before every iteration: when it is nonzero the solve
+ * ends there with BS_MIN_STOPPED, x the last accepted iterate. A solve of
+ * hundreds of Newton iterations (a tangled start at 824k dofs: minutes)
+ * can so be stopped between two of them instead of at its end. The flag is
+ * the caller's and must outlive the minimizer or be unset. */
+void bs_minimizer_set_stop(bs_minimizer *m, volatile sig_atomic_t *stop);
 
 /* What one bs_minimize call hands the next (opts.forcing_ew = 2): whether it
  * converged by full Newton steps only, and its last forcing term. A run that

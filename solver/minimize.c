@@ -115,8 +115,20 @@ const char *bs_min_reason_name(bs_min_reason r) {
   case BS_MIN_STEPS_DONE: return "steps_done";
   case BS_MIN_DIVERGED: return "diverged";
   case BS_MIN_FLOOR: return "converged_floor";
+  case BS_MIN_STOPPED: return "stopped";
   }
   return "unknown";
+}
+
+void bs_minimizer_set_stop(bs_minimizer *m, volatile sig_atomic_t *stop) {
+  if (m) m->stop = stop;
+}
+
+int bs__stopped(bs_minimizer *m, bs_minimize_stats *st, int it, double gnorm) {
+  if (!m->stop || !*m->stop) return 0;
+  bs__set_reason(m, st, BS_MIN_STOPPED, "stopped on request after %d iterations (|grad E| = %.3e, tol %.3e)", it,
+                 gnorm, m->tau);
+  return 1;
 }
 
 void bs_minimizer_get_carry(const bs_minimizer *m, bs_min_carry *c) {
@@ -685,7 +697,7 @@ static int converged_or_capped(bs_minimizer *m, const bs_objective *obj, bs_mini
     bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d iterations", gnorm, m->tau, it);
     return 1;
   }
-  return 0;
+  return bs__stopped(m, st, it, gnorm);
 }
 
 /* The model of the next iteration (bs_minimize.h, "Convexified model"), after

@@ -39,6 +39,7 @@ struct bs_minimizer {
   double *g_raw, *g, *d, *r, *y, *gy_raw, *gy;
   char text[BS_MIN_TEXT];     /* stats.reason_text points here                      */
   int has_vops;               /* 1: vops set (bs_minimizer_set_vecops)               */
+  volatile sig_atomic_t *stop; /* bs_minimizer_set_stop's flag, or NULL                */
   bs_vecops vops;
 };
 
@@ -74,6 +75,10 @@ void bs__set_reason(bs_minimizer *m, bs_minimize_stats *st, bs_min_reason r, con
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
+
+/* 1 with st's reason BS_MIN_STOPPED when m's stop flag is set (iteration it
+ * at ||g|| = gnorm), else 0. */
+int bs__stopped(bs_minimizer *m, bs_minimize_stats *st, int it, double gnorm);
 
 /* Projects x in place with the objective's hook (if any), keeping fixed dofs at
  * their values in `fixed_src` (which may alias nothing in x). Timed into t_eval. */

@@ -56,6 +56,7 @@ static int stop_here(bs_minimizer *m, const bs_objective *obj, bs_minimize_stats
                    w->g_min, BS_NEWTON_WINDOW);
     return 1;
   }
+  if (bs__stopped(m, st, it, gnorm)) return 1;
   if (it >= o->newton_max_iter || it >= o->max_iter) {
     bs__set_reason(m, st, BS_MIN_MAX_ITER, "|grad E| = %.3e >= tol %.3e after %d Newton iterations", gnorm, tol, it);
     return 1;
