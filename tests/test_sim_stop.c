@@ -58,6 +58,24 @@ static int remember(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
   return 0;
 }
 
+/* s stopped in frame 2 is where the callback saw frame 1 end, bit for bit. */
+static void expect_at_frame_1(const bs_sim *s, const seen *w) {
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  cr_expect_eq(s->frame, 1);
+  cr_expect_eq(w->frame, 1, "the callback saw frame %d last", w->frame);
+  cr_expect_eq(s->time, w->time);
+  cr_expect_eq(memcmp(s->x, w->x, sizeof(double) * n3), 0, "x is not frame 1's");
+  cr_expect_eq(memcmp(s->v, w->v, sizeof(double) * n3), 0, "v is not frame 1's");
+}
+
+/* s continued to the end is in ref's end state (the run never stopped), bit for bit. */
+static void expect_same_end(const bs_sim *s, const bs_sim *ref) {
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  cr_expect_eq(s->frame, 3);
+  cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs from the run never stopped");
+  cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
+}
+
 static bs_sim *make_sim(bs_scene *sc) {
   bs_sim *s = NULL;
   bs_term *t = NULL;
@@ -86,19 +104,13 @@ Test(sim_stop, a_frame_cut_short_is_undone_and_the_run_continues_bit_for_bit) {
   bs_sim_run_opts o = {.on_frame = remember, .ctx = &w, .stop = &stop_flag};
   cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), BS_SIM_STOPPED);
   cr_expect_eq(steps_begun, 5);
-  cr_expect_eq(s->frame, 1);
-  cr_expect_eq(w.frame, 1, "the callback saw frame %d last", w.frame);
-  cr_expect_eq(s->time, w.time);
-  cr_expect_eq(memcmp(s->x, w.x, sizeof(double) * n3), 0, "x is not frame 1's");
-  cr_expect_eq(memcmp(s->v, w.v, sizeof(double) * n3), 0, "v is not frame 1's");
+  expect_at_frame_1(s, &w);
   cr_expect_eq(T.steps, 3);
   /* continued: the same end state, bit for bit, and the totals of the whole run */
   stop_flag = 0;
   o.resume = 1;
   cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), 0, "%s", err.msg);
-  cr_expect_eq(s->frame, 3);
-  cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs from the run never stopped");
-  cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
+  expect_same_end(s, ref);
   cr_expect_eq(T.steps, Tref.steps);
   cr_expect_eq(T.iterations, Tref.iterations);
   free(w.x);
@@ -138,17 +150,11 @@ Test(sim_stop, a_solve_is_stopped_between_newton_iterations) {
   cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), BS_SIM_STOPPED);
   cr_expect(grads < g2, "%d gradient evaluations: the solve ran to its end (%d)", grads, g2);
   cr_expect_eq(s->steps[0].st.min.reason, BS_MIN_STOPPED, "%s", s->steps[0].st.min.reason_text);
-  cr_expect_eq(s->frame, 1);
-  cr_expect_eq(w.frame, 1, "the callback saw frame %d last", w.frame);
-  cr_expect_eq(s->time, w.time);
-  cr_expect_eq(memcmp(s->x, w.x, sizeof(double) * n3), 0, "x is not frame 1's");
-  cr_expect_eq(memcmp(s->v, w.v, sizeof(double) * n3), 0, "v is not frame 1's");
+  expect_at_frame_1(s, &w);
   stop_flag = 0, stop_grad = -1;
   o.resume = 1;
   cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), 0, "%s", err.msg);
-  cr_expect_eq(s->frame, 3);
-  cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs from the run never stopped");
-  cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
+  expect_same_end(s, ref);
   cr_expect_eq(T.iterations, Tref.iterations);
   free(w.x);
   free(w.v);
