@@ -1073,8 +1073,8 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
     d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->comp || !d->con || !d->active || !d->hl || !d->nodes || !d->order ||
-        !d->cent || !d->cand || !d->x_last)
+    if (!d->surf || !d->coll_tet || !d->hint || !d->comp || !d->con || !d->active || !d->hl || !d->nodes ||
+        !d->order || !d->cent || !d->cand || !d->x_last)
       st = BS_ENOMEM;
   }
   if (!st) {
