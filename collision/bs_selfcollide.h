@@ -40,18 +40,9 @@
  *    two 12^3-cell boxes overlapping by 0.8 of a cell: H v and the central
  *    difference of the gradient along v differed by 3.9e3 max |H v| at
  *    h = 1e-5 and ten times that at 1e-6, a jump; 5e-10 with this rule).
- *    Inside another connected component of the mesh (another body: p lies
- *    in one of its tets), the primitives are the boundary triangles of the
- *    other components only, and no interface face: that body's surface is
- *    the boundary of where p collides, and with the rule above a vertex more
- *    than about two edges inside another body was measured to its own
- *    surface beyond its neighbours (sqrt 2 edges away on such a grid),
- *    switching between such triangles (test self_term/deep_overlap_is_smooth:
- *    10^3-cell boxes overlapping by 3.5 cells, FD errors 6.3e3 and 6.3e4 of
- *    max |H v| at h = 1e-5 and 1e-6 before, O(h^2) now). A vertex in both
- *    another body and far parts of its own (a self-fold inside a contact)
- *    takes the other body's rule; the rule changes, with a jump, where p
- *    leaves the other body into its own. The search starts from the distance to the triangle p collided
+ *    More than about two edges inside another body, p is still measured to
+ *    its own surface beyond its neighbours (sqrt 2 edges away on such a
+ *    grid), with the same switches. The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
  *    and gathers every triangle within that distance from the AABB tree of

@@ -357,7 +357,6 @@ typedef struct self_data {
   /* per surface vertex */
   int32_t *coll_tet;    /* tet it is in, -1 none                             */
   int32_t *hint;        /* last primitive triangle, -1 none                 */
-  int32_t *comp;        /* n_vertices: connected component (bs_mesh_components) */
   int64_t *if_ptr;      /* n_surf + 1: CSR of the interface faces below     */
   int32_t *if_face;     /* 3 if_ptr[n_surf]: vertices of each interface face */
   contact *con;
@@ -386,7 +385,6 @@ static void self_free(void *p) {
   free(d->cand);
   free(d->coll_tet);
   free(d->hint);
-  free(d->comp);
   free(d->if_ptr);
   free(d->if_face);
   free(d->con);
@@ -552,13 +550,13 @@ static int near_vertex(const bs_bsr *P, int32_t pv, const int32_t *v, int n) {
   return 0;
 }
 
-/* The first tet (in traversal order) of another component than pv's whose
- * closed set contains x_pv, else the first such tet of pv's component outside
- * its neighbourhood (near_vertex); -1 if none; -2 on a shim error. */
+/* The first tet (in traversal order) outside the neighbourhood of vertex pv
+ * (near_vertex) whose closed set contains x_pv; -1 if none; -2 on a shim
+ * error. */
 static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
   const double *p = x + 3 * (size_t)pv;
   const int32_t *tets = d->mesh->tets;
-  int32_t stack[STACK], own = -1;
+  int32_t stack[STACK];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
@@ -581,19 +579,10 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
       int r = bs_shim_point_in_tet(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                                    x + 3 * (size_t)tv[3]);
       if (r < -1) return -2;
-      if (r >= 0 && d->comp[tv[0]] != d->comp[pv]) return t;
-      if (r >= 0 && own < 0) own = t;
+      if (r >= 0) return t;
     }
   }
-  return own;
-}
-
-/* Whether boundary triangle f (3 vertices) can be the primitive of vertex pv:
- * with other (pv is inside another component), a triangle of another
- * component; else one with neither pv nor an edge neighbour of pv as a vertex
- * (see the header). */
-static int admissible(const self_data *d, int32_t pv, const int32_t *f, int other) {
-  return other ? d->comp[f[0]] != d->comp[pv] : !near_vertex(d->fem->pattern, pv, f, 3);
+  return -1;
 }
 
 static double tri_dist2(const double *x, const int32_t *f, const double *p) {
@@ -649,31 +638,29 @@ static void set_contact(contact *c, const double *x, int32_t pv, const int32_t *
 }
 
 /* The closest admissible primitive of surface vertex i (index into surf):
- * inside another component (find_tet), over that component's and the other
- * components' boundary triangles; else over the boundary triangles with
- * neither p nor an edge neighbour of p as a vertex and p's interface faces (a
- * full scan of its short list). Returns 0, or -1 on a shim error. c->nv = 0
- * when none exists. */
+ * over the boundary triangles with neither p nor an edge neighbour of p as a
+ * vertex and p's interface faces (a full scan of its short list). Returns 0,
+ * or -1 on a shim error. c->nv = 0 when none exists. */
 static int closest_primitive(self_data *d, const double *x, int32_t i, double diag, int32_t *buf) {
   const bs_mesh *m = d->mesh;
+  const bs_bsr *P = d->fem->pattern;
   int32_t pv = d->surf[i];
   const double *p = x + 3 * (size_t)pv;
   contact *c = &d->con[i];
   c->nv = 0;
-  const int other = d->comp[m->tets[4 * (size_t)d->coll_tet[i]]] != d->comp[pv];
   double ib = INFINITY;
   const int32_t *iface = NULL;
-  for (int64_t j = other ? d->if_ptr[i + 1] : d->if_ptr[i]; j < d->if_ptr[i + 1]; j++) {
+  for (int64_t j = d->if_ptr[i]; j < d->if_ptr[i + 1]; j++) {
     const int32_t *f = d->if_face + 3 * j;
     const double dd = tri_dist2(x, f, p);
     if (dd < ib) ib = dd, iface = f;
   }
   double r = -1;
   int32_t h = d->hint[i];
-  if (h >= 0 && admissible(d, pv, m->faces + 3 * h, other)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
+  if (h >= 0 && !near_vertex(P, pv, m->faces + 3 * h, 3)) r = sqrt(tri_dist2(x, m->faces + 3 * h, p));
   if (r < 0) {
     int32_t e = rest_estimate(d, x, pv, d->coll_tet[i]);
-    if (e >= 0 && admissible(d, pv, m->faces + 3 * e, other)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
+    if (e >= 0 && !near_vertex(P, pv, m->faces + 3 * e, 3)) r = sqrt(tri_dist2(x, m->faces + 3 * e, p));
   }
   if (r < 0) r = d->h_min;
   if (iface && sqrt(ib) < r) r = sqrt(ib);
@@ -685,7 +672,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
     int32_t bt = -1;
     for (int64_t j = 0; j < cnt; j++) {
       int32_t f = buf[j];
-      if (!admissible(d, pv, m->faces + 3 * f, other)) continue;
+      if (near_vertex(P, pv, m->faces + 3 * f, 3)) continue;
       double dd = tri_dist2(x, m->faces + 3 * f, p);
       if (dd < best || (dd == best && f < bt)) best = dd, bt = f;
     }
@@ -1060,7 +1047,6 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     d->surf = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision surface", err);
     d->coll_tet = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision surface", err);
     d->hint = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision surface", err);
-    d->comp = bs_calloc((size_t)m->n_vertices + 1, sizeof(int32_t), "the self-collision components", err);
     d->con = bs_calloc((size_t)d->n_surf + 1, sizeof(contact), "the self-collision contacts", err);
     d->active = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision contacts", err);
     d->hl = bs_calloc(144 * (size_t)HESS_BATCH, sizeof(double), "the self-collision contact Hessians", err);
@@ -1073,8 +1059,8 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
     d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->comp || !d->con || !d->active || !d->hl || !d->nodes ||
-        !d->order || !d->cent || !d->cand || !d->x_last)
+    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->nodes || !d->order ||
+        !d->cent || !d->cand || !d->x_last)
       st = BS_ENOMEM;
   }
   if (!st) {
@@ -1082,7 +1068,6 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     for (int32_t v = 0; v < m->n_vertices; v++)
       if (is_surf[v]) d->surf[n++] = v;
     for (int32_t i = 0; i < d->n_surf; i++) d->hint[i] = -1;
-    bs_mesh_components(m, d->comp);
     double len = 0;
     for (int32_t e = 0; e < m->n_edges; e++) {
       double u[3];

@@ -290,12 +290,6 @@ int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err);
  * vertex through tets. Arrays are malloc'ed; the caller frees them. */
 int bs_mesh_vertex_graph(const bs_mesh *m, int32_t **ptr, int32_t **adj, bs_error *err);
 
-/* Connected components of the tets (vertices joined through shared tets):
- * comp[v] (n_vertices entries, caller's) receives the component of vertex v,
- * numbered 0, 1, ... in the order of their smallest vertex; a vertex in no
- * tet is a component of its own. Returns the number of components. */
-int32_t bs_mesh_components(const bs_mesh *m, int32_t *comp);
-
 /* ---- quality --------------------------------------------------------- */
 
 typedef struct bs_mesh_quality {

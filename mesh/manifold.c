@@ -10,6 +10,11 @@
 
 #include "mesh_internal.h"
 
+static int32_t root(int32_t *p, int32_t a) {
+  while (p[a] != a) a = p[a] = p[p[a]];
+  return a;
+}
+
 int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, int64_t nt, double min_volume,
                             int32_t *parent) {
   for (int64_t v = 0; v < np; v++) parent[v] = (int32_t)v;
@@ -22,12 +27,12 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
   for (int64_t f = 0; f < nt; f++)
     for (int k = 0; k < 3; k++) {
       used[tris[3 * f + k]] = 1;
-      int32_t a = bs__uf_root(parent, tris[3 * f + k]), b = bs__uf_root(parent, tris[3 * f + (k + 1) % 3]);
+      int32_t a = root(parent, tris[3 * f + k]), b = root(parent, tris[3 * f + (k + 1) % 3]);
       if (a != b) parent[a] = b;
     }
-  for (int64_t f = 0; f < nt; f++) vol[bs__uf_root(parent, tris[3 * f])] += bs__soup_volume(x, tris + 3 * f, 1);
+  for (int64_t f = 0; f < nt; f++) vol[root(parent, tris[3 * f])] += bs__soup_volume(x, tris + 3 * f, 1);
   int64_t n = 0;
-  for (int64_t v = 0; v < np; v++) n += used[v] && bs__uf_root(parent, (int32_t)v) == v && fabs(vol[v]) >= min_volume;
+  for (int64_t v = 0; v < np; v++) n += used[v] && root(parent, (int32_t)v) == v && fabs(vol[v]) >= min_volume;
   free(vol), free(used);
   return n;
 }
@@ -71,12 +76,11 @@ static int32_t pinched_vertices(const bs_mesh *m, const int32_t *ptr, const int3
     qsort(scratch, n, sizeof *scratch, bs__cmp_u64);
     for (size_t i = 1; i < n; i++)
       if (scratch[i] >> 32 == scratch[i - 1] >> 32) {
-        int32_t a = bs__uf_root(parent, (int32_t)(scratch[i] & 0xffffffffu)),
-                b = bs__uf_root(parent, (int32_t)(scratch[i - 1] & 0xffffffffu));
+        int32_t a = root(parent, (int32_t)(scratch[i] & 0xffffffffu)), b = root(parent, (int32_t)(scratch[i - 1] & 0xffffffffu));
         if (a != b) parent[a] = b;
       }
     int32_t fans = 0;
-    for (int32_t i = 0; i < d; i++) fans += bs__uf_root(parent, i) == i;
+    for (int32_t i = 0; i < d; i++) fans += root(parent, i) == i;
     if (fans > 1 && !bad++) memcpy(at, m->x + 3 * (size_t)v, 3 * sizeof *at);
   }
   return bad;

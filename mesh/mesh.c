@@ -742,26 +742,6 @@ double bs_mesh_boundary_volume(const bs_mesh *m) {
   return (k.s + k.c) / 6.0;
 }
 
-/* ---- connected components ----------------------------------------------- */
-
-/* Unions keep the smaller root, so every parent is smaller than its child
- * and one ascending pass turns parents into labels. */
-int32_t bs_mesh_components(const bs_mesh *m, int32_t *comp) {
-  const int32_t nv = m->n_vertices;
-  for (int32_t v = 0; v < nv; ++v) comp[v] = v;
-  for (int32_t t = 0; t < m->n_tets; ++t) {
-    const int32_t *tv = m->tets + 4 * (size_t)t;
-    for (int j = 1; j < 4; ++j) {
-      const int32_t a = bs__uf_root(comp, tv[0]), b = bs__uf_root(comp, tv[j]);
-      if (a < b) comp[b] = a;
-      else if (b < a) comp[a] = b;
-    }
-  }
-  int32_t n = 0;
-  for (int32_t v = 0; v < nv; ++v) comp[v] = comp[v] == v ? n++ : comp[comp[v]];
-  return n;
-}
-
 /* ---- vertex graph ------------------------------------------------------- */
 
 int bs_mesh_vertex_graph(const bs_mesh *m, int32_t **ptr_out, int32_t **adj_out, bs_error *err) {

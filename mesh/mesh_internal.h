@@ -125,12 +125,6 @@ static inline int bs__cmp_u64(const void *a, const void *b) {
   return x < y ? -1 : x > y;
 }
 
-/* Union-find root of a with path halving (parent[x] = x at the roots). */
-static inline int32_t bs__uf_root(int32_t *parent, int32_t a) {
-  while (parent[a] != a) a = parent[a] = parent[parent[a]];
-  return a;
-}
-
 /* manifold.c: the number of connected components of a soup's triangles
  * (points joined by triangle edges; points in no triangle not counted)
  * whose enclosed |volume| is at least min_volume; parent: np scratch

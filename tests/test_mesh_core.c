@@ -218,30 +218,6 @@ Test(mesh_core, unused_vertices_are_dropped) {
   bs_mesh_destroy(&m);
 }
 
-/* Three tets: the first and the third share vertex 6 (one component), the
- * second is apart and holds the first vertex after 0 (component 1). */
-Test(mesh_core, components_are_numbered_by_smallest_vertex) {
-  bs_mesh *m = NULL;
-  bs_error err = {0};
-  double x[33];
-  const int32_t t[] = {0, 4, 5, 6, 1, 2, 3, 7, 6, 8, 9, 10};
-  const double corner[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  const double shift[3][3] = {{0, 0, 0}, {5, 0, 0}, {0, 0, 1}};
-  for (int e = 0; e < 3; ++e) /* the third tet's corner 0 is the first's corner 3 */
-    for (int j = 0; j < 4; ++j)
-      for (int k = 0; k < 3; ++k) x[3 * t[4 * e + j] + k] = corner[j][k] + shift[e][k];
-  cr_assert_eq(bs_mesh_create(11, x, 3, t, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
-  int32_t comp[11];
-  cr_assert_eq(bs_mesh_components(m, comp), 2);
-  const int32_t want[11] = {0, 1, 1, 1, 0, 0, 0, 1, 0, 0, 0};
-  for (int v = 0; v < 11; ++v) cr_expect_eq(comp[v], want[v], "vertex %d: component %d", v, comp[v]);
-  bs_mesh_destroy(&m);
-  cr_assert_eq(bs_mesh_create(5, two_x, 2, two_t, 0, NULL, &m, &err), BS_OK, "%s", err.msg);
-  cr_assert_eq(bs_mesh_components(m, comp), 1);
-  for (int v = 0; v < 5; ++v) cr_expect_eq(comp[v], 0);
-  bs_mesh_destroy(&m);
-}
-
 Test(mesh_core, groups_set_ids) {
   bs_mesh *m = NULL;
   bs_error err = {0};
