@@ -49,8 +49,12 @@
  *      value_lower_bound is given and exceeds phi(0), value() and gradient()
  *      are not called at that point (section 3.3). If no Wolfe point is found
  *      within opts.max_ls trial points, the lowest trial point with
- *      phi < phi(0) is taken (ls_failures); if there is none the solve stops
- *      with BS_MIN_LINE_SEARCH. An accepted step never increases E (except,
+ *      phi < phi(0) is taken (ls_failures); if there is none along a Newton
+ *      direction (dx or -dx) not parallel to -g, whose predicted decrease is
+ *      above the rounding floor, the search is made again along -g (added;
+ *      counted in fallback_neg_grad: a kink of E, such as a self-collision
+ *      contact switching primitives, can block the Newton direction and not
+ *      -g); if there is still none the solve stops with BS_MIN_LINE_SEARCH. An accepted step never increases E (except,
  *      by at most the rounding level of E, with opts.accept_noise; off by
  *      default).
  *   8–9. x <- P(x + a dx), which is the point the line search evaluated.

@@ -571,6 +571,28 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
   return bs__mdot(m, m->d, m->g);
 }
 
+/* After a line search along a Newton direction (dx or -dx) that found no
+ * decrease above the rounding floor: d := -g (clamped), counted in
+ * fallback_neg_grad, and the new g.d returned; 0 when d already points along
+ * -g (the search would repeat) or the decrease it predicted is at the floor. */
+static double restart_along_gradient(bs_minimizer *m, double E, double gnorm, double dphi0, bs_minimize_stats *st,
+                                     bs_min_iter *rec) {
+  const double dn = sqrt(bs__mdot(m, m->d, m->d));
+  if (rec->direction == BS_DIR_NEG_GRAD || -dphi0 <= bs__noise_level(E) || -dphi0 >= (1 - 1e-12) * dn * gnorm)
+    return 0;
+  const int64_t N = m->n3;
+  for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
+  rec->direction = BS_DIR_NEG_GRAD;
+  st->fallback_neg_grad++;
+  if (gnorm > m->opts.clamp) {
+    const double s = m->opts.clamp / gnorm;
+    for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
+    rec->clamped = 1;
+    st->clamps++;
+  }
+  return bs__mdot(m, m->d, m->g);
+}
+
 /* The reason of a line search with no decrease. Paper 3.3: below some
  * |grad E| the decrease a step can make, about |g.d|/2, is lost in the
  * rounding of E itself: a Newton direction there is at the rounding floor,
@@ -754,15 +776,21 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     if (rc < 0) return rc;
     if (rc > 0) break;
 
-    const double dphi0 = downhill_and_clamp(m, gnorm, st, &rec);
+    double dphi0 = downhill_and_clamp(m, gnorm, st, &rec);
     if (bs__at_floor(m, obj, st, it, E, gnorm, dphi0, rec.direction)) break;
 
     /* Steps 7-9: line search along the projected curve. */
     bs__ls_result ls;
     double t = bs_seconds();
     bs__line_search(m, obj, x, E, dphi0, st, &ls);
-    st->t_line_search += bs_seconds() - t;
     st->ls_evaluations += ls.evals;
+    double dg;
+    if (ls.status == BS_LSEARCH_NO_DECREASE && (dg = restart_along_gradient(m, E, gnorm, dphi0, st, &rec)) < 0) {
+      dphi0 = dg;
+      bs__line_search(m, obj, x, E, dphi0, st, &ls);
+      st->ls_evaluations += ls.evals;
+    }
+    st->t_line_search += bs_seconds() - t;
     if (ls.status == BS_LSEARCH_NO_DECREASE) {
       no_decrease_reason(m, st, &ls, it, E, gnorm, dphi0, rec.direction);
       break;

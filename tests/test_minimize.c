@@ -1290,6 +1290,43 @@ static int ev_kink(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
   return 0;
 }
 
+/* A kink across which the Newton direction steps (E = 10 |u0| + 100 (u1 -
+ * 1)^2 + u2^2 from the origin, with a Hessian that models the kink as a
+ * shallow valley: d = (-1e5, 1, 0), clamped to length 1e3): E rises along
+ * every point of that line search. The minimizer then searches along -g,
+ * which decreases E, instead of ending the solve. */
+static int ev_kink_valley(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  (void)f;
+  *E = 10 * fabs(u[0]) + 100 * (u[1] - 1) * (u[1] - 1) + u[2] * u[2];
+  if (g) g[0] = u[0] >= 0 ? 10 : -10, g[1] = 200 * (u[1] - 1), g[2] = 2 * u[2];
+  if (H) hadd(H, 0, 0, 1e-4), hadd(H, 1, 1, 200), hadd(H, 2, 2, 2);
+  return 0;
+}
+
+Test(minimize, a_failed_newton_line_search_restarts_along_the_gradient) {
+  bs_bsr *P = pattern_chain(1);
+  fx f;
+  fx_init(&f, 1, ev_kink_valley);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.max_iter = 20;
+  o.sigma = 1e-12; /* exact Newton directions (a loose CG stops near -g) */
+  o.cg_downhill = 0;
+  bs_minimizer *m = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
+  bs_objective obj = make_obj(&f, NULL);
+  obj.trace = NULL;
+  double x[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  cr_expect(st.iterations >= 1 && st.fallback_neg_grad >= 1, "%d iterations, %d -g fallbacks: %s", st.iterations,
+            st.fallback_neg_grad, st.reason_text);
+  cr_expect(st.E < 1e-2, "E = %g (100 at the start; without the restart the solve ends there)", st.E);
+  bs_minimizer_destroy(&m);
+  bs_bsr_destroy(&P);
+}
+
 Test(minimize, line_search_failure_is_reported) {
   bs_bsr *P = pattern_chain(1);
   fx f;
