@@ -544,6 +544,15 @@ static int start(bs_minimizer *m, const bs_objective *obj, double *x, double *E,
 
 /* Steps 5 and 6 on the Newton direction m->d: the downhill check (dx, else
  * -dx, else -grad E) and the length clamp. Returns phi'(0) = d.g. */
+/* Step 6: the length clamp of m->d, whose norm is dn. */
+static void clamp_direction(bs_minimizer *m, double dn, bs_minimize_stats *st, bs_min_iter *rec) {
+  if (!(dn > m->opts.clamp)) return;
+  const double s = m->opts.clamp / dn;
+  for (int64_t i = 0; i < m->n3; ++i) m->d[i] *= s;
+  rec->clamped = 1;
+  st->clamps++;
+}
+
 static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stats *st, bs_min_iter *rec) {
   const bs_minimize_opts *o = &m->opts;
   const int64_t N = m->n3;
@@ -561,13 +570,7 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
     rec->direction = BS_DIR_NEG_GRAD;
     st->fallback_neg_grad++;
   }
-  /* Step 6: length clamp. */
-  if (dn > o->clamp) {
-    double s = o->clamp / dn;
-    for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
-    rec->clamped = 1;
-    st->clamps++;
-  }
+  clamp_direction(m, dn, st, rec); /* step 6 */
   return bs__mdot(m, m->d, m->g);
 }
 
@@ -584,12 +587,7 @@ static double restart_along_gradient(bs_minimizer *m, double E, double gnorm, do
   for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
   rec->direction = BS_DIR_NEG_GRAD;
   st->fallback_neg_grad++;
-  if (gnorm > m->opts.clamp) {
-    const double s = m->opts.clamp / gnorm;
-    for (int64_t i = 0; i < N; ++i) m->d[i] *= s;
-    rec->clamped = 1;
-    st->clamps++;
-  }
+  clamp_direction(m, gnorm, st, rec);
   return bs__mdot(m, m->d, m->g);
 }
 
