@@ -591,6 +591,23 @@ static double restart_along_gradient(bs_minimizer *m, double E, double gnorm, do
   return bs__mdot(m, m->d, m->g);
 }
 
+/* Steps 7-9's line search along m->d from x (E, slope *dphi0), made again
+ * along -g when it finds no decrease (restart_along_gradient: *dphi0 and
+ * rec follow); ls receives the last search. */
+static void search(bs_minimizer *m, const bs_objective *obj, const double *x, double E, double gnorm, double *dphi0,
+                   bs_minimize_stats *st, bs_min_iter *rec, bs__ls_result *ls) {
+  const double t = bs_seconds();
+  bs__line_search(m, obj, x, E, *dphi0, st, ls);
+  st->ls_evaluations += ls->evals;
+  double dg;
+  if (ls->status == BS_LSEARCH_NO_DECREASE && (dg = restart_along_gradient(m, E, gnorm, *dphi0, st, rec)) < 0) {
+    *dphi0 = dg;
+    bs__line_search(m, obj, x, E, *dphi0, st, ls);
+    st->ls_evaluations += ls->evals;
+  }
+  st->t_line_search += bs_seconds() - t;
+}
+
 /* The reason of a line search with no decrease. Paper 3.3: below some
  * |grad E| the decrease a step can make, about |g.d|/2, is lost in the
  * rounding of E itself: a Newton direction there is at the rounding floor,
@@ -779,16 +796,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
 
     /* Steps 7-9: line search along the projected curve. */
     bs__ls_result ls;
-    double t = bs_seconds();
-    bs__line_search(m, obj, x, E, dphi0, st, &ls);
-    st->ls_evaluations += ls.evals;
-    double dg;
-    if (ls.status == BS_LSEARCH_NO_DECREASE && (dg = restart_along_gradient(m, E, gnorm, dphi0, st, &rec)) < 0) {
-      dphi0 = dg;
-      bs__line_search(m, obj, x, E, dphi0, st, &ls);
-      st->ls_evaluations += ls.evals;
-    }
-    st->t_line_search += bs_seconds() - t;
+    search(m, obj, x, E, gnorm, &dphi0, st, &rec, &ls);
     if (ls.status == BS_LSEARCH_NO_DECREASE) {
       no_decrease_reason(m, st, &ls, it, E, gnorm, dphi0, rec.direction);
       break;
