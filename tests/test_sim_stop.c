@@ -68,9 +68,13 @@ static void expect_at_frame_1(const bs_sim *s, const seen *w) {
   cr_expect_eq(memcmp(s->v, w->v, sizeof(double) * n3), 0, "v is not frame 1's");
 }
 
-/* s continued to the end is in ref's end state (the run never stopped), bit for bit. */
-static void expect_same_end(const bs_sim *s, const bs_sim *ref) {
+/* s, continued to the end (o->resume), is in ref's end state (the run never
+ * stopped), bit for bit. */
+static void expect_same_end(bs_sim *s, const bs_sim *ref, bs_sim_run_opts *o, bs_run_totals *T) {
   const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  bs_error err;
+  o->resume = 1;
+  cr_assert_eq(bs_sim_run_with(s, o, T, &err), 0, "%s", err.msg);
   cr_expect_eq(s->frame, 3);
   cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs from the run never stopped");
   cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
@@ -108,9 +112,7 @@ Test(sim_stop, a_frame_cut_short_is_undone_and_the_run_continues_bit_for_bit) {
   cr_expect_eq(T.steps, 3);
   /* continued: the same end state, bit for bit, and the totals of the whole run */
   stop_flag = 0;
-  o.resume = 1;
-  cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), 0, "%s", err.msg);
-  expect_same_end(s, ref);
+  expect_same_end(s, ref, &o, &T);
   cr_expect_eq(T.steps, Tref.steps);
   cr_expect_eq(T.iterations, Tref.iterations);
   free(w.x);
@@ -152,9 +154,7 @@ Test(sim_stop, a_solve_is_stopped_between_newton_iterations) {
   cr_expect_eq(s->steps[0].st.min.reason, BS_MIN_STOPPED, "%s", s->steps[0].st.min.reason_text);
   expect_at_frame_1(s, &w);
   stop_flag = 0, stop_grad = -1;
-  o.resume = 1;
-  cr_assert_eq(bs_sim_run_with(s, &o, &T, &err), 0, "%s", err.msg);
-  expect_same_end(s, ref);
+  expect_same_end(s, ref, &o, &T);
   cr_expect_eq(T.iterations, Tref.iterations);
   free(w.x);
   free(w.v);
