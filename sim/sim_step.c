@@ -37,9 +37,10 @@ static void record(const bs_sim *s, bs_sim_step *rec) {
 }
 
 /* The state at a frame's start (or before a static solve): x, v (6n
- * doubles), the time and the minimizer's carry. */
+ * doubles), the frame, the time and the minimizer's carry. */
 typedef struct frame_snap {
   double *xv, time;
+  int frame;
   bs_min_carry carry;
 } frame_snap;
 
@@ -48,6 +49,7 @@ static void snap_take(const bs_sim *s, frame_snap *sn) {
   memcpy(sn->xv, s->x, sizeof(double) * n3);
   memcpy(sn->xv + n3, s->v, sizeof(double) * n3);
   sn->time = s->time;
+  sn->frame = s->frame;
   bs_integrator_get_carry(s->integrator, &sn->carry);
 }
 
@@ -57,6 +59,7 @@ static int snap_undo(bs_sim *s, const frame_snap *sn) {
   memcpy(s->x, sn->xv, sizeof(double) * n3);
   memcpy(s->v, sn->xv + n3, sizeof(double) * n3);
   s->time = sn->time;
+  s->frame = sn->frame;
   bs_integrator_set_carry(s->integrator, &sn->carry);
   return BS_SIM_STOPPED;
 }
@@ -177,14 +180,14 @@ int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, 
   if (sc->mode == BS_MODE_STATIC && o->resume)
     return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
   if (o->stop && *o->stop) return BS_SIM_STOPPED;
-  frame_snap snap = {NULL, 0, {0, 0}};
+  frame_snap snap = {NULL, 0, 0, {0, 0}};
   if (o->stop && !(snap.xv = bs_calloc(6 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
     return BS_ENOMEM;
   bs_integrator_set_stop(s->integrator, o->stop);
   if (sc->mode == BS_MODE_STATIC) {
     if (snap.xv) snap_take(s, &snap);
     st = bs_sim_statics(s, &fs, err);
-    if (!st && snap.xv && s->steps[0].st.min.reason == BS_MIN_STOPPED) st = snap_undo(s, &snap), s->frame = 0;
+    if (!st && snap.xv && s->steps[0].st.min.reason == BS_MIN_STOPPED) st = snap_undo(s, &snap);
     if (!st) bs_run_totals_add(totals, &fs);
     if (!st && o->on_frame) st = o->on_frame(s, &fs, o->ctx, err);
   } else {

@@ -542,8 +542,6 @@ static int start(bs_minimizer *m, const bs_objective *obj, double *x, double *E,
   return 1;
 }
 
-/* Steps 5 and 6 on the Newton direction m->d: the downhill check (dx, else
- * -dx, else -grad E) and the length clamp. Returns phi'(0) = d.g. */
 /* Step 6: the length clamp of m->d, whose norm is dn. */
 static void clamp_direction(bs_minimizer *m, double dn, bs_minimize_stats *st, bs_min_iter *rec) {
   if (!(dn > m->opts.clamp)) return;
@@ -552,6 +550,9 @@ static void clamp_direction(bs_minimizer *m, double dn, bs_minimize_stats *st, b
   rec->clamped = 1;
   st->clamps++;
 }
+
+/* Steps 5 and 6 on the Newton direction m->d: the downhill check (dx, else
+ * -dx, else -grad E) and the length clamp. Returns phi'(0) = d.g. */
 
 static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stats *st, bs_min_iter *rec) {
   const bs_minimize_opts *o = &m->opts;

@@ -80,6 +80,14 @@ static void expect_same_end(bs_sim *s, const bs_sim *ref, bs_sim_run_opts *o, bs
   cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs from the run never stopped");
 }
 
+static void tear_down(seen *w, bs_sim **s, bs_sim **ref, bs_scene **sc) {
+  free(w->x);
+  free(w->v);
+  bs_sim_destroy(s);
+  bs_sim_destroy(ref);
+  bs_scene_destroy(sc);
+}
+
 static bs_sim *make_sim(bs_scene *sc) {
   bs_sim *s = NULL;
   bs_term *t = NULL;
@@ -115,11 +123,7 @@ Test(sim_stop, a_frame_cut_short_is_undone_and_the_run_continues_bit_for_bit) {
   expect_same_end(s, ref, &o, &T);
   cr_expect_eq(T.steps, Tref.steps);
   cr_expect_eq(T.iterations, Tref.iterations);
-  free(w.x);
-  free(w.v);
-  bs_sim_destroy(&s);
-  bs_sim_destroy(&ref);
-  bs_scene_destroy(&sc);
+  tear_down(&w, &s, &ref, &sc);
 }
 
 /* A spinning box (20 rad/s, 1 step per frame: 0.83 rad per step) takes
@@ -156,11 +160,7 @@ Test(sim_stop, a_solve_is_stopped_between_newton_iterations) {
   stop_flag = 0, stop_grad = -1;
   expect_same_end(s, ref, &o, &T);
   cr_expect_eq(T.iterations, Tref.iterations);
-  free(w.x);
-  free(w.v);
-  bs_sim_destroy(&s);
-  bs_sim_destroy(&ref);
-  bs_scene_destroy(&sc);
+  tear_down(&w, &s, &ref, &sc);
 }
 
 Test(sim_stop, restore_checks_its_input) {
