@@ -176,9 +176,9 @@ typedef enum { BS_SUMMARY_COMPLETE = 0, BS_SUMMARY_RUNNING, BS_SUMMARY_INTERRUPT
 typedef struct bs_summary {
   char method[32];
   bs_summary_state partial;  /* not complete: a last line "partial: N of M frames (...)" */
-  int frames, frames_total;  /* frames done (statics: 1) and the scene's       */
+  int frames, frames_total;  /* frames done (statics: 1 once solved), scene's   */
   int steps_per_frame;
-  double s_per_frame;        /* wall seconds per frame done                    */
+  double s_per_frame;        /* wall seconds per frame done (NaN: none done)   */
   long dofs;
   double solves_per_step;    /* Newton iterations per step                      */
   long failed;               /* steps that did not converge                     */

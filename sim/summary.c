@@ -19,10 +19,10 @@ void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wa
   memset(out, 0, sizeof *out);
   snprintf(out->method, sizeof out->method, "%s", bs_method_name(sc->solver.method));
   out->steps_per_frame = sc->steps_per_frame;
-  out->frames = sc->mode == BS_MODE_STATIC ? 1 : s->frame;
+  out->frames = s->frame; /* statics: 1 once solved, 0 before (or stopped in its solve) */
   out->frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
   out->partial = out->frames < out->frames_total ? BS_SUMMARY_RUNNING : BS_SUMMARY_COMPLETE;
-  out->s_per_frame = wall / (out->frames > 0 ? out->frames : 1);
+  out->s_per_frame = out->frames > 0 ? wall / out->frames : NAN; /* no frame done: not measured */
   out->dofs = bs_sim_dofs(s);
   out->solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
   out->failed = T->failed;

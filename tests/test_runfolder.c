@@ -142,6 +142,36 @@ Test(runfolder, round_trip, .init = setup, .fini = teardown) {
   bs_scene_destroy(&sc);
 }
 
+/* A run stopped before its first frame: its s/frame is not measured (NaN,
+ * "nan" in summary.txt and NaN read back), not the partial frame's seconds
+ * over no frame. */
+Test(runfolder, no_frame_done_has_no_seconds_per_frame, .init = setup, .fini = teardown) {
+  bs_scene *sc = small_box();
+  bs_sim *s = NULL;
+  bs_error err;
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_run_totals T;
+  memset(&T, 0, sizeof T);
+  bs_summary u, back;
+  bs_summary_make(s, &T, 71.4, &u);
+  cr_expect_eq(u.frames, 0);
+  cr_expect_eq(u.partial, BS_SUMMARY_RUNNING);
+  cr_expect(isnan(u.s_per_frame), "s/frame %g over no frame", u.s_per_frame);
+  char text[2048], p[600];
+  bs_summary_format(&u, text, sizeof text);
+  snprintf(p, sizeof p, "%s/summary.txt", dir);
+  FILE *f = fopen(p, "w");
+  cr_assert_not_null(f);
+  fputs(text, f);
+  fclose(f);
+  cr_assert_eq(bs_summary_read(dir, &back, &err), 0, "%s", err.msg);
+  cr_expect(isnan(back.s_per_frame), "s/frame %g read back", back.s_per_frame);
+  cr_expect_eq(back.frames, 0);
+  cr_expect_eq(back.frames_total, FRAMES);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
 /* Writes bytes to dir/bad/state.bin. */
 static void write_state(const void *bytes, size_t n) {
   char p[600];
