@@ -8,6 +8,8 @@
 #ifndef BS_APP_H
 #define BS_APP_H
 
+#include <signal.h>
+
 #include "bs_base.h"
 #include "bs_mesh.h"
 #include "bs_scene.h"
@@ -63,6 +65,17 @@ int bs_app_write_mesh(const bs_mesh *m, const char *path, bs_error *err);
  * (argv[0] is the command name); the caller frees the string. NULL when out
  * of memory. */
 char *bs_app_command_line(int argc, char **argv);
+
+/* The stop request of `bigstep run`: 0, or the signal (SIGINT, SIGTERM) that
+ * asked the run to stop, set by the handlers that
+ * bs_app_install_stop_handlers installs (a second signal of either ends the
+ * program at once). The run passes the flag to the library (bs_sim_run_opts,
+ * bs_dsim_set_stop). bs_app_signal_name: "SIGINT" or "SIGTERM";
+ * bs_app_stop_status: the exit status of a run it stopped (130, 143). */
+extern volatile sig_atomic_t bs_app_stop_signal;
+void bs_app_install_stop_handlers(void);
+const char *bs_app_signal_name(int sig);
+int bs_app_stop_status(int sig);
 
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);

@@ -42,6 +42,8 @@ static const char *run_help =
     "  --trace               one line per solver iteration on stderr (to follow a slow step)\n"
     "  --backend B           serial | petsc (solver.backend); petsc runs the scene\n"
     "                        distributed: mpirun -np N bigstep run SCENE --backend petsc\n"
+    "                        (a stop request stops every rank at the same Newton\n"
+    "                        iteration; no checkpoint is written, --resume is refused)\n"
     "\n"
     "Exit status: 0 every step converged; 1 a step did not converge, or an error\n"
     "(bad scene, a file that cannot be written, a folder in use or holding an\n"
@@ -178,23 +180,6 @@ static void print_header(const run_args *a, const bs_sim *s) {
   fflush(stdout);
 }
 
-/* The signal that asked the run to stop (0: none). The handlers only set it;
- * SA_RESETHAND puts the default back, so a second Ctrl-C ends the program at
- * once. */
-static volatile sig_atomic_t stop_signal = 0;
-
-static void on_stop_signal(int sig) { stop_signal = sig; }
-
-static void install_stop_handlers(void) {
-  struct sigaction sa;
-  memset(&sa, 0, sizeof sa);
-  sa.sa_handler = on_stop_signal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND | SA_RESTART; /* no EINTR from a write to a pipe or terminal */
-  sigaction(SIGINT, &sa, NULL);
-  sigaction(SIGTERM, &sa, NULL);
-}
-
 /* The summary (printed, and written into the folder, marked interrupted when
  * the run stopped early); the exit status. */
 static int finish(run_ctx *c, const bs_sim *s, const bs_run_totals *T, int stopped, double wall,
@@ -211,11 +196,11 @@ static int finish(run_ctx *c, const bs_sim *s, const bs_run_totals *T, int stopp
     rc = BS_EXIT_FAIL;
   }
   if (stopped) {
-    const int sig = stop_signal;
-    fprintf(stderr, "bigstep run: interrupted (%s) at frame %d of %d%s%s%s\n", sig == SIGTERM ? "SIGTERM" : "SIGINT",
+    const int sig = bs_app_stop_signal;
+    fprintf(stderr, "bigstep run: interrupted (%s) at frame %d of %d%s%s%s\n", bs_app_signal_name(sig),
             s->frame, s->scene->frames, c->folder ? "; continue it with the same command and --resume '" : "",
             c->folder ? s->scene->out_dir : "", c->folder ? "'" : "");
-    return rc ? rc : 128 + (sig == SIGTERM ? SIGTERM : SIGINT);
+    return rc ? rc : bs_app_stop_status(sig);
   }
   if (!rc && T->failed) {
     fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T->failed,
@@ -255,9 +240,9 @@ static int run_scene(const run_args *a, bs_sim *s) {
   run_ctx c = {.args = a, .t0 = bs_seconds(), .tty = isatty(fileno(stdout))};
   bs_run_totals T;
   memset(&T, 0, sizeof T);
-  install_stop_handlers(); /* from here a Ctrl-C stops between steps, leaving a consistent folder */
+  bs_app_install_stop_handlers(); /* from here a Ctrl-C stops between steps, leaving a consistent folder */
   if (open_folder(a, &c, s, &T)) return BS_EXIT_FAIL;
-  const bs_sim_run_opts ro = {.on_frame = on_frame, .ctx = &c, .stop = &stop_signal, .resume = a->resume};
+  const bs_sim_run_opts ro = {.on_frame = on_frame, .ctx = &c, .stop = &bs_app_stop_signal, .resume = a->resume};
   int st = bs_sim_run_with(s, &ro, &T, &err), rc = 0;
   if (st == BS_SIM_STOPPED && c.folder && s->scene->checkpoint_every > 0 && bs_runfolder_checkpoint(c.folder, s, &err))
     st = err.code;
@@ -296,7 +281,11 @@ int bs_cmd_run(int argc, char **argv) {
   bs_sim *s = NULL;
   int st = bs_scene_load(a.scene, a.sets.n, (const char *const *)a.sets.v, &sc, &err);
   if (!st && a.trace) sc->solver.trace = stderr;
-  if (!st && sc->backend == BS_BACKEND_PETSC) {
+  if (!st && sc->backend == BS_BACKEND_PETSC && a.resume) {
+    fprintf(stderr, "bigstep run: %s: --resume: the petsc backend writes no checkpoint to continue from; run the "
+                    "scene again (--replace) or on the serial backend\n", a.scene);
+    rc = BS_EXIT_FAIL;
+  } else if (!st && sc->backend == BS_BACKEND_PETSC) {
     rc = bs_app_run_petsc(a.scene, sc, a.quiet, a.replace);
   } else if (!st && mpi_ranks() > 1) {
     fprintf(stderr, "bigstep run: %s: solver.backend is \"serial\" but mpirun started %d ranks (each would run the "

@@ -2,6 +2,7 @@
  * scene on the distributed backend (dist/bs_dsim.h). Rank 0 prints the
  * header, the frame lines and the summary (bs_summary_format, the serial
  * run's summary). Without PETSc (BS_PETSC=OFF) the backend is refused. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,8 +60,9 @@ static void print_frame(const bs_dsim *d, const bs_frame_stats *fs) {
 }
 
 /* The frames (or the static solve), totals into *T, each frame into the
- * folder (out may be NULL), frame 0 (the initial state) first. */
-static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_error *err) {
+ * folder (out may be NULL), frame 0 (the initial state) first; a stop
+ * request (bs_app_stop_signal) ends them with *stopped = 1. */
+static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, int *stopped, bs_error *err) {
   const bs_scene *sc = d->scene;
   int n = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
   bs_frame_stats fs;
@@ -68,6 +70,10 @@ static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_
   int rc = out ? bs_dout_frame(out, d, &fs, err) : BS_OK;
   for (int f = 0; f < n && !rc; f++) {
     rc = sc->mode == BS_MODE_STATIC ? bs_dsim_statics(d, &fs, err) : bs_dsim_advance_frame(d, &fs, err);
+    if (rc == BS_SIM_STOPPED) {
+      *stopped = 1;
+      return BS_OK;
+    }
     if (rc) return rc;
     bs_run_totals_add(T, &fs);
     if (!quiet && bs_dist_rank() == 0) print_frame(d, &fs);
@@ -76,16 +82,19 @@ static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, bs_
   return rc;
 }
 
-/* The serial run's summary, from the distributed run: printed by rank 0,
- * and written into the folder (out may be NULL). */
-static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, bs_error *err) {
+/* The serial run's summary, from the distributed run (stopped: marked
+ * interrupted, over the frames done): printed by rank 0, and written into the
+ * folder (out may be NULL). */
+static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, int stopped, bs_error *err) {
   const bs_scene *sc = d->scene;
   bs_summary u;
   memset(&u, 0, sizeof u);
   snprintf(u.method, sizeof u.method, "%s", bs_method_name(sc->solver.method));
   u.steps_per_frame = sc->steps_per_frame;
-  u.frames = u.frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
-  u.s_per_frame = wall / u.frames;
+  u.frames = d->frame;
+  u.frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
+  if (stopped) u.partial = BS_SUMMARY_INTERRUPTED, u.no_resume = 1;
+  u.s_per_frame = u.frames > 0 ? wall / u.frames : NAN;
   u.dofs = bs_dsim_dofs(d);
   u.solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
   u.failed = T->failed;
@@ -107,6 +116,18 @@ static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, doubl
   return out ? bs_dout_finish(out, text, err) : BS_OK;
 }
 
+/* A stopped run: rank 0 says where, every rank returns the status of the
+ * signal (the largest over the ranks: a rank that got none agrees). */
+static int stop_status(const bs_dsim *d) {
+  int sig = bs_app_stop_signal;
+  MPI_Allreduce(MPI_IN_PLACE, &sig, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (bs_dist_rank() == 0)
+    fprintf(stderr, "bigstep run: interrupted (%s) at frame %d of %d; the petsc backend writes no checkpoint: "
+                    "a new run starts from frame 0\n",
+            bs_app_signal_name(sig), d->frame, d->scene->mode == BS_MODE_STATIC ? 1 : d->scene->frames);
+  return bs_app_stop_status(sig);
+}
+
 int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
   bs_error err;
   bs_error_clear(&err);
@@ -122,14 +143,18 @@ int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replac
   if (!rc && !quiet && bs_dist_rank() == 0) print_header(path, d);
   bs_dout *out = NULL;
   if (!rc && sc->out_dir[0]) rc = bs_dout_open(d, sc->out_dir, replace, &out, &err);
-  if (!rc) rc = run_frames(d, out, quiet, &T, &err);
-  if (!rc) rc = print_summary(d, out, &T, bs_seconds() - t0, &err);
+  bs_app_install_stop_handlers(); /* a stop request stops every rank at the same Newton iteration */
+  if (!rc) rc = bs_dsim_set_stop(d, &bs_app_stop_signal, &err);
+  int stopped = 0;
+  if (!rc) rc = run_frames(d, out, quiet, &T, &stopped, &err);
+  if (!rc) rc = print_summary(d, out, &T, bs_seconds() - t0, stopped, &err);
   if (rc) report(&err);
   bs_dout_destroy(&out);
-  if (!rc && T.failed && bs_dist_rank() == 0)
+  int status = rc ? BS_EXIT_FAIL : T.failed ? BS_EXIT_FAIL : 0;
+  if (!rc && stopped) status = stop_status(d);
+  else if (!rc && T.failed && bs_dist_rank() == 0)
     fprintf(stderr, "bigstep run: %ld of %ld steps did not converge; the first (frame %d, step %d): %s\n", T.failed,
             T.steps, T.first_fail_frame, T.first_fail_step, T.first_fail_reason);
-  int status = rc ? BS_EXIT_FAIL : T.failed ? BS_EXIT_FAIL : 0;
   bs_dsim_destroy(&d);
   bs_dist_finalize();
   return status;

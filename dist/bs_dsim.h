@@ -56,6 +56,11 @@ typedef struct bs_dsim {
   double time;          /* s                                              */
   bs_sim_step *steps;   /* steps_per_frame records of the last frame      */
   double *xm;           /* work: 3 per local-mesh vertex                  */
+  volatile sig_atomic_t *stop; /* bs_dsim_set_stop's flag (NULL: none)     */
+  double *snap;         /* with a flag: x and v at the frame's start (6n) */
+  double snap_time;
+  int snap_frame;
+  bs_min_carry snap_carry;
 } bs_dsim;
 
 /* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
@@ -71,6 +76,19 @@ int bs_dsim_statics(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
 /* One frame of steps_per_frame steps, as bs_sim_advance_frame (fs->steps
  * points into s, valid until the next frame). */
 int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
+
+/* A stop request (as bs_sim_run_with's opts.stop; a signal handler's flag,
+ * say; NULL: none, the default): bs_dsim_advance_frame and bs_dsim_statics
+ * read it over the ranks before every step and, through the integrator
+ * (bs_dintegrator_set_stop), before every Newton iteration. Raised on any
+ * rank, it stops every rank at the same point: the frame (or static solve)
+ * cut short is undone (x, v, time, frame and the minimizer's carry as at its
+ * start, bit for bit) and they return BS_SIM_STOPPED (not an error; fs is not
+ * written), so that the next call does that frame again as if never stopped.
+ * Every rank must pass a flag or none; the flag must outlive its use.
+ * Allocates the snapshot (6 doubles per local vertex) at the first flag:
+ * BS_ENOMEM. Not collective. */
+int bs_dsim_set_stop(bs_dsim *s, volatile sig_atomic_t *stop, bs_error *err);
 
 /* Tets with det F <= 0 at s->x over the ranks. */
 int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err);

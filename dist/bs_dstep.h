@@ -65,6 +65,19 @@ int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x
 int bs_dintegrator_step(bs_dintegrator *D, double t, double dt, double *x, double *v, bs_step_stats *st,
                         bs_error *err);
 
+/* The minimizer's state carried from one solve to the next (bs_min_carry in
+ * bs_minimize.h): a frame that is undone puts it back. Not collective. */
+void bs_dintegrator_get_carry(const bs_dintegrator *D, bs_min_carry *c);
+void bs_dintegrator_set_carry(bs_dintegrator *D, const bs_min_carry *c);
+
+/* The stop flag of the integrator's solves (as bs_integrator_set_stop; NULL:
+ * none), read before every Newton iteration collectively: set it on every
+ * rank or on none; raised on any rank, it ends every rank's solve at the
+ * same iteration with reason BS_MIN_STOPPED and failed = 1, at a state that
+ * is not the step's solution (undo it); statics take no further load step.
+ * Not collective. */
+void bs_dintegrator_set_stop(bs_dintegrator *D, volatile sig_atomic_t *stop);
+
 /* The linear solver (GAMG figures: bs_dlin_info). */
 const bs_dlin *bs_dintegrator_linsolve(const bs_dintegrator *D);
 

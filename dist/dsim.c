@@ -1,6 +1,6 @@
 /* dsim.c — a scene on the petsc backend: what it may use, and its mesh,
  * materials, terms, scripts and integrator (bs_dsim.h); its obstacles are
- * dsim_obstacles.c's. */
+ * dsim_obstacles.c's, its frames and statics dsim_step.c's. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -202,7 +202,7 @@ void bs_dsim_destroy(bs_dsim **sp) {
   bs_obstacles_destroy(&s->obstacles);
   bs_dfem_destroy(&s->df);
   bs_dmesh_destroy(&s->mesh);
-  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm);
+  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm), free(s->snap);
   free(s);
   *sp = NULL;
 }
@@ -214,50 +214,3 @@ int bs_dsim_inverted(bs_dsim *s, int64_t *n, bs_error *err) {
 }
 
 long bs_dsim_dofs(const bs_dsim *s) { return 3 * (long)s->n_free; }
-
-/* The step's record, as bs_sim's: time, inverted tets, its reason's copy. */
-static int record(bs_dsim *s, bs_sim_step *rec, bs_error *err) {
-  int64_t inv = 0;
-  int rc = bs_dsim_inverted(s, &inv, err);
-  rec->time = s->time;
-  rec->inverted = (int32_t)inv;
-  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
-  rec->st.min.reason_text = rec->reason;
-  return rc;
-}
-
-int bs_dsim_statics(bs_dsim *s, bs_frame_stats *fs, bs_error *err) {
-  bs_sim_step *rec = &s->steps[0];
-  int rc = bs_dintegrator_static(s->integrator, 0.0, s->scene->load_steps, s->x, &rec->st, err);
-  if (rc) {
-    bs_error_prefix(err, "static solve");
-    return rc;
-  }
-  s->frame = 1;
-  rc = record(s, rec, err);
-  bs_frame_sums(s->frame, s->time, 1, s->steps, fs);
-  return rc;
-}
-
-/* Times as bs_sim's (sim/sim_step.c): step k of frame f ends at
- * (f - 1) / fps + (k + 1) dt, the frame at f / fps. */
-int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err) {
-  const bs_scene *sc = s->scene;
-  if (sc->mode != BS_MODE_DYNAMIC)
-    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance", sc->path);
-  const int f = s->frame + 1;
-  for (int k = 0; k < sc->steps_per_frame; k++) {
-    bs_sim_step *rec = &s->steps[k];
-    int rc = bs_dintegrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
-    if (rc) {
-      bs_error_prefix(err, "frame %d step %d", f, k);
-      return rc;
-    }
-    s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-    if ((rc = record(s, rec, err))) return rc;
-  }
-  s->time = f / sc->fps;
-  s->frame = f;
-  bs_frame_sums(s->frame, s->time, sc->steps_per_frame, s->steps, fs);
-  return BS_OK;
-}

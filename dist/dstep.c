@@ -178,3 +178,7 @@ void bs_dintegrator_destroy(bs_dintegrator **pD) {
 }
 
 const bs_dlin *bs_dintegrator_linsolve(const bs_dintegrator *D) { return D->lin; }
+
+void bs_dintegrator_get_carry(const bs_dintegrator *D, bs_min_carry *c) { bs_minimizer_get_carry(D->min, c); }
+void bs_dintegrator_set_carry(bs_dintegrator *D, const bs_min_carry *c) { bs_minimizer_set_carry(D->min, c); }
+void bs_dintegrator_set_stop(bs_dintegrator *D, volatile sig_atomic_t *stop) { bs_minimizer_set_stop(D->min, stop); }

@@ -114,6 +114,7 @@ int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x
     D->step->load = (double)l / load_steps;
     memset(&sub, 0, sizeof sub);
     if (!(rc = run_solver(D, x, 1, &sub, err))) bs_step_stats_add(st, &sub);
+    if (sub.min.reason == BS_MIN_STOPPED) break; /* the later load steps are not taken */
   }
   bs_dfem_set_terms(D->df, D->n_terms, D->terms, 0);
   D->step->load = 1.0;

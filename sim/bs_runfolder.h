@@ -176,6 +176,7 @@ typedef enum { BS_SUMMARY_COMPLETE = 0, BS_SUMMARY_RUNNING, BS_SUMMARY_INTERRUPT
 typedef struct bs_summary {
   char method[32];
   bs_summary_state partial;  /* not complete: a last line "partial: N of M frames (...)" */
+  int no_resume;             /* interrupted, by a run that cannot be continued (petsc)  */
   int frames, frames_total;  /* frames done (statics: 1 once solved), scene's   */
   int steps_per_frame;
   double s_per_frame;        /* wall seconds per frame done (NaN: none done)   */
@@ -184,7 +185,7 @@ typedef struct bs_summary {
   long failed;               /* steps that did not converge                     */
   double max_grad;           /* largest final ||grad E|| (N)                    */
   int32_t inverted;          /* at the last frame                               */
-  int64_t self_intersections;/* at the last frame (BS_SIM_SELF_CAP: at least)  */
+  int64_t self_intersections;/* at the last frame (BS_SIM_SELF_CAP: at least; <0: not computed) */
   int obstacles;             /* 1: the penetration figures apply                */
   int32_t penetrating;
   double max_depth;

@@ -43,8 +43,13 @@ int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
 #define REST buf + (len < (int)n ? len : (int)n), (size_t)(len < (int)n ? (int)n - len : 0)
   len += snprintf(REST, "%-13s %6d %10.4f %9ld %11.2f %8ld %9.2e %9d\n", u->method, u->steps_per_frame, u->s_per_frame,
                   u->dofs, u->solves_per_step, u->failed, u->max_grad, u->inverted);
-  len += snprintf(REST, "at the last frame: %d inverted tets, %s%lld intersecting surface triangle pairs", u->inverted,
-                  u->self_intersections >= BS_SIM_SELF_CAP ? "at least " : "", (long long)u->self_intersections);
+  if (u->self_intersections < 0) /* not computed (the petsc backend) */
+    len += snprintf(REST, "at the last frame: %d inverted tets, intersecting surface triangle pairs not computed",
+                    u->inverted);
+  else
+    len += snprintf(REST, "at the last frame: %d inverted tets, %s%lld intersecting surface triangle pairs",
+                    u->inverted, u->self_intersections >= BS_SIM_SELF_CAP ? "at least " : "",
+                    (long long)u->self_intersections);
   if (u->obstacles)
     len += snprintf(REST, ", %d vertices inside obstacles (max depth %.3e m)", u->penetrating, u->max_depth);
   len += snprintf(REST, "\n");
@@ -58,8 +63,8 @@ int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
     len += snprintf(REST, "partial: %d of %d frames (the run has not finished, or was killed)\n", u->frames,
                     u->frames_total);
   if (u->partial == BS_SUMMARY_INTERRUPTED)
-    len += snprintf(REST, "partial: %d of %d frames (interrupted; bigstep run --resume continues it)\n", u->frames,
-                    u->frames_total);
+    len += snprintf(REST, "partial: %d of %d frames (interrupted; %s)\n", u->frames, u->frames_total,
+                    u->no_resume ? "this backend writes no checkpoint to continue from" : "bigstep run --resume continues it");
 #undef REST
   return len;
 }

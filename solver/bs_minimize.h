@@ -455,7 +455,10 @@ const bs_minimize_opts *bs_minimizer_opts(const bs_minimizer *m);
  * ends there with BS_MIN_STOPPED, x the last accepted iterate. A solve of
  * hundreds of Newton iterations (a tangled start at 824k dofs: minutes)
  * can so be stopped between two of them instead of at its end. The flag is
- * the caller's and must outlive the minimizer or be unset. */
+ * the caller's and must outlive the minimizer or be unset. With vecops
+ * (bs_vecops.h) the check is collective (vecops.any): every rank must set a
+ * flag or none, and a flag raised on one rank stops all ranks at the same
+ * iteration. */
 void bs_minimizer_set_stop(bs_minimizer *m, volatile sig_atomic_t *stop);
 
 /* What one bs_minimize call hands the next (opts.forcing_ew = 2): whether it

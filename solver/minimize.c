@@ -124,8 +124,10 @@ void bs_minimizer_set_stop(bs_minimizer *m, volatile sig_atomic_t *stop) {
   if (m) m->stop = stop;
 }
 
+/* Collective with vecops (bs__many): a flag raised on any rank stops every
+ * rank's solve at the same iteration. */
 int bs__stopped(bs_minimizer *m, bs_minimize_stats *st, int it, double gnorm) {
-  if (!m->stop || !*m->stop) return 0;
+  if (!m->stop || !bs__many(m, *m->stop != 0)) return 0;
   bs__set_reason(m, st, BS_MIN_STOPPED, "stopped on request after %d iterations (|grad E| = %.3e, tol %.3e)", it,
                  gnorm, m->tau);
   return 1;
