@@ -87,6 +87,19 @@ static void check_frames(const char *out, const bs_run_totals *T) {
   cr_expect_eq(bs_frames_csv_lines(out), FRAMES + 2);
 }
 
+/* u formatted into out/summary.txt and read back into *back. */
+static void write_and_read(const char *out, const bs_summary *u, bs_summary *back) {
+  char text[2048], p[600];
+  bs_error err;
+  bs_summary_format(u, text, sizeof text);
+  snprintf(p, sizeof p, "%s/summary.txt", out);
+  FILE *f = fopen(p, "w");
+  cr_assert_not_null(f);
+  fputs(text, f);
+  fclose(f);
+  cr_assert_eq(bs_summary_read(out, back, &err), 0, "%s", err.msg);
+}
+
 /* summary.txt: what bs_summary_format wrote (u, made with 1.5 s of wall time),
  * and a failed count and solves/step of another summary round-trip too */
 static void check_summary(const char *out, const bs_sim *s, const bs_run_totals *T, bs_summary *u) {
@@ -101,16 +114,9 @@ static void check_summary(const char *out, const bs_sim *s, const bs_run_totals 
             back.solves_per_step, (double)T->iterations / T->steps);
   cr_expect(fabs(back.s_per_frame - 1.5 / FRAMES) <= 5e-5, "s/frame %g", back.s_per_frame);
   cr_expect(isfinite(back.peak_mib) && back.peak_mib > 0, "peak %g MiB", back.peak_mib);
-  char text[2048], p[600];
   u->failed = 17;
   u->solves_per_step = 4.25;
-  bs_summary_format(u, text, sizeof text);
-  snprintf(p, sizeof p, "%s/summary.txt", out);
-  FILE *f = fopen(p, "w");
-  cr_assert_not_null(f);
-  fputs(text, f);
-  fclose(f);
-  cr_assert_eq(bs_summary_read(out, &back, &err), 0, "%s", err.msg);
+  write_and_read(out, u, &back);
   cr_expect_eq(back.failed, 17);
   cr_expect_eq(back.solves_per_step, 4.25);
 }
@@ -157,14 +163,7 @@ Test(runfolder, no_frame_done_has_no_seconds_per_frame, .init = setup, .fini = t
   cr_expect_eq(u.frames, 0);
   cr_expect_eq(u.partial, BS_SUMMARY_RUNNING);
   cr_expect(isnan(u.s_per_frame), "s/frame %g over no frame", u.s_per_frame);
-  char text[2048], p[600];
-  bs_summary_format(&u, text, sizeof text);
-  snprintf(p, sizeof p, "%s/summary.txt", dir);
-  FILE *f = fopen(p, "w");
-  cr_assert_not_null(f);
-  fputs(text, f);
-  fclose(f);
-  cr_assert_eq(bs_summary_read(dir, &back, &err), 0, "%s", err.msg);
+  write_and_read(dir, &u, &back);
   cr_expect(isnan(back.s_per_frame), "s/frame %g read back", back.s_per_frame);
   cr_expect_eq(back.frames, 0);
   cr_expect_eq(back.frames_total, FRAMES);
