@@ -64,7 +64,8 @@ int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
                     u->frames_total);
   if (u->partial == BS_SUMMARY_INTERRUPTED)
     len += snprintf(REST, "partial: %d of %d frames (interrupted; %s)\n", u->frames, u->frames_total,
-                    u->no_resume ? "this backend writes no checkpoint to continue from" : "bigstep run --resume continues it");
+                    u->no_resume ? "this backend writes no checkpoint to continue from"
+                                 : "bigstep run --resume continues it");
 #undef REST
   return len;
 }
