@@ -96,7 +96,7 @@ static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, doubl
   if (stopped) u.partial = BS_SUMMARY_INTERRUPTED, u.no_resume = 1;
   u.s_per_frame = u.frames > 0 ? wall / u.frames : NAN;
   u.dofs = bs_dsim_dofs(d);
-  u.solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
+  u.solves_per_step = T->steps ? (double)T->iterations / T->steps : NAN; /* no step: not measured */
   u.failed = T->failed;
   u.max_grad = T->max_grad;
   u.inverted = d->steps[0].inverted;

@@ -181,7 +181,7 @@ typedef struct bs_summary {
   int steps_per_frame;
   double s_per_frame;        /* wall seconds per frame done (NaN: none done)   */
   long dofs;
-  double solves_per_step;    /* Newton iterations per step                      */
+  double solves_per_step;    /* Newton iterations per step (NaN: no step)       */
   long failed;               /* steps that did not converge                     */
   double max_grad;           /* largest final ||grad E|| (N)                    */
   int32_t inverted;          /* at the last frame                               */

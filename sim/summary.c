@@ -24,7 +24,7 @@ void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wa
   out->partial = out->frames < out->frames_total ? BS_SUMMARY_RUNNING : BS_SUMMARY_COMPLETE;
   out->s_per_frame = out->frames > 0 ? wall / out->frames : NAN; /* no frame done: not measured */
   out->dofs = bs_sim_dofs(s);
-  out->solves_per_step = T->steps ? (double)T->iterations / T->steps : 0.0;
+  out->solves_per_step = T->steps ? (double)T->iterations / T->steps : NAN; /* no step: not measured */
   out->failed = T->failed;
   out->max_grad = T->max_grad;
   out->inverted = m->inverted;

@@ -148,9 +148,9 @@ Test(runfolder, round_trip, .init = setup, .fini = teardown) {
   bs_scene_destroy(&sc);
 }
 
-/* A run stopped before its first frame: its s/frame is not measured (NaN,
- * "nan" in summary.txt and NaN read back), not the partial frame's seconds
- * over no frame. */
+/* A run stopped before its first frame: its s/frame and solves/step are not
+ * measured (NaN, "nan" in summary.txt and NaN read back), not the partial
+ * frame's seconds over no frame or 0 solves. */
 Test(runfolder, no_frame_done_has_no_seconds_per_frame, .init = setup, .fini = teardown) {
   bs_scene *sc = small_box();
   bs_sim *s = NULL;
@@ -163,8 +163,10 @@ Test(runfolder, no_frame_done_has_no_seconds_per_frame, .init = setup, .fini = t
   cr_expect_eq(u.frames, 0);
   cr_expect_eq(u.partial, BS_SUMMARY_RUNNING);
   cr_expect(isnan(u.s_per_frame), "s/frame %g over no frame", u.s_per_frame);
+  cr_expect(isnan(u.solves_per_step), "solves/step %g over no step", u.solves_per_step);
   write_and_read(dir, &u, &back);
   cr_expect(isnan(back.s_per_frame), "s/frame %g read back", back.s_per_frame);
+  cr_expect(isnan(back.solves_per_step), "solves/step %g read back", back.solves_per_step);
   cr_expect_eq(back.frames, 0);
   cr_expect_eq(back.frames_total, FRAMES);
   bs_sim_destroy(&s);
