@@ -22,6 +22,17 @@
  * Collective (PETSC_COMM_WORLD). Ownership: bs_dsim_create borrows the scene
  * (it must outlive the dsim) and owns everything else. State (x, v, mask)
  * is in local vectors (3 per local vertex of mesh, consistent).
+ *
+ * Usage (every rank, after bs_dist_init):
+ *   bs_dsim *d;
+ *   if (bs_dsim_create(sc, &d, &err)) ...;          // err names the key refused
+ *   bs_dsim_set_stop(d, &flag, &err);               // optional: a signal handler's flag
+ *   for (int f = 0; f < sc->frames; f++) {
+ *     int rc = bs_dsim_advance_frame(d, &fs, &err);
+ *     if (rc == BS_SIM_STOPPED) break;             // d is at the end of frame f, bit for bit
+ *     if (rc) ...;                                  // an error, the same on every rank
+ *   }
+ *   bs_dsim_destroy(&d);
  */
 #ifndef BS_DSIM_H
 #define BS_DSIM_H
