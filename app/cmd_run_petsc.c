@@ -2,7 +2,6 @@
  * scene on the distributed backend (dist/bs_dsim.h). Rank 0 prints the
  * header, the frame lines and the summary (bs_summary_format, the serial
  * run's summary). Without PETSc (BS_PETSC=OFF) the backend is refused. */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -86,19 +85,9 @@ static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, int
  * interrupted, over the frames done): printed by rank 0, and written into the
  * folder (out may be NULL). */
 static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, int stopped, bs_error *err) {
-  const bs_scene *sc = d->scene;
   bs_summary u;
-  memset(&u, 0, sizeof u);
-  snprintf(u.method, sizeof u.method, "%s", bs_method_name(sc->solver.method));
-  u.steps_per_frame = sc->steps_per_frame;
-  u.frames = d->frame;
-  u.frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
+  bs_summary_init(d->scene, d->frame, bs_dsim_dofs(d), T, wall, &u);
   if (stopped) u.partial = BS_SUMMARY_INTERRUPTED, u.no_resume = 1;
-  u.s_per_frame = u.frames > 0 ? wall / u.frames : NAN;
-  u.dofs = bs_dsim_dofs(d);
-  u.solves_per_step = T->steps ? (double)T->iterations / T->steps : NAN; /* no step: not measured */
-  u.failed = T->failed;
-  u.max_grad = T->max_grad;
   u.inverted = d->steps[0].inverted;
   u.self_intersections = -1; /* not computed on this backend */
   u.obstacles = d->obstacles != NULL;
@@ -106,10 +95,7 @@ static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, doubl
   int rc = u.obstacles ? bs_dsim_penetration(d, &pen, &u.max_depth, err) : BS_OK;
   if (rc) return rc;
   u.penetrating = (int32_t)pen;
-  u.totals = *T;
-  double mib = bs_peak_rss() / 1048576.0;
-  MPI_Allreduce(MPI_IN_PLACE, &mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  u.peak_mib = mib;
+  MPI_Allreduce(MPI_IN_PLACE, &u.peak_mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   char text[2048];
   bs_summary_format(&u, text, sizeof text);
   if (bs_dist_rank() == 0) printf("\n%s(peak memory: the largest of the %d ranks)\n", text, bs_dist_size());

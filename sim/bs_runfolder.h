@@ -199,6 +199,14 @@ typedef struct bs_summary {
  * caller may set BS_SUMMARY_INTERRUPTED). */
 void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_seconds, bs_summary *out);
 
+/* The fields every backend's summary shares: the scene's method, steps per
+ * frame and frame count; frames done (statics: 0 or 1); s/frame (NaN when no
+ * frame is done) and solves/step (NaN when no step is) from the wall seconds
+ * and the totals; partial RUNNING when frames < the scene's; the peak memory
+ * of this process. The state's figures (inverted, ...) are left 0. */
+void bs_summary_init(const bs_scene *sc, int frames, long dofs, const bs_run_totals *T, double wall_seconds,
+                     bs_summary *out);
+
 /* The same with the current state's measures given. */
 void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall_seconds, const bs_sim_measures *m,
                               bs_summary *out);

@@ -13,27 +13,32 @@ void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall, bs_su
   bs_summary_make_measured(s, T, wall, &m, out);
 }
 
-void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall, const bs_sim_measures *m,
-                              bs_summary *out) {
-  const bs_scene *sc = s->scene;
+void bs_summary_init(const bs_scene *sc, int frames, long dofs, const bs_run_totals *T, double wall,
+                     bs_summary *out) {
   memset(out, 0, sizeof *out);
   snprintf(out->method, sizeof out->method, "%s", bs_method_name(sc->solver.method));
   out->steps_per_frame = sc->steps_per_frame;
-  out->frames = s->frame; /* statics: 1 once solved, 0 before (or stopped in its solve) */
+  out->frames = frames;
   out->frames_total = sc->mode == BS_MODE_STATIC ? 1 : sc->frames;
   out->partial = out->frames < out->frames_total ? BS_SUMMARY_RUNNING : BS_SUMMARY_COMPLETE;
   out->s_per_frame = out->frames > 0 ? wall / out->frames : NAN; /* no frame done: not measured */
-  out->dofs = bs_sim_dofs(s);
+  out->dofs = dofs;
   out->solves_per_step = T->steps ? (double)T->iterations / T->steps : NAN; /* no step: not measured */
   out->failed = T->failed;
   out->max_grad = T->max_grad;
+  out->totals = *T;
+  out->peak_mib = bs_peak_rss() / 1048576.0;
+}
+
+void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall, const bs_sim_measures *m,
+                              bs_summary *out) {
+  /* statics: frame 1 once solved, 0 before (or stopped in its solve) */
+  bs_summary_init(s->scene, s->frame, bs_sim_dofs(s), T, wall, out);
   out->inverted = m->inverted;
   out->self_intersections = m->self_intersections;
   out->obstacles = s->obstacles != NULL;
   out->penetrating = m->penetrating;
   out->max_depth = m->max_depth;
-  out->totals = *T;
-  out->peak_mib = bs_peak_rss() / 1048576.0;
 }
 
 int bs_summary_format(const bs_summary *u, char *buf, size_t n) {

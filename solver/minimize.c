@@ -553,9 +553,16 @@ static void clamp_direction(bs_minimizer *m, double dn, bs_minimize_stats *st, b
   st->clamps++;
 }
 
+/* d := -g, counted as a -grad E fallback, then clamped (step 6). */
+static void along_neg_grad(bs_minimizer *m, double gnorm, bs_minimize_stats *st, bs_min_iter *rec) {
+  for (int64_t i = 0; i < m->n3; ++i) m->d[i] = -m->g[i];
+  rec->direction = BS_DIR_NEG_GRAD;
+  st->fallback_neg_grad++;
+  clamp_direction(m, gnorm, st, rec);
+}
+
 /* Steps 5 and 6 on the Newton direction m->d: the downhill check (dx, else
  * -dx, else -grad E) and the length clamp. Returns phi'(0) = d.g. */
-
 static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stats *st, bs_min_iter *rec) {
   const bs_minimize_opts *o = &m->opts;
   const int64_t N = m->n3;
@@ -568,10 +575,8 @@ static double downhill_and_clamp(bs_minimizer *m, double gnorm, bs_minimize_stat
     rec->direction = BS_DIR_NEG_DX;
     st->fallback_neg_dx++;
   } else {
-    for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
-    dn = gnorm;
-    rec->direction = BS_DIR_NEG_GRAD;
-    st->fallback_neg_grad++;
+    along_neg_grad(m, gnorm, st, rec);
+    return bs__mdot(m, m->d, m->g);
   }
   clamp_direction(m, dn, st, rec); /* step 6 */
   return bs__mdot(m, m->d, m->g);
@@ -586,11 +591,7 @@ static double restart_along_gradient(bs_minimizer *m, double E, double gnorm, do
   const double dn = sqrt(bs__mdot(m, m->d, m->d));
   if (rec->direction == BS_DIR_NEG_GRAD || -dphi0 <= bs__noise_level(E) || -dphi0 >= (1 - 1e-12) * dn * gnorm)
     return 0;
-  const int64_t N = m->n3;
-  for (int64_t i = 0; i < N; ++i) m->d[i] = -m->g[i];
-  rec->direction = BS_DIR_NEG_GRAD;
-  st->fallback_neg_grad++;
-  clamp_direction(m, gnorm, st, rec);
+  along_neg_grad(m, gnorm, st, rec);
   return bs__mdot(m, m->d, m->g);
 }
 

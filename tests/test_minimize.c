@@ -1312,18 +1312,14 @@ Test(minimize, a_failed_newton_line_search_restarts_along_the_gradient) {
   o.max_iter = 20;
   o.sigma = 1e-12; /* exact Newton directions (a loose CG stops near -g) */
   o.cg_downhill = 0;
-  bs_minimizer *m = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_minimizer_create(P, &o, &m, &err), 0, "%s", err.msg);
   bs_objective obj = make_obj(&f, NULL);
   obj.trace = NULL;
   double x[3] = {0, 0, 0};
   bs_minimize_stats st;
-  cr_assert_eq(bs_minimize(m, &obj, x, &st, &err), 0, "%s", err.msg);
+  min_run_obj(P, &o, &obj, x, &st);
   cr_expect(st.iterations >= 1 && st.fallback_neg_grad >= 1, "%d iterations, %d -g fallbacks: %s", st.iterations,
             st.fallback_neg_grad, st.reason_text);
   cr_expect(st.E < 1e-2, "E = %g (100 at the start; without the restart the solve ends there)", st.E);
-  bs_minimizer_destroy(&m);
   bs_bsr_destroy(&P);
 }
 
