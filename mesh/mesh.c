@@ -811,91 +811,79 @@ int bs_mesh_vertex_graph(const bs_mesh *m, int32_t **ptr_out, int32_t **adj_out,
 
 /* ---- checker ------------------------------------------------------------ */
 
-static int check_faces(const bs_mesh *m, bs_error *err) {
-  int32_t *ptr = NULL;
-  face_rec *rec = NULL;
-  int32_t *seen = NULL;
-  int rc = face_table(m->tets, m->n_tets, m->n_vertices, &ptr, &rec, err);
-  if (rc) return rc;
-  int32_t nb = 0;
-  /* Interior faces: two tets, opposite orientations (the tets lie on either
-   * side); boundary faces: one tet. */
-  for (int32_t a = 0; a < m->n_vertices && !rc; ++a) {
+/* The faces of the tets (face_table's ptr, rec): an interior face is shared
+ * by two tets with opposite orientations (they lie on either side of it), a
+ * boundary face belongs to one tet. *nb receives the boundary faces. */
+static int check_shared_faces(const bs_mesh *m, const int32_t *ptr, const face_rec *rec, int32_t *nb,
+                              bs_error *err) {
+  *nb = 0;
+  for (int32_t a = 0; a < m->n_vertices; ++a) {
     for (int32_t i = ptr[a]; i < ptr[a + 1];) {
       int32_t n = run_length(rec, i, ptr[a + 1]);
-      if (n > 2) {
-        rc = face_shared_error(m->tets, rec + i, a, n, err);
-        break;
-      }
+      if (n > 2) return face_shared_error(m->tets, rec + i, a, n, err);
       if (n == 2) {
         int32_t u[3], w[3];
         face_oriented(m->tets, rec[i].id, u);
         face_oriented(m->tets, rec[i + 1].id, w);
-        if (same_cycle(u, w) != -1) {
-          rc = bs_error_set(err, BS_EINPUT,
-                            "face (%d %d %d) is shared by tets %d and %d lying on the same side of it (overlapping tets)",
-                            a, rec[i].b, rec[i].c, rec[i].id >> 2, rec[i + 1].id >> 2);
-          break;
-        }
+        if (same_cycle(u, w) != -1)
+          return bs_error_set(err, BS_EINPUT,
+                              "face (%d %d %d) is shared by tets %d and %d lying on the same side of it "
+                              "(overlapping tets)",
+                              a, rec[i].b, rec[i].c, rec[i].id >> 2, rec[i + 1].id >> 2);
       }
-      nb += (n == 1);
+      *nb += (n == 1);
       i += n;
     }
   }
-  if (rc) goto done;
-  if (nb != m->n_faces) {
-    rc = bs_error_set(err, BS_EINPUT, "mesh lists %d boundary faces but its tets have %d", m->n_faces, nb);
-    goto done;
-  }
-  if (nb > 0 && (!m->faces || !m->face_tet || !m->boundary)) {
-    rc = bs_error_set(err, BS_EINPUT, "mesh has %d boundary faces but no face arrays", nb);
-    goto done;
-  }
-  seen = bs_calloc((size_t)4 * m->n_tets, sizeof *seen, "boundary face marks", err);
-  if (!seen) {
-    rc = BS_ENOMEM;
-    goto done;
-  }
-  for (int32_t f = 0; f < m->n_faces && !rc; ++f) {
-    const int32_t *fv = m->faces + 3 * (size_t)f;
-    int32_t t = m->face_tet[f];
-    if (t < 0 || t >= m->n_tets) {
-      rc = bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) names tet %d, out of range [0, %d)", f, fv[0],
+  return BS_OK;
+}
+
+/* Boundary face f: a face of its tet, outward, not interior (face_table's
+ * ptr, rec), listed once (seen: 4 marks per tet). */
+static int check_boundary_face(const bs_mesh *m, int32_t f, const int32_t *ptr, const face_rec *rec, int32_t *seen,
+                               bs_error *err) {
+  const int32_t *fv = m->faces + 3 * (size_t)f;
+  int32_t t = m->face_tet[f];
+  if (t < 0 || t >= m->n_tets)
+    return bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) names tet %d, out of range [0, %d)", f, fv[0],
                         fv[1], fv[2], t, m->n_tets);
-      break;
-    }
-    int lf = -1, sign = 0;
-    for (int k = 0; k < 4 && !sign; ++k) {
-      int32_t u[3];
-      face_oriented(m->tets, 4 * t + k, u);
-      sign = same_cycle(fv, u);
-      lf = k;
-    }
-    if (sign == 0) {
-      rc = bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is not a face of its tet %d", f, fv[0], fv[1], fv[2],
-                        t);
-      break;
-    }
-    if (sign < 0) {
-      rc = bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) points into its tet %d (not outward)", f, fv[0],
-                        fv[1], fv[2], t);
-      break;
-    }
-    int32_t v[3] = {fv[0], fv[1], fv[2]};
-    sort3(v);
-    int32_t lo = ptr[v[0]], hi = ptr[v[0] + 1], hits = 0;
-    for (int32_t i = lo; i < hi; ++i) hits += (rec[i].b == v[1] && rec[i].c == v[2]);
-    if (hits != 1) {
-      rc = bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is an interior face (shared by %d tets)", f, fv[0],
-                        fv[1], fv[2], hits);
-      break;
-    }
-    if (seen[4 * t + lf]++) {
-      rc = bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is listed twice", f, fv[0], fv[1], fv[2]);
-      break;
-    }
+  int lf = -1, sign = 0;
+  for (int k = 0; k < 4 && !sign; ++k) {
+    int32_t u[3];
+    face_oriented(m->tets, 4 * t + k, u);
+    sign = same_cycle(fv, u);
+    lf = k;
   }
-done:
+  if (sign == 0)
+    return bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is not a face of its tet %d", f, fv[0], fv[1],
+                        fv[2], t);
+  if (sign < 0)
+    return bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) points into its tet %d (not outward)", f, fv[0],
+                        fv[1], fv[2], t);
+  int32_t v[3] = {fv[0], fv[1], fv[2]};
+  sort3(v);
+  int32_t hits = 0;
+  for (int32_t i = ptr[v[0]]; i < ptr[v[0] + 1]; ++i) hits += (rec[i].b == v[1] && rec[i].c == v[2]);
+  if (hits != 1)
+    return bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is an interior face (shared by %d tets)", f, fv[0],
+                        fv[1], fv[2], hits);
+  if (seen[4 * t + lf]++)
+    return bs_error_set(err, BS_EINPUT, "boundary face %d (%d %d %d) is listed twice", f, fv[0], fv[1], fv[2]);
+  return BS_OK;
+}
+
+static int check_faces(const bs_mesh *m, bs_error *err) {
+  int32_t *ptr = NULL, *seen = NULL, nb = 0;
+  face_rec *rec = NULL;
+  int rc = face_table(m->tets, m->n_tets, m->n_vertices, &ptr, &rec, err);
+  if (rc) return rc;
+  rc = check_shared_faces(m, ptr, rec, &nb, err);
+  if (!rc && nb != m->n_faces)
+    rc = bs_error_set(err, BS_EINPUT, "mesh lists %d boundary faces but its tets have %d", m->n_faces, nb);
+  if (!rc && nb > 0 && (!m->faces || !m->face_tet || !m->boundary))
+    rc = bs_error_set(err, BS_EINPUT, "mesh has %d boundary faces but no face arrays", nb);
+  if (!rc && !(seen = bs_calloc((size_t)4 * m->n_tets, sizeof *seen, "boundary face marks", err))) rc = BS_ENOMEM;
+  for (int32_t f = 0; f < m->n_faces && !rc; ++f) rc = check_boundary_face(m, f, ptr, rec, seen, err);
   free(seen);
   free(ptr);
   free(rec);
