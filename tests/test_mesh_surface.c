@@ -51,9 +51,14 @@ Test(mesh_surface, elephant_scan_volume) { mesh_checked("data/meshes/elephant.of
  * cavities in a 3 mm sheet on the head until every cavity of a one-piece
  * surface was filled, and is under the gate, so HXT meshes it again inside
  * its boundary. Measured: 95,099 tets, 11.92 degrees, volume -0.60%,
- * Hausdorff 0.37 h. */
+ * Hausdorff 0.37 h. That last step is Gmsh's, and Gmsh's result depends
+ * on where the heap lands (ASLR: under `setarch -R` every run gives the
+ * same 94,884 tets): 11.38 to 12.11 degrees over 30 runs here, and in 1
+ * run here and in CI's run of 2026-12-05 it missed the gate, so the first
+ * mesh (-1.38%, Hausdorff 0.40 h) was kept, as the mesher says it does.
+ * The bound holds for both. */
 Test(mesh_surface, camel_mesh3_boundary_is_a_manifold) {
-  mesh_checked_with("data/corpus/cgal/camel.off", 30, BS_SURFACE_CGAL, 0.01, 0.5);
+  mesh_checked_with("data/corpus/cgal/camel.off", 30, BS_SURFACE_CGAL, 0.015, 0.5);
 }
 
 /* At diagonal / 40 Mesh_3's first mesh is under the gate (9.6 degrees);
@@ -93,6 +98,8 @@ Test(mesh_surface, auto_takes_the_remesh_path_when_mesh3_refuses) {
   cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
   bs_mesh_quality q;
   bs_mesh_quality_compute(m, NULL, &q);
+  cr_log_info("camel at diagonal / 50, gate 13: %d tets, %.3f degrees, volume %g vs %g", m->n_tets, q.dihedral_min,
+              bs_mesh_volume(m), s.volume);
   cr_expect_geq(q.dihedral_min, 13.0, "%.3f degrees", q.dihedral_min);
   cr_expect_eq(q.n_inverted, 0);
   cr_expect_eq(bs__boundary_manifold(m, path, 1, &err), BS_OK, "%s", err.msg);
