@@ -147,3 +147,9 @@ int bs_parse_int(const char *s, long lo, long hi, int *out) {
   *out = (int)v;
   return 0;
 }
+
+uint64_t bs_fnv1a(uint64_t h, const void *p, size_t n) {
+  const unsigned char *b = p;
+  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ULL;
+  return h;
+}

@@ -92,6 +92,12 @@ int bs_parse_int(const char *s, long lo, long hi, int *out);
  * `mkdir -p`: 0, or BS_EIO naming the folder that could not be made. */
 int bs_mkdir_p(const char *dir, bs_error *err);
 
+/* FNV-1a over n bytes at p, continuing from h (BS_FNV_SEED to start): the
+ * checksums of checkpoint.bin and the scene's identity, the integrator's
+ * mark of the state it left. */
+#define BS_FNV_SEED 1469598103934665603ULL
+uint64_t bs_fnv1a(uint64_t h, const void *p, size_t n);
+
 /* qsort/bsearch comparison of two int32_t (ascending). */
 int bs_cmp_i32(const void *a, const void *b);
 

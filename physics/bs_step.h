@@ -7,6 +7,12 @@
  *     with opts.guess_xn a third, xⁿ, keeping the one with the smallest E (the
  *     first and third are "naive": at least one iteration is then taken); each
  *     is projected when a projection hook is set (constraint collisions);
+ *     with post-solve hooks (friction, which changes vⁿ after the solve) a
+ *     fourth, xⁿ + d, d the last step's displacement before its hooks, when
+ *     (xⁿ, vⁿ) is the state that step left and its E is the smallest: where
+ *     a kinematic obstacle pushes a body along a frictional floor, x̂ lags
+ *     the obstacle by what friction took from vⁿ (the fig14 replica: E at
+ *     x̂ ~1e4 J against ~380 at the step's answer);
  *  4. the solve: the optimization integrator (bs_minimize), or the Newton
  *     baseline (bs_newton, to convergence or k steps);
  *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt, then the post-solve hooks (friction).
@@ -95,10 +101,11 @@ typedef struct bs_step_hooks {
 typedef enum {
   BS_GUESS_XHAT = 0,     /* x̂ = xⁿ + Δt vⁿ                                        */
   BS_GUESS_EXPLICIT = 1, /* x̂ + Δt² M⁻¹ f(xⁿ) (an explicit step)                  */
-  BS_GUESS_XN = 2        /* xⁿ (opts.guess_xn)                                    */
+  BS_GUESS_XN = 2,       /* xⁿ (opts.guess_xn)                                    */
+  BS_GUESS_PREVIOUS = 3  /* xⁿ + the last step's displacement (post-solve hooks)  */
 } bs_guess;
 
-/* "x_hat", "explicit", "x_n"; "?" for a value outside the enum. */
+/* "x_hat", "explicit", "x_n", "previous"; "?" for a value outside the enum. */
 const char *bs_guess_name(bs_guess g);
 
 typedef struct bs_step_stats {
@@ -164,6 +171,21 @@ double bs_integrator_energy(bs_integrator *I, const double *x);
  * bs_minimize.h), for checkpoints. */
 void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c);
 void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c);
+
+/* What the previous-step guess (step 3) needs, for checkpoints and for
+ * undoing a stopped frame: have = 0 when there is none (no step yet, after
+ * statics, or without post-solve hooks). get copies d when p->d is not NULL
+ * (3n doubles, the caller's); set copies d (have is kept only with d and
+ * dt > 0). A state restored bit for bit with its mark gets the guess back;
+ * any other state simply does not. */
+typedef struct bs_previous_step {
+  int have;
+  double dt;     /* that step's Δt                                 */
+  uint64_t mark; /* of the (x, v) that step left                    */
+  double *d;     /* 3n: its displacement before the post-solve hooks */
+} bs_previous_step;
+void bs_integrator_get_previous(const bs_integrator *I, bs_previous_step *p);
+void bs_integrator_set_previous(bs_integrator *I, const bs_previous_step *p);
 
 /* The stop flag of the integrator's solves (bs_minimizer_set_stop; NULL:
  * none): a step whose solve it stops ends with reason BS_MIN_STOPPED and

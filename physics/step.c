@@ -22,6 +22,7 @@ struct bs_integrator {
   int has_expensive;
   int has_convexified;    /* a term offers hessian_convexified         */
   double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
+  bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
 };
 
 static const char *method_names[] = {"optimization", "newton", "newton_k"};
@@ -37,9 +38,9 @@ int bs_method_parse(const char *name, bs_method *out, bs_error *err) {
 
 const char *bs_method_name(bs_method m) { return (unsigned)m < 3 ? method_names[m] : "?"; }
 
-static const char *guess_names[] = {"x_hat", "explicit", "x_n"};
+static const char *guess_names[] = {"x_hat", "explicit", "x_n", "previous"};
 
-const char *bs_guess_name(bs_guess g) { return (unsigned)g < 3 ? guess_names[g] : "?"; }
+const char *bs_guess_name(bs_guess g) { return (unsigned)g < 4 ? guess_names[g] : "?"; }
 
 void bs_integrator_opts_default(bs_integrator_opts *o) {
   memset(o, 0, sizeof *o);
@@ -65,6 +66,7 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->g2);
   free(I->grad);
   free(I->gh);
+  free(I->prev.d);
   free(I);
   *pI = NULL;
 }
@@ -87,7 +89,8 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   I->g2 = malloc(sizeof(double) * (n3 ? n3 : 1));
   I->grad = malloc(sizeof(double) * (n3 ? n3 : 1));
   I->gh = malloc(sizeof(double) * (n3 ? n3 : 1));
-  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh) {
+  I->prev.d = calloc(n3 ? n3 : 1, sizeof(double));
+  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh || !I->prev.d) {
     bs_integrator_destroy(&I);
     return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%zu vertices)", nv);
   }
@@ -357,6 +360,18 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
 
 void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c) { bs_minimizer_get_carry(I->min, c); }
 void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c) { bs_minimizer_set_carry(I->min, c); }
+
+void bs_integrator_get_previous(const bs_integrator *I, bs_previous_step *p) {
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  p->have = I->prev.have, p->dt = I->prev.dt, p->mark = I->prev.mark;
+  if (p->d) memcpy(p->d, I->prev.d, sizeof(double) * n3);
+}
+
+void bs_integrator_set_previous(bs_integrator *I, const bs_previous_step *p) {
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  I->prev.have = p->have && p->d && p->dt > 0, I->prev.dt = p->dt, I->prev.mark = p->mark;
+  if (I->prev.have) memcpy(I->prev.d, p->d, sizeof(double) * n3);
+}
 void bs_integrator_set_stop(bs_integrator *I, volatile sig_atomic_t *stop) { bs_minimizer_set_stop(I->min, stop); }
 
 double bs_integrator_energy(bs_integrator *I, const double *x) {
@@ -410,6 +425,37 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
   /* "k Newton steps and stop" ends by design without convergence: not a failure. */
   st->failed = !bs_min_reason_converged(st->min.reason) && st->min.reason != BS_MIN_STEPS_DONE;
   return 0;
+}
+
+/* The mark of the state (x, v) a step left: the previous-step guess is
+ * offered only from that state. */
+static uint64_t state_mark(const double *x, const double *v, size_t n3) {
+  return bs_fnv1a(bs_fnv1a(BS_FNV_SEED, x, sizeof(double) * n3), v, sizeof(double) * n3);
+}
+
+/* The previous-step candidate (bs_step.h, step 3): xⁿ + (Δt / Δt_prev) d,
+ * d the last step's displacement before its post-solve hooks (friction)
+ * changed vⁿ, scripted vertices at tⁿ⁺¹, projected; taken into x when its E
+ * is below the chosen guess's. Offered only when (x, v) is the state that
+ * step left (its mark). */
+static void previous_step_guess(bs_integrator *I, double t, double dt, double *x, const double *v, int *naive,
+                                bs_step_stats *st) {
+  const size_t nv = (size_t)I->fem->n_vertices, n3 = 3 * nv;
+  if (!I->prev.have || I->prev.mark != state_mark(I->x_n, v, n3)) return;
+  const double s = dt / I->prev.dt;
+  for (size_t i = 0; i < n3; i++) I->g1[i] = I->x_n[i] + s * I->prev.d[i];
+  for (size_t vtx = 0; vtx < nv; vtx++)
+    if (!I->mask[vtx])
+      for (int k = 0; k < 3; k++) I->g1[3 * vtx + k] = I->x_n[3 * vtx + k];
+  if (I->script) I->script(t + dt, I->g1, I->script_ctx);
+  if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
+  const double Eb = guess_energy(I, x, guess_part(I, x, TERMS_CHEAP), INFINITY);
+  const double Ep = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
+  if (isfinite(Ep) && (!isfinite(Eb) || Ep < Eb)) {
+    memcpy(x, I->g1, sizeof(double) * n3);
+    st->guess = BS_GUESS_PREVIOUS;
+    *naive = 1;
+  }
 }
 
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
@@ -486,6 +532,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
       naive = 1;
     }
   }
+  if (I->hooks.post_solve) previous_step_guess(I, t, dt, x, v, &naive, st);
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
   if (I->hooks.post_solve) {
@@ -493,7 +540,13 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     const char *bad = "?";
     if (terms_gradient(I, x, &E, I->gh, &bad))
       return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the solution (post-solve hooks)", bad);
+    memcpy(I->g1, v, sizeof(double) * n3); /* the solve's own velocity, before friction */
     if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
+    if (st->min.reason != BS_MIN_STOPPED) { /* a stopped step is undone: keep the one before */
+      for (size_t i = 0; i < n3; i++) I->prev.d[i] = dt * I->g1[i];
+      I->prev.have = 1, I->prev.dt = dt;
+      I->prev.mark = state_mark(x, v, n3);
+    }
   }
   st->seconds = bs_seconds() - t0;
   return 0;
@@ -507,6 +560,7 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
   if ((rc = check_finite(x, n3, "position", err))) return rc;
   if (load_steps < 1) return bs_error_set(err, BS_EINPUT, "load_steps must be >= 1, got %d", load_steps);
   I->static_mode = 1;
+  I->prev.have = 0;
   I->step->dt = 0;
   I->step->time = t;
   memcpy(I->x_n, x, sizeof(double) * n3);

@@ -236,24 +236,28 @@ int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
  *   indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill, floor), 2 doubles
  *   (seconds, max_grad), 2 int32 (first failed frame and step), the first
  *   failure's reason (256 bytes); the minimizer's carry (bs_min_carry: int64
- *   full, double eta);
- *   x (3n doubles), v (3n doubles); a uint64 FNV-1a of every byte before.
- * x, v and the time are everything the next step reads: the lagged Rayleigh
+ *   full, double eta); the previous-step guess's state (bs_previous_step:
+ *   int64 have, double dt, uint64 mark);
+ *   x (3n doubles), v (3n doubles), the previous step's displacement d (3n
+ *   doubles, zeros when have is 0); a uint64 FNV-1a of every byte before.
+ * x, v, d and the time are everything the next step reads: the lagged Rayleigh
  * damping, the initial guesses and x̂ are made from xⁿ, vⁿ; scripted
  * vertices and obstacles move as functions of time; the obstacles' active
  * sets start empty every step; the self-collision caches (the last detection,
  * search hints) only spare work, and the minimizer starts every solve afresh
- * but for its carry (cg_forcing adaptive), which the checkpoint holds.
+ * but for its carry (cg_forcing adaptive), which the checkpoint holds; with
+ * friction the previous-step guess (bs_step.h) starts from d.
  * One exception: solver.linear "amg" with solver.amg_matrix "current" builds
  * its preconditioner at an earlier iterate, which no checkpoint holds:
  * bs_runfolder_resume refuses such a scene. */
-#define BS_CHECKPOINT_VERSION 2
+#define BS_CHECKPOINT_VERSION 3
 
 typedef struct bs_checkpoint {
   int frame;
   double time, wall_seconds;
   bs_run_totals totals;
   bs_min_carry carry;        /* the minimizer's state between solves (bs_minimize.h) */
+  bs_previous_step prev;     /* the previous-step guess's (prev.d: 3n, in x's allocation) */
   double *x, *v;             /* 3n each (one allocation, freed by bs_checkpoint_free) */
 } bs_checkpoint;
 

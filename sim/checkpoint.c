@@ -15,13 +15,8 @@
 #define CK_LONGS 12
 #define CK_TOTALS (CK_LONGS * 8 + 2 * 8 + 2 * 4 + 256)
 #define CK_CARRY 16 /* the minimizer's carry: int64 full, double eta */
-#define CK_HEAD (CK_HEADER + CK_TOTALS + CK_CARRY)
-
-uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n) {
-  const unsigned char *b = p;
-  for (size_t i = 0; i < n; i++) h = (h ^ b[i]) * 1099511628211ULL;
-  return h;
-}
+#define CK_PREV 24  /* the previous-step guess: int64 have, double dt, uint64 mark */
+#define CK_HEAD (CK_HEADER + CK_TOTALS + CK_CARRY + CK_PREV)
 
 int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err) {
   bs_scene *c = malloc(sizeof *c);
@@ -93,17 +88,31 @@ int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T
   memcpy(head + CK_HEADER + CK_TOTALS, &full, 8);
   memcpy(head + CK_HEADER + CK_TOTALS + 8, &c.eta, 8);
   const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  uint64_t h = bs_fnv1a_(BS_FNV_SEED, head, sizeof head);
-  h = bs_fnv1a_(h, s->x, sizeof(double) * n3);
-  h = bs_fnv1a_(h, s->v, sizeof(double) * n3);
+  bs_previous_step p = {0, 0, 0, calloc(n3 ? n3 : 1, sizeof(double))};
+  if (!p.d) return bs_error_set(err, BS_ENOMEM, "out of memory (checkpoint)");
+  bs_integrator_get_previous(s->integrator, &p);
+  const int64_t have = p.have;
+  if (!have) memset(p.d, 0, sizeof(double) * n3);
+  unsigned char *q = head + CK_HEADER + CK_TOTALS + CK_CARRY;
+  memcpy(q, &have, 8);
+  memcpy(q + 8, &p.dt, 8);
+  memcpy(q + 16, &p.mark, 8);
+  uint64_t h = bs_fnv1a(BS_FNV_SEED, head, sizeof head);
+  h = bs_fnv1a(h, s->x, sizeof(double) * n3);
+  h = bs_fnv1a(h, s->v, sizeof(double) * n3);
+  h = bs_fnv1a(h, p.d, sizeof(double) * n3);
   bs_outfile o;
   int st = bs_outfile_open_replace(&o, dir, "checkpoint.bin", err);
-  if (st) return st;
-  bs_outfile_write(&o, head, 1, sizeof head);
-  bs_outfile_write(&o, s->x, sizeof(double), n3);
-  bs_outfile_write(&o, s->v, sizeof(double), n3);
-  bs_outfile_write(&o, &h, 8, 1);
-  return bs_outfile_close(&o, err);
+  if (!st) {
+    bs_outfile_write(&o, head, 1, sizeof head);
+    bs_outfile_write(&o, s->x, sizeof(double), n3);
+    bs_outfile_write(&o, s->v, sizeof(double), n3);
+    bs_outfile_write(&o, p.d, sizeof(double), n3);
+    bs_outfile_write(&o, &h, 8, 1);
+    st = bs_outfile_close(&o, err);
+  }
+  free(p.d);
+  return st;
 }
 
 /* The whole file into memory (it was written whole): *buf, *n. */
@@ -149,7 +158,7 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
   if (i3[0] != s->mesh->n_vertices)
     return bs_error_set(err, BS_EINPUT, "'%s' holds %d vertices, the scene's mesh %d: a checkpoint of another scene", p,
                         i3[0], s->mesh->n_vertices);
-  const size_t want = CK_HEAD + 48 * (size_t)i3[0] + 8;
+  const size_t want = CK_HEAD + 72 * (size_t)i3[0] + 8;
   if (n != want)
     return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, a checkpoint of %d vertices %zu: truncated or damaged", p,
                         n, i3[0], want);
@@ -159,6 +168,20 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
   if (ck->frame < 0 || ck->frame > sc->frames || ck->time != ck->frame / sc->fps || !isfinite(ck->wall_seconds))
     return bs_error_set(err, BS_EINPUT, "'%s': frame %d at time %.17g does not fit the scene (%d frames at %g fps)", p,
                         ck->frame, ck->time, sc->frames, sc->fps);
+  return 0;
+}
+
+/* The previous-step guess's state at q (CK_PREV bytes) into prev (its d
+ * already read): 0 or BS_EINPUT when out of range. */
+static int read_previous(const char *p, const unsigned char *q, bs_previous_step *prev, bs_error *err) {
+  int64_t have;
+  memcpy(&have, q, 8);
+  memcpy(&prev->dt, q + 8, 8);
+  memcpy(&prev->mark, q + 16, 8);
+  prev->have = (int)have;
+  if (!(have == 0 || have == 1) || (have && !(prev->dt > 0 && isfinite(prev->dt))))
+    return bs_error_set(err, BS_EINPUT, "'%s': the previous step's state (%lld, dt %g) is out of range: a damaged checkpoint",
+                        p, (long long)have, prev->dt);
   return 0;
 }
 
@@ -173,10 +196,10 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
   st = check_header(p, b, n, s, scene_hash, ck, err);
   uint64_t h = 0;
   if (!st) memcpy(&h, b + n - 8, 8);
-  if (!st && h != bs_fnv1a_(BS_FNV_SEED, b, n - 8))
+  if (!st && h != bs_fnv1a(BS_FNV_SEED, b, n - 8))
     st = bs_error_set(err, BS_EINPUT, "'%s': the checksum does not match: a damaged checkpoint", p);
   const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  if (!st && !(ck->x = malloc(sizeof(double) * (2 * n3 + 1)))) st = bs_error_set(err, BS_ENOMEM, "out of memory");
+  if (!st && !(ck->x = malloc(sizeof(double) * (3 * n3 + 1)))) st = bs_error_set(err, BS_ENOMEM, "out of memory");
   if (!st) {
     unpack_totals(b + CK_HEADER, &ck->totals);
     int64_t full;
@@ -187,11 +210,13 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
       st = bs_error_set(err, BS_EINPUT, "'%s': the solver state (%lld, %g) is out of range: a damaged checkpoint", p,
                         (long long)full, ck->carry.eta);
     ck->v = ck->x + n3;
-    memcpy(ck->x, b + CK_HEAD, sizeof(double) * 2 * n3);
-    for (size_t i = 0; i < 2 * n3 && !st; i++)
+    ck->prev.d = ck->x + 2 * n3;
+    memcpy(ck->x, b + CK_HEAD, sizeof(double) * 3 * n3);
+    if (!st) st = read_previous(p, b + CK_HEADER + CK_TOTALS + CK_CARRY, &ck->prev, err);
+    static const char *what[3] = {"position", "velocity", "previous step's displacement"};
+    for (size_t i = 0; i < 3 * n3 && !st; i++)
       if (!isfinite(ck->x[i]))
-        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p,
-                          i < n3 ? "position" : "velocity", (i % n3) / 3);
+        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p, what[i / n3], (i % n3) / 3);
   }
   free(b);
   if (st) bs_checkpoint_free(ck);
@@ -200,5 +225,5 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
 
 void bs_checkpoint_free(bs_checkpoint *ck) {
   free(ck->x);
-  ck->x = ck->v = NULL;
+  ck->x = ck->v = ck->prev.d = NULL;
 }

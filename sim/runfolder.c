@@ -81,7 +81,7 @@ int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   rf->t_open = bs_seconds();
   char *id = NULL;
   int st = bs_scene_identity_(s->scene, &id, err);
-  if (!st) rf->scene_hash = bs_fnv1a_(BS_FNV_SEED, id, strlen(id));
+  if (!st) rf->scene_hash = bs_fnv1a(BS_FNV_SEED, id, strlen(id));
   free(id);
   if (!st && s->scene->checkpoint_every < 0)
     st = bs_error_set(err, BS_EINPUT, "output.checkpoint_every: must be an integer in [0, 1000000], got %d",

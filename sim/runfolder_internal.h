@@ -41,8 +41,5 @@ int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err);
  * between a run and its resumption. *text is malloc'd. */
 int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err);
 
-/* 64-bit FNV-1a of n bytes, continuing from h (start: BS_FNV_SEED). */
-#define BS_FNV_SEED 1469598103934665603ULL
-uint64_t bs_fnv1a_(uint64_t h, const void *p, size_t n);
 
 #endif

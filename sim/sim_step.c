@@ -36,12 +36,14 @@ static void record(const bs_sim *s, bs_sim_step *rec) {
   rec->st.min.reason_text = rec->reason;
 }
 
-/* The state at a frame's start (or before a static solve): x, v (6n
- * doubles), the frame, the time and the minimizer's carry. */
+/* The state at a frame's start (or before a static solve): x, v and the
+ * previous step's displacement (9n doubles: xv, prev.d = xv + 6n), the
+ * frame, the time, the minimizer's carry and the previous-step guess's. */
 typedef struct frame_snap {
   double *xv, time;
   int frame;
   bs_min_carry carry;
+  bs_previous_step prev;
 } frame_snap;
 
 static void snap_take(const bs_sim *s, frame_snap *sn) {
@@ -51,6 +53,8 @@ static void snap_take(const bs_sim *s, frame_snap *sn) {
   sn->time = s->time;
   sn->frame = s->frame;
   bs_integrator_get_carry(s->integrator, &sn->carry);
+  sn->prev.d = sn->xv + 2 * n3;
+  bs_integrator_get_previous(s->integrator, &sn->prev);
 }
 
 /* Puts the snapshot back and returns BS_SIM_STOPPED. */
@@ -61,6 +65,7 @@ static int snap_undo(bs_sim *s, const frame_snap *sn) {
   s->time = sn->time;
   s->frame = sn->frame;
   bs_integrator_set_carry(s->integrator, &sn->carry);
+  bs_integrator_set_previous(s->integrator, &sn->prev);
   return BS_SIM_STOPPED;
 }
 
@@ -180,8 +185,8 @@ int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, 
   if (sc->mode == BS_MODE_STATIC && o->resume)
     return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
   if (o->stop && *o->stop) return BS_SIM_STOPPED;
-  frame_snap snap = {NULL, 0, 0, {0, 0}};
-  if (o->stop && !(snap.xv = bs_calloc(6 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
+  frame_snap snap = {NULL, 0, 0, {0, 0}, {0, 0, 0, NULL}};
+  if (o->stop && !(snap.xv = bs_calloc(9 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
     return BS_ENOMEM;
   bs_integrator_set_stop(s->integrator, o->stop);
   if (sc->mode == BS_MODE_STATIC) {

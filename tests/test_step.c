@@ -81,7 +81,8 @@ Test(step, free_fall_is_exact) {
   cr_expect_str_eq(bs_guess_name(st.guess), "explicit");
   cr_expect_str_eq(bs_guess_name(BS_GUESS_XHAT), "x_hat");
   cr_expect_str_eq(bs_guess_name(BS_GUESS_XN), "x_n");
-  cr_expect_str_eq(bs_guess_name((bs_guess)3), "?");
+  cr_expect_str_eq(bs_guess_name(BS_GUESS_PREVIOUS), "previous");
+  cr_expect_str_eq(bs_guess_name((bs_guess)4), "?");
   cr_expect_eq(st.min.iterations, 0, "free fall took %d Newton iterations", st.min.iterations);
   double v0[3] = {0.3, 2.0, -0.1};
   for (size_t i = 0; i < n3; i++) {
