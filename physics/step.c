@@ -436,10 +436,10 @@ static uint64_t state_mark(const double *x, const double *v, size_t n3) {
 /* The previous-step candidate (bs_step.h, step 3): xⁿ + (Δt / Δt_prev) d,
  * d the last step's displacement before its post-solve hooks (friction)
  * changed vⁿ, scripted vertices at tⁿ⁺¹, projected; taken into x when its E
- * is below the chosen guess's. Offered only when (x, v) is the state that
- * step left (its mark). */
-static void previous_step_guess(bs_integrator *I, double t, double dt, double *x, const double *v, int *naive,
-                                bs_step_stats *st) {
+ * is below Eb, the chosen guess's. Offered only when (x, v) is the state
+ * that step left (its mark). */
+static void previous_step_guess(bs_integrator *I, double t, double dt, double *x, const double *v, double Eb,
+                                int *naive, bs_step_stats *st) {
   const size_t nv = (size_t)I->fem->n_vertices, n3 = 3 * nv;
   if (!I->prev.have || I->prev.mark != state_mark(I->x_n, v, n3)) return;
   const double s = dt / I->prev.dt;
@@ -449,13 +449,55 @@ static void previous_step_guess(bs_integrator *I, double t, double dt, double *x
       for (int k = 0; k < 3; k++) I->g1[3 * vtx + k] = I->x_n[3 * vtx + k];
   if (I->script) I->script(t + dt, I->g1, I->script_ctx);
   if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-  const double Eb = guess_energy(I, x, guess_part(I, x, TERMS_CHEAP), INFINITY);
   const double Ep = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
   if (isfinite(Ep) && (!isfinite(Eb) || Ep < Eb)) {
     memcpy(x, I->g1, sizeof(double) * n3);
     st->guess = BS_GUESS_PREVIOUS;
     *naive = 1;
   }
+}
+
+/* Step 3's paper guesses in I->g1 (x̂) and I->g2 (explicit), and xⁿ with
+ * opts.guess_xn: the one with the smallest E into x (st->guess, *naive).
+ * Returns its E (+Inf when none is evaluable). */
+static double paper_guesses(bs_integrator *I, double t, double dt, double *x, int *naive, bs_step_stats *st) {
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  /* the candidate with the smaller cheap part first: the other's expensive
+     terms are then often skipped (and the detection left for the solve is the
+     chosen guess's) */
+  const double c1 = guess_part(I, I->g1, TERMS_CHEAP), c2 = guess_part(I, I->g2, TERMS_CHEAP);
+  double E1, E2;
+  if (c2 < c1) {
+    E2 = guess_energy(I, I->g2, c2, INFINITY);
+    E1 = guess_energy(I, I->g1, c1, E2);
+  } else {
+    E1 = guess_energy(I, I->g1, c1, INFINITY);
+    E2 = guess_energy(I, I->g2, c2, E1);
+  }
+  *naive = 1;
+  if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
+    memcpy(x, I->g2, sizeof(double) * n3);
+    st->guess = BS_GUESS_EXPLICIT;
+    *naive = 0;
+  } else {
+    memcpy(x, I->g1, sizeof(double) * n3);
+  }
+  /* A third candidate with opts.guess_xn (bs_step.h): xⁿ itself, scripted
+     vertices at tⁿ⁺¹, projected; chosen only when its E is the smallest. */
+  if (I->opts.guess_xn) {
+    memcpy(I->g1, I->x_n, sizeof(double) * n3);
+    if (I->script) I->script(t + dt, I->g1, I->script_ctx);
+    if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
+    const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
+    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
+    if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
+      memcpy(x, I->g1, sizeof(double) * n3);
+      st->guess = BS_GUESS_XN;
+      *naive = 1;
+      return E0;
+    }
+  }
+  return st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
 }
 
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
@@ -498,41 +540,9 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     I->hooks.project(I->g1, I->hooks.ctx);
     I->hooks.project(I->g2, I->hooks.ctx);
   }
-  /* the candidate with the smaller cheap part first: the other's expensive
-     terms are then often skipped (and the detection left for the solve is the
-     chosen guess's) */
-  const double c1 = guess_part(I, I->g1, TERMS_CHEAP), c2 = guess_part(I, I->g2, TERMS_CHEAP);
-  double E1, E2;
-  if (c2 < c1) {
-    E2 = guess_energy(I, I->g2, c2, INFINITY);
-    E1 = guess_energy(I, I->g1, c1, E2);
-  } else {
-    E1 = guess_energy(I, I->g1, c1, INFINITY);
-    E2 = guess_energy(I, I->g2, c2, E1);
-  }
   int naive = 1;
-  if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
-    memcpy(x, I->g2, sizeof(double) * n3);
-    st->guess = BS_GUESS_EXPLICIT;
-    naive = 0;
-  } else {
-    memcpy(x, I->g1, sizeof(double) * n3);
-  }
-  /* A third candidate with opts.guess_xn (bs_step.h): xⁿ itself, scripted
-     vertices at tⁿ⁺¹, projected; chosen only when its E is the smallest. */
-  if (I->opts.guess_xn) {
-    memcpy(I->g1, I->x_n, sizeof(double) * n3);
-    if (I->script) I->script(t + dt, I->g1, I->script_ctx);
-    if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
-    const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
-    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
-    if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
-      memcpy(x, I->g1, sizeof(double) * n3);
-      st->guess = BS_GUESS_XN;
-      naive = 1;
-    }
-  }
-  if (I->hooks.post_solve) previous_step_guess(I, t, dt, x, v, &naive, st);
+  const double Eb = paper_guesses(I, t, dt, x, &naive, st);
+  if (I->hooks.post_solve) previous_step_guess(I, t, dt, x, v, Eb, &naive, st);
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
   if (I->hooks.post_solve) {
@@ -542,9 +552,12 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
       return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the solution (post-solve hooks)", bad);
     memcpy(I->g1, v, sizeof(double) * n3); /* the solve's own velocity, before friction */
     if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
-    if (st->min.reason != BS_MIN_STOPPED) { /* a stopped step is undone: keep the one before */
-      for (size_t i = 0; i < n3; i++) I->prev.d[i] = dt * I->g1[i];
-      I->prev.have = 1, I->prev.dt = dt;
+    /* a stopped step is undone: keep the one before; hooks that left v as it
+       was (no friction acted) make the candidate x̂ itself: none */
+    if (st->min.reason != BS_MIN_STOPPED) {
+      I->prev.have = memcmp(v, I->g1, sizeof(double) * n3) != 0;
+      for (size_t i = 0; i < n3 && I->prev.have; i++) I->prev.d[i] = dt * I->g1[i];
+      I->prev.dt = dt;
       I->prev.mark = state_mark(x, v, n3);
     }
   }
