@@ -558,7 +558,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
       I->prev.have = memcmp(v, I->g1, sizeof(double) * n3) != 0;
       for (size_t i = 0; i < n3 && I->prev.have; i++) I->prev.d[i] = dt * I->g1[i];
       I->prev.dt = dt;
-      I->prev.mark = state_mark(x, v, n3);
+      I->prev.mark = I->prev.have ? state_mark(x, v, n3) : 0;
     }
   }
   st->seconds = bs_seconds() - t0;
