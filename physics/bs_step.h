@@ -11,8 +11,7 @@
  *     fourth, xⁿ + d, d the last step's displacement before its hooks, when
  *     (xⁿ, vⁿ) is the state that step left and its E is the smallest: where
  *     a kinematic obstacle pushes a body along a frictional floor, x̂ lags
- *     the obstacle by what friction took from vⁿ (the fig14 replica: E at
- *     x̂ ~1e4 J against ~380 at the step's answer);
+ *     the obstacle by what friction took from vⁿ, and this one does not;
  *  4. the solve: the optimization integrator (bs_minimize), or the Newton
  *     baseline (bs_newton, to convergence or k steps);
  *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt, then the post-solve hooks (friction).

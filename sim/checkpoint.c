@@ -180,8 +180,9 @@ static int read_previous(const char *p, const unsigned char *q, bs_previous_step
   memcpy(&prev->mark, q + 16, 8);
   prev->have = (int)have;
   if (!(have == 0 || have == 1) || (have && !(prev->dt > 0 && isfinite(prev->dt))))
-    return bs_error_set(err, BS_EINPUT, "'%s': the previous step's state (%lld, dt %g) is out of range: a damaged checkpoint",
-                        p, (long long)have, prev->dt);
+    return bs_error_set(err, BS_EINPUT,
+                        "'%s': the previous step's state (%lld, dt %g) is out of range: a damaged checkpoint", p,
+                        (long long)have, prev->dt);
   return 0;
 }
 

@@ -41,5 +41,4 @@ int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err);
  * between a run and its resumption. *text is malloc'd. */
 int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err);
 
-
 #endif
