@@ -98,7 +98,7 @@ static bs_sim *make_sim(bs_scene *sc) {
   return s;
 }
 
-/* Frames in which a step started from the previous-step guess (bs_step.h). */
+/* Counts the steps that started from the previous-step guess (bs_step.h). */
 static int count_previous(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
   (void)err;
   for (int k = 0; k < fs->n_steps; k++) *(int *)ctx += s->steps[k].st.guess == BS_GUESS_PREVIOUS;
@@ -139,6 +139,7 @@ Test(sim_stop, a_frame_cut_short_is_undone_and_the_run_continues_bit_for_bit) {
   cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
   int previous;
   cut_short_and_continue(sc, &previous);
+  cr_expect_eq(previous, 0, "without friction the previous-step guess is never offered");
 }
 
 /* The box on a floor with friction 0.5, pushed along x at 2 m/s by a
