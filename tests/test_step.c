@@ -309,13 +309,16 @@ Test(step, a_term_whose_hessian_is_not_evaluable_stops_the_solve) {
   cr_expect_eq(st.min.iterations, 0);
 }
 
-/* The previous-step guess (bs_step.h, step 3): the xmin face of a bar is
- * scripted to move at 1 m/s along x and drags the bar; a post-solve hook
- * stops the free vertices (a stand-in for friction), so x̂ = xⁿ and the
- * explicit guess lag the face and xⁿ plus the last displacement does not:
- * that candidate must be taken at the second step and most later ones; a
- * state changed by the caller does not get it; a state restored with
- * bs_integrator_set_previous gets it back and the step repeats bit for bit. */
+/* The previous-step guess's bookkeeping (bs_step.h, step 3): the xmin face
+ * of a bar is scripted to move at 1 m/s along x and drags the bar; a
+ * post-solve hook stops the free vertices (a stand-in for friction). Every
+ * step then keeps a candidate (have); it is not offered from a state whose v
+ * the caller changed; a state restored with bs_integrator_set_previous gets
+ * it back and the step repeats bit for bit. (Which guess wins is not asserted
+ * here: with v stopped, the last displacement d solves M d / Δt² = f(xⁿ), so
+ * the candidate is the explicit guess up to round-off. The choice is tested
+ * in test_sim_stop, where a penalty box pushes the box: there its E is
+ * lower by 6e-5 to 2e-3 of it.) */
 typedef struct push_ctx {
   const double *x0;
   const uint8_t *mask;
@@ -361,21 +364,18 @@ Test(step, previous_step_guess_follows_a_pushing_script) {
   memcpy(x, s.mesh->x, sizeof(double) * n3);
   const double dt = 1.0 / 24;
   bs_step_stats st;
-  int taken = 0;
+  bs_previous_step p = {.d = ds};
+  bs_integrator_get_previous(s.I, &p);
+  cr_expect_eq(p.have, 0, "a candidate before the first step");
   for (int n = 0; n < 4; n++) {
     cr_assert_eq(bs_integrator_step(s.I, n * dt, dt, x, v, &st, &err), 0, "%s", err.msg);
     cr_expect_eq(st.failed, 0, "step %d", n);
-    cr_log_info("step %d started from %s", n, bs_guess_name(st.guess));
     if (n == 0) cr_expect_neq(st.guess, BS_GUESS_PREVIOUS, "no step before the first");
-    if (n == 1) cr_expect_eq(st.guess, BS_GUESS_PREVIOUS, "step 1 started from %s", bs_guess_name(st.guess));
-    taken += st.guess == BS_GUESS_PREVIOUS;
+    bs_integrator_get_previous(s.I, &p);
+    cr_expect_eq(p.have, 1, "step %d kept no candidate", n);
+    cr_expect_eq(p.dt, dt);
   }
-  /* the bar rings: the explicit guess wins some steps (measured: 2 of 3 taken) */
-  cr_expect_geq(taken, 2, "the previous-step guess taken in %d of steps 1-3", taken);
   /* the state and the guess's, then one step */
-  bs_previous_step p = {.d = ds};
-  bs_integrator_get_previous(s.I, &p);
-  cr_expect_eq(p.have, 1);
   memcpy(xs, x, sizeof(double) * n3), memcpy(vs, v, sizeof(double) * n3);
   cr_assert_eq(bs_integrator_step(s.I, 4 * dt, dt, x, v, &st, &err), 0, "%s", err.msg);
   const bs_guess g4 = st.guess;
