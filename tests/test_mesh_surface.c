@@ -82,25 +82,27 @@ Test(mesh_surface, elk_meshed_again_with_a_finer_facet_distance) {
 }
 
 /* The mesher auto takes the remesh path when the Mesh_3 path refuses: the
- * camel at diagonal / 50 with a gate of 13 degrees, which Mesh_3's meshes
+ * camel at diagonal / 50 with a gate of 12 degrees, which Mesh_3's meshes
  * (7.07, 10.02 after HXT inside the finer one's boundary) do not reach; the
- * remesh path meets it without optimising (13.75 to 13.90: HXT varies),
+ * remesh path meets it (HXT's result depends on the heap's addresses, see
+ * camel_mesh3_boundary_is_a_manifold: 13.45 to 13.96 degrees in 22 runs),
  * 2.7% short of the volume. Measured: about 11.5k tets (Mesh_3's are
- * 24k-130k). */
+ * 24k-130k). The gate was 13 until a fresh clone's run of 2026-12-06 missed
+ * it on the remesh path too (and the mesher refused the camel). */
 Test(mesh_surface, auto_takes_the_remesh_path_when_mesh3_refuses) {
   char path[1024];
   soup s;
   soup_or_skip("data/corpus/cgal/camel.off", path, sizeof path, &s);
-  bs_mesh_read_opts o = {.size = s.diag / 50, .min_dihedral = 13};
+  bs_mesh_read_opts o = {.size = s.diag / 50, .min_dihedral = 12};
   bs_mesh *m = NULL;
   bs_error err;
   bs_error_clear(&err);
   cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
   bs_mesh_quality q;
   bs_mesh_quality_compute(m, NULL, &q);
-  cr_log_info("camel at diagonal / 50, gate 13: %d tets, %.3f degrees, volume %g vs %g", m->n_tets, q.dihedral_min,
+  cr_log_info("camel at diagonal / 50, gate 12: %d tets, %.3f degrees, volume %g vs %g", m->n_tets, q.dihedral_min,
               bs_mesh_volume(m), s.volume);
-  cr_expect_geq(q.dihedral_min, 13.0, "%.3f degrees", q.dihedral_min);
+  cr_expect_geq(q.dihedral_min, 12.0, "%.3f degrees", q.dihedral_min);
   cr_expect_eq(q.n_inverted, 0);
   cr_expect_eq(bs__boundary_manifold(m, path, 1, &err), BS_OK, "%s", err.msg);
   cr_expect_lt(m->n_tets, 20000, "%d tets: not the remesh path's", m->n_tets);
