@@ -433,6 +433,18 @@ static uint64_t state_mark(const double *x, const double *v, size_t n3) {
   return bs_fnv1a(bs_fnv1a(BS_FNV_SEED, x, sizeof(double) * n3), v, sizeof(double) * n3);
 }
 
+/* A later candidate g (xⁿ, the previous-step guess) made admissible:
+ * masked vertices at xⁿ, then scripted ones at their positions at t1, then
+ * projected (constraint collisions). */
+static void constrain_candidate(bs_integrator *I, double t1, double *g) {
+  const size_t nv = (size_t)I->fem->n_vertices;
+  for (size_t vtx = 0; vtx < nv; vtx++)
+    if (!I->mask[vtx])
+      for (int k = 0; k < 3; k++) g[3 * vtx + k] = I->x_n[3 * vtx + k];
+  if (I->script) I->script(t1, g, I->script_ctx);
+  if (I->hooks.project) I->hooks.project(g, I->hooks.ctx);
+}
+
 /* The previous-step candidate (bs_step.h, step 3): xⁿ + (Δt / Δt_prev) d,
  * d the last step's displacement before its post-solve hooks (friction)
  * changed vⁿ, scripted vertices at tⁿ⁺¹, projected; taken into x when its E
@@ -440,15 +452,11 @@ static uint64_t state_mark(const double *x, const double *v, size_t n3) {
  * that step left (its mark). */
 static void previous_step_guess(bs_integrator *I, double t, double dt, double *x, const double *v, double Eb,
                                 int *naive, bs_step_stats *st) {
-  const size_t nv = (size_t)I->fem->n_vertices, n3 = 3 * nv;
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
   if (!I->prev.have || I->prev.mark != state_mark(I->x_n, v, n3)) return;
   const double s = dt / I->prev.dt;
   for (size_t i = 0; i < n3; i++) I->g1[i] = I->x_n[i] + s * I->prev.d[i];
-  for (size_t vtx = 0; vtx < nv; vtx++)
-    if (!I->mask[vtx])
-      for (int k = 0; k < 3; k++) I->g1[3 * vtx + k] = I->x_n[3 * vtx + k];
-  if (I->script) I->script(t + dt, I->g1, I->script_ctx);
-  if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
+  constrain_candidate(I, t + dt, I->g1);
   const double Ep = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
   if (isfinite(Ep) && (!isfinite(Eb) || Ep < Eb)) {
     memcpy(x, I->g1, sizeof(double) * n3);
@@ -486,8 +494,7 @@ static double paper_guesses(bs_integrator *I, double t, double dt, double *x, in
      vertices at tⁿ⁺¹, projected; chosen only when its E is the smallest. */
   if (I->opts.guess_xn) {
     memcpy(I->g1, I->x_n, sizeof(double) * n3);
-    if (I->script) I->script(t + dt, I->g1, I->script_ctx);
-    if (I->hooks.project) I->hooks.project(I->g1, I->hooks.ctx);
+    constrain_candidate(I, t + dt, I->g1);
     const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
     const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
     if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
