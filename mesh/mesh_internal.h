@@ -150,8 +150,11 @@ int bs__boundary_like_soup(const bs_mesh *m, const char *path, const double *pts
  * moves removed (four boundary vertices, two boundary faces: the surface
  * edge between them flipped), its boundary checked to be a closed
  * 2-manifold with the soup's components (bs__boundary_manifold), then held
- * to the gate. Groups (3, 1, "body") and (2, 1, "surface_1"). Errors name
- * path: Gmsh's failure, the manifold check, the gate. */
+ * to the gate. HXT's mesh depends on the heap's addresses (Gmsh 4.8.4), so
+ * a refused mesh (Gmsh's failure or void, the manifold check, the gate) is
+ * made again, up to three attempts in all; the last refusal is returned.
+ * Groups (3, 1, "body") and (2, 1, "surface_1"). Errors name path: Gmsh's
+ * failure, the manifold check, the gate. */
 int bs__mesh_hxt_inside(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                         const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
