@@ -433,16 +433,25 @@ static uint64_t state_mark(const double *x, const double *v, size_t n3) {
   return bs_fnv1a(bs_fnv1a(BS_FNV_SEED, x, sizeof(double) * n3), v, sizeof(double) * n3);
 }
 
-/* A later candidate g (xⁿ, the previous-step guess) made admissible:
- * masked vertices at xⁿ, then scripted ones at their positions at t1, then
- * projected (constraint collisions). */
-static void constrain_candidate(bs_integrator *I, double t1, double *g) {
+/* A later candidate in I->g1 (xⁿ, the previous-step guess) made admissible
+ * (masked vertices at xⁿ, then scripted ones at their positions at t1, then
+ * projected: constraint collisions) and taken into x as `kind` when its E is
+ * below Eb, the chosen guess's. Returns the chosen guess's E after. */
+static double offer_candidate(bs_integrator *I, double t1, double Eb, bs_guess kind, double *x, int *naive,
+                              bs_step_stats *st) {
   const size_t nv = (size_t)I->fem->n_vertices;
+  double *g = I->g1;
   for (size_t vtx = 0; vtx < nv; vtx++)
     if (!I->mask[vtx])
       for (int k = 0; k < 3; k++) g[3 * vtx + k] = I->x_n[3 * vtx + k];
   if (I->script) I->script(t1, g, I->script_ctx);
   if (I->hooks.project) I->hooks.project(g, I->hooks.ctx);
+  const double Ec = guess_energy(I, g, guess_part(I, g, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
+  if (!isfinite(Ec) || (isfinite(Eb) && Ec >= Eb)) return Eb;
+  memcpy(x, g, sizeof(double) * 3 * nv);
+  st->guess = kind;
+  *naive = 1;
+  return Ec;
 }
 
 /* The previous-step candidate (bs_step.h, step 3): xⁿ + (Δt / Δt_prev) d,
@@ -456,13 +465,7 @@ static void previous_step_guess(bs_integrator *I, double t, double dt, double *x
   if (!I->prev.have || I->prev.mark != state_mark(I->x_n, v, n3)) return;
   const double s = dt / I->prev.dt;
   for (size_t i = 0; i < n3; i++) I->g1[i] = I->x_n[i] + s * I->prev.d[i];
-  constrain_candidate(I, t + dt, I->g1);
-  const double Ep = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
-  if (isfinite(Ep) && (!isfinite(Eb) || Ep < Eb)) {
-    memcpy(x, I->g1, sizeof(double) * n3);
-    st->guess = BS_GUESS_PREVIOUS;
-    *naive = 1;
-  }
+  offer_candidate(I, t + dt, Eb, BS_GUESS_PREVIOUS, x, naive, st);
 }
 
 /* Step 3's paper guesses in I->g1 (x̂) and I->g2 (explicit), and xⁿ with
@@ -492,19 +495,10 @@ static double paper_guesses(bs_integrator *I, double t, double dt, double *x, in
   }
   /* A third candidate with opts.guess_xn (bs_step.h): xⁿ itself, scripted
      vertices at tⁿ⁺¹, projected; chosen only when its E is the smallest. */
-  if (I->opts.guess_xn) {
-    memcpy(I->g1, I->x_n, sizeof(double) * n3);
-    constrain_candidate(I, t + dt, I->g1);
-    const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
-    const double E0 = guess_energy(I, I->g1, guess_part(I, I->g1, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
-    if (isfinite(E0) && (!isfinite(Eb) || E0 < Eb)) {
-      memcpy(x, I->g1, sizeof(double) * n3);
-      st->guess = BS_GUESS_XN;
-      *naive = 1;
-      return E0;
-    }
-  }
-  return st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
+  const double Eb = st->guess == BS_GUESS_EXPLICIT ? E2 : E1;
+  if (!I->opts.guess_xn) return Eb;
+  memcpy(I->g1, I->x_n, sizeof(double) * n3);
+  return offer_candidate(I, t + dt, Eb, BS_GUESS_XN, x, naive, st);
 }
 
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
