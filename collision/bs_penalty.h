@@ -15,6 +15,20 @@
  * 3 k phi^2 grad phi, points out of the obstacle. Each vertex's Hessian is a
  * 3x3 block on the diagonal of H.
  *
+ * Secant model (the term's hessian_g, bs_terms.h; used by the integrator with
+ * bs_integrator_opts.penalty_secant): given g, the whole objective's gradient
+ * at x, the coefficient -6 k phi = 6 k depth of grad phi grad phi^T is
+ * replaced by 3 k (depth + depth*), the slope of the penalty's force between
+ * the vertex's depth and depth* = sqrt(F / (3 k |grad phi|)), where the
+ * penalty balances F, the other terms' push into the obstacle along grad phi
+ * (F = (g_v - dPhi/dx_v) . grad phi / |grad phi|; depth* = 0 when they pull
+ * outwards). Why: along the normal the penalty's gradient is 3 k depth^2, and
+ * Newton on it from depth >> depth* goes half-way (the gradient falls 4x per
+ * iteration: a vertex that entered 20 times its resting depth takes 4-5
+ * iterations to come back); the secant goes to depth* in one when F stays.
+ * At a minimizer (g_v = 0) depth* = depth, so the model is the Hessian there
+ * and Newton's local convergence is kept. The -3 k phi^2 Hess phi part stays.
+ *
  * Units: k in J/m^3 (N/m^2), phi in m, energy in J, force in N.
  *
  * Threads: OpenMP over vertices; each gradient entry and diagonal block is

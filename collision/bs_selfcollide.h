@@ -84,6 +84,11 @@
  * blocks at x, and bs_self_coupling_pairs lists the vertex pairs a collision
  * within a distance margin may couple.
  *
+ * Secant model (the term's hessian_g, bs_terms.h; used with
+ * bs_integrator_opts.penalty_secant): each contact's Hessian with the
+ * secant correction of bs_self_pair_secant, given the objective's gradient.
+ * The convexified Hessian below projects the exact one.
+ *
  * Convexified Hessian (the term's hessian_convexified, bs_terms.h): each
  * contact's (3 (nv + 1))^2 Hessian projected onto the positive semidefinite
  * cone (bs_sym_psd_project, bs_svd.h) before it is added. The exact one is
@@ -138,6 +143,7 @@ extern "C" {
 #endif
 
 #define BS_SELF_EPS 1e-15 /* eps in Phi = k d sqrt(d + eps), m^2 */
+#define BS_SELF_SECANT_MIN_D 1e-13 /* d below which the secant model is the Hessian (100 eps), m^2 */
 
 /* The self-collision term over all boundary vertices of fem->mesh; k finite
  * > 0. step may be NULL (then begin_step does not rebuild the hierarchy). */
@@ -217,6 +223,17 @@ double bs_self_sqdist(int nv, const double *y, double *g, double *H);
 /* Phi = k d sqrt(d + eps) for the same y, with gradient and Hessian
  * (overwritten when non-NULL). */
 double bs_self_pair_energy(int nv, const double *y, double k, double *g, double *H);
+
+/* The secant model (the term's hessian_g, as the object penalty's in
+ * bs_penalty.h) of the same pair: with r = sqrt(d) the depth, Phi is about
+ * k r^3, and the coefficient 6 k r of grad r grad r^T in the pair's Hessian H
+ * (as bs_self_pair_energy gives it) becomes 3 k (r + r*), where
+ * r* = sqrt(F / (3 k)) balances F, the other terms' push along grad r
+ * (F = dPhi/dr - g . grad r / |grad r|^2, g the objective's whole gradient at
+ * the pair's 3 (nv + 1) dofs; r* = 0 when F <= 0): ADDS
+ * 3 k (r* - r) grad r grad r^T into H. At a minimizer (g = 0) r* = r and H is
+ * unchanged. Nothing is added for d <= BS_SELF_SECANT_MIN_D. */
+void bs_self_pair_secant(int nv, const double *y, double k, const double *g, double *H);
 
 #ifdef __cplusplus
 }

@@ -61,7 +61,20 @@ static int penalty_gradient(const bs_term *t, const double *x, double *E, double
   return BS_TERM_OK;
 }
 
-static int penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+/* The coefficient of grad phi grad phi^T in the secant model (bs_penalty.h)
+ * of a vertex at depth -phi whose whole gradient is gv: 3 k (depth + depth*),
+ * depth* = sqrt(F / (3 k |grad phi|)) from the other terms' push inwards F
+ * (0 when they pull outwards). */
+static double secant_coef(double k, double phi, const double grad[3], const double gv[3]) {
+  const double gn = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+  double F = 0; /* (gv - the penalty's own gradient) . grad phi / |grad phi| */
+  for (int a = 0; a < 3; a++) F += (gv[a] + 3 * k * phi * phi * grad[a]) * grad[a];
+  const double ds = gn > 0 && F > 0 ? sqrt(F / gn / (3 * k * gn)) : 0;
+  return isfinite(ds) ? 3 * k * (ds - phi) : -6 * k * phi;
+}
+
+/* The exact Hessian (g NULL) or the secant model given g, added into H. */
+static void penalty_model(const bs_term *t, const double *x, const double *g, bs_bsr *H) {
   const penalty_data *d = t->data;
   bs_levelset_frame f;
   bs_levelset_frame_at(d->ls, step_time(t), &f);
@@ -72,15 +85,24 @@ static int penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
     double grad[3], hess[9];
     double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, grad, hess);
     if (!(phi < 0)) continue;
+    const double c = g ? secant_coef(k, phi, grad, g + 3 * (size_t)v) : -6 * k * phi;
     double *blk = H->val + 9 * (size_t)H->diag[v];
     for (int a = 0; a < 3; a++)
-      for (int b = 0; b < 3; b++)
-        blk[3 * a + b] += -6 * k * phi * grad[a] * grad[b] - 3 * k * phi * phi * hess[3 * a + b];
+      for (int b = 0; b < 3; b++) blk[3 * a + b] += c * grad[a] * grad[b] - 3 * k * phi * phi * hess[3 * a + b];
   }
+}
+
+static int penalty_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  penalty_model(t, x, NULL, H);
+  return BS_TERM_OK;
+}
+static int penalty_hessian_g(const bs_term *t, const double *x, const double *g, bs_bsr *H) {
+  penalty_model(t, x, g, H);
   return BS_TERM_OK;
 }
 
-static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free, NULL};
+static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free, NULL,
+                                        penalty_hessian_g};
 
 int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, const bs_levelset *ls, double k,
                                   int32_t n_vertices, const int32_t *vertices, bs_term **out, bs_error *err) {

@@ -322,6 +322,24 @@ double bs_self_pair_energy(int nv, const double *y, double k, double *g, double 
   return k * psi;
 }
 
+void bs_self_pair_secant(int nv, const double *y, double k, const double *g, double *H) {
+  const int m = 3 * (nv + 1);
+  double gd[12];
+  const double d = bs_self_sqdist(nv, y, gd, NULL);
+  if (!(d > BS_SELF_SECANT_MIN_D)) return;
+  const double r = sqrt(d), se = sqrt(d + BS_SELF_EPS);
+  const double s = k * (se + d / (2 * se)) * 2 * r; /* dPhi/dr */
+  double gg = 0, dd = 0;
+  for (int i = 0; i < m; i++) gg += g[i] * gd[i], dd += gd[i] * gd[i];
+  if (!(dd > 0)) return;
+  const double F = s - gg * 2 * r / dd; /* the other terms' push along grad r */
+  const double rs = F > 0 ? sqrt(F / (3 * k)) : 0;
+  const double c = 3 * k * (rs - r) / (4 * d); /* (3 k (r + r*) - 6 k r) grad r grad r^T */
+  if (!isfinite(c)) return;
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) H[i * m + j] += c * gd[i] * gd[j];
+}
+
 /* ---- the term --------------------------------------------------------- */
 
 typedef struct bvh_node {
@@ -807,15 +825,21 @@ static int self_gradient(const bs_term *t, const double *x, double *E, double *g
 typedef void (*missing_fn)(int32_t i, int32_t j, const double *B, void *ctx);
 
 /* The local Hessians of the contacts active[0..n) into hl (144 each, row
- * stride 3 (nv + 1)), projected onto the PSD cone when convex; in parallel,
+ * stride 3 (nv + 1)), with the secant model when g (the objective's
+ * gradient) is given, projected onto the PSD cone when convex; in parallel,
  * each the same whatever the thread count. */
-static void local_hessians(const self_data *d, const double *x, int convex, const int32_t *active, int n, double *hl) {
+static void local_hessians(const self_data *d, const double *x, const double *g, int convex, const int32_t *active,
+                           int n, double *hl) {
 #pragma omp parallel for schedule(dynamic, 4) num_threads(d->nthreads) if (n >= HESS_PAR_MIN)
   for (int i = 0; i < n; i++) {
     const contact *c = &d->con[active[i]];
-    double y[12], *Hl = hl + 144 * (size_t)i;
+    double y[12], gl[12], *Hl = hl + 144 * (size_t)i;
     gather(x, c, y);
     bs_self_pair_energy(c->nv, y, d->k, NULL, Hl);
+    if (g) {
+      gather(g, c, gl);
+      bs_self_pair_secant(c->nv, y, d->k, gl, Hl);
+    }
     if (convex) bs_sym_psd_project(3 * (c->nv + 1), Hl);
   }
 }
@@ -840,14 +864,15 @@ static int64_t place(const contact *c, const double *Hl, const bs_bsr *P, bs_bsr
   return missing;
 }
 
-static int64_t assemble(self_data *d, const double *x, int convex, bs_bsr *H, missing_fn fn, void *ctx) {
+static int64_t assemble(self_data *d, const double *x, const double *g, int convex, bs_bsr *H, missing_fn fn,
+                        void *ctx) {
   int32_t n = 0;
   for (int32_t i = 0; i < d->n_surf; i++)
     if (d->con[i].nv > 0) d->active[n++] = i;
   int64_t missing = 0;
   for (int32_t b0 = 0; b0 < n; b0 += HESS_BATCH) {
     const int nb = n - b0 < HESS_BATCH ? (int)(n - b0) : HESS_BATCH;
-    local_hessians(d, x, convex, d->active + b0, nb, d->hl);
+    local_hessians(d, x, g, convex, d->active + b0, nb, d->hl);
     for (int i = 0; i < nb; i++)
       missing += place(&d->con[d->active[b0 + i]], d->hl + 144 * (size_t)i, d->fem->pattern, H, fn, ctx);
   }
@@ -855,17 +880,23 @@ static int64_t assemble(self_data *d, const double *x, int convex, bs_bsr *H, mi
 }
 
 /* Not evaluable as self_eval (H untouched). convex: each contact's Hessian
- * projected onto the PSD cone (the term's hessian_convexified). */
-static int hessian_at(const bs_term *t, const double *x, int convex, bs_bsr *H) {
+ * projected onto the PSD cone (the term's hessian_convexified); g: the
+ * secant model (the term's hessian_g). */
+static int hessian_at(const bs_term *t, const double *x, const double *g, int convex, bs_bsr *H) {
   self_data *d = t->data;
   int32_t cnt = detect(d, x);
   if (cnt < 0) return BS_TERM_NOT_EVALUABLE;
-  d->stats.missing_blocks = cnt ? assemble(d, x, convex, H, NULL, NULL) : 0;
+  d->stats.missing_blocks = cnt ? assemble(d, x, g, convex, H, NULL, NULL) : 0;
   return BS_TERM_OK;
 }
 
-static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) { return hessian_at(t, x, 0, H); }
-static int self_hessian_convexified(const bs_term *t, const double *x, bs_bsr *H) { return hessian_at(t, x, 1, H); }
+static int self_hessian(const bs_term *t, const double *x, bs_bsr *H) { return hessian_at(t, x, NULL, 0, H); }
+static int self_hessian_convexified(const bs_term *t, const double *x, bs_bsr *H) {
+  return hessian_at(t, x, NULL, 1, H);
+}
+static int self_hessian_g(const bs_term *t, const double *x, const double *g, bs_bsr *H) {
+  return hessian_at(t, x, g, 0, H);
+}
 
 static int self_begin_step(bs_term *t, bs_error *err) {
   (void)err;
@@ -882,7 +913,7 @@ static int self_begin_step(bs_term *t, bs_error *err) {
 }
 
 static const bs_term_ops self_ops = {self_value, self_gradient, self_hessian, self_begin_step, self_free,
-                                     self_hessian_convexified};
+                                     self_hessian_convexified, self_hessian_g};
 
 /* ---- interface faces ---------------------------------------------------
  * The excluded region of surface vertex p is the union of the tets that hold
@@ -1172,7 +1203,7 @@ int bs_term_self_missing_blocks(bs_term *t, const double *x, int64_t cap, int32_
   if ((st = check_x(d, x, "self-collision missing blocks", err))) return st;
   if (detect(d, x) < 0) return bs_error_set(err, BS_EINTERNAL, "self-collision missing blocks: a query failed");
   missing_ctx c = {0, cap, pairs, blocks};
-  d->stats.missing_blocks = assemble(d, x, 0, NULL, collect_missing, &c);
+  d->stats.missing_blocks = assemble(d, x, NULL, 0, NULL, collect_missing, &c);
   *count = c.n;
   return 0;
 }

@@ -82,6 +82,11 @@ int bs_dfem_hessian(bs_dfem *df, const double *x, const uint8_t *mask, bs_error 
 typedef void (*bs_dfem_hessian_fn)(bs_bsr *Hm, void *ctx);
 int bs_dfem_hessian_with(bs_dfem *df, const double *x, const uint8_t *mask, bs_dfem_hessian_fn fn, void *ctx,
                          bs_error *err);
+/* The same with the Newton model of the terms that offer hessian_g
+ * (bs_terms.h) in place of their Hessians, given g, grad E(x) assembled (as
+ * bs_dfem_gradient gives it); g NULL: bs_dfem_hessian_with. */
+int bs_dfem_hessian_model(bs_dfem *df, const double *x, const double *g, const uint8_t *mask, bs_dfem_hessian_fn fn,
+                          void *ctx, bs_error *err);
 
 /* Sum over the ranks of a.b over owned entries. */
 int bs_dfem_dot(const bs_dfem *df, const double *a, const double *b, double *out, bs_error *err);

@@ -196,11 +196,20 @@ int bs_dfem_hessian(bs_dfem *df, const double *x, const uint8_t *mask, bs_error 
 
 int bs_dfem_hessian_with(bs_dfem *df, const double *x, const uint8_t *mask, bs_dfem_hessian_fn fn, void *ctx,
                          bs_error *err) {
+  return bs_dfem_hessian_model(df, x, NULL, mask, fn, ctx, err);
+}
+
+int bs_dfem_hessian_model(bs_dfem *df, const double *x, const double *g, const uint8_t *mask, bs_dfem_hessian_fn fn,
+                          void *ctx, bs_error *err) {
   to_mesh(df, x);
+  if (g) bs_dfem_mesh_vector(df, g, df->gm); /* df->gm: free between gradients */
   bs_bsr_zero(df->Hm);
   int st = BS_TERM_OK;
-  for (int i = 0; i < df->n_terms && st == BS_TERM_OK; i++)
-    if (active(df, i)) st = df->terms[i]->ops->hessian(df->terms[i], df->xm, df->Hm);
+  for (int i = 0; i < df->n_terms && st == BS_TERM_OK; i++) {
+    const bs_term *t = df->terms[i];
+    if (!active(df, i)) continue;
+    st = g && t->ops->hessian_g ? t->ops->hessian_g(t, df->xm, df->gm, df->Hm) : t->ops->hessian(t, df->xm, df->Hm);
+  }
   int rc = agree(st, err);
   if (rc) return rc;
   if (fn) fn(df->Hm, ctx);

@@ -44,7 +44,7 @@ static void obj_project_gradient(const double *x, double *g, void *ctx) {
   bs__dstep_note(D, bs_dfem_consistent(D->df, g, &D->cb_err));
 }
 
-/* Inside bs_dfem_hessian_with: the rank's partial Hessian projected at the
+/* Inside bs_dfem_hessian_model: the rank's partial Hessian projected at the
  * point obj_hessian_g was given. */
 static void project_partial(bs_bsr *Hm, void *ctx) {
   bs_dintegrator *D = ctx;
@@ -52,11 +52,14 @@ static void project_partial(bs_bsr *Hm, void *ctx) {
   D->hooks.project_hessian(D->hxm, D->hgm, Hm, D->hooks.ctx);
 }
 
+/* The Hessian (the terms' secant models with opts.penalty_secant), projected
+ * by the hook when there is one. */
 static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
   (void)H; /* the minimizer's (unused) matrix: the dfem assembles its own */
   bs_dintegrator *D = ctx;
   D->hess_x = x, D->hess_g = g_raw;
-  int rc = bs_dfem_hessian_with(D->df, x, D->mask, project_partial, D, &D->cb_err);
+  int rc = bs_dfem_hessian_model(D->df, x, D->opts.penalty_secant ? g_raw : NULL, D->mask,
+                                 D->hooks.project_hessian ? project_partial : NULL, D, &D->cb_err);
   bs__dstep_note(D, rc);
   return rc ? 1 : 0;
 }
@@ -66,5 +69,5 @@ void bs__dstep_hook_objective(bs_dintegrator *D, bs_objective *o) {
   o->project = h->project ? obj_project : NULL;
   o->register_active = h->register_active ? obj_register : NULL;
   o->project_gradient = h->project_gradient ? obj_project_gradient : NULL;
-  o->hessian_g = h->project_hessian ? obj_hessian_g : NULL;
+  o->hessian_g = h->project_hessian || D->opts.penalty_secant ? obj_hessian_g : NULL;
 }

@@ -72,6 +72,16 @@ typedef struct bs_integrator_opts {
      (neo_hookean) it leads into a local minimum that keeps one tet inverted. bs_sim_create
      (sim/) sets it for the optimization integrator when the scene has self_collision. */
   int guess_xn;
+  /* added, default 0: the Newton model of the terms that offer hessian_g (bs_terms.h: the
+     object penalties' secant model, bs_penalty.h) instead of their Hessians, wherever the
+     minimizer hands over the gradient (every iteration of the optimization method's
+     solves). E and its gradient are unchanged. Why: the penalty k depth³ has a gradient
+     quadratic in the depth, on which Newton halves a deep vertex's depth per iteration
+     (its gradient falls 4x per iteration) until it is near the depth where the penalty
+     balances the other forces. bs_sim_create sets it from the scene's
+     solver.penalty_hessian for the optimization method (the Newton baseline keeps the
+     exact Hessian). */
+  int penalty_secant;
 } bs_integrator_opts;
 
 void bs_integrator_opts_default(bs_integrator_opts *o);

@@ -6,7 +6,12 @@
  *   gradient(x, &E, g)        its energy into E, and its gradient ADDED into g;
  *   hessian(x, H)             its Hessian ADDED into the block matrix H (the
  *                             fem pattern);
- *   begin_step(step)          optional: refresh what it lags on (xⁿ, Δt).
+ *   begin_step(step)          optional: refresh what it lags on (xⁿ, Δt);
+ *   hessian_g(x, g, H)        optional: a Newton model added into H in place
+ *                             of hessian's, given g = ∇E(x) of the whole
+ *                             objective (every term, unprojected); used by
+ *                             the integrator only when asked
+ *                             (bs_integrator_opts.penalty_secant).
  * value, gradient and hessian return a bs_term_status (as libCEED's
  * QFunctions return int): BS_TERM_OK, or BS_TERM_NOT_EVALUABLE when x lies
  * outside the term's domain, so that it has no value there (self-collision:
@@ -78,6 +83,12 @@ typedef struct bs_term_ops {
      semidefinite cone). The minimizer's convexified model (bs_minimize.h,
      "Convexified model") takes it in place of hessian. */
   int (*hessian_convexified)(const bs_term *t, const double *x, bs_bsr *H);
+  /* May be NULL: a Newton model that uses the other terms' forces, added into
+     H in place of hessian's, given g = grad E(x) of the whole objective at x
+     (the penalty's secant model: bs_penalty.h). Not a second derivative, so
+     not checked against differences of the gradient; it must tend to the
+     Hessian as x tends to a minimizer. */
+  int (*hessian_g)(const bs_term *t, const double *x, const double *g, bs_bsr *H);
 } bs_term_ops;
 
 struct bs_term {

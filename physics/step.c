@@ -21,6 +21,7 @@ struct bs_integrator {
   double *gh;             /* 3n: grad E' for the Hessian projection   */
   int has_expensive;
   int has_convexified;    /* a term offers hessian_convexified         */
+  int has_hessian_g;      /* a term offers hessian_g and opts.penalty_secant */
   double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
 };
@@ -98,6 +99,7 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
     I->terms[i] = terms[i];
     if (terms[i]->expensive) I->has_expensive = 1;
     if (terms[i]->ops->hessian_convexified) I->has_convexified = 1;
+    if (terms[i]->ops->hessian_g) I->has_hessian_g = 1;
   }
   if (mask) memcpy(I->mask, mask, nv);
   else memset(I->mask, 1, nv);
@@ -105,6 +107,7 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
   I->script_ctx = script_ctx;
   if (opts) I->opts = *opts;
   else bs_integrator_opts_default(&I->opts);
+  I->has_hessian_g = I->has_hessian_g && I->opts.penalty_secant;
   I->amg_dt = -1;
   step->x_hat = I->x_hat;
   step->x_n = I->x_n;
@@ -209,14 +212,17 @@ static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
 
 /* The active terms' Hessians added into H (a term's status when one is not
  * evaluable); dynamic_only: only the terms marked so; convex: a term's
- * convexified Hessian where it offers one. */
-static int terms_hessian(bs_integrator *I, const double *x, int dynamic_only, int convex, bs_bsr *H) {
+ * convexified Hessian where it offers one; g (may be NULL): grad E'(x), for
+ * the terms' hessian_g models when I->has_hessian_g. */
+static int terms_hessian(bs_integrator *I, const double *x, const double *g, int dynamic_only, int convex,
+                         bs_bsr *H) {
   for (int i = 0; i < I->n_terms; i++) {
     const bs_term *t = I->terms[i];
-    if (term_active(I, t) && (!dynamic_only || t->dynamic_only)) {
-      int rc = convex && t->ops->hessian_convexified ? t->ops->hessian_convexified(t, x, H) : t->ops->hessian(t, x, H);
-      if (rc) return rc;
-    }
+    if (!term_active(I, t) || (dynamic_only && !t->dynamic_only)) continue;
+    int rc = convex && t->ops->hessian_convexified ? t->ops->hessian_convexified(t, x, H)
+             : g && I->has_hessian_g && t->ops->hessian_g ? t->ops->hessian_g(t, x, g, H)
+                                                           : t->ops->hessian(t, x, H);
+    if (rc) return rc;
   }
   return 0;
 }
@@ -224,7 +230,7 @@ static int terms_hessian(bs_integrator *I, const double *x, int dynamic_only, in
 static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
   bs_integrator *I = ctx;
   bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, 0, H);
+  int rc = terms_hessian(I, x, NULL, 0, 0, H);
   if (rc) return rc;
   if (I->hooks.project_hessian) {
     double E;
@@ -238,7 +244,7 @@ static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
  * projected by the hook when there is one (g_raw: the unprojected gradient). */
 static int hessian_projected(bs_integrator *I, const double *x, const double *g_raw, int convex, bs_bsr *H) {
   bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, 0, convex, H);
+  int rc = terms_hessian(I, x, g_raw, 0, convex, H);
   if (rc) return rc;
   if (I->hooks.project_hessian) I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
   return 0;
@@ -258,7 +264,7 @@ static int obj_hessian_convexified(const double *x, const double *g_raw, bs_bsr 
  * Hessians plus the PSD-projected elastic Hessian at rest or at x. */
 static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
   bs_integrator *I = ctx;
-  int rc = terms_hessian(I, x, 1, 0, P);
+  int rc = terms_hessian(I, x, NULL, 1, 0, P);
   if (rc) return rc;
   bs_fem_elastic_hessian(I->fem, I->opts.amg_at_rest ? I->fem->mesh->x : x, 1, 1.0, P);
   return 0;
@@ -350,7 +356,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   o->project = I->hooks.project ? hook_project : NULL;
   o->register_active = I->hooks.register_active ? hook_register : NULL;
   o->project_gradient = I->hooks.project_gradient ? hook_project_gradient : NULL;
-  o->hessian_g = I->hooks.project_hessian ? obj_hessian_g : NULL;
+  o->hessian_g = I->hooks.project_hessian || I->has_hessian_g ? obj_hessian_g : NULL;
   o->hessian_convexified = I->has_convexified ? obj_hessian_convexified : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->precond_matrix = obj_precond;

@@ -647,6 +647,7 @@ static int parse_solver_choices(ctx *c, const cJSON *so, bs_scene *s) {
       (st = get_choice(c, so, "solver", "solver", "amg_matrix", &current)) ||
       (st = get_choice(c, so, "solver", "solver", "cg_forcing", &s->solver.min.forcing_ew)) ||
       (st = get_choice(c, so, "solver", "solver", "contact_hessian", &s->solver.min.convexify)) ||
+      (st = get_choice(c, so, "solver", "solver", "penalty_hessian", &s->solver.penalty_secant)) ||
       (st = get_choice(c, so, "solver", "solver", "mode", &stat)) ||
       (st = get_choice(c, so, "solver", "solver", "backend", &backend)) ||
       (st = get_choice(c, so, "solver", "solver", "globalization", &glob)))

@@ -79,6 +79,7 @@ static int make_integrator(bs_sim *s, bs_error *err) {
   bs_integrator_destroy(&s->integrator);
   bs_integrator_opts io = sc->solver;
   io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
+  io.penalty_secant = sc->solver.penalty_secant && sc->solver.method == BS_METHOD_OPTIMIZATION;
   int st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
                                 s->n_scripts ? bs_sim_script_positions_ : NULL, s, &io, &s->integrator, err);
   if (st) return st;

@@ -172,6 +172,55 @@ Test(self_kernel, psd_projection_known_matrix) {
  * is PSD and differs from it by a PSD matrix (only negative curvature is
  * removed) and is projected again to itself; in the vertex region (|p - a|^2
  * is convex) the Hessian is PSD and left bit for bit. */
+/* The pair's secant model (bs_self_pair_secant) in every region: at balance
+ * (g = 0) it is the Hessian; when the other terms pull outwards (g = the
+ * pair's own gradient plus a pull along grad d, r* = 0) the grad d grad d^T
+ * part is gone, leaving
+ * k psi'(d) Hess d; with a push F along grad r the model's curvature along
+ * grad r is 3 k (r + r*) |grad r|^4 + (the Hess r part), so against case 2 it
+ * gains 3 k r* (grad r . grad r)^2. */
+Test(self_kernel, pair_secant_model) {
+  const double k = 2.5;
+  for (int want = 0; want < 3; want++)
+    for (unsigned seed = 1; seed <= 3; seed++) {
+      double y[12], H[144], Hs[144], H0[144], gp[12], gd[12], Hd[144], g[12];
+      const int nv = region_config(want, seed, y), m = 3 * (nv + 1);
+      bs_self_pair_energy(nv, y, k, gp, H);
+      const double d = bs_self_sqdist(nv, y, gd, Hd), r = sqrt(d), se = sqrt(d + BS_SELF_EPS);
+      double scale = 0;
+      for (int i = 0; i < m * m; i++) scale = fmax(scale, fabs(H[i]));
+      memset(g, 0, sizeof g);
+      memcpy(Hs, H, sizeof(double) * (size_t)(m * m));
+      bs_self_pair_secant(nv, y, k, g, Hs);
+      for (int i = 0; i < m * m; i++)
+        cr_expect(fabs(Hs[i] - H[i]) <= 1e-9 * scale, "region %d seed %u: at balance entry %d %g vs %g", want, seed, i,
+                  Hs[i], H[i]);
+      memcpy(H0, H, sizeof(double) * (size_t)(m * m));
+      for (int i = 0; i < m; i++) g[i] = gp[i] + 1e-3 * gd[i];
+      bs_self_pair_secant(nv, y, k, g, H0);
+      const double dpsi = se + d / (2 * se);
+      for (int i = 0; i < m * m; i++)
+        cr_expect(fabs(H0[i] - k * dpsi * Hd[i]) <= 1e-9 * scale, "region %d seed %u: unloaded entry %d %g vs %g", want,
+                  seed, i, H0[i], k * dpsi * Hd[i]);
+      /* a push F = 3 k (r / 2)^2 along grad r: r* = r / 2 */
+      double dd = 0;
+      for (int i = 0; i < m; i++) dd += gd[i] * gd[i];
+      const double F = 3 * k * (r / 2) * (r / 2), gr2 = dd / (4 * d); /* |grad r|^2 */
+      for (int i = 0; i < m; i++) g[i] = gp[i] - F * gd[i] / (2 * r);
+      memcpy(Hs, H, sizeof(double) * (size_t)(m * m));
+      bs_self_pair_secant(nv, y, k, g, Hs);
+      double q = 0, q0 = 0; /* curvatures along grad r */
+      for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+          q += gd[i] * Hs[i * m + j] * gd[j] / (4 * d);
+          q0 += gd[i] * H0[i * m + j] * gd[j] / (4 * d);
+        }
+      const double want_q = q0 + 3 * k * (r / 2) * gr2 * gr2;
+      cr_expect(fabs(q - want_q) <= 1e-9 * fabs(want_q), "region %d seed %u: curvature %.17g, expected %.17g", want,
+                seed, q, want_q);
+    }
+}
+
 Test(self_kernel, psd_projection_of_contact_hessians) {
   for (int want = 0; want < 3; want++)
     for (unsigned seed = 1; seed <= 3; seed++) {
