@@ -85,9 +85,11 @@
  * within a distance margin may couple.
  *
  * Secant model (the term's hessian_g, bs_terms.h; used with
- * bs_integrator_opts.penalty_secant): each contact's Hessian with the
- * secant correction of bs_self_pair_secant, given the objective's gradient.
- * The convexified Hessian below projects the exact one.
+ * bs_integrator_opts.penalty_secant), off by default
+ * (bs_term_self_set_secant): each contact's Hessian with the secant
+ * correction of bs_self_pair_secant, given the objective's gradient; off,
+ * hessian_g is the Hessian. The convexified Hessian below projects the exact
+ * one.
  *
  * Convexified Hessian (the term's hessian_convexified, bs_terms.h): each
  * contact's (3 (nv + 1))^2 Hessian projected onto the positive semidefinite
@@ -151,6 +153,10 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
 
 /* 1 if t was made by bs_term_self_create, else 0. */
 int bs_term_is_self(const bs_term *t);
+
+/* on = 1: the term's hessian_g is the secant model (above); 0 (at creation):
+ * the Hessian. BS_EINPUT when t is not a self-collision term. */
+int bs_term_self_set_secant(bs_term *t, int on, bs_error *err);
 
 typedef struct bs_self_stats {
   int32_t colliding;      /* colliding vertices at the last evaluation          */

@@ -359,6 +359,7 @@ typedef struct self_data {
   const bs_fem *fem;
   const bs_mesh *mesh;
   double k;
+  int secant;           /* hessian_g gives the secant model (else the Hessian) */
   int32_t n_surf;
   int32_t *surf;        /* boundary vertices                                */
   /* tet hierarchy */
@@ -895,7 +896,7 @@ static int self_hessian_convexified(const bs_term *t, const double *x, bs_bsr *H
   return hessian_at(t, x, NULL, 1, H);
 }
 static int self_hessian_g(const bs_term *t, const double *x, const double *g, bs_bsr *H) {
-  return hessian_at(t, x, g, 0, H);
+  return hessian_at(t, x, ((const self_data *)t->data)->secant ? g : NULL, 0, H);
 }
 
 static int self_begin_step(bs_term *t, bs_error *err) {
@@ -1157,6 +1158,13 @@ int bs_term_self_stats(const bs_term *t, bs_self_stats *out, bs_error *err) {
   int st = need_self(t, "self-collision stats", err);
   if (st) return st;
   *out = ((const self_data *)t->data)->stats;
+  return 0;
+}
+
+int bs_term_self_set_secant(bs_term *t, int on, bs_error *err) {
+  int st = need_self(t, "self-collision secant model", err);
+  if (st) return st;
+  ((self_data *)t->data)->secant = on != 0;
   return 0;
 }
 

@@ -43,6 +43,10 @@ typedef enum { BS_METHOD_OPTIMIZATION = 0, BS_METHOD_NEWTON, BS_METHOD_NEWTON_K 
 int bs_method_parse(const char *name, bs_method *out, bs_error *err); /* optimization|newton|newton_k */
 const char *bs_method_name(bs_method m);
 
+/* bs_integrator_opts.penalty_secant; the scene's solver.penalty_hessian
+ * "exact", "obstacles", "all". */
+enum { BS_PENALTY_EXACT = 0, BS_PENALTY_SECANT_OBSTACLES = 1, BS_PENALTY_SECANT_ALL = 2 };
+
 typedef struct bs_integrator_opts {
   bs_method method;
   int newton_k;           /* steps for BS_METHOD_NEWTON_K (1: linearized backward Euler) */
@@ -72,15 +76,17 @@ typedef struct bs_integrator_opts {
      (neo_hookean) it leads into a local minimum that keeps one tet inverted. bs_sim_create
      (sim/) sets it for the optimization integrator when the scene has self_collision. */
   int guess_xn;
-  /* added, default 0: the Newton model of the terms that offer hessian_g (bs_terms.h: the
-     object penalties' secant model, bs_penalty.h) instead of their Hessians, wherever the
-     minimizer hands over the gradient (every iteration of the optimization method's
-     solves). E and its gradient are unchanged. Why: the penalty k depth³ has a gradient
-     quadratic in the depth, on which Newton halves a deep vertex's depth per iteration
-     (its gradient falls 4x per iteration) until it is near the depth where the penalty
-     balances the other forces. bs_sim_create sets it from the scene's
-     solver.penalty_hessian for the optimization method (the Newton baseline keeps the
-     exact Hessian). */
+  /* added, default BS_PENALTY_EXACT (0): with another value, the Newton model of the
+     terms that offer hessian_g (bs_terms.h: the object penalties' secant model,
+     bs_penalty.h; the self-collision term's, bs_selfcollide.h, when it is switched on
+     there) instead of their Hessians, wherever the minimizer hands over the gradient
+     (every iteration of the optimization method's solves). E and its gradient are
+     unchanged. Why: the penalty k depth³ has a gradient quadratic in the depth, on which
+     Newton halves a deep vertex's depth per iteration (its gradient falls 4x per
+     iteration) until it is near the depth where the penalty balances the other forces.
+     bs_sim_create sets it from the scene's solver.penalty_hessian for the optimization
+     method (the Newton baseline keeps the exact Hessian), and switches the
+     self-collision term's model on for BS_PENALTY_SECANT_ALL. */
   int penalty_secant;
 } bs_integrator_opts;
 

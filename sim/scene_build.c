@@ -35,7 +35,7 @@ void bs_scene_defaults_(bs_scene *s) {
   s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
   s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (README, Scenes) */
-  s->solver.penalty_secant = 1; /* penalty_hessian "secant" (README, Scenes) */
+  s->solver.penalty_secant = BS_PENALTY_SECANT_OBSTACLES; /* penalty_hessian "obstacles" (README, Scenes) */
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
   s->gravity[0] = 0;

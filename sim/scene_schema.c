@@ -81,10 +81,11 @@ const bs_schema_key bs_schema_keys_[] = {
      .doc = "the Newton model's self-collision contacts: exact Hessians (the paper's), or adaptive: each "
             "contact's Hessian projected onto the PSD cone after a solve met negative curvature, until a full "
             "Newton step"},
-    {"solver", "penalty_hessian", STR, .choices = CHOICES("exact", "secant"), .def = "\"secant\"",
-     .doc = "the Newton model of the penalties (obstacles and self-collision): exact Hessians (the paper's), "
-            "or secant: each contact's stiffness along its normal from its depth and the depth where the penalty "
-            "balances the other forces (optimization method)"},
+    {"solver", "penalty_hessian", STR, .choices = CHOICES("exact", "obstacles", "all"), .def = "\"obstacles\"",
+     .doc = "the Newton model of the penalties: exact Hessians (the paper's), or the secant model (each "
+            "contact's stiffness along its normal from its depth and the depth where the penalty balances the "
+            "other forces) for the penalty obstacles, or for them and the self-collision contacts (optimization "
+            "method)"},
     {"solver", "cg_downhill", BOOL, .def = "true",
      .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
     {"solver", "cg_precision", STR, .choices = CHOICES("double", "single"), .def = "\"double\"",

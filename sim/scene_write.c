@@ -87,7 +87,7 @@ static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
   str(w, o, "globalization", choice("solver", "globalization", (int)m->globalization));
   num(w, o, "tr_radius", m->tr_radius);
   str(w, o, "contact_hessian", choice("solver", "contact_hessian", m->convexify));
-  str(w, o, "penalty_hessian", choice("solver", "penalty_hessian", s->solver.penalty_secant != 0));
+  str(w, o, "penalty_hessian", choice("solver", "penalty_hessian", s->solver.penalty_secant));
   boolean(w, o, "cg_downhill", m->cg_downhill);
   str(w, o, "cg_precision", choice("solver", "cg_precision", m->cg_single != 0));
   str(w, o, "amg_matrix", choice("solver", "amg_matrix", !s->solver.amg_at_rest));

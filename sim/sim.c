@@ -67,7 +67,9 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
   if (sc->n_obstacles > 0 && (st = bs_sim_make_obstacles_(s, err))) return st;
   if (sc->self_collision) {
-    if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err))) return st;
+    if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err)) ||
+        (st = bs_term_self_set_secant(s->self, sc->solver.penalty_secant == BS_PENALTY_SECANT_ALL, err)))
+      return st;
     s->terms[s->n_terms++] = s->self;
   }
   return bs_sim_make_friction_(s, err);
@@ -79,7 +81,7 @@ static int make_integrator(bs_sim *s, bs_error *err) {
   bs_integrator_destroy(&s->integrator);
   bs_integrator_opts io = sc->solver;
   io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
-  io.penalty_secant = sc->solver.penalty_secant && sc->solver.method == BS_METHOD_OPTIMIZATION;
+  io.penalty_secant = sc->solver.method == BS_METHOD_OPTIMIZATION ? sc->solver.penalty_secant : BS_PENALTY_EXACT;
   int st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
                                 s->n_scripts ? bs_sim_script_positions_ : NULL, s, &io, &s->integrator, err);
   if (st) return st;

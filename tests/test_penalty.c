@@ -13,6 +13,7 @@
 #include "bs_fem.h"
 #include "bs_levelset.h"
 #include "bs_penalty.h"
+#include "bs_selfcollide.h"
 #include "bs_step.h"
 #include "bs_terms.h"
 #include "test_term_eval.h"
@@ -479,6 +480,8 @@ Test(penalty, secant_model_against_the_hessian) {
   cr_assert_eq(bs_levelset_create_halfspace(nrm, 0, &ls, &err), 0, "%s", err.msg);
   cr_assert_eq(bs_term_penalty_create(f.fem, &f.step, ls, k, &t, &err), 0, "%s", err.msg);
   cr_assert_not_null(t->ops->hessian_g);
+  cr_expect_eq(bs_term_self_set_secant(t, 1, &err), BS_EINPUT, "a penalty term taken for a self-collision term");
+  cr_expect(strstr(err.msg, "is not a self-collision term") != NULL, "%s", err.msg);
   double *x = malloc(f.n3 * sizeof(double)), *g = calloc(f.n3, sizeof(double));
   for (size_t i = 0; i < f.n3; i++) x[i] = f.mesh->x[i] + (i % 3 == 1 ? 0.3 : 0.0); /* 16 vertices 0.2 m deep */
   bs_bsr *H = NULL, *Hg = NULL;
