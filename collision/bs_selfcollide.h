@@ -16,8 +16,9 @@
  *    leaving that neighbourhood through the body continuous. Contact between
  *    parts of a body closer than that (in the mesh) is left to the elastic
  *    energy. Tets are found through a bounding-volume
- *    hierarchy over tet boxes: its topology is built at creation and rebuilt
- *    at each begin_step (at xⁿ), its boxes are refit at every evaluation;
+ *    hierarchy over tet boxes (bs_bvh.h): its topology is built at creation
+ *    and rebuilt at each begin_step (at xⁿ), its boxes are refit at every
+ *    evaluation;
  *  - the primitive of a colliding p is the feature (triangle interior, edge
  *    or vertex) of the closest triangle among the boundary triangles none of
  *    whose vertices is p or an edge neighbour of p (the others lie on p's
@@ -45,8 +46,9 @@
  *    grid), with the same switches. The search starts from the distance to the triangle p collided
  *    with last (hint) or, for a new collision, to the triangle closest in the
  *    rest shape to p's rest-shape image (barycentric in the tet it is in),
- *    and gathers every triangle within that distance from the AABB tree of
- *    the boundary at x (bs_shim_tree_within); the radius doubles when no
+ *    and gathers every triangle within that distance from a hierarchy of
+ *    the boundary triangles (bs_bvh.h; built with the tets', refit to x when
+ *    some vertex collides); the radius doubles when no
  *    admissible triangle is within it. The result is the exact minimum over
  *    admissible triangles (ties: the smallest triangle index), whatever the
  *    start: the hint only makes the search faster.

@@ -111,7 +111,7 @@ static double interp_linear(const bs_levelset *ls, const grid_locus *L, double g
   return val;
 }
 
-/* The cubic B-spline weights of one axis (value, first and second
+/* The cubic B-spline weights of one axis (value, and when need > 0 first and second
  * derivatives in f) on the stencil nodes c - 1 .. c + 2, with a ghost node
  * (index -1 or n) folded onto its two neighbours: C_{-1} = 2 C_0 - C_1 gives
  * w_0 += 2 w_{-1}, w_1 -= w_{-1}. Slots lo .. hi are the in-grid ones. */
@@ -126,29 +126,57 @@ static void fold(double a[4], int ghost, int near, int next) {
   a[ghost] = 0;
 }
 
-static void bspline_weights(double f, int32_t c, int32_t n, axis_weights *A) {
+static void bspline_weights(double f, int32_t c, int32_t n, int need, axis_weights *A) {
   double g = 1 - f, f2 = f * f;
   A->w[0] = g * g * g / 6;
   A->w[1] = (3 * f2 * f - 6 * f2 + 4) / 6;
   A->w[2] = (-3 * f2 * f + 3 * f2 + 3 * f + 1) / 6;
   A->w[3] = f2 * f / 6;
-  A->d[0] = -0.5 * g * g;
-  A->d[1] = 1.5 * f2 - 2 * f;
-  A->d[2] = -1.5 * f2 + f + 0.5;
-  A->d[3] = 0.5 * f2;
-  A->dd[0] = g;
-  A->dd[1] = 3 * f - 2;
-  A->dd[2] = 1 - 3 * f;
-  A->dd[3] = f;
+  if (need > 0) {
+    A->d[0] = -0.5 * g * g;
+    A->d[1] = 1.5 * f2 - 2 * f;
+    A->d[2] = -1.5 * f2 + f + 0.5;
+    A->d[3] = 0.5 * f2;
+    A->dd[0] = g;
+    A->dd[1] = 3 * f - 2;
+    A->dd[2] = 1 - 3 * f;
+    A->dd[3] = f;
+  }
   A->lo = 0, A->hi = 3;
   if (c == 0) { /* node -1 is a ghost */
-    fold(A->w, 0, 1, 2), fold(A->d, 0, 1, 2), fold(A->dd, 0, 1, 2);
+    fold(A->w, 0, 1, 2);
+    if (need > 0) fold(A->d, 0, 1, 2), fold(A->dd, 0, 1, 2);
     A->lo = 1;
   }
   if (c + 2 >= n) { /* node n is a ghost */
-    fold(A->w, 3, 2, 1), fold(A->d, 3, 2, 1), fold(A->dd, 3, 2, 1);
+    fold(A->w, 3, 2, 1);
+    if (need > 0) fold(A->d, 3, 2, 1), fold(A->dd, 3, 2, 1);
     A->hi = 2;
   }
+}
+
+/* The value alone of the cubic B-spline at the locus: the sums of
+ * interp_cubic that make it, in the same order (the same bits). */
+static double interp_cubic_value(const bs_levelset *ls, const grid_locus *L) {
+  const int32_t *n = ls->n;
+  axis_weights X, Y, Z;
+  bspline_weights(L->f[0], L->c[0], n[0], 0, &X);
+  bspline_weights(L->f[1], L->c[1], n[1], 0, &Y);
+  bspline_weights(L->f[2], L->c[2], n[2], 0, &Z);
+  const size_t sy = (size_t)n[0], sz = (size_t)n[0] * (size_t)n[1];
+  double val = 0;
+  for (int c = Z.lo; c <= Z.hi; c++) {
+    size_t kz = (size_t)(L->c[2] - 1 + c) * sz;
+    double t00 = 0;
+    for (int b = Y.lo; b <= Y.hi; b++) {
+      const double *row = ls->coef + kz + (size_t)(L->c[1] - 1 + b) * sy + L->c[0];
+      double r0 = 0;
+      for (int a = X.lo; a <= X.hi; a++) r0 += row[a - 1] * X.w[a];
+      t00 += r0 * Y.w[b];
+    }
+    val += t00 * Z.w[c];
+  }
+  return val;
 }
 
 /* Cubic B-spline at the locus: value, gradient d/du and Hessian d2/du2. The
@@ -157,9 +185,9 @@ static void bspline_weights(double f, int32_t c, int32_t n, axis_weights *A) {
 static double interp_cubic(const bs_levelset *ls, const grid_locus *L, double gu[3], double Hu[9]) {
   const int32_t *n = ls->n;
   axis_weights X, Y, Z;
-  bspline_weights(L->f[0], L->c[0], n[0], &X);
-  bspline_weights(L->f[1], L->c[1], n[1], &Y);
-  bspline_weights(L->f[2], L->c[2], n[2], &Z);
+  bspline_weights(L->f[0], L->c[0], n[0], 2, &X);
+  bspline_weights(L->f[1], L->c[1], n[1], 2, &Y);
+  bspline_weights(L->f[2], L->c[2], n[2], 2, &Z);
   const size_t sy = (size_t)n[0], sz = (size_t)n[0] * (size_t)n[1];
   double val = 0, gx = 0, gy = 0, gz = 0, hxx = 0, hyy = 0, hzz = 0, hxy = 0, hxz = 0, hyz = 0;
   for (int c = Z.lo; c <= Z.hi; c++) {
@@ -212,7 +240,9 @@ double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double 
   grid_locus L;
   locate(ls, p, &L);
   double gu[3], Hu[9];
-  double val = ls->grid_interp == BS_GRID_LINEAR ? interp_linear(ls, &L, gu, Hu) : interp_cubic(ls, &L, gu, Hu);
+  double val = ls->grid_interp == BS_GRID_LINEAR ? interp_linear(ls, &L, gu, Hu)
+               : g || H                          ? interp_cubic(ls, &L, gu, Hu)
+                                                 : interp_cubic_value(ls, &L);
   const double h = ls->h, *r = L.r;
   const int *clamped = L.clamped;
   double dist = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);

@@ -24,6 +24,16 @@ static void penalty_free(void *p) {
 static double step_time(const bs_term *t) { return t->step ? t->step->time : 0.0; }
 static int32_t vertex_of(const penalty_data *d, int32_t i) { return d->verts ? d->verts[i] : i; }
 
+/* phi at xp, with its gradient (and Hessian) only where phi < 0: the value
+ * alone costs a tenth of a grid level set's full interpolation, and most
+ * vertices are outside. The same phi either way (the same sums). */
+static double phi_at(const bs_levelset *ls, const bs_levelset_frame *f, const double *xp, double grad[3],
+                     double hess[9]) {
+  const double phi = bs_levelset_eval_frame(ls, f, xp, NULL, NULL);
+  if (!(phi < 0) || (!grad && !hess)) return phi;
+  return bs_levelset_eval_frame(ls, f, xp, grad, hess);
+}
+
 /* Energy of all vertices (summed as in bs_sum.h: the same bits with any
  * thread count), gradient added into g when non-NULL. */
 static double penalty_eval(const bs_term *t, const double *x, double *g) {
@@ -39,7 +49,7 @@ static double penalty_eval(const bs_term *t, const double *x, double *g) {
     for (int32_t i = (int32_t)bs_sum_lo(P, c); i < (int32_t)bs_sum_hi(P, c); i++) {
       int32_t v = vertex_of(d, i);
       double grad[3];
-      double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, g ? grad : NULL, NULL);
+      double phi = phi_at(d->ls, &f, x + 3 * (size_t)v, g ? grad : NULL, NULL);
       if (!(phi < 0)) continue;
       E -= k * phi * phi * phi;
       if (g)
@@ -83,7 +93,7 @@ static void penalty_model(const bs_term *t, const double *x, const double *g, bs
   for (int32_t i = 0; i < d->n; i++) {
     int32_t v = vertex_of(d, i);
     double grad[3], hess[9];
-    double phi = bs_levelset_eval_frame(d->ls, &f, x + 3 * (size_t)v, grad, hess);
+    double phi = phi_at(d->ls, &f, x + 3 * (size_t)v, grad, hess);
     if (!(phi < 0)) continue;
     const double c = g ? secant_coef(k, phi, grad, g + 3 * (size_t)v) : -6 * k * phi;
     double *blk = H->val + 9 * (size_t)H->diag[v];
@@ -193,7 +203,7 @@ int bs_term_penalty_forces(const bs_term *t, const double *x, double *f, bs_erro
   for (int32_t i = 0; i < d->n; i++) {
     int32_t v = vertex_of(d, i);
     double grad[3];
-    double phi = bs_levelset_eval_frame(d->ls, &fr, x + 3 * (size_t)v, grad, NULL);
+    double phi = phi_at(d->ls, &fr, x + 3 * (size_t)v, grad, NULL);
     if (phi < 0)
       for (int a = 0; a < 3; a++) f[3 * (size_t)v + a] = 3 * k * phi * phi * grad[a];
   }

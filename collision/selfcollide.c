@@ -29,14 +29,14 @@
 #endif
 
 #include "bs_selfcollide.h"
+#include "bs_bvh.h"
 #include "bs_svd.h"
 #include "bs_shim.h"
 #include "bs_vec3.h"
 
-/* LEAF: tets per hierarchy leaf; STACK: traversal depth bound (a median
- * split has depth log2(n_tets / LEAF) + 1); PAR_MIN: surface vertices below
- * which detection runs on one thread (a parallel region costs more). */
-enum { LEAF = 4, STACK = 128, PAR_MIN = 2048 };
+/* PAR_MIN: surface vertices below which detection runs on one thread (a
+ * parallel region costs more). */
+enum { PAR_MIN = 2048 };
 /* Contacts whose Hessians are computed (and PSD-projected) in one parallel
  * pass before they are added, in order, into H; HESS_PAR_MIN: fewer run
  * serially (a projection costs tens of microseconds). */
@@ -342,12 +342,6 @@ void bs_self_pair_secant(int nv, const double *y, double k, const double *g, dou
 
 /* ---- the term --------------------------------------------------------- */
 
-typedef struct bvh_node {
-  double lo[3], hi[3];
-  int32_t left, right; /* children (left = -1: leaf)            */
-  int32_t first, count;/* leaf: tets order[first .. first+count) */
-} bvh_node;
-
 typedef struct contact {
   int nv;           /* primitive vertices (0: not colliding)       */
   int32_t v[4];     /* p, then the primitive's vertices            */
@@ -362,14 +356,10 @@ typedef struct self_data {
   int secant;           /* hessian_g gives the secant model (else the Hessian) */
   int32_t n_surf;
   int32_t *surf;        /* boundary vertices                                */
-  /* tet hierarchy */
-  int32_t n_nodes;
-  bvh_node *nodes;      /* 2 n_tets                                         */
-  int32_t *order;       /* n_tets                                           */
-  double *cent;         /* 3 n_tets, build scratch                          */
-  /* boundary trees */
-  bs_shim_tree *tree;   /* at the current x                                 */
-  bs_shim_tree *rest;   /* at rest                                          */
+  /* hierarchies, built at x^n (begin_step), refit at each detection */
+  bs_bvh tet_bvh;       /* the tets                                         */
+  bs_bvh tri_bvh;       /* the boundary triangles                           */
+  bs_shim_tree *rest;   /* the boundary at rest                             */
   double h_min;         /* smallest search radius: half the mean boundary edge */
   int nthreads;
   int32_t *cand;        /* nthreads * n_faces                              */
@@ -396,10 +386,8 @@ static void self_free(void *p) {
   self_data *d = p;
   if (!d) return;
   free(d->surf);
-  free(d->nodes);
-  free(d->order);
-  free(d->cent);
-  bs_shim_tree_destroy(&d->tree);
+  bs_bvh_free(&d->tet_bvh);
+  bs_bvh_free(&d->tri_bvh);
   bs_shim_tree_destroy(&d->rest);
   free(d->cand);
   free(d->coll_tet);
@@ -413,112 +401,13 @@ static void self_free(void *p) {
   free(d);
 }
 
-/* Centroid key with index tie-break, for a deterministic median split. */
-static int key_less(const double *cent, int axis, int32_t a, int32_t b) {
-  double ka = cent[3 * a + axis], kb = cent[3 * b + axis];
-  return ka < kb || (ka == kb && a < b);
-}
-
-/* Places the m-th smallest of v[0..n) at v[m] (quickselect, median-of-three). */
-static void select_nth(int32_t *v, int32_t n, int32_t m, const double *cent, int axis) {
-  int32_t lo = 0, hi = n - 1;
-  while (hi > lo) {
-    int32_t mid = lo + (hi - lo) / 2;
-    if (key_less(cent, axis, v[mid], v[lo])) { int32_t t = v[mid]; v[mid] = v[lo]; v[lo] = t; }
-    if (key_less(cent, axis, v[hi], v[lo])) { int32_t t = v[hi]; v[hi] = v[lo]; v[lo] = t; }
-    if (key_less(cent, axis, v[hi], v[mid])) { int32_t t = v[hi]; v[hi] = v[mid]; v[mid] = t; }
-    int32_t pivot = v[mid];
-    int32_t i = lo, j = hi;
-    while (i <= j) {
-      while (key_less(cent, axis, v[i], pivot)) i++;
-      while (key_less(cent, axis, pivot, v[j])) j--;
-      if (i <= j) {
-        int32_t t = v[i]; v[i] = v[j]; v[j] = t;
-        i++, j--;
-      }
-    }
-    if (m <= j) hi = j;
-    else if (m >= i) lo = i;
-    else return;
-  }
-}
-
-static void build_node(self_data *d, int32_t node, int32_t first, int32_t count) {
-  bvh_node *nd = &d->nodes[node];
-  nd->first = first;
-  nd->count = count;
-  nd->left = nd->right = -1;
-  if (count <= LEAF) return;
-  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int32_t i = first; i < first + count; i++)
-    for (int k = 0; k < 3; k++) {
-      double c = d->cent[3 * d->order[i] + k];
-      if (c < lo[k]) lo[k] = c;
-      if (c > hi[k]) hi[k] = c;
-    }
-  int axis = 0;
-  for (int k = 1; k < 3; k++)
-    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-  int32_t half = count / 2;
-  select_nth(d->order + first, count, half, d->cent, axis);
-  int32_t l = d->n_nodes++, r = d->n_nodes++;
-  nd->left = l;
-  nd->right = r;
-  build_node(d, l, first, half);
-  build_node(d, r, first + half, count - half);
-}
-
-/* Rebuilds the hierarchy's topology from the tet centroids at x. */
+/* Both hierarchies' topology from the positions x. */
 static void bvh_rebuild(self_data *d, const double *x) {
   double t0 = bs_seconds();
-  const bs_mesh *m = d->mesh;
-  for (int32_t t = 0; t < m->n_tets; t++) {
-    const int32_t *tv = m->tets + 4 * t;
-    for (int k = 0; k < 3; k++)
-      d->cent[3 * t + k] =
-          0.25 * (x[3 * tv[0] + k] + x[3 * tv[1] + k] + x[3 * tv[2] + k] + x[3 * tv[3] + k]);
-    d->order[t] = t;
-  }
-  d->n_nodes = 1;
-  build_node(d, 0, 0, m->n_tets);
+  bs_bvh_build(&d->tet_bvh, x);
+  bs_bvh_build(&d->tri_bvh, x);
   d->stats.rebuilds++;
   d->stats.t_rebuild += bs_seconds() - t0;
-}
-
-/* Refits every box to x: the leaves in parallel (min and max are exact in
- * any order), then the inner nodes from the last to the first (children have
- * larger indices than their parent). */
-static void bvh_refit(self_data *d, const double *x) {
-  double t0 = bs_seconds();
-  const int32_t *tets = d->mesh->tets;
-  const int32_t nn = d->n_nodes;
-#pragma omp parallel for schedule(static) num_threads(d->nthreads) if (nn >= 4 * PAR_MIN)
-  for (int32_t i = 0; i < nn; i++) {
-    bvh_node *nd = &d->nodes[i];
-    if (nd->left >= 0) continue;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-      const int32_t *tv = tets + 4 * d->order[j];
-      for (int a = 0; a < 4; a++)
-        for (int k = 0; k < 3; k++) {
-          double c = x[3 * tv[a] + k];
-          lo[k] = c < lo[k] ? c : lo[k];
-          hi[k] = c > hi[k] ? c : hi[k];
-        }
-    }
-    memcpy(nd->lo, lo, sizeof lo);
-    memcpy(nd->hi, hi, sizeof hi);
-  }
-  for (int32_t i = nn - 1; i >= 0; i--) {
-    bvh_node *nd = &d->nodes[i];
-    if (nd->left < 0) continue;
-    const bvh_node *l = &d->nodes[nd->left], *r = &d->nodes[nd->right];
-    for (int k = 0; k < 3; k++) {
-      nd->lo[k] = l->lo[k] < r->lo[k] ? l->lo[k] : r->lo[k];
-      nd->hi[k] = l->hi[k] > r->hi[k] ? l->hi[k] : r->hi[k];
-    }
-  }
-  d->stats.t_refit += bs_seconds() - t0;
 }
 
 /* det[b - a, c - a, d - a] in double, with a bound on its rounding error
@@ -575,11 +464,12 @@ static int near_vertex(const bs_bsr *P, int32_t pv, const int32_t *v, int n) {
 static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
   const double *p = x + 3 * (size_t)pv;
   const int32_t *tets = d->mesh->tets;
-  int32_t stack[STACK];
+  const bs_bvh *b = &d->tet_bvh;
+  int32_t stack[BS_BVH_STACK];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const bvh_node *nd = &d->nodes[stack[--top]];
+    const bs_bvh_node *nd = &b->nodes[stack[--top]];
     if (p[0] < nd->lo[0] || p[0] > nd->hi[0] || p[1] < nd->lo[1] || p[1] > nd->hi[1] || p[2] < nd->lo[2] ||
         p[2] > nd->hi[2])
       continue;
@@ -589,7 +479,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
       continue;
     }
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-      int32_t t = d->order[j];
+      int32_t t = b->order[j];
       const int32_t *tv = tets + 4 * t;
       if (near_vertex(d->fem->pattern, pv, tv, 4)) continue;
       if (surely_outside(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
@@ -685,8 +575,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   if (iface && sqrt(ib) < r) r = sqrt(ib);
   for (;;) {
     double lo[3] = {p[0] - r, p[1] - r, p[2] - r}, hi[3] = {p[0] + r, p[1] + r, p[2] + r};
-    int64_t cnt = 0;
-    if (bs_shim_tree_within(d->tree, lo, hi, buf, m->n_faces, &cnt) != 0) return -1;
+    const int64_t cnt = bs_bvh_within(&d->tri_bvh, x, lo, hi, buf, m->n_faces);
     double best = INFINITY;
     int32_t bt = -1;
     for (int64_t j = 0; j < cnt; j++) {
@@ -712,14 +601,23 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   }
 }
 
+/* 1 when the n vertices' coordinates are all finite. */
+static int all_finite(const double *x, int32_t n) {
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(| : bad) if (n >= 4 * PAR_MIN)
+  for (int64_t i = 0; i < 3 * (int64_t)n; i++) bad |= !isfinite(x[i]);
+  return !bad;
+}
+
 /* Detection and primitives at x; fills d->con. Returns the number of
  * colliding vertices, or -1 on a shim error (non-finite x). */
 static int32_t detect_at(self_data *d, const double *x) {
-  bvh_refit(d, x);
-  const bvh_node *root = &d->nodes[0];
-  for (int k = 0; k < 3; k++)
-    if (!isfinite(root->lo[k]) || !isfinite(root->hi[k])) return -1;
   double t0 = bs_seconds();
+  bs_bvh_refit(&d->tet_bvh, x, d->nthreads);
+  d->stats.t_refit += bs_seconds() - t0;
+  if (!bs_bvh_finite(&d->tet_bvh)) return -1;
+  const bs_bvh_node *root = &d->tet_bvh.nodes[0];
+  t0 = bs_seconds();
   int failed = 0;
   int32_t n = d->n_surf;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(d->nthreads) reduction(| : failed) if (n >= PAR_MIN)
@@ -739,7 +637,8 @@ static int32_t detect_at(self_data *d, const double *x) {
     d->stats.max_depth = 0;
     return 0;
   }
-  if (bs_shim_tree_update(d->tree, x, NULL) != 0) return -1;
+  if (!all_finite(x, d->mesh->n_vertices)) return -1;
+  bs_bvh_refit(&d->tri_bvh, x, d->nthreads);
   double diag = 0;
   for (int k = 0; k < 3; k++) diag += (root->hi[k] - root->lo[k]) * (root->hi[k] - root->lo[k]);
   diag = sqrt(diag);
@@ -1082,18 +981,16 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     d->con = bs_calloc((size_t)d->n_surf + 1, sizeof(contact), "the self-collision contacts", err);
     d->active = bs_calloc((size_t)d->n_surf + 1, sizeof(int32_t), "the self-collision contacts", err);
     d->hl = bs_calloc(144 * (size_t)HESS_BATCH, sizeof(double), "the self-collision contact Hessians", err);
-    d->nodes = bs_calloc(2 * (size_t)m->n_tets + 1, sizeof(bvh_node), "the tet hierarchy", err);
-    d->order = bs_calloc((size_t)m->n_tets + 1, sizeof(int32_t), "the tet hierarchy", err);
-    d->cent = bs_calloc(3 * (size_t)m->n_tets + 1, sizeof(double), "the tet hierarchy", err);
     d->nthreads = 1;
 #ifdef _OPENMP
     d->nthreads = omp_get_max_threads();
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
     d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->nodes || !d->order ||
-        !d->cent || !d->cand || !d->x_last)
+    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->cand || !d->x_last)
       st = BS_ENOMEM;
+    if (!st) st = bs_bvh_init(&d->tet_bvh, m->tets, 4, m->n_tets, err);
+    if (!st) st = bs_bvh_init(&d->tri_bvh, m->faces, 3, m->n_faces, err);
   }
   if (!st) {
     int32_t n = 0;
@@ -1108,8 +1005,7 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     }
     d->h_min = m->n_edges ? 0.5 * len / m->n_edges : 1e-3;
     if (!(d->h_min > 0)) d->h_min = 1e-3;
-    st = bs_shim_tree_create(m->x, m->n_vertices, m->faces, m->n_faces, &d->tree, err);
-    if (!st) st = bs_shim_tree_create(m->x, m->n_vertices, m->faces, m->n_faces, &d->rest, err);
+    st = bs_shim_tree_create(m->x, m->n_vertices, m->faces, m->n_faces, &d->rest, err);
   }
   free(is_surf);
   bs_term *t = NULL;

@@ -1,0 +1,76 @@
+/* bs_bvh.h — a bounding-volume hierarchy over the simplices (triangles or
+ * tets) of a moving vertex array, for the self-collision queries
+ * (bs_selfcollide.h).
+ *
+ * The topology is built from the simplices' centroids at one configuration
+ * (median splits along the longest axis of the centroids' box, ties broken by
+ * index: the same tree on every run and thread count); the boxes are then
+ * refit to any later configuration in O(n) without changing the topology, so
+ * the boxes stay exact (each the smallest box around its simplices at that
+ * configuration) and only the tree's quality degrades as the shape moves away
+ * from the one it was built at. Rebuild when that shape is far (the
+ * self-collision term rebuilds at the start of each time step).
+ *
+ * Ownership: bs_bvh_init allocates the nodes and the order; the simplex array
+ * `elems` stays the caller's and must outlive the hierarchy. Positions x are
+ * 3 doubles per vertex (m), read only during the call.
+ *
+ * Usage:
+ *   bs_bvh b;
+ *   if (bs_bvh_init(&b, mesh->faces, 3, mesh->n_faces, &err)) return err.code;
+ *   bs_bvh_build(&b, x0);
+ *   ... bs_bvh_refit(&b, x, nthreads);
+ *   int64_t n = bs_bvh_within(&b, x, lo, hi, out, cap);  // simplices whose box meets [lo, hi]
+ *   bs_bvh_free(&b);
+ */
+#ifndef BS_BVH_H
+#define BS_BVH_H
+
+#include <stdint.h>
+
+#include "bs_base.h"
+
+/* Simplices per leaf; traversal stack bound (a median split of n simplices
+ * has depth log2(n / BS_BVH_LEAF) + 1, far below it for any int32 n). */
+enum { BS_BVH_LEAF = 4, BS_BVH_STACK = 128 };
+
+typedef struct bs_bvh_node {
+  double lo[3], hi[3];  /* the box at the last refit                        */
+  int32_t left, right;  /* children (left = -1: a leaf)                      */
+  int32_t first, count; /* a leaf: the simplices order[first .. first+count) */
+} bs_bvh_node;
+
+typedef struct bs_bvh {
+  const int32_t *elems; /* arity vertex indices per simplex (the caller's)   */
+  int arity;            /* 3: triangles, 4: tets                             */
+  int32_t n;            /* simplices                                         */
+  int32_t n_nodes;      /* nodes in use (at most 2 n)                        */
+  bs_bvh_node *nodes;   /* node 0 is the root; children follow parents      */
+  int32_t *order;       /* n: the simplices in leaf order                    */
+  double *cent;         /* 3 n: centroids, scratch of bs_bvh_build           */
+} bs_bvh;
+
+/* Allocates the hierarchy of n simplices of the given arity (3 or 4); no
+ * topology until bs_bvh_build. BS_EINPUT on a bad arity or n < 0, BS_ENOMEM. */
+int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error *err);
+void bs_bvh_free(bs_bvh *b);
+
+/* The topology from the centroids at x (serial, O(n log n)); the boxes are
+ * not set: call bs_bvh_refit before a query. */
+void bs_bvh_build(bs_bvh *b, const double *x);
+
+/* Every box to x: the leaves on up to nthreads threads, then the inner
+ * nodes. Non-finite coordinates make non-finite boxes (the root's box then
+ * says so: bs_bvh_finite). */
+void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads);
+
+/* 1 when the root's box at the last refit is finite. */
+int bs_bvh_finite(const bs_bvh *b);
+
+/* The simplices whose own box at x meets the closed box [lo, hi], in leaf
+ * order, written to out (up to cap of them); returns how many there are
+ * (more than cap: out holds the first cap). x must be the refit's x. */
+int64_t bs_bvh_within(const bs_bvh *b, const double *x, const double lo[3], const double hi[3], int32_t *out,
+                      int64_t cap);
+
+#endif

@@ -1,0 +1,112 @@
+/* The bounding-volume hierarchy (collision/bs_bvh.h): box queries against a
+ * brute-force scan over every simplex, for triangles and tets, at the
+ * configuration the tree was built at and after the vertices moved far
+ * (refit only); the cap; a non-finite position; bad arguments. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_bvh.h"
+#include "bs_mesh.h"
+
+static double rnd(unsigned *s) {
+  *s = *s * 1103515245u + 12345u;
+  return ((*s >> 8) & 0xffff) / 65536.0;
+}
+
+static int meets(const double *x, const int32_t *e, int arity, const double lo[3], const double hi[3]) {
+  for (int k = 0; k < 3; k++) {
+    double a = INFINITY, b = -INFINITY;
+    for (int v = 0; v < arity; v++) {
+      a = fmin(a, x[3 * (size_t)e[v] + k]);
+      b = fmax(b, x[3 * (size_t)e[v] + k]);
+    }
+    if (a > hi[k] || b < lo[k]) return 0;
+  }
+  return 1;
+}
+
+static int cmp_i32(const void *a, const void *b) {
+  int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* 200 random boxes: the query's set is the brute-force set. Returns the
+ * total number of hits (so that a test can check it is not trivially 0). */
+static int64_t check_queries(const bs_bvh *b, const double *x, const int32_t *elems, int arity, int32_t n,
+                             unsigned seed) {
+  int32_t *got = malloc(sizeof(int32_t) * (size_t)n), *want = malloc(sizeof(int32_t) * (size_t)n);
+  int64_t total = 0;
+  for (int q = 0; q < 200; q++) {
+    double c[3], lo[3], hi[3], r = 0.3 * rnd(&seed);
+    for (int k = 0; k < 3; k++) c[k] = -0.2 + 1.4 * rnd(&seed), lo[k] = c[k] - r, hi[k] = c[k] + r;
+    int64_t ng = bs_bvh_within(b, x, lo, hi, got, n), nw = 0;
+    for (int32_t t = 0; t < n; t++)
+      if (meets(x, elems + (size_t)arity * t, arity, lo, hi)) want[nw++] = t;
+    cr_assert_eq(ng, nw, "query %d: %lld simplices, brute force %lld", q, (long long)ng, (long long)nw);
+    qsort(got, (size_t)ng, sizeof(int32_t), cmp_i32);
+    for (int64_t i = 0; i < ng; i++) cr_assert_eq(got[i], want[i], "query %d: hit %lld differs", q, (long long)i);
+    total += ng;
+  }
+  free(got);
+  free(want);
+  return total;
+}
+
+static void run_case(int arity) {
+  bs_error err;
+  bs_mesh *m = NULL;
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 6, 5, 4, &m, &err), BS_OK);
+  const int32_t *elems = arity == 3 ? m->faces : m->tets;
+  const int32_t n = arity == 3 ? m->n_faces : m->n_tets;
+  bs_bvh b;
+  cr_assert_eq(bs_bvh_init(&b, elems, arity, n, &err), BS_OK);
+  bs_bvh_build(&b, m->x);
+  bs_bvh_refit(&b, m->x, 2);
+  cr_assert(bs_bvh_finite(&b));
+  cr_assert_gt(check_queries(&b, m->x, elems, arity, n, 7u), 200, "the queries hit almost nothing");
+  /* move every vertex far (a twist and noise), refit only */
+  size_t n3 = 3 * (size_t)m->n_vertices;
+  double *x = malloc(n3 * sizeof(double));
+  unsigned s = 3u;
+  for (int32_t v = 0; v < m->n_vertices; v++) {
+    const double *p = m->x + 3 * (size_t)v, a = 1.5 * p[2];
+    x[3 * v] = 0.5 + cos(a) * (p[0] - 0.5) - sin(a) * (p[1] - 0.5) + 0.2 * rnd(&s);
+    x[3 * v + 1] = 0.5 + sin(a) * (p[0] - 0.5) + cos(a) * (p[1] - 0.5) + 0.2 * rnd(&s);
+    x[3 * v + 2] = p[2] + 0.2 * rnd(&s);
+  }
+  bs_bvh_refit(&b, x, 1);
+  cr_assert_gt(check_queries(&b, x, elems, arity, n, 11u), 200);
+  /* the cap: the count of all, the first cap written */
+  double all_lo[3] = {-9, -9, -9}, all_hi[3] = {9, 9, 9};
+  int32_t few[5] = {-1, -1, -1, -1, -1};
+  cr_assert_eq(bs_bvh_within(&b, x, all_lo, all_hi, few, 4), n);
+  for (int i = 0; i < 4; i++) cr_assert(few[i] >= 0 && few[i] < n);
+  cr_assert_eq(few[4], -1, "wrote past the cap");
+  /* a non-finite position shows in the root's box */
+  x[3 * (size_t)elems[0]] = INFINITY;
+  bs_bvh_refit(&b, x, 1);
+  cr_assert_not(bs_bvh_finite(&b));
+  free(x);
+  bs_bvh_free(&b);
+  bs_mesh_destroy(&m);
+}
+
+Test(bvh, triangles_match_brute_force_after_moving) { run_case(3); }
+Test(bvh, tets_match_brute_force_after_moving) { run_case(4); }
+
+Test(bvh, bad_arguments) {
+  bs_error err;
+  bs_bvh b;
+  int32_t e[5] = {0, 1, 2, 3, 4};
+  cr_assert_eq(bs_bvh_init(&b, e, 5, 1, &err), BS_EINPUT);
+  cr_assert(strstr(err.msg, "arity 5"), "%s", err.msg);
+  cr_assert_eq(bs_bvh_init(&b, NULL, 3, 2, &err), BS_EINPUT);
+  cr_assert_eq(bs_bvh_init(&b, e, 3, 0, &err), BS_OK);
+  double x[3] = {0, 0, 0}, lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
+  bs_bvh_build(&b, x);
+  cr_assert_eq(bs_bvh_within(&b, x, lo, hi, NULL, 0), 0);
+  bs_bvh_free(&b);
+}
