@@ -775,6 +775,26 @@ Test(levelset, grid_cubic_interpolates_nodes) {
   }
 }
 
+/* The value alone (no gradient asked: the penalty's first pass) is the value
+ * of the full evaluation bit for bit, in boundary cells (ghost nodes folded),
+ * inside and outside the grid (clamped plus the distance). */
+Test(levelset, grid_cubic_value_alone_is_the_full_value) {
+  const int32_t n[3] = {5, 2, 7};
+  const double h = 0.25;
+  double vals[5 * 2 * 7];
+  bs_levelset *ls = random_grid(n, h, vals);
+  int differ = 0;
+  for (int p = 0; p < 2000; p++) {
+    double x[3], g[3], H[9];
+    for (int k = 0; k < 3; k++) x[k] = urange(-0.5, h * (n[k] - 1) + 0.5);
+    const double v = bs_levelset_eval(ls, 0, x, NULL, NULL), vg = bs_levelset_eval(ls, 0, x, g, NULL),
+                 vh = bs_levelset_eval(ls, 0, x, g, H);
+    differ += memcmp(&v, &vg, sizeof v) != 0 || memcmp(&v, &vh, sizeof v) != 0;
+  }
+  cr_assert_eq(differ, 0, "%d of 2000 points: the value alone differs from the full evaluation's", differ);
+  bs_levelset_destroy(&ls);
+}
+
 /* grad vs central differences of phi and Hessian vs central differences of
  * grad for the cubic mode, at random points of the whole box (cells next to
  * the boundary included) and at points ON cell faces: errors summed over the
