@@ -59,9 +59,10 @@ void bs_bvh_free(bs_bvh *b);
  * not set: call bs_bvh_refit before a query. */
 void bs_bvh_build(bs_bvh *b, const double *x);
 
-/* Every box to x: the leaves on up to nthreads threads, then the inner
- * nodes. Non-finite coordinates make non-finite boxes (the root's box then
- * says so: bs_bvh_finite). */
+/* Every box to x: the leaves on up to nthreads threads (less than 1 counts
+ * as 1), then the inner nodes. An infinite coordinate makes the boxes around
+ * it infinite (bs_bvh_finite then says 0); a NaN coordinate is skipped by the
+ * min and max, so check positions for NaN before trusting a query. */
 void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads);
 
 /* 1 when the root's box at the last refit is finite. */

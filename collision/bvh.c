@@ -125,7 +125,7 @@ static void simplex_box(const bs_bvh *b, const double *x, int32_t t, double lo[3
  * their parent). */
 void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads) {
   const int32_t nn = b->n_nodes;
-  (void)nthreads;
+  if (nthreads < 1) nthreads = 1;
 #pragma omp parallel for schedule(static) num_threads(nthreads) if (nn >= PAR_NODES)
   for (int32_t i = 0; i < nn; i++) {
     bs_bvh_node *nd = &b->nodes[i];
