@@ -101,7 +101,7 @@ void bs_bvh_build(bs_bvh *b, const double *x) {
     for (int k = 0; k < 3; k++) {
       double c = 0;
       for (int a = 0; a < s; a++) c += x[3 * (size_t)tv[a] + k];
-      b->cent[3 * (size_t)t + k] = s == 4 ? 0.25 * c : w * c;
+      b->cent[3 * (size_t)t + k] = w * c; /* 1/4 is exact: the tets' 0.25 (x0 + x1 + x2 + x3) */
     }
     b->order[t] = t;
   }

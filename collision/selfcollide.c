@@ -610,12 +610,12 @@ static int all_finite(const double *x, int32_t n) {
 }
 
 /* Detection and primitives at x; fills d->con. Returns the number of
- * colliding vertices, or -1 on a shim error (non-finite x). */
+ * colliding vertices, or -1 on a non-finite x or a shim error. */
 static int32_t detect_at(self_data *d, const double *x) {
+  if (!all_finite(x, d->mesh->n_vertices)) return -1; /* a NaN would pass the boxes' min and max */
   double t0 = bs_seconds();
   bs_bvh_refit(&d->tet_bvh, x, d->nthreads);
   d->stats.t_refit += bs_seconds() - t0;
-  if (!bs_bvh_finite(&d->tet_bvh)) return -1;
   const bs_bvh_node *root = &d->tet_bvh.nodes[0];
   t0 = bs_seconds();
   int failed = 0;
@@ -637,7 +637,6 @@ static int32_t detect_at(self_data *d, const double *x) {
     d->stats.max_depth = 0;
     return 0;
   }
-  if (!all_finite(x, d->mesh->n_vertices)) return -1;
   bs_bvh_refit(&d->tri_bvh, x, d->nthreads);
   double diag = 0;
   for (int k = 0; k < 3; k++) diag += (root->hi[k] - root->lo[k]) * (root->hi[k] - root->lo[k]);
