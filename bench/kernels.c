@@ -6,7 +6,9 @@
  * plus M/dt^2 (dt = 1/24 s; 50 iterations, no convergence test met), in ms per
  * iteration; its GB/s column is the product's bytes over that time, so the
  * ratio of STREAM to it is the iteration's time over the product's bandwidth
- * floor. "PCG iteration (single values)" is the same with solver.cg_precision
+ * floor. "tet hierarchy build" and "refit" are the self-collision term's
+ * bounding-volume hierarchy over the tets (collision/bs_bvh.h), built at
+ * each time step's start and refit at each evaluation. "PCG iteration (single values)" is the same with solver.cg_precision
  * "single" (bs_linsolve_set_single), against the same double bytes.
  *
  *   bench_kernels [CELLS] [REPEATS] [ONLY]
@@ -20,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_bvh.h"
 #include "bs_fem.h"
 #include "bs_linsolve.h"
 #include "bs_terms.h"
@@ -89,6 +92,11 @@ int main(int argc, char **argv) {
     s ^= s << 17;
     x[i] = mesh->x[i] + 0.2 / cells * ((double)(s >> 11) / 9007199254740992.0 - 0.5);
   }
+  bs_bvh bvh; /* the self-collision term's hierarchy over the tets (bs_bvh.h) */
+  if (bs_bvh_init(&bvh, mesh->tets, 4, mesh->n_tets, &err)) {
+    fprintf(stderr, "%s\n", err.msg);
+    return 1;
+  }
   int maxt = omp_get_max_threads();
   printf("box %d^3 cells: %d vertices (%zu dofs), %d tets, %lld blocks, %d colours; medians of %d\n", cells,
          mesh->n_vertices, n3, mesh->n_tets, (long long)H->nnzb, fem->n_colors, reps);
@@ -122,6 +130,8 @@ int main(int argc, char **argv) {
          (memset(g, 0, n3 * sizeof(double)), bs_fem_elastic_gradient(fem, x, g), bs_bsr_zero(H),
           bs_fem_elastic_hessian(fem, x, 0, 1.0, H)),
          1, 0);
+    TIME("tet hierarchy build", bs_bvh_build(&bvh, x, threads[ti]), 1, 0);
+    TIME("tet hierarchy refit", bs_bvh_refit(&bvh, x, threads[ti]), 1, 0);
     double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
     TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
     if (!only || strstr("PCG iteration (block Jacobi)", only) || strstr("PCG iteration (single values)", only)) {
@@ -176,6 +186,7 @@ int main(int argc, char **argv) {
   free(x);
   free(g);
   free(y);
+  bs_bvh_free(&bvh);
   bs_bsr_destroy(&H);
   bs_fem_destroy(&fem);
   bs_mesh_destroy(&mesh);

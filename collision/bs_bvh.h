@@ -18,7 +18,7 @@
  * Usage:
  *   bs_bvh b;
  *   if (bs_bvh_init(&b, mesh->faces, 3, mesh->n_faces, &err)) return err.code;
- *   bs_bvh_build(&b, x0);
+ *   bs_bvh_build(&b, x0, nthreads);
  *   ... bs_bvh_refit(&b, x, nthreads);
  *   int64_t n = bs_bvh_within(&b, x, lo, hi, out, cap);  // simplices whose box meets [lo, hi]
  *   bs_bvh_free(&b);
@@ -45,9 +45,9 @@ typedef struct bs_bvh {
   int arity;            /* 3: triangles, 4: tets                             */
   int32_t n;            /* simplices                                         */
   int32_t n_nodes;      /* nodes in use (at most 2 n)                        */
-  bs_bvh_node *nodes;   /* node 0 is the root; children follow parents      */
+  bs_bvh_node *nodes;   /* node 0 is the root; pre-order (children after)   */
   int32_t *order;       /* n: the simplices in leaf order                    */
-  double *cent;         /* 3 n: centroids, scratch of bs_bvh_build           */
+  struct bs_bvh_rec *rec; /* n: centroids and indices, bs_bvh_build's scratch */
 } bs_bvh;
 
 /* Allocates the hierarchy of n simplices of the given arity (3 or 4); no
@@ -55,9 +55,12 @@ typedef struct bs_bvh {
 int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error *err);
 void bs_bvh_free(bs_bvh *b);
 
-/* The topology from the centroids at x (serial, O(n log n)); the boxes are
- * not set: call bs_bvh_refit before a query. */
-void bs_bvh_build(bs_bvh *b, const double *x);
+/* The topology from the centroids at x (O(n log n), large subtrees as OpenMP
+ * tasks on up to nthreads threads; fewer than 1 counts as 1). The nodes are in
+ * pre-order (a node's left child follows it, its right child follows the left
+ * subtree), a layout fixed by n alone: the same tree, node for node, on every
+ * thread count. The boxes are not set: call bs_bvh_refit before a query. */
+void bs_bvh_build(bs_bvh *b, const double *x, int nthreads);
 
 /* Every box to x: the leaves on up to nthreads threads (less than 1 counts
  * as 1), then the inner nodes. An infinite coordinate makes the boxes around

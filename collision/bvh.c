@@ -9,6 +9,15 @@
 /* Nodes below which a refit runs on one thread (a parallel region costs more). */
 enum { PAR_NODES = 8192 };
 
+/* A simplex's centroid and index, moved together by the build (the splits
+ * read the centroids in sequence, not through the order). */
+struct bs_bvh_rec {
+  double c[3];
+  int32_t id;
+  int32_t pad;
+};
+typedef struct bs_bvh_rec rec_t;
+
 int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error *err) {
   memset(b, 0, sizeof *b);
   if ((arity != 3 && arity != 4) || n < 0 || (n > 0 && !elems))
@@ -19,8 +28,8 @@ int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error 
   b->n = n;
   b->nodes = bs_calloc(2 * (size_t)n + 1, sizeof(bs_bvh_node), "a bounding-volume hierarchy", err);
   b->order = bs_calloc((size_t)n + 1, sizeof(int32_t), "a bounding-volume hierarchy", err);
-  b->cent = bs_calloc(3 * (size_t)n + 1, sizeof(double), "a bounding-volume hierarchy", err);
-  if (!b->nodes || !b->order || !b->cent) {
+  b->rec = bs_calloc((size_t)n + 1, sizeof(struct bs_bvh_rec), "a bounding-volume hierarchy", err);
+  if (!b->nodes || !b->order || !b->rec) {
     bs_bvh_free(b);
     return BS_ENOMEM;
   }
@@ -31,36 +40,36 @@ void bs_bvh_free(bs_bvh *b) {
   if (!b) return;
   free(b->nodes);
   free(b->order);
-  free(b->cent);
+  free(b->rec);
   memset(b, 0, sizeof *b);
 }
 
 /* Centroid key with index tie-break, for a deterministic median split. */
-static int key_less(const double *cent, int axis, int32_t a, int32_t b) {
-  double ka = cent[3 * a + axis], kb = cent[3 * b + axis];
-  return ka < kb || (ka == kb && a < b);
+static int key_less(const rec_t *a, const rec_t *b, int axis) {
+  double ka = a->c[axis], kb = b->c[axis];
+  return ka < kb || (ka == kb && a->id < b->id);
 }
 
-static void swap32(int32_t *v, int32_t i, int32_t j) {
-  int32_t t = v[i];
+static void swap_rec(rec_t *v, int32_t i, int32_t j) {
+  rec_t t = v[i];
   v[i] = v[j];
   v[j] = t;
 }
 
 /* Places the m-th smallest of v[0..n) at v[m] (quickselect, median-of-three). */
-static void select_nth(int32_t *v, int32_t n, int32_t m, const double *cent, int axis) {
+static void select_nth(rec_t *v, int32_t n, int32_t m, int axis) {
   int32_t lo = 0, hi = n - 1;
   while (hi > lo) {
     int32_t mid = lo + (hi - lo) / 2;
-    if (key_less(cent, axis, v[mid], v[lo])) swap32(v, mid, lo);
-    if (key_less(cent, axis, v[hi], v[lo])) swap32(v, hi, lo);
-    if (key_less(cent, axis, v[hi], v[mid])) swap32(v, hi, mid);
-    int32_t pivot = v[mid];
+    if (key_less(&v[mid], &v[lo], axis)) swap_rec(v, mid, lo);
+    if (key_less(&v[hi], &v[lo], axis)) swap_rec(v, hi, lo);
+    if (key_less(&v[hi], &v[mid], axis)) swap_rec(v, hi, mid);
+    const rec_t pivot = v[mid];
     int32_t i = lo, j = hi;
     while (i <= j) {
-      while (key_less(cent, axis, v[i], pivot)) i++;
-      while (key_less(cent, axis, pivot, v[j])) j--;
-      if (i <= j) swap32(v, i++, j--);
+      while (key_less(&v[i], &pivot, axis)) i++;
+      while (key_less(&pivot, &v[j], axis)) j--;
+      if (i <= j) swap_rec(v, i++, j--);
     }
     if (m <= j) hi = j;
     else if (m >= i) lo = i;
@@ -68,6 +77,29 @@ static void select_nth(int32_t *v, int32_t n, int32_t m, const double *cent, int
   }
 }
 
+/* Nodes of the subtree over c simplices: 1 for a leaf, else 1 plus its two
+ * halves' (c / 2 and c - c / 2). The halves of c and c + 1 are both among
+ * h = c / 2 and h + 1, so (N(c), N(c + 1)) follows from (N(h), N(h + 1)):
+ * O(log c). */
+static void subtree_nodes(int32_t c, int64_t *nc, int64_t *nc1) {
+  if (c + 1 <= BS_BVH_LEAF) {
+    *nc = *nc1 = 1;
+    return;
+  }
+  const int32_t h = c / 2;
+  int64_t nh, nh1;
+  subtree_nodes(h, &nh, &nh1);
+  *nc = c <= BS_BVH_LEAF ? 1 : c % 2 == 0 ? 1 + 2 * nh : 1 + nh + nh1;
+  *nc1 = c % 2 == 0 ? 1 + nh + nh1 : 1 + 2 * nh1;
+}
+
+/* Subtrees of at least this many simplices are built as separate tasks. */
+enum { TASK_MIN = 16384 };
+
+/* The subtree over order[first .. first+count) at `node`, in pre-order: its
+ * left child at node + 1, its right child after the left subtree's nodes.
+ * The layout depends on the counts only, so tasks may build the subtrees in
+ * any order and the tree is the same on every thread count. */
 static void build_node(bs_bvh *b, int32_t node, int32_t first, int32_t count) {
   bs_bvh_node *nd = &b->nodes[node];
   nd->first = first;
@@ -75,9 +107,10 @@ static void build_node(bs_bvh *b, int32_t node, int32_t first, int32_t count) {
   nd->left = nd->right = -1;
   if (count <= BS_BVH_LEAF) return;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  const rec_t *rec = b->rec;
   for (int32_t i = first; i < first + count; i++)
     for (int k = 0; k < 3; k++) {
-      double c = b->cent[3 * b->order[i] + k];
+      double c = rec[i].c[k];
       if (c < lo[k]) lo[k] = c;
       if (c > hi[k]) hi[k] = c;
     }
@@ -85,28 +118,45 @@ static void build_node(bs_bvh *b, int32_t node, int32_t first, int32_t count) {
   for (int k = 1; k < 3; k++)
     if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
   int32_t half = count / 2;
-  select_nth(b->order + first, count, half, b->cent, axis);
-  int32_t l = b->n_nodes++, r = b->n_nodes++;
+  select_nth(b->rec + first, count, half, axis);
+  int64_t nl, unused;
+  subtree_nodes(half, &nl, &unused);
+  const int32_t l = node + 1, r = node + 1 + (int32_t)nl;
   nd->left = l;
   nd->right = r;
-  build_node(b, l, first, half);
-  build_node(b, r, first + half, count - half);
+  if (count >= TASK_MIN) {
+#pragma omp task default(none) firstprivate(b, l, first, half)
+    build_node(b, l, first, half);
+    build_node(b, r, first + half, count - half);
+#pragma omp taskwait
+  } else {
+    build_node(b, l, first, half);
+    build_node(b, r, first + half, count - half);
+  }
 }
 
-void bs_bvh_build(bs_bvh *b, const double *x) {
+void bs_bvh_build(bs_bvh *b, const double *x, int nthreads) {
   const int s = b->arity;
   const double w = 1.0 / s;
+  if (nthreads < 1) nthreads = 1;
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (b->n >= PAR_NODES)
   for (int32_t t = 0; t < b->n; t++) {
     const int32_t *tv = b->elems + (size_t)s * t;
     for (int k = 0; k < 3; k++) {
       double c = 0;
       for (int a = 0; a < s; a++) c += x[3 * (size_t)tv[a] + k];
-      b->cent[3 * (size_t)t + k] = w * c; /* 1/4 is exact: the tets' 0.25 (x0 + x1 + x2 + x3) */
+      b->rec[t].c[k] = w * c; /* 1/4 is exact: the tets' 0.25 (x0 + x1 + x2 + x3) */
     }
-    b->order[t] = t;
+    b->rec[t].id = t;
   }
-  b->n_nodes = 1;
+  int64_t nn, unused;
+  subtree_nodes(b->n, &nn, &unused);
+  b->n_nodes = (int32_t)nn;
+#pragma omp parallel num_threads(nthreads) if (b->n >= TASK_MIN)
+#pragma omp single
   build_node(b, 0, 0, b->n);
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (b->n >= PAR_NODES)
+  for (int32_t t = 0; t < b->n; t++) b->order[t] = b->rec[t].id;
 }
 
 /* The box of simplex t at x. */

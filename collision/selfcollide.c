@@ -404,8 +404,8 @@ static void self_free(void *p) {
 /* Both hierarchies' topology from the positions x. */
 static void bvh_rebuild(self_data *d, const double *x) {
   double t0 = bs_seconds();
-  bs_bvh_build(&d->tet_bvh, x);
-  bs_bvh_build(&d->tri_bvh, x);
+  bs_bvh_build(&d->tet_bvh, x, d->nthreads);
+  bs_bvh_build(&d->tri_bvh, x, d->nthreads);
   d->stats.rebuilds++;
   d->stats.t_rebuild += bs_seconds() - t0;
 }

@@ -1,7 +1,9 @@
 /* The bounding-volume hierarchy (collision/bs_bvh.h): box queries against a
  * brute-force scan over every simplex, for triangles and tets, at the
  * configuration the tree was built at and after the vertices moved far
- * (refit only); the cap; a non-finite position; bad arguments. */
+ * (refit only); the cap; a non-finite position; bad arguments; a tree large
+ * enough for the parallel build's tasks is the same, node for node, on 1 and
+ * 2 threads, and well formed (pre-order, every simplex in one leaf). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -63,7 +65,7 @@ static void run_case(int arity) {
   const int32_t n = arity == 3 ? m->n_faces : m->n_tets;
   bs_bvh b;
   cr_assert_eq(bs_bvh_init(&b, elems, arity, n, &err), BS_OK);
-  bs_bvh_build(&b, m->x);
+  bs_bvh_build(&b, m->x, 2);
   bs_bvh_refit(&b, m->x, 2);
   cr_assert(bs_bvh_finite(&b));
   cr_assert_gt(check_queries(&b, m->x, elems, arity, n, 7u), 200, "the queries hit almost nothing");
@@ -106,7 +108,55 @@ Test(bvh, bad_arguments) {
   cr_assert_eq(bs_bvh_init(&b, NULL, 3, 2, &err), BS_EINPUT);
   cr_assert_eq(bs_bvh_init(&b, e, 3, 0, &err), BS_OK);
   double x[3] = {0, 0, 0}, lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
-  bs_bvh_build(&b, x);
+  bs_bvh_build(&b, x, 1);
   cr_assert_eq(bs_bvh_within(&b, x, lo, hi, NULL, 0), 0);
   bs_bvh_free(&b);
+}
+
+/* Pre-order and coverage: node i's children are i + 1 and the node after the
+ * left subtree, the leaves hold order[] exactly once in leaf order, and
+ * n_nodes nodes are reached. Returns the nodes of the subtree at i. */
+static int32_t check_subtree(const bs_bvh *b, int32_t i, int32_t *next_first) {
+  const bs_bvh_node *nd = &b->nodes[i];
+  if (nd->left < 0) {
+    cr_assert_eq(nd->first, *next_first, "leaf %d starts at %d, expected %d", i, nd->first, *next_first);
+    cr_assert(nd->count >= 1 && nd->count <= BS_BVH_LEAF, "leaf %d holds %d", i, nd->count);
+    *next_first += nd->count;
+    return 1;
+  }
+  cr_assert_eq(nd->left, i + 1, "node %d: left child %d", i, nd->left);
+  const int32_t nl = check_subtree(b, nd->left, next_first);
+  cr_assert_eq(nd->right, i + 1 + nl, "node %d: right child %d after a left subtree of %d", i, nd->right, nl);
+  return 1 + nl + check_subtree(b, nd->right, next_first);
+}
+
+Test(bvh, parallel_build_is_the_serial_tree) {
+  bs_error err;
+  bs_mesh *m = NULL;
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 18, 17, 16, &m, &err), BS_OK); /* 29,376 tets: tasks */
+  bs_bvh b1, b2;
+  cr_assert_eq(bs_bvh_init(&b1, m->tets, 4, m->n_tets, &err), BS_OK);
+  cr_assert_eq(bs_bvh_init(&b2, m->tets, 4, m->n_tets, &err), BS_OK);
+  bs_bvh_build(&b1, m->x, 1);
+  bs_bvh_build(&b2, m->x, 2);
+  cr_assert_eq(b1.n_nodes, b2.n_nodes);
+  cr_assert_eq(memcmp(b1.order, b2.order, sizeof(int32_t) * (size_t)m->n_tets), 0, "leaf order differs");
+  for (int32_t i = 0; i < b1.n_nodes; i++) {
+    const bs_bvh_node *p = &b1.nodes[i], *q = &b2.nodes[i];
+    cr_assert(p->left == q->left && p->right == q->right && p->first == q->first && p->count == q->count,
+              "node %d differs between 1 and 2 threads", i);
+  }
+  int32_t next_first = 0;
+  cr_assert_eq(check_subtree(&b2, 0, &next_first), b2.n_nodes);
+  cr_assert_eq(next_first, m->n_tets);
+  int32_t *seen = calloc((size_t)m->n_tets, sizeof(int32_t));
+  for (int32_t j = 0; j < m->n_tets; j++) seen[b2.order[j]]++;
+  for (int32_t t = 0; t < m->n_tets; t++) cr_assert_eq(seen[t], 1, "tet %d in %d leaves", t, seen[t]);
+  free(seen);
+  bs_bvh_refit(&b2, m->x, 2);
+  cr_assert_gt(check_queries(&b2, m->x, m->tets, 4, m->n_tets, 5u), 200);
+  bs_bvh_free(&b1);
+  bs_bvh_free(&b2);
+  bs_mesh_destroy(&m);
 }
