@@ -4,8 +4,9 @@
  * Gmsh keeps one global state. Every use of it here runs under one mutex,
  * between gmshInitialize (no configuration files) and gmshFinalize, with
  * General.Terminal = 0 so that the library prints nothing; Gmsh's messages go
- * to its logger, and its last error is copied into the bs_error. Gmsh sets LC_NUMERIC to "C"; the
- * caller's setting is restored afterwards.
+ * to its logger, and its last error is copied into the bs_error. Gmsh sets LC_NUMERIC to "C" and the
+ * OpenMP thread count (omp_set_num_threads, from General.NumThreads); the
+ * caller's settings of both are restored afterwards.
  *
  * Inputs, by extension (case-insensitive):
  *   .msh                              taken as is (v2 / v4, ASCII / binary), once
@@ -56,6 +57,9 @@
 #include <sys/stat.h>
 
 #include <gmshc.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "bs_mesh.h"
 #include "bs_shim.h"
@@ -112,11 +116,20 @@ static void gmsh_quiet(void) {
   gmshOptionSetNumber("General.Verbosity", 1, &ierr); /* errors only, and only to the logger */
 }
 
+/* The caller's OpenMP thread count, saved by gmsh_begin (under the lock):
+ * Gmsh sets it from General.NumThreads (1 by default) with
+ * omp_set_num_threads, which outlives gmshFinalize; without the restore every
+ * parallel region after a Gmsh call ran on one thread. */
+static int gmsh_saved_threads = 1;
+
 static void gmsh_end(void) {
   int ierr = 0;
   gmshLoggerStop(&ierr);
   gmshFinalize(&ierr);
   setlocale(LC_NUMERIC, gmsh_saved_locale);
+#ifdef _OPENMP
+  omp_set_num_threads(gmsh_saved_threads);
+#endif
   pthread_mutex_unlock(&gmsh_mutex);
 }
 
@@ -125,6 +138,9 @@ static int gmsh_begin(const char *path, bs_error *err) {
   pthread_mutex_lock(&gmsh_mutex);
   const char *loc = setlocale(LC_NUMERIC, NULL);
   snprintf(gmsh_saved_locale, sizeof gmsh_saved_locale, "%s", loc ? loc : "C");
+#ifdef _OPENMP
+  gmsh_saved_threads = omp_get_max_threads();
+#endif
   int ierr = 0;
   gmshInitialize(0, NULL, 0, &ierr);
   if (ierr) {

@@ -1,7 +1,8 @@
 /* Reading meshes through Gmsh (bs_mesh_read) and writing .msh
  * (bs_mesh_write_msh): every data/geo input, every file format, the default
  * groups, options, the error paths (each message must name its culprit), the
- * library's silence, concurrent reads, and the write/read round trip. */
+ * library's silence, concurrent reads, the caller's OpenMP thread count kept,
+ * and the write/read round trip. */
 #define _POSIX_C_SOURCE 200809L
 
 #include <criterion/criterion.h>
@@ -16,6 +17,7 @@
 #include <unistd.h>
 
 #include <gmshc.h>
+#include <omp.h>
 
 #include "bs_mesh.h"
 #include "bs_shim.h"
@@ -212,6 +214,21 @@ Test(mesh_read, torus_geo) {
   group_ok(m, "body", 3);
   const bs_group *s = group_ok(m, "surface", 2);
   cr_assert_eq(s->n_elems, m->n_faces);
+  bs_mesh_destroy(&m);
+}
+
+/* Gmsh sets the OpenMP thread count from General.NumThreads (1); the caller's
+ * must come back, or every parallel region after a mesh read runs on one
+ * thread. */
+Test(mesh_read, keeps_the_callers_openmp_thread_count) {
+  omp_set_num_threads(3);
+  bs_mesh *m = read_ok("data/geo/torus.geo", NULL);
+  cr_assert_eq(omp_get_max_threads(), 3, "bs_mesh_read left the OpenMP thread count at %d", omp_get_max_threads());
+  int team = 0;
+#pragma omp parallel
+#pragma omp single
+  team = omp_get_num_threads();
+  cr_assert_eq(team, 3, "a parallel region after bs_mesh_read ran on %d threads", team);
   bs_mesh_destroy(&m);
 }
 
