@@ -363,6 +363,7 @@ typedef struct self_data {
   double h_min;         /* smallest search radius: half the mean boundary edge */
   int nthreads;
   int32_t *cand;        /* nthreads * n_faces                              */
+  int32_t *mark;        /* nthreads * n_vertices: find_tet's neighbour marks */
   /* per surface vertex */
   int32_t *coll_tet;    /* tet it is in, -1 none                             */
   int32_t *hint;        /* last primitive triangle, -1 none                 */
@@ -390,6 +391,7 @@ static void self_free(void *p) {
   bs_bvh_free(&d->tri_bvh);
   bs_shim_tree_destroy(&d->rest);
   free(d->cand);
+  free(d->mark);
   free(d->coll_tet);
   free(d->hint);
   free(d->if_ptr);
@@ -460,9 +462,14 @@ static int near_vertex(const bs_bsr *P, int32_t pv, const int32_t *v, int n) {
 
 /* The first tet (in traversal order) outside the neighbourhood of vertex pv
  * (near_vertex) whose closed set contains x_pv; -1 if none; -2 on a shim
- * error. */
-static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
+ * error. The neighbour test reads mark (the thread's, n_vertices): set here
+ * to pv at the vertices of pv's pattern row, and never pv elsewhere (only a
+ * row's vertices get its vertex), so mark[v] == pv is near_vertex's test
+ * without its binary searches. */
+static int32_t find_tet(const self_data *d, const double *x, int32_t pv, int32_t *mark) {
   const double *p = x + 3 * (size_t)pv;
+  const bs_bsr *P = d->fem->pattern;
+  for (int32_t s = P->row_ptr[pv]; s < P->row_ptr[pv + 1]; s++) mark[P->col[s]] = pv;
   const int32_t *tets = d->mesh->tets;
   const bs_bvh *b = &d->tet_bvh;
   int32_t stack[BS_BVH_STACK];
@@ -481,7 +488,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv) {
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
       int32_t t = b->order[j];
       const int32_t *tv = tets + 4 * t;
-      if (near_vertex(d->fem->pattern, pv, tv, 4)) continue;
+      if (mark[tv[0]] == pv || mark[tv[1]] == pv || mark[tv[2]] == pv || mark[tv[3]] == pv) continue;
       if (surely_outside(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                          x + 3 * (size_t)tv[3]))
         continue;
@@ -620,12 +627,20 @@ static int32_t detect_at(self_data *d, const double *x) {
   t0 = bs_seconds();
   int failed = 0;
   int32_t n = d->n_surf;
-#pragma omp parallel for schedule(dynamic, 64) num_threads(d->nthreads) reduction(| : failed) if (n >= PAR_MIN)
-  for (int32_t i = 0; i < n; i++) {
-    int32_t t = find_tet(d, x, d->surf[i]);
-    if (t == -2) failed = 1, t = -1;
-    d->coll_tet[i] = t;
-    d->con[i].nv = 0;
+#pragma omp parallel num_threads(d->nthreads) reduction(| : failed) if (n >= PAR_MIN)
+  {
+    int tid = 0;
+#ifdef _OPENMP
+    tid = omp_get_thread_num();
+#endif
+    int32_t *mark = d->mark + (size_t)tid * (size_t)d->mesh->n_vertices;
+#pragma omp for schedule(dynamic, 64)
+    for (int32_t i = 0; i < n; i++) {
+      int32_t t = find_tet(d, x, d->surf[i], mark);
+      if (t == -2) failed = 1, t = -1;
+      d->coll_tet[i] = t;
+      d->con[i].nv = 0;
+    }
   }
   int32_t count = 0;
   for (int32_t i = 0; i < n; i++) count += d->coll_tet[i] >= 0;
@@ -985,8 +1000,11 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     d->nthreads = omp_get_max_threads();
 #endif
     d->cand = bs_calloc((size_t)d->nthreads * (size_t)m->n_faces, sizeof(int32_t), "the candidate buffers", err);
+    d->mark = bs_calloc((size_t)d->nthreads * (size_t)m->n_vertices + 1, sizeof(int32_t), "the neighbour marks", err);
+    for (size_t i = 0; d->mark && i < (size_t)d->nthreads * (size_t)m->n_vertices; i++) d->mark[i] = -1;
     d->x_last = bs_calloc(3 * (size_t)m->n_vertices + 1, sizeof(double), "the self-collision positions", err);
-    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->cand || !d->x_last)
+    if (!d->surf || !d->coll_tet || !d->hint || !d->con || !d->active || !d->hl || !d->cand || !d->mark ||
+        !d->x_last)
       st = BS_ENOMEM;
     if (!st) st = bs_bvh_init(&d->tet_bvh, m->tets, 4, m->n_tets, err);
     if (!st) st = bs_bvh_init(&d->tri_bvh, m->faces, 3, m->n_faces, err);
