@@ -47,6 +47,9 @@ typedef struct bs_bvh {
   int32_t n_nodes;      /* nodes in use (at most 2 n)                        */
   bs_bvh_node *nodes;   /* node 0 is the root; pre-order (children after)   */
   int32_t *order;       /* n: the simplices in leaf order                    */
+  int32_t *leaf_elems;  /* arity n: their vertices in leaf order (simplex
+                           order[j]'s at leaf_elems + arity j), so leaves
+                           read one run of memory                           */
   struct bs_bvh_rec *rec; /* n: centroids and indices, bs_bvh_build's scratch */
 } bs_bvh;
 

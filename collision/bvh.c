@@ -29,7 +29,8 @@ int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error 
   b->nodes = bs_calloc(2 * (size_t)n + 1, sizeof(bs_bvh_node), "a bounding-volume hierarchy", err);
   b->order = bs_calloc((size_t)n + 1, sizeof(int32_t), "a bounding-volume hierarchy", err);
   b->rec = bs_calloc((size_t)n + 1, sizeof(struct bs_bvh_rec), "a bounding-volume hierarchy", err);
-  if (!b->nodes || !b->order || !b->rec) {
+  b->leaf_elems = bs_calloc((size_t)arity * (size_t)n + 1, sizeof(int32_t), "a bounding-volume hierarchy", err);
+  if (!b->nodes || !b->order || !b->rec || !b->leaf_elems) {
     bs_bvh_free(b);
     return BS_ENOMEM;
   }
@@ -41,6 +42,7 @@ void bs_bvh_free(bs_bvh *b) {
   free(b->nodes);
   free(b->order);
   free(b->rec);
+  free(b->leaf_elems);
   memset(b, 0, sizeof *b);
 }
 
@@ -156,12 +158,16 @@ void bs_bvh_build(bs_bvh *b, const double *x, int nthreads) {
 #pragma omp single
   build_node(b, 0, 0, b->n);
 #pragma omp parallel for schedule(static) num_threads(nthreads) if (b->n >= PAR_NODES)
-  for (int32_t t = 0; t < b->n; t++) b->order[t] = b->rec[t].id;
+  for (int32_t j = 0; j < b->n; j++) {
+    const int32_t t = b->rec[j].id;
+    b->order[j] = t;
+    for (int a = 0; a < s; a++) b->leaf_elems[(size_t)s * j + a] = b->elems[(size_t)s * t + a];
+  }
 }
 
-/* The box of simplex t at x. */
-static void simplex_box(const bs_bvh *b, const double *x, int32_t t, double lo[3], double hi[3]) {
-  const int32_t *tv = b->elems + (size_t)b->arity * t;
+/* The box at x of the simplex in leaf slot j. */
+static void simplex_box(const bs_bvh *b, const double *x, int32_t j, double lo[3], double hi[3]) {
+  const int32_t *tv = b->leaf_elems + (size_t)b->arity * j;
   for (int a = 0; a < b->arity; a++)
     for (int k = 0; k < 3; k++) {
       double c = x[3 * (size_t)tv[a] + k];
@@ -181,7 +187,7 @@ void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads) {
     bs_bvh_node *nd = &b->nodes[i];
     if (nd->left >= 0) continue;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int32_t j = nd->first; j < nd->first + nd->count; j++) simplex_box(b, x, b->order[j], lo, hi);
+    for (int32_t j = nd->first; j < nd->first + nd->count; j++) simplex_box(b, x, j, lo, hi);
     memcpy(nd->lo, lo, sizeof lo);
     memcpy(nd->hi, hi, sizeof hi);
   }
@@ -224,11 +230,10 @@ int64_t bs_bvh_within(const bs_bvh *b, const double *x, const double lo[3], cons
       continue;
     }
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-      const int32_t t = b->order[j];
       double tlo[3] = {INFINITY, INFINITY, INFINITY}, thi[3] = {-INFINITY, -INFINITY, -INFINITY};
-      simplex_box(b, x, t, tlo, thi);
+      simplex_box(b, x, j, tlo, thi);
       if (!boxes_meet(tlo, thi, lo, hi)) continue;
-      if (cnt < cap) out[cnt] = t;
+      if (cnt < cap) out[cnt] = b->order[j];
       cnt++;
     }
   }

@@ -470,7 +470,6 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv, int32_t
   const double *p = x + 3 * (size_t)pv;
   const bs_bsr *P = d->fem->pattern;
   for (int32_t s = P->row_ptr[pv]; s < P->row_ptr[pv + 1]; s++) mark[P->col[s]] = pv;
-  const int32_t *tets = d->mesh->tets;
   const bs_bvh *b = &d->tet_bvh;
   int32_t stack[BS_BVH_STACK];
   int top = 0;
@@ -486,8 +485,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv, int32_t
       continue;
     }
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-      int32_t t = b->order[j];
-      const int32_t *tv = tets + 4 * t;
+      const int32_t *tv = b->leaf_elems + 4 * (size_t)j; /* tet order[j]'s vertices */
       if (mark[tv[0]] == pv || mark[tv[1]] == pv || mark[tv[2]] == pv || mark[tv[3]] == pv) continue;
       if (surely_outside(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                          x + 3 * (size_t)tv[3]))
@@ -495,7 +493,7 @@ static int32_t find_tet(const self_data *d, const double *x, int32_t pv, int32_t
       int r = bs_shim_point_in_tet(p, x + 3 * (size_t)tv[0], x + 3 * (size_t)tv[1], x + 3 * (size_t)tv[2],
                                    x + 3 * (size_t)tv[3]);
       if (r < -1) return -2;
-      if (r >= 0) return t;
+      if (r >= 0) return b->order[j];
     }
   }
   return -1;
