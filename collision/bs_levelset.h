@@ -133,6 +133,9 @@ typedef struct bs_levelset {
   double *values;       /* grid: n[0] n[1] n[2] = N values, x fastest; the one
                            allocation holds 2 N doubles: then the coefficients */
   double *coef;         /* grid: N cubic B-spline coefficients (values + N)   */
+  double *coef_range;   /* grid: per block of BS_GRID_BLOCK^3 cells, the min
+                           and max of the coefficients its interior cells'
+                           B-splines read (2 per block, after coef)          */
   int grid_interp;      /* grid: a bs_grid_interp (BS_GRID_CUBIC by default)  */
 } bs_levelset;
 
@@ -204,6 +207,15 @@ double bs_levelset_eval(const bs_levelset *ls, double t, const double x[3], doub
 double bs_levelset_eval_frame(const bs_levelset *ls, const bs_levelset_frame *f, const double x[3], double grad[3],
                               double hess[9]);
 
+/* 1 when the phi bs_levelset_eval_frame computes at x is certainly not
+ * negative, found without evaluating it: a cubic grid whose coefficients
+ * around x (the range of x's block of cells, coef_range) all have phi's
+ * outside sign, x in an interior cell (no folded or clamped axis), where the
+ * B-spline's weights are >= 0, so every term of the computed sum has that
+ * sign too. 0 means unknown (analytic shapes, linear grids, cells near the
+ * grid's boundary, the surface within the block's reach, NaN). */
+int bs_levelset_surely_outside_frame(const bs_levelset *ls, const bs_levelset_frame *f, const double x[3]);
+
 /* x in the shape's local frame at time t: y = M^T (x - c(t)) (for grids the
  * local origin is the centre of the grid box). */
 void bs_levelset_local_point(const bs_levelset *ls, double t, const double x[3], double y[3]);
@@ -227,6 +239,15 @@ double bs_levelset_grid_interp(const bs_levelset *ls, const double p[3], double 
 /* The grid's values (layout above) and geometry, or NULL for analytic
  * shapes. Any output pointer may be NULL. */
 const double *bs_levelset_grid_values(const bs_levelset *ls, int32_t n[3], double origin[3], double *h);
+
+/* Cells per axis of a coef_range block. */
+enum { BS_GRID_BLOCK = 2 };
+
+/* 1 when the cubic interpolant at p (the grid's rest frame, as
+ * bs_levelset_grid_interp computes it) is certainly >= 0 (sign +1) or <= 0
+ * (sign -1): p in an interior cell whose block's coefficients are all > 0,
+ * or all < 0 (see bs_levelset_surely_outside_frame). */
+int bs_levelset_grid_sign_certain(const bs_levelset *ls, const double p[3], int sign);
 
 /* Selects the grid interpolant (both are ready from creation: switching is
  * free). BS_EINPUT for an analytic level set (naming its kind) or an unknown

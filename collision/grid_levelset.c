@@ -40,9 +40,11 @@
  * the distance adds r/|r| to the gradient and (P - u u^T)/|r| to the Hessian
  * (r = p - q, u = r/|r|, P the diagonal projector on the clamped axes).
  *
- * Storage: ls->values holds 2 N doubles in one allocation (freed with
- * ls->values by bs_levelset_destroy): the N samples, then the N B-spline
- * coefficients (ls->coef = ls->values + N).
+ * Storage: ls->values holds 2 N + 2 B doubles in one allocation (freed with
+ * ls->values by bs_levelset_destroy): the N samples, the N B-spline
+ * coefficients (ls->coef = ls->values + N), then the min and max of the
+ * coefficients each block of BS_GRID_BLOCK^3 cells reads (ls->coef_range,
+ * B blocks; bs_levelset_grid_sign_certain).
  */
 #include <errno.h>
 #include <math.h>
@@ -300,7 +302,57 @@ static void prefilter_axis(double *C, const int32_t n[3], int a, double *im) {
   }
 }
 
-/* Fills ls->coef from ls->values. */
+/* Blocks of BS_GRID_BLOCK cells along each axis (n - 1 cells). */
+static void grid_blocks(const int32_t n[3], int32_t nb[3]) {
+  for (int k = 0; k < 3; k++) nb[k] = (n[k] - 1 + BS_GRID_BLOCK - 1) / BS_GRID_BLOCK;
+}
+
+/* The min and max of the coefficients read by the cells of block (bi, bj,
+ * bk): nodes c - 1 .. c + 2 of each of its cells c, clipped to the grid. */
+static void block_range(const bs_levelset *ls, const int32_t b[3], double *mn, double *mx) {
+  int32_t lo[3], hi[3];
+  for (int k = 0; k < 3; k++) {
+    lo[k] = BS_GRID_BLOCK * b[k] - 1;
+    hi[k] = BS_GRID_BLOCK * b[k] + BS_GRID_BLOCK + 1;
+    if (lo[k] < 0) lo[k] = 0;
+    if (hi[k] > ls->n[k] - 1) hi[k] = ls->n[k] - 1;
+  }
+  const size_t sy = (size_t)ls->n[0], sz = sy * (size_t)ls->n[1];
+  double a = INFINITY, z = -INFINITY;
+  for (int32_t k = lo[2]; k <= hi[2]; k++)
+    for (int32_t j = lo[1]; j <= hi[1]; j++)
+      for (int32_t i = lo[0]; i <= hi[0]; i++) {
+        const double c = ls->coef[(size_t)k * sz + (size_t)j * sy + (size_t)i];
+        a = c < a ? c : a;
+        z = c > z ? c : z;
+      }
+  *mn = a, *mx = z;
+}
+
+static void grid_ranges(bs_levelset *ls) {
+  int32_t nb[3], b[3];
+  grid_blocks(ls->n, nb);
+  size_t q = 0;
+  for (b[2] = 0; b[2] < nb[2]; b[2]++)
+    for (b[1] = 0; b[1] < nb[1]; b[1]++)
+      for (b[0] = 0; b[0] < nb[0]; b[0]++, q++) block_range(ls, b, &ls->coef_range[2 * q], &ls->coef_range[2 * q + 1]);
+}
+
+int bs_levelset_grid_sign_certain(const bs_levelset *ls, const double p[3], int sign) {
+  if (ls->kind != BS_LS_GRID || ls->grid_interp != BS_GRID_CUBIC) return 0;
+  int32_t c[3], nb[3];
+  for (int k = 0; k < 3; k++) {
+    const double u = (p[k] - ls->origin[k]) / ls->h; /* locate's u, so the same cell */
+    if (!(u >= 1 && u < (double)(ls->n[k] - 2))) return 0; /* folded, clamped or NaN */
+    c[k] = (int32_t)u;
+  }
+  grid_blocks(ls->n, nb);
+  const size_t q = ((size_t)(c[2] / BS_GRID_BLOCK) * (size_t)nb[1] + (size_t)(c[1] / BS_GRID_BLOCK)) * (size_t)nb[0] +
+                   (size_t)(c[0] / BS_GRID_BLOCK);
+  return sign > 0 ? ls->coef_range[2 * q] > 0 : ls->coef_range[2 * q + 1] < 0;
+}
+
+/* Fills ls->coef from ls->values, then ls->coef_range. */
 static int grid_prefilter(bs_levelset *ls, bs_error *err) {
   int32_t mmax = ls->n[0];
   if (ls->n[1] > mmax) mmax = ls->n[1];
@@ -310,6 +362,7 @@ static int grid_prefilter(bs_levelset *ls, bs_error *err) {
   memcpy(ls->coef, ls->values, (size_t)ls->n[0] * (size_t)ls->n[1] * (size_t)ls->n[2] * sizeof(double));
   for (int a = 0; a < 3; a++) prefilter_axis(ls->coef, ls->n, a, im);
   free(im);
+  grid_ranges(ls);
   return 0;
 }
 
@@ -347,12 +400,16 @@ static int grid_new(const double origin[3], double h, const int32_t n[3], bs_lev
                         (int)n[2]);
   bs_levelset *ls = bs_calloc(1, sizeof *ls, "a grid level set", err);
   if (!ls) return BS_ENOMEM;
-  ls->values = bs_calloc(2 * (size_t)total, sizeof(double), "grid level set values", err);
+  int32_t nb[3];
+  grid_blocks(n, nb);
+  const size_t blocks = (size_t)nb[0] * (size_t)nb[1] * (size_t)nb[2];
+  ls->values = bs_calloc(2 * (size_t)total + 2 * blocks, sizeof(double), "grid level set values", err);
   if (!ls->values) {
     free(ls);
     return BS_ENOMEM;
   }
   ls->coef = ls->values + (size_t)total;
+  ls->coef_range = ls->coef + (size_t)total;
   ls->grid_interp = BS_GRID_CUBIC;
   ls->kind = BS_LS_GRID;
   ls->motion = BS_LS_STATIC;

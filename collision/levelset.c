@@ -485,6 +485,14 @@ double bs_levelset_eval_frame(const bs_levelset *ls, const bs_levelset_frame *f,
   return sgn * phi;
 }
 
+int bs_levelset_surely_outside_frame(const bs_levelset *ls, const bs_levelset_frame *f, const double x[3]) {
+  if (ls->kind != BS_LS_GRID) return 0;
+  double dx[3] = {x[0] - f->c[0], x[1] - f->c[1], x[2] - f->c[2]}, y[3]; /* as bs_levelset_eval_frame */
+  matTvec(f->M, dx, y);
+  const double q[3] = {ls->c0[0] + y[0], ls->c0[1] + y[1], ls->c0[2] + y[2]}; /* as eval_local */
+  return bs_levelset_grid_sign_certain(ls, q, ls->complement ? -1 : 1);
+}
+
 double bs_levelset_eval(const bs_levelset *ls, double t, const double x[3], double grad[3], double hess[9]) {
   bs_levelset_frame f;
   bs_levelset_frame_at(ls, t, &f);

@@ -26,9 +26,12 @@ static int32_t vertex_of(const penalty_data *d, int32_t i) { return d->verts ? d
 
 /* phi at xp, with its gradient (and Hessian) only where phi < 0: the value
  * alone costs a tenth of a grid level set's full interpolation, and most
- * vertices are outside. The same phi either way (the same sums). */
+ * vertices are outside. The same phi either way (the same sums). Where a
+ * grid's coefficient ranges already say phi >= 0, +Inf in its place (the
+ * callers only ask phi < 0). */
 static double phi_at(const bs_levelset *ls, const bs_levelset_frame *f, const double *xp, double grad[3],
                      double hess[9]) {
+  if (bs_levelset_surely_outside_frame(ls, f, xp)) return INFINITY;
   const double phi = bs_levelset_eval_frame(ls, f, xp, NULL, NULL);
   if (!(phi < 0) || (!grad && !hess)) return phi;
   return bs_levelset_eval_frame(ls, f, xp, grad, hess);

@@ -1116,3 +1116,48 @@ Test(levelset, huge_and_tiny_directions_normalize) {
   cr_expect(fabs(bs_norm3_scaled((const double[3]){3e200, 4e200, 0}) / 5e200 - 1) < 1e-15);
   cr_expect_eq(bs_norm3_scaled((const double[3]){0, 0, 0}), 0);
 }
+
+/* bs_levelset_surely_outside_frame: wherever it says 1 the evaluated phi is
+ * >= 0, for a sampled torus, its complement, moving, and the linear mode
+ * (never 1); it does say 1 at nine in ten points 0.3 outside inside the grid
+ * (so the test can fail), and 0 for an analytic shape. */
+Test(levelset, grid_surely_outside_never_contradicts_phi) {
+  bs_levelset *torus = make_shape(4), *grid = NULL;
+  bs_error err;
+  double lo[3] = {-1.1, -1.3, -0.8}, hi[3] = {1.3, 0.9, 1.4};
+  cr_assert_eq(bs_levelset_grid_sample(torus, 0, lo, hi, 0.05, &grid, &err), 0, "%s", err.msg);
+  for (int variant = 0; variant < 4; variant++) {
+    cr_assert_eq(bs_levelset_grid_set_interp(grid, variant == 3 ? BS_GRID_LINEAR : BS_GRID_CUBIC, &err), 0);
+    bs_levelset_set_complement(grid, variant == 1);
+    if (variant == 2) set_test_velocity(grid);
+    const double t = variant == 2 ? 0.3 : 0;
+    bs_levelset_frame f;
+    bs_levelset_frame_at(grid, t, &f);
+    int said = 0, far = 0, far_said = 0;
+    for (int p = 0; p < 20000; p++) {
+      double x[3], y[3];
+      for (int k = 0; k < 3; k++) x[k] = urange(lo[k] - 0.3, hi[k] + 0.3);
+      const double phi = bs_levelset_eval_frame(grid, &f, x, NULL, NULL);
+      const int s = bs_levelset_surely_outside_frame(grid, &f, x);
+      cr_assert(!s || phi >= 0, "variant %d: surely outside where phi = %g", variant, phi);
+      said += s;
+      bs_levelset_local_point(grid, t, x, y);
+      int interior = 1; /* two cells and a block from the grid's faces (in its own frame) */
+      for (int k = 0; k < 3; k++) interior &= grid->c0[k] + y[k] - lo[k] > 0.25 && hi[k] - grid->c0[k] - y[k] > 0.25;
+      if (interior && phi > 0.3) far++, far_said += s;
+    }
+    if (variant == 3) {
+      cr_assert_eq(said, 0, "the linear mode has no coefficient ranges");
+    } else if (variant != 1) { /* the complement's outside, the tube, is at most 0.25 deep */
+      cr_assert_gt(far, 200);
+      cr_assert_geq(far_said, far * 9 / 10, "variant %d: %d of %d points 0.3 outside, inside the grid, certain", variant,
+                    far_said, far);
+    }
+  }
+  bs_levelset_frame f0;
+  bs_levelset_frame_at(torus, 0, &f0);
+  const double x[3] = {5, 5, 5};
+  cr_assert_eq(bs_levelset_surely_outside_frame(torus, &f0, x), 0, "an analytic shape is always evaluated");
+  bs_levelset_destroy(&grid);
+  bs_levelset_destroy(&torus);
+}
