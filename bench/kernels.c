@@ -6,10 +6,11 @@
  * plus M/dt^2 (dt = 1/24 s; 50 iterations, no convergence test met), in ms per
  * iteration; its GB/s column is the product's bytes over that time, so the
  * ratio of STREAM to it is the iteration's time over the product's bandwidth
- * floor. "tet hierarchy build" and "refit" are the self-collision term's
- * bounding-volume hierarchy over the tets (collision/bs_bvh.h), built at
- * each time step's start and refit at each evaluation. "PCG iteration (single values)" is the same with solver.cg_precision
- * "single" (bs_linsolve_set_single), against the same double bytes.
+ * floor. "PCG iteration (single values)" is the same with solver.cg_precision
+ * "single" (bs_linsolve_set_single), against the same double bytes. "tet
+ * hierarchy build" and "refit" are the self-collision term's bounding-volume
+ * hierarchy over the tets (collision/bs_bvh.h), built at each time step's
+ * start and refit at each evaluation, in ns per tet.
  *
  *   bench_kernels [CELLS] [REPEATS] [ONLY]
  *

@@ -131,7 +131,7 @@ typedef struct bs_levelset {
   int32_t n[3];         /* grid: nodes per axis                               */
   double origin[3], h;  /* grid: first node, spacing                          */
   double *values;       /* grid: n[0] n[1] n[2] = N values, x fastest; the one
-                           allocation holds 2 N doubles: then the coefficients */
+                           allocation also holds the coefficients and ranges */
   double *coef;         /* grid: N cubic B-spline coefficients (values + N)   */
   double *coef_range;   /* grid: per block of BS_GRID_BLOCK^3 cells, the min
                            and max of the coefficients its interior cells'

@@ -335,7 +335,8 @@ static void grid_ranges(bs_levelset *ls) {
   size_t q = 0;
   for (b[2] = 0; b[2] < nb[2]; b[2]++)
     for (b[1] = 0; b[1] < nb[1]; b[1]++)
-      for (b[0] = 0; b[0] < nb[0]; b[0]++, q++) block_range(ls, b, &ls->coef_range[2 * q], &ls->coef_range[2 * q + 1]);
+      for (b[0] = 0; b[0] < nb[0]; b[0]++, q++)
+        block_range(ls, b, &ls->coef_range[2 * q], &ls->coef_range[2 * q + 1]);
 }
 
 int bs_levelset_grid_sign_certain(const bs_levelset *ls, const double p[3], int sign) {

@@ -4,9 +4,9 @@
  * Gmsh keeps one global state. Every use of it here runs under one mutex,
  * between gmshInitialize (no configuration files) and gmshFinalize, with
  * General.Terminal = 0 so that the library prints nothing; Gmsh's messages go
- * to its logger, and its last error is copied into the bs_error. Gmsh sets LC_NUMERIC to "C" and the
- * OpenMP thread count (omp_set_num_threads, from General.NumThreads); the
- * caller's settings of both are restored afterwards.
+ * to its logger, and its last error is copied into the bs_error. Gmsh sets
+ * LC_NUMERIC to "C" and the OpenMP thread count (omp_set_num_threads, from
+ * General.NumThreads); the caller's settings of both are restored afterwards.
  *
  * Inputs, by extension (case-insensitive):
  *   .msh                              taken as is (v2 / v4, ASCII / binary), once

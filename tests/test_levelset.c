@@ -1150,8 +1150,8 @@ Test(levelset, grid_surely_outside_never_contradicts_phi) {
       cr_assert_eq(said, 0, "the linear mode has no coefficient ranges");
     } else if (variant != 1) { /* the complement's outside, the tube, is at most 0.25 deep */
       cr_assert_gt(far, 200);
-      cr_assert_geq(far_said, far * 9 / 10, "variant %d: %d of %d points 0.3 outside, inside the grid, certain", variant,
-                    far_said, far);
+      cr_assert_geq(far_said, far * 9 / 10, "variant %d: %d of %d points 0.3 outside, inside the grid, certain",
+                    variant, far_said, far);
     }
   }
   bs_levelset_frame f0;
