@@ -606,6 +606,16 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   }
 }
 
+/* The calling thread's number in its team (0 without OpenMP): the index of
+ * its per-thread buffers (cand, mark). */
+static int thread_num(void) {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 /* 1 when the n vertices' coordinates are all finite. */
 static int all_finite(const double *x, int32_t n) {
   int bad = 0;
@@ -627,11 +637,7 @@ static int32_t detect_at(self_data *d, const double *x) {
   int32_t n = d->n_surf;
 #pragma omp parallel num_threads(d->nthreads) reduction(| : failed) if (n >= PAR_MIN)
   {
-    int tid = 0;
-#ifdef _OPENMP
-    tid = omp_get_thread_num();
-#endif
-    int32_t *mark = d->mark + (size_t)tid * (size_t)d->mesh->n_vertices;
+    int32_t *mark = d->mark + (size_t)thread_num() * (size_t)d->mesh->n_vertices;
 #pragma omp for schedule(dynamic, 64)
     for (int32_t i = 0; i < n; i++) {
       int32_t t = find_tet(d, x, d->surf[i], mark);
@@ -656,11 +662,7 @@ static int32_t detect_at(self_data *d, const double *x) {
   diag = sqrt(diag);
 #pragma omp parallel num_threads(d->nthreads) reduction(| : failed) if (count >= PAR_MIN / 8)
   {
-    int tid = 0;
-#ifdef _OPENMP
-    tid = omp_get_thread_num();
-#endif
-    int32_t *buf = d->cand + (size_t)tid * (size_t)d->mesh->n_faces;
+    int32_t *buf = d->cand + (size_t)thread_num() * (size_t)d->mesh->n_faces;
 #pragma omp for schedule(dynamic, 16)
     for (int32_t i = 0; i < n; i++)
       if (d->coll_tet[i] >= 0 && closest_primitive(d, x, i, diag, buf) != 0) failed = 1;
