@@ -23,20 +23,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bench_median.h"
 #include "bs_bvh.h"
 #include "bs_fem.h"
 #include "bs_linsolve.h"
 #include "bs_terms.h"
-
-static int cmp_d(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *t, int n) {
-  qsort(t, (size_t)n, sizeof(double), cmp_d);
-  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
 
 static double stream_triad(size_t n, int reps) {
   double *a = malloc(n * sizeof(double)), *b = malloc(n * sizeof(double)), *c = malloc(n * sizeof(double));
@@ -53,11 +44,75 @@ static double stream_triad(size_t n, int reps) {
     for (size_t i = 0; i < n; i++) a[i] = b[i] + 3.0 * c[i];
     t[r] = bs_seconds() - t0;
   }
-  double s = median(t, reps);
+  double s = bench_median(t, reps);
   free(a);
   free(b);
   free(c);
   return 3.0 * n * sizeof(double) / s / 1e9;
+}
+
+/* The two "PCG iteration" rows (double values, then single:
+ * solver.cg_precision) on A = projected Hessian at x + M/dt^2 (SPD, so PCG
+ * runs its 50 iterations; b = 1 in g, the answer in y); their GB/s column is
+ * the double product's bytes over the time. first: the 1-thread run, whose
+ * medians go to base[*k] on as the ratios' reference. Nonzero (printed) when
+ * the solver cannot be made. */
+static int pcg_rows(const bs_fem *fem, const double *x, bs_bsr *H, double *g, double *y, double bytes, int reps,
+                    const char *only, int nthreads, int first, double *base, int *k) {
+  bs_error err;
+  bs_bsr_zero(H);
+  bs_fem_elastic_hessian(fem, x, 1, 1.0, H);
+  const double idt2 = 24.0 * 24.0;
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    double B[9] = {0};
+    B[0] = B[4] = B[8] = fem->mass[v] * idt2;
+    bs_bsr_add_block(H, v, v, B);
+  }
+  bs_linsolve *ls = NULL;
+  if (bs_linsolve_create(H, BS_LIN_PCG, &ls, &err)) {
+    fprintf(stderr, "%s\n", err.msg);
+    return 1;
+  }
+  for (size_t i = 0; i < 3 * (size_t)fem->n_vertices; i++) g[i] = 1.0;
+  for (int single = 0; single < 2; single++) {
+    const char *label = single ? "PCG iteration (single values)" : "PCG iteration (block Jacobi)";
+    if (only && !strstr(label, only)) continue;
+    if (bs_linsolve_set_single(ls, single, &err)) {
+      fprintf(stderr, "%s\n", err.msg);
+      bs_linsolve_destroy(&ls);
+      return 1;
+    }
+    int iters = 50;
+    double rres = 0, t[64];
+    for (int r = 0; r < reps; r++) {
+      bs_lin_stats st;
+      double t0 = bs_seconds();
+      bs_linsolve_solve(ls, H, NULL, g, 0.0, 50, y, &st, &err);
+      iters = st.iterations > 0 ? st.iterations : 1;
+      rres = st.rel_residual;
+      t[r] = (bs_seconds() - t0) / iters;
+    }
+    double m = bench_median(t, reps);
+    if (first) base[*k] = m;
+    printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, nthreads, 1e3 * m, bytes / m / 1e9, base[*k] / m);
+    (*k)++;
+    if (iters != 50) printf("(PCG stopped after %d iterations)\n", iters);
+    if (first) printf("(%s: relative residual %.3e after 50 iterations)\n", label, rres);
+  }
+  bs_linsolve_destroy(&ls);
+  return 0;
+}
+
+/* The box's vertices moved by up to +-amp/2 per coordinate (xorshift, fixed
+ * seed: the same positions in every run) into x. */
+static void jitter(const bs_mesh *mesh, double amp, double *x) {
+  uint64_t s = 88172645463325252ull;
+  for (size_t i = 0; i < 3 * (size_t)mesh->n_vertices; i++) {
+    s ^= s << 13;
+    s ^= s >> 7;
+    s ^= s << 17;
+    x[i] = mesh->x[i] + amp * ((double)(s >> 11) / 9007199254740992.0 - 0.5);
+  }
 }
 
 int main(int argc, char **argv) {
@@ -86,13 +141,7 @@ int main(int argc, char **argv) {
   bs_fem_matrix(fem, &H, &err);
   size_t n3 = 3 * (size_t)mesh->n_vertices;
   double *x = malloc(n3 * sizeof(double)), *g = malloc(n3 * sizeof(double)), *y = malloc(n3 * sizeof(double));
-  uint64_t s = 88172645463325252ull;
-  for (size_t i = 0; i < n3; i++) {
-    s ^= s << 13;
-    s ^= s >> 7;
-    s ^= s << 17;
-    x[i] = mesh->x[i] + 0.2 / cells * ((double)(s >> 11) / 9007199254740992.0 - 0.5);
-  }
+  jitter(mesh, 0.2 / cells, x);
   bs_bvh bvh; /* the self-collision term's hierarchy over the tets (bs_bvh.h) */
   if (bs_bvh_init(&bvh, mesh->tets, 4, mesh->n_tets, &err)) {
     fprintf(stderr, "%s\n", err.msg);
@@ -117,7 +166,7 @@ int main(int argc, char **argv) {
       body;                                                                                                \
       t[r] = bs_seconds() - t0;                                                                            \
     }                                                                                                      \
-    double m = median(t, reps);                                                                            \
+    double m = bench_median(t, reps);                                                                     \
     if (ti == ti0) base[k] = m;                                                                              \
     double metric = per_tet ? 1e9 * m / mesh->n_tets : (bytes) / m / 1e9;                                  \
     printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, threads[ti], 1e3 * m, metric, base[k] / m);           \
@@ -135,50 +184,9 @@ int main(int argc, char **argv) {
     TIME("tet hierarchy refit", bs_bvh_refit(&bvh, x, threads[ti]), 1, 0);
     double bytes = (double)H->nnzb * (9 * 8 + 4) + 4.0 * (mesh->n_vertices + 1) + 2 * n3 * 8.0;
     TIME("block CSR product y = A x", bs_bsr_mul(H, NULL, x, y), 0, bytes);
-    if (!only || strstr("PCG iteration (block Jacobi)", only) || strstr("PCG iteration (single values)", only)) {
-      /* A = projected Hessian + M/dt^2: SPD, so PCG runs its 50 iterations. */
-      bs_bsr_zero(H);
-      bs_fem_elastic_hessian(fem, x, 1, 1.0, H);
-      const double idt2 = 24.0 * 24.0;
-      for (int32_t v = 0; v < mesh->n_vertices; v++) {
-        double B[9] = {0};
-        B[0] = B[4] = B[8] = fem->mass[v] * idt2;
-        bs_bsr_add_block(H, v, v, B);
-      }
-      bs_linsolve *ls = NULL;
-      if (bs_linsolve_create(H, BS_LIN_PCG, &ls, &err)) {
-        fprintf(stderr, "%s\n", err.msg);
-        return 1;
-      }
-      for (size_t i = 0; i < n3; i++) g[i] = 1.0;
-      /* double values, then single (solver.cg_precision); the GB/s column of both
-         is the double product's bytes over the time, as above */
-      for (int single = 0; single < 2; single++) {
-        const char *label = single ? "PCG iteration (single values)" : "PCG iteration (block Jacobi)";
-        if (only && !strstr(label, only)) continue;
-        if (bs_linsolve_set_single(ls, single, &err)) {
-          fprintf(stderr, "%s\n", err.msg);
-          return 1;
-        }
-        int iters = 50;
-        double rres = 0;
-        for (int r = 0; r < reps; r++) {
-          bs_lin_stats st;
-          double t0 = bs_seconds();
-          bs_linsolve_solve(ls, H, NULL, g, 0.0, 50, y, &st, &err);
-          iters = st.iterations > 0 ? st.iterations : 1;
-          rres = st.rel_residual;
-          t[r] = (bs_seconds() - t0) / iters;
-        }
-        double m = median(t, reps);
-        if (ti == ti0) base[k] = m;
-        printf("%-34s %8d %12.2f %12.1f %8.2f\n", label, threads[ti], 1e3 * m, bytes / m / 1e9, base[k] / m);
-        k++;
-        if (iters != 50) printf("(PCG stopped after %d iterations)\n", iters);
-        if (ti == ti0) printf("(%s: relative residual %.3e after 50 iterations)\n", label, rres);
-      }
-      bs_linsolve_destroy(&ls);
-    }
+    if ((!only || strstr("PCG iteration (block Jacobi)", only) || strstr("PCG iteration (single values)", only)) &&
+        pcg_rows(fem, x, H, g, y, bytes, reps, only, threads[ti], ti == ti0, base, &k))
+      return 1;
     if (!only || strstr("STREAM triad", only)) {
       double triad = stream_triad(n3 * 8 > ((size_t)1 << 24) ? n3 * 8 : (size_t)1 << 24, reps); /* >= 384 MB */
       printf("%-34s %8d %12s %12.1f\n", "STREAM triad (GB/s)", threads[ti], "", triad);

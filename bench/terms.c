@@ -14,19 +14,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bench_median.h"
 #include "bs_scene.h"
 #include "bs_selfcollide.h"
 #include "bs_sim.h"
-
-static int cmp_d(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static double median(double *t, int n) {
-  qsort(t, (size_t)n, sizeof(double), cmp_d);
-  return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
 
 /* Median ms of reps evaluations of t at xa / xb alternately (gradient when g). */
 static double time_term(bs_term *t, const double *xa, const double *xb, double *g, size_t n3, int reps) {
@@ -41,7 +32,7 @@ static double time_term(bs_term *t, const double *xa, const double *xb, double *
     }
     ms[r] = 1e3 * (bs_seconds() - t0);
   }
-  return median(ms, reps);
+  return bench_median(ms, reps);
 }
 
 int main(int argc, char **argv) {

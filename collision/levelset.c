@@ -440,6 +440,18 @@ static double sdf_torus(double R, double r, const double y[3], int need, double 
   return d - r;
 }
 
+/* A grid's rest-frame point of the local point y (the local origin is the
+ * centre of the grid box, c0). */
+static void grid_point(const bs_levelset *ls, const double y[3], double q[3]) {
+  for (int k = 0; k < 3; k++) q[k] = ls->c0[k] + y[k];
+}
+
+/* The local point y = M^T (x - c) of x in frame f. */
+static void to_local(const bs_levelset_frame *f, const double x[3], double y[3]) {
+  double dx[3] = {x[0] - f->c[0], x[1] - f->c[1], x[2] - f->c[2]};
+  matTvec(f->M, dx, y);
+}
+
 static double eval_local(const bs_levelset *ls, const double y[3], int need, double g[3], double H[9]) {
   const double *p = ls->param;
   switch (ls->kind) {
@@ -451,7 +463,8 @@ static double eval_local(const bs_levelset *ls, const double y[3], int need, dou
     case BS_LS_CYLINDER: return sdf_cylinder(p[0], p[1], y, need, g, H);
     case BS_LS_TORUS: return sdf_torus(p[0], p[1], y, need, g, H);
     case BS_LS_GRID: {
-      double q[3] = {ls->c0[0] + y[0], ls->c0[1] + y[1], ls->c0[2] + y[2]};
+      double q[3];
+      grid_point(ls, y, q);
       return bs_levelset_grid_interp(ls, q, need ? g : NULL, need > 1 ? H : NULL);
     }
   }
@@ -462,8 +475,8 @@ static double eval_local(const bs_levelset *ls, const double y[3], int need, dou
 
 double bs_levelset_eval_frame(const bs_levelset *ls, const bs_levelset_frame *f, const double x[3], double grad[3],
                               double hess[9]) {
-  double dx[3] = {x[0] - f->c[0], x[1] - f->c[1], x[2] - f->c[2]}, y[3];
-  matTvec(f->M, dx, y);
+  double y[3];
+  to_local(f, x, y);
   double gl[3] = {0, 0, 0}, Hl[9] = {0};
   int need = hess ? 2 : grad ? 1 : 0;
   double phi = eval_local(ls, y, need, gl, Hl);
@@ -487,9 +500,9 @@ double bs_levelset_eval_frame(const bs_levelset *ls, const bs_levelset_frame *f,
 
 int bs_levelset_surely_outside_frame(const bs_levelset *ls, const bs_levelset_frame *f, const double x[3]) {
   if (ls->kind != BS_LS_GRID) return 0;
-  double dx[3] = {x[0] - f->c[0], x[1] - f->c[1], x[2] - f->c[2]}, y[3]; /* as bs_levelset_eval_frame */
-  matTvec(f->M, dx, y);
-  const double q[3] = {ls->c0[0] + y[0], ls->c0[1] + y[1], ls->c0[2] + y[2]}; /* as eval_local */
+  double y[3], q[3]; /* the point eval_frame's interpolation reads */
+  to_local(f, x, y);
+  grid_point(ls, y, q);
   return bs_levelset_grid_sign_certain(ls, q, ls->complement ? -1 : 1);
 }
 
@@ -502,8 +515,7 @@ double bs_levelset_eval(const bs_levelset *ls, double t, const double x[3], doub
 void bs_levelset_local_point(const bs_levelset *ls, double t, const double x[3], double y[3]) {
   bs_levelset_frame f;
   bs_levelset_frame_at(ls, t, &f);
-  double dx[3] = {x[0] - f.c[0], x[1] - f.c[1], x[2] - f.c[2]};
-  matTvec(f.M, dx, y);
+  to_local(&f, x, y);
 }
 
 void bs_levelset_velocity(const bs_levelset *ls, double t, const double x[3], double v[3]) {
