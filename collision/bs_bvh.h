@@ -8,8 +8,9 @@
  * refit to any later configuration in O(n) without changing the topology, so
  * the boxes stay exact (each the smallest box around its simplices at that
  * configuration) and only the tree's quality degrades as the shape moves away
- * from the one it was built at. Rebuild when that shape is far (the
- * self-collision term rebuilds at the start of each time step).
+ * from the one it was built at. Rebuild when that shape is far: bs_bvh_cost
+ * measures how far (the self-collision term compares it at each time step's
+ * start with its value at the last rebuild).
  *
  * Ownership: bs_bvh_init allocates the nodes and the order; the simplex array
  * `elems` stays the caller's and must outlive the hierarchy. Positions x are
@@ -70,6 +71,14 @@ void bs_bvh_build(bs_bvh *b, const double *x, int nthreads);
  * it infinite (bs_bvh_finite then says 0); a NaN coordinate is skipped by the
  * min and max, so check positions for NaN before trusting a query. */
 void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads);
+
+/* The tree's cost at the last refit: the summed half surface areas of all
+ * node boxes (m^2), to which the expected number of nodes a small query box
+ * visits is proportional (the surface-area heuristic). It does not change
+ * when the simplices move rigidly together and grows as they move apart from
+ * the neighbours they were grouped with at the build; +Inf for infinite
+ * boxes. One serial pass over the nodes: the same value on every thread count. */
+double bs_bvh_cost(const bs_bvh *b);
 
 /* 1 when the root's box at the last refit is finite. */
 int bs_bvh_finite(const bs_bvh *b);

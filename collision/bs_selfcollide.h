@@ -17,8 +17,13 @@
  *    parts of a body closer than that (in the mesh) is left to the elastic
  *    energy. Tets are found through a bounding-volume
  *    hierarchy over tet boxes (bs_bvh.h): its topology is built at creation
- *    and rebuilt at each begin_step (at xⁿ), its boxes are refit at every
- *    evaluation;
+ *    and rebuilt at a begin_step (at xⁿ) when its cost (bs_bvh_cost) there
+ *    exceeds BS_SELF_REBUILD_GROWTH times its cost at the last rebuild, its
+ *    boxes are refit at every evaluation. Which tet a vertex is found in
+ *    only seeds the primitive search, whose result is the closest primitive
+ *    (ties to the lowest triangle index): the contacts do not depend on the
+ *    hierarchy, so neither do the results on when it was rebuilt (a resumed
+ *    run rebuilds at its first step);
  *  - the primitive of a colliding p is the feature (triangle interior, edge
  *    or vertex) of the closest triangle among the boundary triangles none of
  *    whose vertices is p or an edge neighbour of p (the others lie on p's
@@ -149,6 +154,12 @@ extern "C" {
 #define BS_SELF_EPS 1e-15 /* eps in Phi = k d sqrt(d + eps), m^2 */
 #define BS_SELF_SECANT_MIN_D 1e-13 /* d below which the secant model is the Hessian (100 eps), m^2 */
 
+/* Growth of a hierarchy's cost (bs_bvh_cost) over its value at the last
+ * rebuild beyond which begin_step rebuilds it: a factor of the expected nodes
+ * a query visits. Bodies falling together keep the cost; a pile that
+ * rearranges grows it. */
+#define BS_SELF_REBUILD_GROWTH 1.25
+
 /* The self-collision term over all boundary vertices of fem->mesh; k finite
  * > 0. step may be NULL (then begin_step does not rebuild the hierarchy). */
 int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, bs_term **out, bs_error *err);
@@ -168,7 +179,8 @@ typedef struct bs_self_stats {
   int64_t reused;         /* of which answered by the last detection (the same  */
                           /* positions, bitwise: value, gradient, Hessian at one */
                           /* iterate, f(xⁿ) after the last step's friction)     */
-  int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step)          */
+  int64_t rebuilds;       /* hierarchy rebuilds (creation, begin_step when the  */
+                          /* cost grew by BS_SELF_REBUILD_GROWTH)              */
   double t_rebuild;       /* seconds: hierarchy topology rebuilds               */
   double t_refit;         /* seconds: box refits                                */
   double t_detect;        /* seconds: point-in-tet detection                    */

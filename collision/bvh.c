@@ -202,6 +202,16 @@ void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads) {
   }
 }
 
+double bs_bvh_cost(const bs_bvh *b) {
+  double s = 0;
+  for (int32_t i = 0; i < b->n_nodes; i++) {
+    const bs_bvh_node *nd = &b->nodes[i];
+    const double e0 = nd->hi[0] - nd->lo[0], e1 = nd->hi[1] - nd->lo[1], e2 = nd->hi[2] - nd->lo[2];
+    s += e0 * e1 + e1 * e2 + e2 * e0;
+  }
+  return isfinite(s) ? s : INFINITY;
+}
+
 int bs_bvh_finite(const bs_bvh *b) {
   const bs_bvh_node *root = &b->nodes[0];
   for (int k = 0; k < 3; k++)

@@ -359,6 +359,7 @@ typedef struct self_data {
   /* hierarchies, built at x^n (begin_step), refit at each detection */
   bs_bvh tet_bvh;       /* the tets                                         */
   bs_bvh tri_bvh;       /* the boundary triangles                           */
+  double tet_cost, tri_cost; /* their bs_bvh_cost at the last rebuild      */
   bs_shim_tree *rest;   /* the boundary at rest                             */
   double h_min;         /* smallest search radius: half the mean boundary edge */
   int nthreads;
@@ -403,13 +404,30 @@ static void self_free(void *p) {
   free(d);
 }
 
-/* Both hierarchies' topology from the positions x. */
+/* Both hierarchies' topology from the positions x, and their costs there. */
 static void bvh_rebuild(self_data *d, const double *x) {
   double t0 = bs_seconds();
   bs_bvh_build(&d->tet_bvh, x, d->nthreads);
   bs_bvh_build(&d->tri_bvh, x, d->nthreads);
+  bs_bvh_refit(&d->tet_bvh, x, d->nthreads);
+  bs_bvh_refit(&d->tri_bvh, x, d->nthreads);
+  d->tet_cost = bs_bvh_cost(&d->tet_bvh);
+  d->tri_cost = bs_bvh_cost(&d->tri_bvh);
   d->stats.rebuilds++;
   d->stats.t_rebuild += bs_seconds() - t0;
+}
+
+/* At a step's start: both hierarchies refit to x, rebuilt when either's cost
+ * grew past BS_SELF_REBUILD_GROWTH times its cost at the last rebuild (or is
+ * not finite). */
+static void bvh_update(self_data *d, const double *x) {
+  double t0 = bs_seconds();
+  bs_bvh_refit(&d->tet_bvh, x, d->nthreads);
+  bs_bvh_refit(&d->tri_bvh, x, d->nthreads);
+  const double ct = bs_bvh_cost(&d->tet_bvh), cf = bs_bvh_cost(&d->tri_bvh);
+  d->stats.t_refit += bs_seconds() - t0;
+  if (!(ct <= BS_SELF_REBUILD_GROWTH * d->tet_cost) || !(cf <= BS_SELF_REBUILD_GROWTH * d->tri_cost))
+    bvh_rebuild(d, x);
 }
 
 /* det[b - a, c - a, d - a] in double, with a bound on its rounding error
@@ -821,7 +839,7 @@ static int self_begin_step(bs_term *t, bs_error *err) {
       for (int k = 0; k < 3; k++)
         if (!isfinite(x[3 * (size_t)v + k]))
           return bs_error_set(err, BS_ENUMERIC, "self-collision: position of vertex %d is not finite", (int)v);
-    bvh_rebuild(d, x); /* the last detection stays valid: the same positions give the same contacts */
+    bvh_update(d, x); /* the last detection stays valid: the same positions give the same contacts */
   }
   return 0;
 }

@@ -3,7 +3,8 @@
  * configuration the tree was built at and after the vertices moved far
  * (refit only); the cap; a non-finite position; bad arguments; a tree large
  * enough for the parallel build's tasks is the same, node for node, on 1 and
- * 2 threads, and well formed (pre-order, every simplex in one leaf). */
+ * 2 threads, and well formed (pre-order, every simplex in one leaf); the
+ * cost keeps under a translation and grows when the vertices are shuffled. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -158,5 +159,46 @@ Test(bvh, parallel_build_is_the_serial_tree) {
   cr_assert_gt(check_queries(&b2, m->x, m->tets, 4, m->n_tets, 5u), 200);
   bs_bvh_free(&b1);
   bs_bvh_free(&b2);
+  bs_mesh_destroy(&m);
+}
+
+/* bs_bvh_cost: the same after a rigid translation (the tree is as good), far
+ * larger after the vertices were shuffled (every leaf box then spans about
+ * the block), +Inf at an infinite coordinate. */
+Test(bvh, cost_keeps_under_translation_and_grows_when_shuffled) {
+  bs_error err;
+  bs_mesh *m = NULL;
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 8, 7, 6, &m, &err), BS_OK);
+  bs_bvh b;
+  cr_assert_eq(bs_bvh_init(&b, m->tets, 4, m->n_tets, &err), BS_OK);
+  bs_bvh_build(&b, m->x, 1);
+  bs_bvh_refit(&b, m->x, 1);
+  const double c0 = bs_bvh_cost(&b);
+  cr_assert(c0 > 0 && isfinite(c0), "cost %g", c0);
+  const size_t n3 = 3 * (size_t)m->n_vertices;
+  double *x = malloc(n3 * sizeof(double));
+  for (size_t i = 0; i < n3; i++) x[i] = m->x[i] + (i % 3 == 0 ? 5.0 : i % 3 == 1 ? -3.0 : 2.0);
+  bs_bvh_refit(&b, x, 2);
+  cr_expect(fabs(bs_bvh_cost(&b) - c0) <= 1e-9 * c0, "translated: cost %.17g against %.17g", bs_bvh_cost(&b), c0);
+  unsigned s = 5u; /* shuffle the positions among the vertices (Fisher-Yates) */
+  memcpy(x, m->x, n3 * sizeof(double));
+  for (int32_t v = m->n_vertices - 1; v > 0; v--) {
+    int32_t u = (int32_t)(rnd(&s) * (v + 1));
+    for (int k = 0; k < 3; k++) {
+      double t = x[3 * (size_t)v + k];
+      x[3 * (size_t)v + k] = x[3 * (size_t)u + k];
+      x[3 * (size_t)u + k] = t;
+    }
+  }
+  bs_bvh_refit(&b, x, 2);
+  const double c1 = bs_bvh_cost(&b);
+  cr_expect(c1 > 10 * c0, "shuffled: cost %g, built %g", c1, c0);
+  cr_assert_gt(check_queries(&b, x, m->tets, 4, m->n_tets, 9u), 200);
+  x[3 * (size_t)m->tets[0]] = INFINITY;
+  bs_bvh_refit(&b, x, 1);
+  cr_expect(isinf(bs_bvh_cost(&b)), "an infinite coordinate: cost %g", bs_bvh_cost(&b));
+  free(x);
+  bs_bvh_free(&b);
   bs_mesh_destroy(&m);
 }
