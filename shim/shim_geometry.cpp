@@ -22,12 +22,15 @@
 #include <boost/iterator/counting_iterator.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <exception>
 #include <limits>
 #include <new>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -511,10 +514,73 @@ typedef CGAL::Box_intersection_d::Box_with_info_d<double, 3, int32_t, CGAL::Box_
 
 struct CapReached {}; // thrown by the callback to stop the search at the cap
 
-// cap > 0: stop once cap pairs are found (*truncated = 1); cap = 0: all pairs.
+// The box search runs in slabs along the axis of the boxes' longest extent,
+// cut at quantiles of their centres, one slab per task: a box goes to every
+// slab it meets (closed), and a pair of boxes found in several slabs is kept
+// in the one holding the lower end of their overlap along the axis, which
+// both boxes meet: each pair is tested once. The slab count depends on the
+// number of boxes only (not on the threads); the pairs are sorted at the end,
+// so the result does not depend on the thread count either.
+enum { SLAB_BOXES = 16384, MAX_SLABS = 64 };
+
+struct Slabs {
+  int axis = 0;
+  std::vector<double> cut; // slab k is [cut[k], cut[k+1]); cut[0] = -inf, back = +inf
+  int of(double v) const { // the slab holding v
+    return (int)(std::upper_bound(cut.begin() + 1, cut.end() - 1, v) - (cut.begin() + 1));
+  }
+};
+
+Slabs make_slabs(const std::vector<Box> &boxes) {
+  Slabs sl;
+  const std::size_t n = boxes.size();
+  const int ns = (int)std::max<std::size_t>(1, std::min<std::size_t>(MAX_SLABS, n / SLAB_BOXES));
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const Box &b : boxes)
+    for (int k = 0; k < 3; k++) lo[k] = std::min(lo[k], b.min_coord(k)), hi[k] = std::max(hi[k], b.max_coord(k));
+  for (int k = 1; k < 3; k++)
+    if (hi[k] - lo[k] > hi[sl.axis] - lo[sl.axis]) sl.axis = k;
+  std::vector<double> c(n);
+  for (std::size_t i = 0; i < n; i++) c[i] = 0.5 * (boxes[i].min_coord(sl.axis) + boxes[i].max_coord(sl.axis));
+  std::sort(c.begin(), c.end());
+  sl.cut.push_back(-INFINITY);
+  for (int k = 1; k < ns; k++) sl.cut.push_back(c[(std::size_t)k * n / (std::size_t)ns]);
+  sl.cut.push_back(INFINITY);
+  return sl;
+}
+
+// The candidate boxes of each slab.
+std::vector<std::vector<const Box *>> slab_members(const std::vector<Box> &boxes, const Slabs &sl) {
+  std::vector<std::vector<const Box *>> in(sl.cut.size() - 1);
+  for (const Box &b : boxes)
+    for (int k = sl.of(b.min_coord(sl.axis)), e = sl.of(b.max_coord(sl.axis)); k <= e; k++) in[k].push_back(&b);
+  return in;
+}
+
+// The intersecting pairs whose boxes' overlap starts in slab k, into out;
+// found counts the pairs of all slabs (with the degenerate ones) for the cap.
+void slab_pairs(const Soup &s, const Slabs &sl, int k, std::vector<const Box *> &in, int64_t cap,
+                std::atomic<int64_t> &found, std::vector<std::pair<int32_t, int32_t>> &out) {
+  const int a = sl.axis;
+  auto callback = [&](const Box *b1, const Box *b2) {
+    if (sl.of(std::max(b1->min_coord(a), b2->min_coord(a))) != k) return; // another slab's pair
+    const int32_t i = b1->info(), j = b2->info();
+    if (triangles_intersect(s, i, j)) {
+      out.emplace_back(std::min(i, j), std::max(i, j));
+      if (cap > 0) found++;
+    }
+    if (cap > 0 && found.load(std::memory_order_relaxed) >= cap) throw CapReached(); // this slab's or another's
+  };
+  CGAL::box_self_intersection_d(in.begin(), in.end(), callback); // closed boxes: touching triangles are candidates
+}
+
+// cap > 0: stop once cap pairs are found (*truncated = 1, the first cap pairs
+// in order kept); cap = 0: all pairs. Slabs on OpenMP threads (above).
 int self_intersections(const double *x, int64_t n_points, const int32_t *t, int64_t n_tris, int64_t cap,
                        int32_t **pairs_out, int64_t *n_pairs_out, int *truncated, bs_error *err) {
   if (truncated) *truncated = 0;
+  *pairs_out = NULL;
+  *n_pairs_out = 0;
   int rc = check_soup("bs_shim_self_intersections", x, n_points, t, n_tris, 0, err);
   if (rc) return rc;
   const Soup s = {x, t};
@@ -534,28 +600,37 @@ int self_intersections(const double *x, int64_t n_points, const int32_t *t, int6
     }
     boxes.push_back(Box(CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]), (int32_t)i));
   }
-  std::vector<const Box *> ptrs;
-  ptrs.reserve(boxes.size());
-  for (const Box &b : boxes) ptrs.push_back(&b);
-  auto callback = [&s, &pairs, cap](const Box *b1, const Box *b2) {
-    const int32_t i = b1->info(), j = b2->info();
-    if (triangles_intersect(s, i, j)) pairs.emplace_back(std::min(i, j), std::max(i, j));
-    if (cap > 0 && (int64_t)pairs.size() >= cap) throw CapReached();
-  };
-  // closed boxes: triangles that merely touch are candidates
-  if (cap > 0 && (int64_t)pairs.size() >= cap) {
-    if (truncated) *truncated = 1;
-  } else {
-    try {
-      CGAL::box_self_intersection_d(ptrs.begin(), ptrs.end(), callback);
-    } catch (const CapReached &) {
-      if (truncated) *truncated = 1;
+  std::atomic<int64_t> found((int64_t)pairs.size());
+  int stopped = cap > 0 && found >= cap, failed = 0; // failed: 1 out of memory, 2 another exception
+  if (!stopped && !boxes.empty()) {
+    const Slabs sl = make_slabs(boxes);
+    std::vector<std::vector<const Box *>> in = slab_members(boxes, sl);
+    std::vector<std::vector<std::pair<int32_t, int32_t>>> got(in.size());
+    const int ns = (int)in.size();
+    std::string what; // the first exception's message
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : stopped, failed) if (ns > 1)
+    for (int k = 0; k < ns; k++) {
+      try {
+        slab_pairs(s, sl, k, in[k], cap, found, got[k]);
+      } catch (const CapReached &) {
+        stopped = 1;
+      } catch (const std::bad_alloc &) {
+        failed |= 1;
+      } catch (const std::exception &e) {
+        failed |= 2;
+#pragma omp critical(bs_shim_slab_error)
+        if (what.empty()) what = e.what();
+      } catch (...) {
+        failed |= 2;
+      }
     }
+    if (failed & 1) throw std::bad_alloc();
+    if (failed) throw std::runtime_error(what.empty() ? "unknown exception in the box search" : what);
+    for (const auto &g : got) pairs.insert(pairs.end(), g.begin(), g.end());
   }
   std::sort(pairs.begin(), pairs.end());
-
-  *pairs_out = NULL;
-  *n_pairs_out = 0;
+  if (stopped && cap > 0 && (int64_t)pairs.size() > cap) pairs.resize((std::size_t)cap);
+  if (truncated) *truncated = stopped;
   if (!pairs.empty()) {
     int32_t *out = (int32_t *)std::malloc(2 * pairs.size() * sizeof(int32_t));
     if (!out)

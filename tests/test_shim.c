@@ -4,6 +4,7 @@
  * come from brute force over all triangles with an independent algorithm. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -826,6 +827,88 @@ Test(shim_self, random_soup_matches_pairwise_tests) {
   cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, -1, &cnt, &trunc, &err), BS_EINPUT);
   cr_assert(strstr(err.msg, "cap"), "%s", err.msg);
   bs_shim_free(p);
+  free(x);
+  free(t);
+}
+
+/* Box-overlap candidates by a sweep along x (the test's own search), each
+ * decided by the shim on the pair alone: the reference for large soups. */
+typedef struct {
+  double lo[3], hi[3];
+  int32_t id;
+} sweep_box;
+
+static int sweep_cmp(const void *a, const void *b) {
+  const sweep_box *p = a, *q = b;
+  return p->lo[0] < q->lo[0] ? -1 : p->lo[0] > q->lo[0] ? 1 : (p->id > q->id) - (p->id < q->id);
+}
+
+static int64_t sweep_pairs(const double *x, const int32_t *t, int nt) {
+  sweep_box *b = malloc((size_t)nt * sizeof *b);
+  for (int i = 0; i < nt; i++) {
+    b[i].id = i;
+    for (int d = 0; d < 3; d++) {
+      b[i].lo[d] = INFINITY, b[i].hi[d] = -INFINITY;
+      for (int k = 0; k < 3; k++) {
+        b[i].lo[d] = fmin(b[i].lo[d], x[3 * t[3 * i + k] + d]);
+        b[i].hi[d] = fmax(b[i].hi[d], x[3 * t[3 * i + k] + d]);
+      }
+    }
+  }
+  qsort(b, (size_t)nt, sizeof *b, sweep_cmp);
+  int64_t n = 0;
+  int32_t t01[6] = {0, 1, 2, 3, 4, 5};
+  for (int i = 0; i < nt; i++)
+    for (int j = i + 1; j < nt && b[j].lo[0] <= b[i].hi[0]; j++) {
+      if (b[j].lo[1] > b[i].hi[1] || b[j].hi[1] < b[i].lo[1] || b[j].lo[2] > b[i].hi[2] || b[j].hi[2] < b[i].lo[2])
+        continue;
+      double xy[18];
+      for (int k = 0; k < 3; k++) {
+        memcpy(xy + 3 * k, x + 3 * t[3 * b[i].id + k], 3 * sizeof(double));
+        memcpy(xy + 9 + 3 * k, x + 3 * t[3 * b[j].id + k], 3 * sizeof(double));
+      }
+      n += self_pairs(xy, 6, t01, 2, NULL);
+    }
+  free(b);
+  return n;
+}
+
+Test(shim_self, large_soup_in_slabs_matches_a_sweep_on_any_thread_count) {
+  /* 70,000 small triangles and 40 long ones across the whole soup in x (each
+   * in every slab of the search): the pairs are the sweep's, each once, and
+   * the same on 1 and 2 threads; the cap stops the count at the cap. */
+  enum { NS = 70000, NL = 40, NT = NS + NL };
+  double *x = malloc(9 * (size_t)NT * sizeof(double));
+  int32_t *t = malloc(3 * (size_t)NT * sizeof(int32_t));
+  for (int i = 0; i < NT; i++) {
+    double c[3] = {urand(), urand(), urand()};
+    for (int k = 0; k < 3; k++)
+      for (int d = 0; d < 3; d++) x[9 * i + 3 * k + d] = c[d] + urange(-0.01, 0.01);
+    if (i >= NS) x[9 * i] = -0.1, x[9 * i + 3] = 1.1; /* two vertices at the ends in x */
+    for (int k = 0; k < 3; k++) t[3 * i + k] = 3 * i + k;
+  }
+  const int64_t want = sweep_pairs(x, t, NT);
+  cr_assert_gt(want, 1000, "the soup should have crossings (%lld)", (long long)want);
+  int32_t *p[2] = {NULL, NULL};
+  int64_t n[2];
+  for (int th = 1; th <= 2; th++) {
+    omp_set_num_threads(th);
+    n[th - 1] = self_pairs(x, 3 * NT, t, NT, &p[th - 1]);
+    cr_assert_eq(n[th - 1], want, "%d threads: %lld pairs, the sweep %lld", th, (long long)n[th - 1],
+                 (long long)want);
+    for (int64_t k = 1; k < n[th - 1]; k++) {
+      const int32_t *a = p[th - 1] + 2 * (k - 1), *b = a + 2;
+      cr_assert(a[0] < b[0] || (a[0] == b[0] && a[1] < b[1]), "pair %lld not after the one before", (long long)k);
+    }
+  }
+  cr_assert_eq(memcmp(p[0], p[1], 2 * (size_t)want * sizeof(int32_t)), 0, "1 and 2 threads differ");
+  bs_error err = {0};
+  int64_t cnt = -1;
+  int trunc = -1;
+  cr_assert_eq(bs_shim_count_self_intersections(x, 3 * NT, t, NT, 5, &cnt, &trunc, &err), BS_OK, "%s", err.msg);
+  cr_assert(cnt == 5 && trunc == 1, "cap = 5: count %lld truncated %d", (long long)cnt, trunc);
+  bs_shim_free(p[0]);
+  bs_shim_free(p[1]);
   free(x);
   free(t);
 }
