@@ -175,9 +175,10 @@ int bs_shim_signed_distance(const bs_shim_tree *t, const double *q, int64_t n, d
  * others. *pairs receives 2 * *n_pairs indices (i < j within a pair, pairs
  * sorted), allocated by the shim (free with bs_shim_free; NULL when there
  * are none). The box search runs in slabs (a number set by n_tris alone) on
- * the caller's OpenMP threads; the pairs do not depend on the thread count. Errors: BS_EINPUT for NULL arrays with positive counts,
- * negative counts, or an index outside [0, n_points) (names the triangle);
- * BS_ENUMERIC for a non-finite coordinate (names the point); BS_ENOMEM. */
+ * the caller's OpenMP threads; the pairs do not depend on the thread count.
+ * Errors: BS_EINPUT for NULL arrays with positive counts, negative counts, or
+ * an index outside [0, n_points) (names the triangle); BS_ENUMERIC for a
+ * non-finite coordinate (names the point); BS_ENOMEM. */
 int bs_shim_self_intersections(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
                                int32_t **pairs, int64_t *n_pairs, bs_error *err);
 
