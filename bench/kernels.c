@@ -115,6 +115,18 @@ static void jitter(const bs_mesh *mesh, double amp, double *x) {
   }
 }
 
+/* The unit box of cells^3 cells, its FEM (fixed corotated, E = 1e5) and a
+ * matrix of its pattern. */
+static int make_box(int cells, bs_mesh **mesh, bs_fem **fem, bs_bsr **H, bs_error *err) {
+  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  bs_material mat;
+  int rc = bs_mesh_create_box(lo, hi, cells, cells, cells, mesh, err);
+  if (!rc) rc = bs_material_init(BS_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, &mat, err);
+  if (!rc) rc = bs_fem_create(*mesh, 1, &mat, NULL, fem, err);
+  if (!rc) rc = bs_fem_matrix(*fem, H, err);
+  return rc;
+}
+
 int main(int argc, char **argv) {
   int cells = argc > 1 ? atoi(argv[1]) : 64;
   int reps = argc > 2 ? atoi(argv[2]) : 5;
@@ -125,20 +137,12 @@ int main(int argc, char **argv) {
   }
   bs_error err;
   bs_mesh *mesh = NULL;
-  double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-  if (bs_mesh_create_box(lo, hi, cells, cells, cells, &mesh, &err)) {
-    fprintf(stderr, "%s\n", err.msg);
-    return 1;
-  }
-  bs_material mat;
-  bs_material_init(BS_MODEL_FIXED_COROTATED, 1e5, 0.3, 1000, &mat, &err);
   bs_fem *fem = NULL;
-  if (bs_fem_create(mesh, 1, &mat, NULL, &fem, &err)) {
+  bs_bsr *H = NULL;
+  if (make_box(cells, &mesh, &fem, &H, &err)) {
     fprintf(stderr, "%s\n", err.msg);
     return 1;
   }
-  bs_bsr *H = NULL;
-  bs_fem_matrix(fem, &H, &err);
   size_t n3 = 3 * (size_t)mesh->n_vertices;
   double *x = malloc(n3 * sizeof(double)), *g = malloc(n3 * sizeof(double)), *y = malloc(n3 * sizeof(double));
   jitter(mesh, 0.2 / cells, x);

@@ -341,12 +341,12 @@ static void grid_ranges(bs_levelset *ls) {
 
 int bs_levelset_grid_sign_certain(const bs_levelset *ls, const double p[3], int sign) {
   if (ls->kind != BS_LS_GRID || ls->grid_interp != BS_GRID_CUBIC) return 0;
-  int32_t c[3], nb[3];
-  for (int k = 0; k < 3; k++) {
-    const double u = (p[k] - ls->origin[k]) / ls->h; /* locate's u, so the same cell */
-    if (!(u >= 1 && u < (double)(ls->n[k] - 2))) return 0; /* folded, clamped or NaN */
-    c[k] = (int32_t)u;
-  }
+  grid_locus L; /* the cell the interpolation reads */
+  locate(ls, p, &L);
+  const int32_t *c = L.c;
+  for (int k = 0; k < 3; k++) /* clamped (or NaN), or a cell whose B-spline folds at the boundary */
+    if (L.clamped[k] || c[k] < 1 || c[k] > ls->n[k] - 3) return 0;
+  int32_t nb[3];
   grid_blocks(ls->n, nb);
   const size_t q = ((size_t)(c[2] / BS_GRID_BLOCK) * (size_t)nb[1] + (size_t)(c[1] / BS_GRID_BLOCK)) * (size_t)nb[0] +
                    (size_t)(c[0] / BS_GRID_BLOCK);

@@ -356,7 +356,8 @@ typedef struct self_data {
   int secant;           /* hessian_g gives the secant model (else the Hessian) */
   int32_t n_surf;
   int32_t *surf;        /* boundary vertices                                */
-  /* hierarchies, built at x^n (begin_step), refit at each detection */
+  /* hierarchies: built at creation, rebuilt at a step's start when their
+     cost grew (bvh_update), refit at each detection */
   bs_bvh tet_bvh;       /* the tets                                         */
   bs_bvh tri_bvh;       /* the boundary triangles                           */
   double tet_cost, tri_cost; /* their bs_bvh_cost at the last rebuild      */

@@ -249,11 +249,20 @@ Test(levelset, analytic_derivatives) {
     }
 }
 
-Test(levelset, grid_derivatives) {
+/* The torus of make_shape(4) sampled over the box [TORUS_LO, TORUS_HI] at
+ * spacing h. */
+static const double TORUS_LO[3] = {-1.1, -1.3, -0.8}, TORUS_HI[3] = {1.3, 0.9, 1.4};
+static bs_levelset *sampled_torus(double h) {
   bs_levelset *torus = make_shape(4), *grid = NULL;
   bs_error err;
-  double lo[3] = {-1.1, -1.3, -0.8}, hi[3] = {1.3, 0.9, 1.4};
-  cr_assert_eq(bs_levelset_grid_sample(torus, 0, lo, hi, 0.08, &grid, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_levelset_grid_sample(torus, 0, TORUS_LO, TORUS_HI, h, &grid, &err), 0, "%s", err.msg);
+  bs_levelset_destroy(&torus);
+  return grid;
+}
+
+Test(levelset, grid_derivatives) {
+  bs_levelset *grid = sampled_torus(0.08);
+  bs_error err;
   for (int variant = 0; variant < 6; variant++) {
     bs_grid_interp mode = variant < 3 ? BS_GRID_CUBIC : BS_GRID_LINEAR;
     cr_assert_eq(bs_levelset_grid_set_interp(grid, mode, &err), 0, "%s", err.msg);
@@ -272,7 +281,6 @@ Test(levelset, grid_derivatives) {
     check_derivatives(name, grid, 0.6, 1.9, 0.015, 0);
   }
   bs_levelset_destroy(&grid);
-  bs_levelset_destroy(&torus);
 }
 
 /* ---- sign convention, |grad| ----------------------------------------------- */
@@ -1122,10 +1130,9 @@ Test(levelset, huge_and_tiny_directions_normalize) {
  * (never 1); it does say 1 at nine in ten points 0.3 outside inside the grid
  * (so the test can fail), and 0 for an analytic shape. */
 Test(levelset, grid_surely_outside_never_contradicts_phi) {
-  bs_levelset *torus = make_shape(4), *grid = NULL;
+  bs_levelset *torus = make_shape(4), *grid = sampled_torus(0.05);
   bs_error err;
-  double lo[3] = {-1.1, -1.3, -0.8}, hi[3] = {1.3, 0.9, 1.4};
-  cr_assert_eq(bs_levelset_grid_sample(torus, 0, lo, hi, 0.05, &grid, &err), 0, "%s", err.msg);
+  const double *lo = TORUS_LO, *hi = TORUS_HI;
   for (int variant = 0; variant < 4; variant++) {
     cr_assert_eq(bs_levelset_grid_set_interp(grid, variant == 3 ? BS_GRID_LINEAR : BS_GRID_CUBIC, &err), 0);
     bs_levelset_set_complement(grid, variant == 1);
