@@ -131,6 +131,8 @@ typedef struct run_ctx {
   double t0;            /* wall clock at the start of the run */
   int first;            /* the frame the run (or its resumption) started from */
   int tty;              /* stdout is a terminal: one updating line */
+  int measured_frame;   /* the frame last_m measured, with intersections; -1: none */
+  bs_sim_measures last_m;
 } run_ctx;
 
 /* The progress part of a frame line: frames done, elapsed, s/frame, ETA. */
@@ -146,6 +148,7 @@ static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
   if ((c->args->quiet || fs->frame == 0) && !c->folder) return 0;
   bs_sim_measures m; /* once: the folder's row (with intersections) and the line */
   bs_sim_measure(s, c->folder != NULL, &m);
+  if (c->folder) c->last_m = m, c->measured_frame = fs->frame;
   if (c->folder && bs_runfolder_write(c->folder, s, fs, &m, err)) return BS_EIO;
   if (c->args->quiet || fs->frame == 0) return 0;
   if (s->scene->mode == BS_MODE_STATIC) {
@@ -186,7 +189,10 @@ static int finish(run_ctx *c, const bs_sim *s, const bs_run_totals *T, int stopp
                   bs_error *err) {
   bs_summary u;
   char summary[2048];
-  bs_summary_make(s, T, wall, &u);
+  if (!stopped && c->measured_frame == s->frame) /* the last frame line's measures: the same state */
+    bs_summary_make_measured(s, T, wall, &c->last_m, &u);
+  else
+    bs_summary_make(s, T, wall, &u);
   if (stopped) u.partial = BS_SUMMARY_INTERRUPTED;
   bs_summary_format(&u, summary, sizeof summary);
   printf("\n%s", summary);
@@ -237,7 +243,7 @@ static int open_folder(const run_args *a, run_ctx *c, bs_sim *s, bs_run_totals *
 static int run_scene(const run_args *a, bs_sim *s) {
   bs_error err;
   bs_error_clear(&err);
-  run_ctx c = {.args = a, .t0 = bs_seconds(), .tty = isatty(fileno(stdout))};
+  run_ctx c = {.args = a, .t0 = bs_seconds(), .tty = isatty(fileno(stdout)), .measured_frame = -1};
   bs_run_totals T;
   memset(&T, 0, sizeof T);
   bs_app_install_stop_handlers(); /* from here a Ctrl-C stops between steps, leaving a consistent folder */
