@@ -146,7 +146,7 @@ static void print_progress(const run_ctx *c, const bs_sim *s, int frame) {
 static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
   run_ctx *c = ctx;
   if ((c->args->quiet || fs->frame == 0) && !c->folder) return 0;
-  bs_sim_measures m; /* once: the folder's row (with intersections) and the line */
+  bs_sim_measures m; /* once: the folder's row (with intersections), the line and, kept, the summary's */
   bs_sim_measure(s, c->folder != NULL, &m);
   if (c->folder) c->last_m = m, c->measured_frame = fs->frame;
   if (c->folder && bs_runfolder_write(c->folder, s, fs, &m, err)) return BS_EIO;
