@@ -1,5 +1,5 @@
 /* bigstep run SCENE with solver.backend = "petsc", under mpirun -np N: the
- * scene on the distributed backend (dist/bs_dsim.h). Rank 0 prints the
+ * scene on the distributed backend (petsc/bs_dsim.h). Rank 0 prints the
  * header, the frame lines and the summary (bs_summary_format, the serial
  * run's summary). Without PETSc (BS_PETSC=OFF) the backend is refused. */
 #include <stdio.h>

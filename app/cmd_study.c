@@ -1,6 +1,6 @@
 /* bigstep study SCENE --vary KEY=v1,v2,... — speed against accuracy, measured.
  *
- * The study engine (plan, metrics, report) is sim/bs_study.h; this command
+ * The study engine (plan, metrics, report) is study/bs_study.h; this command
  * parses the arguments, runs every pending run as a child `bigstep run` (this
  * executable, /proc/self/exe) in its own folder, at most --jobs at a time,
  * with a progress line and a done marker per run, runs gnuplot on the plots

@@ -33,6 +33,11 @@ enum {
 
 #define BS_ERROR_MSG 1024
 
+/* The longest path (bytes, with its terminating NUL) bigstep keeps: a
+ * scene's mesh and output folder, a run folder's files. Longer paths are
+ * refused as input errors. */
+#define BS_MAX_PATH 1024
+
 typedef struct bs_error {
   int code;                /* the status last set; 0 if none */
   char msg[BS_ERROR_MSG];  /* one line, no trailing newline  */

@@ -1,4 +1,4 @@
-/* bench/dist_cube.c — the petsc backend (dist/) on the unit cube of
+/* bench/dist_cube.c — the petsc backend (petsc/) on the unit cube of
  * CELLS^3 cells (64: the 65^3-vertex cube, 824k dofs), fixed_corotated
  * (E 1e5, nu 0.3, rho 1000), gravity, the x = 0 face fixed; static (one
  * solve) or dynamic (FRAMES frames at 24 fps); solver.linear LINEAR (amg:

@@ -73,20 +73,20 @@ if(NOT OpenMP_C_FOUND)
   bs_missing("OpenMP for C" "gcc (libgomp1)")
 endif()
 
-# PETSc (dist/, the distributed backend: DMPlex, MATBAIJ, KSP/PC) over the same
+# PETSc (petsc/, the distributed backend: DMPlex, MATBAIJ, KSP/PC) over the same
 # Open MPI. Optional: BS_PETSC defaults to ON when pkg-config finds PETSc, and
-# dist/ with its tests (tests/dist/) is built only then.
+# petsc/ with its tests (tests/petsc/) is built only then.
 find_package(PkgConfig QUIET)
 if(PkgConfig_FOUND)
   pkg_check_modules(PETSC QUIET IMPORTED_TARGET PETSc)
 endif()
-option(BS_PETSC "Build dist/, the PETSc + MPI backend (solver.backend = petsc)" ${PETSC_FOUND})
+option(BS_PETSC "Build petsc/, the PETSc + MPI backend (solver.backend = petsc)" ${PETSC_FOUND})
 if(BS_PETSC AND NOT PETSC_FOUND)
   bs_missing("PETSc (pkg-config PETSc) for BS_PETSC=ON" petsc-dev)
 endif()
 if(BS_PETSC)
   find_program(MPIEXEC_EXECUTABLE NAMES mpirun mpiexec)
   if(NOT MPIEXEC_EXECUTABLE)
-    bs_missing("mpirun (for the tests of dist/)" openmpi-bin)
+    bs_missing("mpirun (for the tests of petsc/)" openmpi-bin)
   endif()
 endif()

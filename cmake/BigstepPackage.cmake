@@ -1,7 +1,7 @@
 # bigstep as a library for other programs. `cmake --install build --prefix P`
 # writes
 #   P/lib/libbigstep.a, P/lib/libbigstep.so   every folder library of
-#       BS_LIBRARIES (bs_base ... bs_collision, bs_sim when present), archived
+#       BS_LIBRARIES (bs_base ... bs_scene, bs_sim, bs_runfolder, bs_study), archived
 #       and linked from the objects those libraries already compiled
 #   P/include/bigstep/    the public headers, flat, and the umbrella bigstep.h
 #   P/lib/pkgconfig/bigstep.pc

@@ -1,6 +1,6 @@
 /* bs_ls_surface.h — the zero level set of an analytic obstacle as a
  * triangle surface, at the obstacle's pose at a time t: what a run writes so
- * that the obstacle can be seen beside the bodies (sim/bs_obstacle_output.h).
+ * that the obstacle can be seen beside the bodies (runfolder/bs_obstacle_output.h).
  *
  * Shapes (bs_levelset.h), tessellated in the shape's local frame and placed
  * by its frame at t (x = M y + c):

@@ -106,7 +106,7 @@
  * whenever step->time changes, so that a step never starts from the last
  * step's labels. One integrator per bs_obstacles.
  *
- * Part of a distributed mesh (the petsc backend, dist/): a process whose fem
+ * Part of a distributed mesh (the petsc backend, petsc/): a process whose fem
  * covers only its own cells marks the vertices it owns (bs_obstacles_set_owned,
  * each shared vertex owned by one process) and gives the whole scene's rest
  * box (bs_obstacles_set_bounds, so that tol_b is the serial one). With x and

@@ -158,7 +158,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
                          bs_error *err);
 
-/* Shared with the distributed integrator (dist/bs_dstep.h), so that both
+/* Shared with the distributed integrator (petsc/bs_dstep.h), so that both
  * backends decide alike. Nothing allocates, prints or fails. */
 
 /* bs_objective.quadratic of a solve over the terms: 1 when every term active

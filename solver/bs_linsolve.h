@@ -103,7 +103,7 @@ const char *bs_lin_kind_name(bs_lin_kind k);
  * (row-major) into Mi (row-major): the inverse of D's symmetric part, the
  * pseudo-inverse of its absolute value, or the identity; returns 0, 1 or 2
  * for those. Shared with the
- * petsc backend's point-block Jacobi (dist/bs_dlinsolve.h). Nothing
+ * petsc backend's point-block Jacobi (petsc/bs_dlinsolve.h). Nothing
  * allocates or fails. */
 int bs_linsolve_block_inverse(const double D[9], double Mi[9]);
 

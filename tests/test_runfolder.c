@@ -1,4 +1,4 @@
-/* The run folder (sim/bs_runfolder.h) written and read back by the library:
+/* The run folder (runfolder/bs_runfolder.h) written and read back by the library:
  * state.bin holds the simulation's x and v bit for bit, frames.csv a row per
  * frame at its time, summary.txt the solves/step and failed count that
  * bs_summary_format wrote; a state.bin that is not one (wrong magic, unknown

@@ -1,4 +1,4 @@
-/* Write failures of a run folder (sim/bs_runfolder.h): every output file
+/* Write failures of a run folder (runfolder/bs_runfolder.h): every output file
  * pointed at /dev/full ends the run with BS_EIO and a message naming the file
  * and the OS reason. Appended files (frames.csv, stats.csv, state.bin,
  * qoi.csv) are opened by bs_runfolder_open: their descriptor is then swapped

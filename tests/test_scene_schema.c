@@ -1,4 +1,4 @@
-/* The scene schema table (sim/scene_schema.c) against everything that must
+/* The scene schema table (scene/scene_schema.c) against everything that must
  * agree with it: the published JSON Schema (data/scene.schema.json, byte for
  * byte), the loader (types, ranges, required keys, allowed strings, each
  * tried key by key on a scene that holds every section), the defaults of

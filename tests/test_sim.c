@@ -1,4 +1,4 @@
-/* The simulation library's own entry points (sim/bs_scene.h, sim/bs_sim.h):
+/* The simulation library's own entry points (scene/bs_scene.h, sim/bs_sim.h):
  * a scene built in C is the scene of the same JSON, bit for bit;
  * bs_scene_validate names the key of a bad value; bs_sim_run's callback
  * contract (frames 0..frames at exactly f / fps, a nonzero return stops). */

@@ -8,7 +8,7 @@
 
 #include <cJSON.h>
 
-#include "bs_fields.h"
+#include "bs_field_names.h"
 #include "bs_scene.h"
 #include "json_print.h"
 #include "outfile.h"

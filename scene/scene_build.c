@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_fields.h"
+#include "bs_field_names.h"
 #include "bs_scene.h"
 #include "scene_internal.h"
 

@@ -57,7 +57,6 @@ extern "C" {
 #endif
 
 #define BS_MAX_NAME 256
-#define BS_MAX_PATH 1024
 /* Limits of a scene that can run (refused above them, naming the key):
  * time.fps in [BS_SCENE_MIN_FPS, BS_SCENE_MAX_FPS]; time.steps_per_frame (or
  * the count a time.dt gives) at most BS_SCENE_MAX_STEPS_PER_FRAME; frames x
@@ -181,7 +180,7 @@ typedef struct bs_scene {
                            /* bs_scene_validate set it                             */
   bs_integrator_opts solver;
   bs_scene_mode mode;
-  bs_scene_backend backend; /* solver.backend: serial [default] or petsc (dist/) */
+  bs_scene_backend backend; /* solver.backend: serial [default] or petsc (petsc/) */
   int load_steps;
   int project_hessian;     /* bs_psd_mode of the elastic Hessian                */
   double gravity[3];
@@ -199,7 +198,7 @@ typedef struct bs_scene {
   int checkpoint_every;    /* frames between checkpoints (0: none; bs_runfolder.h) */
   int stats_csv;
   int states;              /* write state.bin (x, v every frame)                */
-  uint32_t out_fields;     /* output.fields: a set of bs_field bits (bs_fields.h) */
+  uint32_t out_fields;     /* output.fields: a set of bs_field bits (bs_field_names.h) */
   int out_compress;        /* output.compress: zlib-compressed VTU frames       */
 } bs_scene;
 

@@ -1,11 +1,11 @@
-/* field_names.c — the names of the output fields (bs_fields.h) and the scene
+/* field_names.c — the names of the output fields (bs_field_names.h) and the scene
  * key output.fields parsed into a set, once. */
 #include <stdio.h>
 #include <string.h>
 
 #include <cJSON.h>
 
-#include "bs_fields.h"
+#include "bs_field_names.h"
 #include "fields_json.h"
 
 const char *const bs_field_names_[BS_FIELD_COUNT + 1] = {

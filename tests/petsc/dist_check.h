@@ -1,4 +1,4 @@
-/* dist_check.h — checks for the MPI tests of dist/ (plain C, no Criterion).
+/* dist_check.h — checks for the MPI tests of petsc/ (plain C, no Criterion).
  *
  * CHECK(cond, fmt, ...) records a failure on this rank (printed with the rank,
  * file and line); CHECK_REL(a, b, tol, what) checks |a - b| <= tol max(|a|,

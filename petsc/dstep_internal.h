@@ -1,4 +1,4 @@
-/* dstep_internal.h — private to dist/: the distributed integrator's state,
+/* dstep_internal.h — private to petsc/: the distributed integrator's state,
  * shared by dstep.c (creation, the objective) and dstep_run.c (the solves). */
 #ifndef BS_DSTEP_INTERNAL_H
 #define BS_DSTEP_INTERNAL_H

@@ -1,4 +1,4 @@
-/* dmesh_internal.h — private to dist/: the steps of building a bs_dmesh. */
+/* dmesh_internal.h — private to petsc/: the steps of building a bs_dmesh. */
 #ifndef BS_DMESH_INTERNAL_H
 #define BS_DMESH_INTERNAL_H
 

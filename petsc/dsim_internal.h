@@ -1,4 +1,4 @@
-/* dsim_internal.h — private to dist/: the parts of bs_dsim_create that live
+/* dsim_internal.h — private to petsc/: the parts of bs_dsim_create that live
  * in dsim_obstacles.c. */
 #ifndef BS_DSIM_INTERNAL_H
 #define BS_DSIM_INTERNAL_H

@@ -1,4 +1,4 @@
-/* outfile.h — checked output files (internal to sim/): the one place where a
+/* outfile.h — checked output files (internal to bigstep: not installed): the one place where a
  * run folder's writes are checked.
  *
  * Every write's failure is kept with the errno of the first failure and
@@ -20,7 +20,6 @@
 #include <stdio.h>
 
 #include "bs_base.h"
-#include "bs_scene.h" /* BS_MAX_PATH */
 
 #define BS_TMP_SUFFIX ".tmp"
 

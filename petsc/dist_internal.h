@@ -1,4 +1,4 @@
-/* dist_internal.h — private to dist/: turning a PETSc error code into a
+/* dist_internal.h — private to petsc/: turning a PETSc error code into a
  * bigstep status with a message. */
 #ifndef BS_DIST_INTERNAL_H
 #define BS_DIST_INTERNAL_H

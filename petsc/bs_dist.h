@@ -1,7 +1,7 @@
 /* bs_dist.h — the distributed backend's process set-up: PETSc and MPI.
  *
  * Conventions
- *  - Every function of dist/ is collective over PETSC_COMM_WORLD unless it
+ *  - Every function of petsc/ is collective over PETSC_COMM_WORLD unless it
  *    says otherwise, and returns BS_OK (0) or a negative BS_E* code with the
  *    bs_error filled; a PETSc error becomes BS_EINTERNAL (or the code named)
  *    with PETSc's message and the call that failed. PETSc's own error printing

@@ -1,5 +1,5 @@
 /* fields_json.h — the scene loader's hook for output.fields (private: not
- * installed; the public names and sets are in bs_fields.h). */
+ * installed; the public names and sets are in bs_field_names.h). */
 #ifndef BS_FIELDS_JSON_H
 #define BS_FIELDS_JSON_H
 
