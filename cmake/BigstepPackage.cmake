@@ -13,40 +13,75 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-# bs_*.h files of the library folders that are not installed (paths from the
-# source dir). Headers not named bs_*.h (mesh/mesh_internal.h,
-# solver/minimize_impl.h, physics/polar_avx2.h) are private by their name.
-#   shim/bs_shim.h   the C bridge to the C++ of shim/, used inside mesh/ and
-#                    collision/ only; no public header includes it.
-set(BS_PRIVATE_HEADERS shim/bs_shim.h)
+# The installed headers: bigstep's public API, listed here and nowhere else.
+# The API proper: base (errors, limits), scene, sim (the simulation, its
+# fields, forces, QoIs, memory estimate), terms for user energy terms,
+# mesh, runfolder, study. With them the headers whose types they expose:
+# materials, the fem and the step options (physics/), the block matrix user
+# terms assemble into and the minimizer's options (solver/), obstacles and
+# level sets (collision/). Every other header is internal: not installed,
+# its functions not exported (the version script below); headers not named
+# bs_*.h are private by their name.
+set(BS_PUBLIC_HEADERS
+    base/bs_base.h base/bs_limits.h
+    scene/bs_scene.h scene/bs_field_names.h
+    sim/bs_sim.h sim/bs_fields.h sim/bs_forces.h sim/bs_qoi.h sim/bs_memory.h
+    physics/bs_terms.h physics/bs_material.h physics/bs_fem.h physics/bs_step.h
+    solver/bs_bsr.h solver/bs_minimize.h solver/bs_linsolve.h solver/bs_amg.h
+    collision/bs_obstacles.h collision/bs_levelset.h
+    mesh/bs_mesh.h mesh/bs_vtu_read.h
+    runfolder/bs_runfolder.h
+    study/bs_study.h)
+foreach(_h IN ITEMS runfolder/bs_audit.h)
+  if(EXISTS ${PROJECT_SOURCE_DIR}/${_h}) # a header whose module is landing
+    list(APPEND BS_PUBLIC_HEADERS ${_h})
+  endif()
+endforeach()
 
 get_property(BS_LIBRARIES GLOBAL PROPERTY BS_LIBRARIES)
 
-# The objects, the public headers and the folders they come from.
+# The objects of the folder libraries.
 set(_bs_objects)
-set(_bs_headers)
-set(_bs_header_names)
 foreach(_lib IN LISTS BS_LIBRARIES)
   get_target_property(_type ${_lib} TYPE)
   if(_type STREQUAL "STATIC_LIBRARY")
     list(APPEND _bs_objects $<TARGET_OBJECTS:${_lib}>)
   endif()
-  get_target_property(_dir ${_lib} SOURCE_DIR)
-  file(GLOB _hdrs CONFIGURE_DEPENDS ${_dir}/bs_*.h)
-  list(SORT _hdrs)
-  foreach(_h IN LISTS _hdrs)
-    file(RELATIVE_PATH _rel ${PROJECT_SOURCE_DIR} ${_h})
-    get_filename_component(_name ${_h} NAME)
-    if(_rel IN_LIST BS_PRIVATE_HEADERS)
-      continue()
-    endif()
-    if(_name IN_LIST _bs_header_names)
-      message(FATAL_ERROR "bigstep: two public headers named ${_name}; include/bigstep/ is flat")
-    endif()
-    list(APPEND _bs_headers ${_h})
-    list(APPEND _bs_header_names ${_name})
+endforeach()
+
+# The public headers (absolute paths, names) and the names they declare:
+# every bs_ identifier written in them (functions, data, types, macros) is
+# exported by libbigstep.so; internal names (bs__x, and everything declared
+# only in internal headers) are local.
+set(_bs_headers)
+set(_bs_header_names)
+set(_bs_api_names)
+foreach(_rel IN LISTS BS_PUBLIC_HEADERS)
+  set(_h ${PROJECT_SOURCE_DIR}/${_rel})
+  if(NOT EXISTS ${_h})
+    message(FATAL_ERROR "bigstep: the public header ${_rel} does not exist (cmake/BigstepPackage.cmake)")
+  endif()
+  get_filename_component(_name ${_h} NAME)
+  if(_name IN_LIST _bs_header_names)
+    message(FATAL_ERROR "bigstep: two public headers named ${_name}; include/bigstep/ is flat")
+  endif()
+  list(APPEND _bs_headers ${_h})
+  list(APPEND _bs_header_names ${_name})
+  set_property(DIRECTORY ${PROJECT_SOURCE_DIR} APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${_h})
+  file(STRINGS ${_h} _lines REGEX "bs_[a-z0-9]")
+  foreach(_l IN LISTS _lines)
+    string(REGEX MATCHALL "bs_[a-z0-9][a-z0-9_]*" _ids "${_l}")
+    list(APPEND _bs_api_names ${_ids})
   endforeach()
 endforeach()
+list(REMOVE_DUPLICATES _bs_api_names)
+list(SORT _bs_api_names)
+set(_bs_map "/* libbigstep.so's exports (written by cmake/BigstepPackage.cmake from the\n * bs_ names of the public headers): the API, nothing internal. */\n{\n  global:\n")
+foreach(_n IN LISTS _bs_api_names)
+  string(APPEND _bs_map "    ${_n};\n")
+endforeach()
+string(APPEND _bs_map "  local: *;\n};\n")
+file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/bigstep.map CONTENT "${_bs_map}")
 
 # What the folder libraries link outside the project, in link order, read
 # from their link interfaces: every BS_LIBRARIES target and INTERFACE target
@@ -132,11 +167,11 @@ set_target_properties(bigstep_shared PROPERTIES OUTPUT_NAME bigstep EXPORT_NAME 
                       VERSION ${PROJECT_VERSION} SOVERSION ${_bs_soversion}
                       LINKER_LANGUAGE CXX INSTALL_RPATH_USE_LINK_PATH ON)
 # The shared library resolves every symbol it uses at its own link, and
-# exports only bs_* (bigstep.map).
+# exports only the names of the public headers (bigstep.map, above).
 target_link_libraries(bigstep_shared PRIVATE ${_bs_link_items} ${_bs_link_openmp})
 target_link_libraries(bigstep_shared INTERFACE m) # the public headers have inline math (bs_vec3.h)
-target_link_options(bigstep_shared PRIVATE -Wl,--version-script=${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
-set_property(TARGET bigstep_shared APPEND PROPERTY LINK_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/bigstep.map)
+target_link_options(bigstep_shared PRIVATE -Wl,--version-script=${PROJECT_BINARY_DIR}/bigstep.map)
+set_property(TARGET bigstep_shared APPEND PROPERTY LINK_DEPENDS ${PROJECT_BINARY_DIR}/bigstep.map)
 if(NOT BS_SANITIZE)
   target_link_options(bigstep_shared PRIVATE -Wl,--no-undefined)
 endif()

@@ -24,7 +24,7 @@ static int put_arrays(FILE *fp, const char *tag, int n, const bs_pvtu_array *a) 
   int bad = fprintf(fp, "    <%s>\n", tag) < 0;
   for (int i = 0; i < n; i++) {
     bad |= fprintf(fp, "      <PDataArray type=\"%s\" Name=\"", type_name(a[i].type)) < 0;
-    bad |= bs_vtk_put_escaped_(fp, a[i].name) < 0;
+    bad |= bs__vtk_put_escaped(fp, a[i].name) < 0;
     bad |= fprintf(fp, "\" NumberOfComponents=\"%d\"/>\n", a[i].ncomp) < 0;
   }
   bad |= fprintf(fp, "    </%s>\n", tag) < 0;
@@ -49,16 +49,16 @@ int bs_pvtu_write(const char *path, int n_point, const bs_pvtu_array *point, int
                     "<?xml version=\"1.0\"?>\n"
                     "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"%s\" header_type=\"UInt64\">\n"
                     "  <PUnstructuredGrid GhostLevel=\"0\">\n",
-                    bs_vtk_byte_order_()) < 0;
+                    bs__vtk_byte_order()) < 0;
   bad |= put_arrays(fp, "PPointData", n_point, point);
   bad |= put_arrays(fp, "PCellData", n_cell, cell);
   bad |= fputs("    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
                "    </PPoints>\n", fp) < 0;
   for (int i = 0; i < n_pieces && !bad; i++) {
     bad |= fputs("    <Piece Source=\"", fp) < 0;
-    bad |= bs_vtk_put_escaped_(fp, pieces[i]) < 0;
+    bad |= bs__vtk_put_escaped(fp, pieces[i]) < 0;
     bad |= fputs("\"/>\n", fp) < 0;
   }
   bad |= fputs("  </PUnstructuredGrid>\n</VTKFile>\n", fp) < 0;
-  return bs_vtk_close_(fp, bad, "pvtu", path, err);
+  return bs__vtk_close(fp, bad, "pvtu", path, err);
 }

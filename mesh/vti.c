@@ -31,7 +31,7 @@ int bs_vti_write(const bs_vti_grid *g, const char *path, bs_error *err) {
   const double *D = g->direction ? g->direction : I;
   const uint64_t count = (uint64_t)g->n[0] * (uint64_t)g->n[1] * (uint64_t)g->n[2];
   bs_vtk_blob b;
-  bs_vtk_blob_encode_(&b, g->values, 8 * count, 0, g->name, err);
+  bs__vtk_blob_encode(&b, g->values, 8 * count, 0, g->name, err);
   FILE *fp = fopen(path, "wb");
   if (!fp) {
     int e = errno;
@@ -45,16 +45,16 @@ int bs_vti_write(const bs_vti_grid *g, const char *path, bs_error *err) {
                     "  <ImageData WholeExtent=\"%s\" Origin=\"%.17g %.17g %.17g\" Spacing=\"%.17g %.17g %.17g\"\n"
                     "             Direction=\"%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\">\n"
                     "    <Piece Extent=\"%s\">\n      <PointData Scalars=\"",
-                    bs_vtk_byte_order_(), ext, g->origin[0], g->origin[1], g->origin[2], g->h, g->h, g->h, D[0],
+                    bs__vtk_byte_order(), ext, g->origin[0], g->origin[1], g->origin[2], g->h, g->h, g->h, D[0],
                     D[1], D[2], D[3], D[4], D[5], D[6], D[7], D[8], ext) < 0;
-  bad |= bs_vtk_put_escaped_(fp, g->name) < 0;
+  bad |= bs__vtk_put_escaped(fp, g->name) < 0;
   bad |= fputs("\">\n        <DataArray type=\"Float64\" Name=\"", fp) < 0;
-  bad |= bs_vtk_put_escaped_(fp, g->name) < 0;
+  bad |= bs__vtk_put_escaped(fp, g->name) < 0;
   bad |= fputs("\" format=\"appended\" offset=\"0\"/>\n      </PointData>\n      <CellData>\n      </CellData>\n"
                "    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n",
                fp) < 0;
-  bad |= bs_vtk_start_appended_(fp) < 0;
-  bad |= bs_vtk_blob_write_(fp, &b) < 0;
+  bad |= bs__vtk_start_appended(fp) < 0;
+  bad |= bs__vtk_blob_write(fp, &b) < 0;
   bad |= fputs("\n  </AppendedData>\n</VTKFile>\n", fp) < 0;
-  return bs_vtk_close_(fp, bad, "vti", path, err);
+  return bs__vtk_close(fp, bad, "vti", path, err);
 }

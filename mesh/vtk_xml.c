@@ -9,14 +9,14 @@
 
 #include "vtk_xml.h"
 
-const char *bs_vtk_byte_order_(void) {
+const char *bs__vtk_byte_order(void) {
   const uint16_t one = 1;
   unsigned char c;
   memcpy(&c, &one, 1);
   return c ? "LittleEndian" : "BigEndian";
 }
 
-int bs_vtk_put_escaped_(FILE *fp, const char *s) {
+int bs__vtk_put_escaped(FILE *fp, const char *s) {
   for (; *s; s++) {
     int r;
     switch (*s) {
@@ -64,7 +64,7 @@ static int zlib_encode(bs_vtk_blob *b, const char *name, bs_error *err) {
   return 0;
 }
 
-int bs_vtk_blob_encode_(bs_vtk_blob *b, const void *data, uint64_t bytes, int compress, const char *name,
+int bs__vtk_blob_encode(bs_vtk_blob *b, const void *data, uint64_t bytes, int compress, const char *name,
                         bs_error *err) {
   memset(b, 0, sizeof *b);
   b->data = data;
@@ -73,14 +73,14 @@ int bs_vtk_blob_encode_(bs_vtk_blob *b, const void *data, uint64_t bytes, int co
   return compress ? zlib_encode(b, name, err) : 0;
 }
 
-int bs_vtk_blob_write_(FILE *fp, const bs_vtk_blob *b) {
+int bs__vtk_blob_write(FILE *fp, const bs_vtk_blob *b) {
   if (b->z) return fwrite(b->z, 1, (size_t)b->encoded, fp) == (size_t)b->encoded ? 0 : -1;
   if (fwrite(&b->bytes, sizeof b->bytes, 1, fp) != 1) return -1;
   if (b->bytes && fwrite(b->data, 1, (size_t)b->bytes, fp) != (size_t)b->bytes) return -1;
   return 0;
 }
 
-void bs_vtk_blob_free_(bs_vtk_blob *b) {
+void bs__vtk_blob_free(bs_vtk_blob *b) {
   free(b->z);
   memset(b, 0, sizeof *b);
 }
@@ -92,7 +92,7 @@ void bs_vtk_blob_free_(bs_vtk_blob *b) {
  * binary bytes. Measured with python3-vtk and pvpython: files whose '_' lies
  * in the block after the tag's read (headers of 2 to 80 kB); with less
  * padding they fail. */
-int bs_vtk_start_appended_(FILE *fp) {
+int bs__vtk_start_appended(FILE *fp) {
   enum { BLOCK = 8192 };
   long at = ftell(fp);
   if (at < 0) return -1;
@@ -107,7 +107,7 @@ int bs_vtk_start_appended_(FILE *fp) {
   return fputc('_', fp) == EOF ? -1 : 0;
 }
 
-int bs_vtk_close_(FILE *fp, int bad, const char *what, const char *path, bs_error *err) {
+int bs__vtk_close(FILE *fp, int bad, const char *what, const char *path, bs_error *err) {
   int e = errno;
   if (ferror(fp)) bad = 1;
   if (fclose(fp) != 0) {

@@ -28,10 +28,10 @@
 #define BS_VTK_ZLIB_LEVEL 5
 
 /* "LittleEndian" or "BigEndian": this machine's. */
-const char *bs_vtk_byte_order_(void);
+const char *bs__vtk_byte_order(void);
 
 /* Writes s with &, <, >, " and ' escaped (for an attribute value); 0 or -1. */
-int bs_vtk_put_escaped_(FILE *fp, const char *s);
+int bs__vtk_put_escaped(FILE *fp, const char *s);
 
 /* One appended array: the payload and, when compressed, its encoding. */
 typedef struct bs_vtk_blob {
@@ -43,14 +43,14 @@ typedef struct bs_vtk_blob {
 
 /* Sets b for data (bytes long), compressing it with zlib when compress != 0.
  * `name` names the array in messages. */
-int bs_vtk_blob_encode_(bs_vtk_blob *b, const void *data, uint64_t bytes, int compress, const char *name,
+int bs__vtk_blob_encode(bs_vtk_blob *b, const void *data, uint64_t bytes, int compress, const char *name,
                         bs_error *err);
 
 /* Writes b's appended block; 0 or -1 (errno tells why). */
-int bs_vtk_blob_write_(FILE *fp, const bs_vtk_blob *b);
+int bs__vtk_blob_write(FILE *fp, const bs_vtk_blob *b);
 
 /* Frees b's encoding (b->z) and zeroes b. */
-void bs_vtk_blob_free_(bs_vtk_blob *b);
+void bs__vtk_blob_free(bs_vtk_blob *b);
 
 /* Writes the whitespace and the '_' that start the appended data, fp being
  * just after the <AppendedData encoding="raw"> tag: spaces up to the second
@@ -58,10 +58,10 @@ void bs_vtk_blob_free_(bs_vtk_blob *b);
  * (VTK's, meshio's, bigstep's), so that the binary bytes begin at least one
  * of VTK's 8192-byte read blocks after the block that holds the tag (why:
  * vtk_xml.c). 0 or -1. */
-int bs_vtk_start_appended_(FILE *fp);
+int bs__vtk_start_appended(FILE *fp);
 
 /* Closes fp; on a write error before (bad != 0) or at the close, removes the
  * file and returns BS_EIO naming `what` and path. */
-int bs_vtk_close_(FILE *fp, int bad, const char *what, const char *path, bs_error *err);
+int bs__vtk_close(FILE *fp, int bad, const char *what, const char *path, bs_error *err);
 
 #endif

@@ -77,7 +77,7 @@ static int ug_add(ugrid *g, int section, const char *name, const char *type, int
   }
   out_array *o = &g->a[g->n];
   *o = (out_array){.name = name, .type = type, .ncomp = ncomp, .section = section};
-  int st = bs_vtk_blob_encode_(&o->blob, data, bytes, g->compress, name, err);
+  int st = bs__vtk_blob_encode(&o->blob, data, bytes, g->compress, name, err);
   if (!st) g->n++;
   return st;
 }
@@ -117,7 +117,7 @@ static int ug_add_topology(ugrid *g, const double *x, int k, const int32_t *cell
 }
 
 static void ug_free(ugrid *g) {
-  for (int i = 0; i < g->n; i++) bs_vtk_blob_free_(&g->a[i].blob);
+  for (int i = 0; i < g->n; i++) bs__vtk_blob_free(&g->a[i].blob);
   free(g->a);
   free(g->buf);
   free(g->data);
@@ -127,13 +127,13 @@ static void ug_free(ugrid *g) {
 /* The XML of one DataArray. */
 static int put_array(FILE *fp, const out_array *a) {
   int bad = fprintf(fp, "        <DataArray type=\"%s\" Name=\"", a->type) < 0;
-  bad |= bs_vtk_put_escaped_(fp, a->name) < 0;
+  bad |= bs__vtk_put_escaped(fp, a->name) < 0;
   if (a->ncomp > 1) bad |= fprintf(fp, "\" NumberOfComponents=\"%d", a->ncomp) < 0;
   bad |= fprintf(fp, "\" format=\"appended\" offset=\"%llu\"/>\n", (unsigned long long)a->offset) < 0;
   return bad;
 }
 
-/* The XML header and the '_' marker (after bs_vtk_start_appended_'s
+/* The XML header and the '_' marker (after bs__vtk_start_appended's
  * padding), with the sections' tags. */
 static int put_header(FILE *fp, const ugrid *g) {
   static const char *const open[] = {"PointData", "CellData", "Points", "Cells"};
@@ -142,7 +142,7 @@ static int put_header(FILE *fp, const ugrid *g) {
                     "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"%s\" header_type=\"UInt64\"%s>\n"
                     "  <UnstructuredGrid>\n"
                     "    <Piece NumberOfPoints=\"%lld\" NumberOfCells=\"%lld\">\n",
-                    bs_vtk_byte_order_(), g->compress ? " compressor=\"vtkZLibDataCompressor\"" : "",
+                    bs__vtk_byte_order(), g->compress ? " compressor=\"vtkZLibDataCompressor\"" : "",
                     (long long)g->n_points, (long long)g->n_cells) < 0;
   int i = 0;
   for (int sec = SEC_POINT_DATA; sec <= SEC_CELLS; sec++) {
@@ -154,7 +154,7 @@ static int put_header(FILE *fp, const ugrid *g) {
     bad |= fprintf(fp, "      </%s>\n", open[sec]) < 0;
   }
   bad |= fputs("    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n", fp) < 0;
-  bad |= bs_vtk_start_appended_(fp) < 0;
+  bad |= bs__vtk_start_appended(fp) < 0;
   return bad;
 }
 
@@ -171,9 +171,9 @@ static int ug_write(ugrid *g, const char *what, const char *path, bs_error *err)
     return bs_error_set(err, BS_EIO, "write %s: cannot open '%s' for writing: %s", what, path, strerror(e));
   }
   int bad = put_header(fp, g);
-  for (int i = 0; i < g->n && !bad; i++) bad |= bs_vtk_blob_write_(fp, &g->a[i].blob);
+  for (int i = 0; i < g->n && !bad; i++) bad |= bs__vtk_blob_write(fp, &g->a[i].blob);
   bad |= fputs("\n  </AppendedData>\n</VTKFile>\n", fp) < 0;
-  return bs_vtk_close_(fp, bad, what, path, err);
+  return bs__vtk_close(fp, bad, what, path, err);
 }
 
 /* ---- tet meshes ------------------------------------------------------------ */
@@ -269,12 +269,12 @@ int bs_pvd_write(const char *path, int n, const double *times, const char *const
                  "<?xml version=\"1.0\"?>\n"
                  "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"%s\">\n"
                  "  <Collection>\n",
-                 bs_vtk_byte_order_()) < 0;
+                 bs__vtk_byte_order()) < 0;
   for (int i = 0; i < n && !bad; i++) {
     bad |= fprintf(fp, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"", times[i]) < 0;
-    bad |= bs_vtk_put_escaped_(fp, files[i]) < 0;
+    bad |= bs__vtk_put_escaped(fp, files[i]) < 0;
     bad |= fputs("\"/>\n", fp) < 0;
   }
   bad |= fputs("  </Collection>\n</VTKFile>\n", fp) < 0;
-  return bs_vtk_close_(fp, bad, "pvd", path, err);
+  return bs__vtk_close(fp, bad, "pvd", path, err);
 }

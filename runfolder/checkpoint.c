@@ -18,7 +18,7 @@
 #define CK_PREV 24  /* the previous-step guess: int64 have, double dt, uint64 mark */
 #define CK_HEAD (CK_HEADER + CK_TOTALS + CK_CARRY + CK_PREV)
 
-int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err) {
+int bs__scene_identity(const bs_scene *sc, char **text, bs_error *err) {
   bs_scene *c = malloc(sizeof *c);
   if (!c) return bs_error_set(err, BS_ENOMEM, "out of memory");
   *c = *sc; /* a shallow copy, only written out */

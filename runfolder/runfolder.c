@@ -71,7 +71,7 @@ static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error 
   return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
-int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
+int bs__runfolder_begin(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
   *out = NULL;
   if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
   bs_runfolder *rf = calloc(1, sizeof *rf);
@@ -80,7 +80,7 @@ int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
   rf->t_open = bs_seconds();
   char *id = NULL;
-  int st = bs_scene_identity_(s->scene, &id, err);
+  int st = bs__scene_identity(s->scene, &id, err);
   if (!st) rf->scene_hash = bs_fnv1a(BS_FNV_SEED, id, strlen(id));
   free(id);
   if (!st && s->scene->checkpoint_every < 0)
@@ -93,7 +93,7 @@ int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   return st;
 }
 
-int bs_runfolder_outputs_(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
+int bs__runfolder_outputs(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   int st = open_files(rf, s, append, err);
   if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
   if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(rf->dir, s, &rf->obstacles, err);
@@ -106,13 +106,13 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
   const bs_runfolder_opts none = {0};
   if (!o) o = &none;
   bs_runfolder *rf = NULL;
-  int st = bs_runfolder_begin_(dir, s, &rf, err);
+  int st = bs__runfolder_begin(dir, s, &rf, err);
   if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
   if (!st) st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
   if (!st) st = bs_scene_write_json_file(s->scene, p, err);
-  if (!st) st = bs_runfolder_outputs_(rf, s, 0, err);
+  if (!st) st = bs__runfolder_outputs(rf, s, 0, err);
   if (st) bs_runfolder_destroy(&rf);
   *out = rf;
   return st;
@@ -157,7 +157,7 @@ static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
  * over the old one: the collection is valid after every frame. */
-int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err) {
+int bs__runfolder_write_pvd(const bs_runfolder *rf, bs_error *err) {
   char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/frames.pvd", rf->dir);
   bs_tmp_path(tmp, sizeof tmp, p);
@@ -165,7 +165,7 @@ int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err) {
   return st ? st : bs_tmp_commit(tmp, p, err);
 }
 
-int bs_runfolder_add_vtu_(bs_runfolder *rf, const char *name, double t, bs_error *err) {
+int bs__runfolder_add_vtu(bs_runfolder *rf, const char *name, double t, bs_error *err) {
   if (rf->n_vtu == rf->cap_vtu) {
     int cap = rf->cap_vtu ? 2 * rf->cap_vtu : 64;
     char **nn = realloc(rf->vtu_names, sizeof(char *) * (size_t)cap);
@@ -188,8 +188,8 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   int st = bs_fields_write_vtu(rf->fields, s, tmp, err);
   if (!st) st = bs_tmp_commit(tmp, path, err);
   if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
-  if (!st) st = bs_runfolder_add_vtu_(rf, name, s->time, err);
-  return st ? st : bs_runfolder_write_pvd_(rf, err);
+  if (!st) st = bs__runfolder_add_vtu(rf, name, s->time, err);
+  return st ? st : bs__runfolder_write_pvd(rf, err);
 }
 
 int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {

@@ -24,21 +24,21 @@ struct bs_runfolder {
   bs_run_totals totals; /* of the frames written (the partial summary, checkpoints) */
   double t_open;        /* bs_seconds() at the open, less a resumed run's earlier wall time */
   int lock_fd;          /* holds the folder's lock (bs_runfolder_lock)       */
-  uint64_t scene_hash;  /* of bs_scene_identity_ (checkpoints)               */
+  uint64_t scene_hash;  /* of bs__scene_identity (checkpoints)               */
 };
 
 /* runfolder.c: a writer for dir with the folder made and locked and s's
  * scene hash (BS_EINPUT for a negative output.checkpoint_every); the outputs
  * of s opened (append: the files of a resumed run, at their end; else new,
  * with their headers); a VTU frame added to frames.pvd's list; frames.pvd. */
-int bs_runfolder_begin_(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
-int bs_runfolder_outputs_(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err);
-int bs_runfolder_add_vtu_(bs_runfolder *rf, const char *name, double t, bs_error *err);
-int bs_runfolder_write_pvd_(const bs_runfolder *rf, bs_error *err);
+int bs__runfolder_begin(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
+int bs__runfolder_outputs(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err);
+int bs__runfolder_add_vtu(bs_runfolder *rf, const char *name, double t, bs_error *err);
+int bs__runfolder_write_pvd(const bs_runfolder *rf, bs_error *err);
 
 /* The scene as the run folder compares it: its resolved JSON
  * (bs_scene_write_json) without output.dir and description, which may differ
  * between a run and its resumption. *text is malloc'd. */
-int bs_scene_identity_(const bs_scene *sc, char **text, bs_error *err);
+int bs__scene_identity(const bs_scene *sc, char **text, bs_error *err);
 
 #endif

@@ -32,8 +32,8 @@ static int same_scene(const char *dir, const bs_scene *sc, bs_error *err) {
   char *a = NULL, *b = NULL;
   int st = bs_scene_load(p, 0, NULL, &old, err);
   if (st) bs_error_prefix(err, "cannot continue the run in '%s'", dir);
-  if (!st) st = bs_scene_identity_(sc, &a, err);
-  if (!st) st = bs_scene_identity_(old, &b, err);
+  if (!st) st = bs__scene_identity(sc, &a, err);
+  if (!st) st = bs__scene_identity(old, &b, err);
   if (!st && strcmp(a, b)) {
     first_difference(a, b, diff, sizeof diff);
     st = bs_error_set(err, BS_EINPUT,
@@ -133,10 +133,10 @@ static int restore_collections(bs_runfolder *rf, const bs_sim *s, int K, bs_erro
     char name[64], p[BS_MAX_PATH + 80];
     snprintf(name, sizeof name, "frame_%05d.vtu", f);
     snprintf(p, sizeof p, "%s/%s", rf->dir, name);
-    if (access(p, F_OK) == 0) st = bs_runfolder_add_vtu_(rf, name, f / sc->fps, err);
+    if (access(p, F_OK) == 0) st = bs__runfolder_add_vtu(rf, name, f / sc->fps, err);
     if (!st) st = bs_obstacle_output_skip(rf->obstacles, f, f / sc->fps, err);
   }
-  if (!st) st = bs_runfolder_write_pvd_(rf, err);
+  if (!st) st = bs__runfolder_write_pvd(rf, err);
   if (!st) st = bs_obstacle_output_write_pvds(rf->obstacles, err);
   return st;
 }
@@ -171,7 +171,7 @@ static int cut_back(bs_runfolder *rf, const bs_sim *s, int K, bs_error *err) {
   if (!st && sc->n_qoi > 0) st = cut_rows(rf->dir, "qoi.csv", K, K + 1L, err);
   if (!st && sc->states) st = cut_state(rf->dir, s, K, err);
   if (!st) st = remove_later(rf->dir, K, err);
-  if (!st) st = bs_runfolder_outputs_(rf, s, 1, err);
+  if (!st) st = bs__runfolder_outputs(rf, s, 1, err);
   if (!st) st = restore_collections(rf, s, K, err);
   return st;
 }
@@ -181,7 +181,7 @@ int bs_runfolder_resume(const char *dir, bs_sim *s, const bs_runfolder_opts *o, 
   *out = NULL;
   bs_runfolder *rf = NULL;
   bs_checkpoint ck = {0};
-  int st = bs_runfolder_begin_(dir, s, &rf, err);
+  int st = bs__runfolder_begin(dir, s, &rf, err);
   if (!st) st = resumable(dir, s->scene, err);
   if (!st) st = bs_checkpoint_read(dir, s, rf->scene_hash, &ck, err);
   if (!st) st = bs_sim_restore(s, ck.frame, ck.x, ck.v, err);

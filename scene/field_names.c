@@ -8,7 +8,7 @@
 #include "bs_field_names.h"
 #include "fields_json.h"
 
-const char *const bs_field_names_[BS_FIELD_COUNT + 1] = {
+const char *const bs__field_names[BS_FIELD_COUNT + 1] = {
     [BS_FIELD_DISPLACEMENT] = "displacement", [BS_FIELD_VELOCITY] = "velocity",
     [BS_FIELD_SCRIPTED] = "scripted",         [BS_FIELD_BODY] = "body",
     [BS_FIELD_MATERIAL] = "material",         [BS_FIELD_DETF] = "detF",
@@ -19,17 +19,17 @@ const char *const bs_field_names_[BS_FIELD_COUNT + 1] = {
     [BS_FIELD_CONTACT_FORCE] = "contact_force",   [BS_FIELD_FRICTION_IMPULSE] = "friction_impulse",
     [BS_FIELD_COUNT] = NULL};
 
-const char *bs_field_name(bs_field f) { return (unsigned)f < BS_FIELD_COUNT ? bs_field_names_[f] : "unknown"; }
+const char *bs_field_name(bs_field f) { return (unsigned)f < BS_FIELD_COUNT ? bs__field_names[f] : "unknown"; }
 
 int bs_field_parse(const char *name, bs_field *out, bs_error *err) {
   for (int i = 0; name && i < BS_FIELD_COUNT; i++)
-    if (!strcmp(name, bs_field_names_[i])) {
+    if (!strcmp(name, bs__field_names[i])) {
       *out = (bs_field)i;
       return 0;
     }
   char list[512] = "";
   for (int i = 0; i < BS_FIELD_COUNT; i++) {
-    strncat(list, bs_field_names_[i], sizeof list - strlen(list) - 1);
+    strncat(list, bs__field_names[i], sizeof list - strlen(list) - 1);
     if (i + 1 < BS_FIELD_COUNT) strncat(list, ", ", sizeof list - strlen(list) - 1);
   }
   return bs_error_set(err, BS_EINPUT, "unknown field \"%s\" (allowed: %s)", name ? name : "(null)", list);
@@ -50,7 +50,7 @@ int bs_fields_parse_names(int n, const char *const *list, uint32_t *set, bs_erro
   return 0;
 }
 
-int bs_fields_parse_json_(const cJSON *arr, const char *file, uint32_t *set, bs_error *err) {
+int bs__fields_parse_json(const cJSON *arr, const char *file, uint32_t *set, bs_error *err) {
   if (!arr) return 0;
   if (!cJSON_IsArray(arr)) return bs_error_set(err, BS_EINPUT, "%s: output.fields: must be an array of field names", file);
   enum { MAX = 64 };

@@ -11,12 +11,12 @@
 
 /* The field names in bs_field order, NULL-terminated (the schema table's
  * choices for output.fields). */
-extern const char *const bs_field_names_[];
+extern const char *const bs__field_names[];
 
 /* output.fields (arr: the JSON value; NULL when absent: *set untouched) as a
  * set of bs_field bits. BS_EINPUT, naming file and the key path, for a value
  * that is not an array of strings or for an unknown name (listing the
  * allowed ones). */
-int bs_fields_parse_json_(const cJSON *arr, const char *file, uint32_t *set, bs_error *err);
+int bs__fields_parse_json(const cJSON *arr, const char *file, uint32_t *set, bs_error *err);
 
 #endif

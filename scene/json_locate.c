@@ -117,7 +117,7 @@ static int value(scan *s) {
   return err(s, "a value (an object, array, string, number, true, false or null)");
 }
 
-int bs_json_locate_(const char *text, const char **at, const char **what) {
+int bs__json_locate(const char *text, const char **at, const char **what) {
   scan s = {text, NULL, NULL, 0};
   if (!value(&s)) {
     ws(&s);

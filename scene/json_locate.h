@@ -11,6 +11,6 @@
  * what was expected there ("a value", "',' or '}'", ...). 0 when the text
  * is JSON as far as this check sees (*at, *what untouched). Nesting beyond
  * 1000 levels counts as an error. */
-int bs_json_locate_(const char *text, const char **at, const char **what);
+int bs__json_locate(const char *text, const char **at, const char **what);
 
 #endif

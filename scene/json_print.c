@@ -83,7 +83,7 @@ static void value(buf *b, const cJSON *v, int depth) {
   put(b, obj ? "}" : "]", 1);
 }
 
-char *bs_json_print_(const cJSON *v) {
+char *bs__json_print(const cJSON *v) {
   buf b = {0};
   value(&b, v, 0);
   put(&b, "\n", 1);

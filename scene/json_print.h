@@ -11,6 +11,6 @@
 /* The text of v ending in a newline, malloc'd (free it); NULL when out of
  * memory. Numbers and strings are printed as cJSON prints them (numbers to
  * 17 significant digits when 15 do not give the value back). */
-char *bs_json_print_(const cJSON *v);
+char *bs__json_print(const cJSON *v);
 
 #endif

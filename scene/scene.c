@@ -62,7 +62,7 @@ static const char *got(const cJSON *it, char *buf, size_t n) {
 
 /* The table's row of section.key (a key the parser reads must be there). */
 static const bs_schema_key *row(ctx *c, const char *where, const char *section, const char *key) {
-  const bs_schema_key *k = bs_schema_find_(section, key);
+  const bs_schema_key *k = bs__schema_find(section, key);
   if (!k) bs_error_set(c->err, BS_EINTERNAL, "%s: %s.%s: not in the schema table (a bug)", c->file, where, key);
   return k;
 }
@@ -75,7 +75,7 @@ static int unknown_key(ctx *c, const char *where, const char *bad, const char *c
     strncat(list, keys[i], sizeof list - strlen(list) - 1);
     if (i + 1 < n) strncat(list, ", ", sizeof list - strlen(list) - 1);
   }
-  const char *near = bs_schema_nearest_(bad, keys, n);
+  const char *near = bs__schema_nearest(bad, keys, n);
   if (near) snprintf(hint, sizeof hint, "; did you mean '%s'?", near);
   return fail(c, w, "unknown key%s (allowed here: %s)", hint, list);
 }
@@ -89,7 +89,7 @@ static int bad_choice(ctx *c, const char *w, const bs_schema_key *k, const char 
     snprintf(one, sizeof one, "%s\"%s\"", i == 0 ? "" : k->choices[i + 1] ? ", " : " or ", k->choices[i]);
     strncat(list, one, sizeof list - strlen(list) - 1);
   }
-  const char *near = bs_schema_nearest_(v, k->choices, -1);
+  const char *near = bs__schema_nearest(v, k->choices, -1);
   if (near) snprintf(hint, sizeof hint, "; did you mean \"%s\"?", near);
   return fail(c, w, "must be %s, got \"%.64s\"%s", list, v, hint);
 }
@@ -109,7 +109,7 @@ static int is_vec3(const cJSON *v) {
 static const char *type_misfit(const bs_schema_key *k, const cJSON *v, char *want, size_t n) {
   bs_schema_range r;
   char rt[96] = "";
-  if (bs_schema_range_(k, &r)) bs_schema_range_text_(&r, rt, sizeof rt);
+  if (bs__schema_range(k, &r)) bs__schema_range_text(&r, rt, sizeof rt);
   int ok = 1;
   switch (k->type) {
   case BS_SCHEMA_NUMBER:
@@ -126,7 +126,7 @@ static const char *type_misfit(const bs_schema_key *k, const cJSON *v, char *wan
   case BS_SCHEMA_IVEC3: ok = is_vec3(v), snprintf(want, n, "an array of 3 integers"); break;
   case BS_SCHEMA_NUM_OR_VEC3: ok = is_finite_number(v) || is_vec3(v), snprintf(want, n, "a number or an array of 3 numbers"); break;
   case BS_SCHEMA_NUM_OR_CHOICE:
-    ok = is_finite_number(v) || (cJSON_IsString(v) && bs_schema_choice_(k, v->valuestring) >= 0);
+    ok = is_finite_number(v) || (cJSON_IsString(v) && bs__schema_choice(k, v->valuestring) >= 0);
     snprintf(want, n, "a number%s%s or \"%s\"", rt[0] ? " " : "", rt, k->choices ? k->choices[0] : "");
     break;
   case BS_SCHEMA_OBJECT: ok = cJSON_IsObject(v), snprintf(want, n, "an object"); break;
@@ -149,7 +149,7 @@ static int check_value(ctx *c, const char *w, const bs_schema_key *k, const cJSO
     if (k->type != BS_SCHEMA_STRINGS || !k->choices) return 0;
     int i = 0;
     for (const cJSON *e = v->child; e; e = e->next, i++)
-      if (bs_schema_choice_(k, e->valuestring) < 0) {
+      if (bs__schema_choice(k, e->valuestring) < 0) {
         char wi[600];
         snprintf(wi, sizeof wi, "%s.%d", w, i);
         return bad_choice(c, wi, k, e->valuestring);
@@ -169,7 +169,7 @@ static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *s
   char g[96], w[512];
   if (!cJSON_IsObject(obj)) return fail(c, where[0] ? where : "(top level)", "must be an object, got %s", got(obj, g, sizeof g));
   const char *keys[128];
-  int n = bs_schema_section_keys_(section, keys, 128);
+  int n = bs__schema_section_keys(section, keys, 128);
   for (const cJSON *it = obj->child; it; it = it->next) {
     int ok = 0;
     for (int i = 0; i < n && !ok; i++) ok = !strcmp(it->string, keys[i]);
@@ -177,7 +177,7 @@ static int check_keys(ctx *c, const cJSON *obj, const char *where, const char *s
     join(w, sizeof w, where, it->string);
     for (const cJSON *p = obj->child; p != it; p = p->next)
       if (!strcmp(p->string, it->string)) return fail(c, w, "given twice");
-    int st = check_value(c, w, bs_schema_find_(section, it->string), it);
+    int st = check_value(c, w, bs__schema_find(section, it->string), it);
     if (st) return st;
   }
   return 0;
@@ -206,9 +206,9 @@ static int get_int(ctx *c, const cJSON *obj, const char *where, const char *sect
   int st = get_num(c, obj, where, key, k->required, &v);
   if (st) return st;
   bs_schema_range r;
-  bs_schema_range_(k, &r);
-  bs_schema_range_text_(&r, rt, sizeof rt);
-  if (v != floor(v) || !bs_schema_in_range_(&r, v) || fabs(v) > 2147483647.0)
+  bs__schema_range(k, &r);
+  bs__schema_range_text(&r, rt, sizeof rt);
+  if (v != floor(v) || !bs__schema_in_range(&r, v) || fabs(v) > 2147483647.0)
     return fail(c, w, "must be an integer in %s, got %.17g", rt, v);
   *out = (int)v;
   return 0;
@@ -234,25 +234,17 @@ static int get_choice_str(ctx *c, const cJSON *obj, const char *where, const cha
   if (!k) return BS_EINTERNAL;
   buf[0] = 0;
   int st = get_str(c, obj, where, key, k->required, buf, n);
-  if (st || !buf[0] || bs_schema_choice_(k, buf) >= 0) return st;
+  if (st || !buf[0] || bs__schema_choice(k, buf) >= 0) return st;
   char w[512];
   join(w, sizeof w, where, key);
   return bad_choice(c, w, k, buf);
-}
-
-/* bodies[].mesher as BS_SURFACE_* (bs_mesh_parse_mesher): *out untouched when absent. */
-static int get_mesher(ctx *c, const cJSON *obj, const char *where, int *out) {
-  char buf[64];
-  int st = get_choice_str(c, obj, where, "bodies[]", "mesher", buf, sizeof buf);
-  if (!st && buf[0]) bs_mesh_parse_mesher(buf, out);
-  return st;
 }
 
 /* The same as an index into the choices: *out untouched when absent. */
 static int get_choice(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key, int *out) {
   char buf[64];
   int st = get_choice_str(c, obj, where, section, key, buf, sizeof buf);
-  if (!st && buf[0]) *out = bs_schema_choice_(bs_schema_find_(section, key), buf);
+  if (!st && buf[0]) *out = bs__schema_choice(bs__schema_find(section, key), buf);
   return st;
 }
 
@@ -292,6 +284,64 @@ static int get_array(ctx *c, const cJSON *obj, const char *where, const char *ke
   if (!it) return 0;
   if (!cJSON_IsArray(it) || (non_empty && cJSON_GetArraySize(it) < 1))
     return fail(c, w, "must be a%s array, got %s", non_empty ? " non-empty" : "n", got(it, g, sizeof g));
+  return 0;
+}
+
+/* ---- sections ------------------------------------------------------------ */
+
+/* "box": its cells, integers in the table's range (an IVEC3 key). */
+static int get_ivec3(ctx *c, const cJSON *obj, const char *where, const bs_schema_key *k, int out[3]) {
+  double v[3];
+  int st = get_vec3(c, obj, where, k->key, k->required, v);
+  if (st || !cJSON_GetObjectItemCaseSensitive(obj, k->key)) return st;
+  bs_schema_range r;
+  char w[600], rt[96];
+  bs__schema_range(k, &r);
+  bs__schema_range_text(&r, rt, sizeof rt);
+  join(w, sizeof w, where, k->key);
+  for (int i = 0; i < 3; i++)
+    if (v[i] != floor(v[i]) || !bs__schema_in_range(&r, v[i]))
+      return fail(c, w, "element %d must be an integer in %s, got %.17g", i, rt, v[i]);
+  for (int i = 0; i < 3; i++) out[i] = (int)v[i];
+  return 0;
+}
+
+/* A number (the same for x, y, z) or an array of 3 (a NUM_OR_VEC3 key). */
+static int get_num_or_vec3(ctx *c, const cJSON *obj, const char *where, const bs_schema_key *k, double out[3]) {
+  const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, k->key);
+  if (!cJSON_IsNumber(it)) return get_vec3(c, obj, where, k->key, k->required, out);
+  out[0] = out[1] = out[2] = it->valuedouble;
+  return 0;
+}
+
+/* One key bound to a struct field (scene_schema.h), read into `field` as its
+ * type says; untouched when absent. */
+static int get_bound(ctx *c, const cJSON *obj, const char *where, const bs_schema_key *k, char *field) {
+  int *ip = (int *)(void *)field, idx = -1, st;
+  switch (k->type) {
+  case BS_SCHEMA_NUMBER: return get_num(c, obj, where, k->key, k->required, (double *)(void *)field);
+  case BS_SCHEMA_INTEGER: return get_int(c, obj, where, k->section, k->key, ip);
+  case BS_SCHEMA_BOOLEAN: return get_bool(c, obj, where, k->key, ip);
+  case BS_SCHEMA_VEC3: return get_vec3(c, obj, where, k->key, k->required, (double *)(void *)field);
+  case BS_SCHEMA_NUM_OR_VEC3: return get_num_or_vec3(c, obj, where, k, (double *)(void *)field);
+  case BS_SCHEMA_IVEC3: return get_ivec3(c, obj, where, k, ip);
+  case BS_SCHEMA_STRING:
+    if (!k->choices) return get_str(c, obj, where, k->key, k->required, field, k->size);
+    if (!(st = get_choice(c, obj, where, k->section, k->key, &idx)) && idx >= 0) *ip = bs__schema_choice_value(k, idx);
+    return st;
+  default: return fail(c, where, "%s: the schema binds a key of a type it cannot read (a bug)", k->key);
+  }
+}
+
+/* Every key of `section` bound to a field of the struct at base, in the
+ * table's order. */
+static int get_section(ctx *c, const cJSON *obj, const char *where, const char *section, void *base) {
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
+    if (!bs__schema_bound(k) || strcmp(k->section, section)) continue;
+    int st = get_bound(c, obj, where, k, (char *)base + k->offset);
+    if (st) return st;
+  }
   return 0;
 }
 
@@ -350,16 +400,10 @@ static int parse_linear(const char *name, int *out, bs_error *err) {
 /* ---- sections ------------------------------------------------------------ */
 
 static int parse_material(ctx *c, const cJSON *o, const char *where, bs_scene_material *m) {
-  int st, model = (int)m->model;
-  if ((st = check_keys(c, o, where, "bodies[].material")) ||
-      (st = get_enum(c, o, where, "bodies[].material", "model", parse_model, &model)))
-    return st;
-  m->model = (bs_model)model;
+  int st;
+  if ((st = check_keys(c, o, where, "bodies[].material"))) return st;
   m->rayleigh = 0;
-  if ((st = get_num(c, o, where, "youngs", 1, &m->youngs)) || (st = get_num(c, o, where, "poisson", 1, &m->poisson)) ||
-      (st = get_num(c, o, where, "density", 1, &m->density)) || (st = get_num(c, o, where, "rayleigh", 0, &m->rayleigh)))
-    return st;
-  return 0;
+  return get_section(c, o, where, "bodies[].material", m);
 }
 
 static int parse_script_keys(ctx *c, const cJSON *arr, const char *w, bs_scene_script *s) {
@@ -416,7 +460,7 @@ static int parse_body_materials(ctx *c, const cJSON *o, const char *where, bs_sc
   b->materials = calloc((size_t)nm, sizeof(bs_scene_material));
   if (!b->materials) return bs_error_set(c->err, BS_ENOMEM, "out of memory");
   b->n_materials = nm;
-  for (int i = 0; i < nm; i++) bs_scene_material_defaults_(&b->materials[i]);
+  for (int i = 0; i < nm; i++) bs__scene_material_defaults(&b->materials[i]);
   const cJSON *mat = cJSON_GetObjectItemCaseSensitive(o, "material");
   join(w, sizeof w, where, "material");
   if (!mat) return fail(c, w, "missing (an object with model, youngs, poisson, density is required)");
@@ -473,56 +517,20 @@ static int parse_body_scripts(ctx *c, const cJSON *o, const char *where, bs_scen
   return 0;
 }
 
-/* "box": {"cells": [nx, ny, nz] (integers in the table's range), "size"}. */
-static int parse_body_box(ctx *c, const cJSON *box, const char *w, bs_scene_body *b) {
-  int st;
-  double cells[3];
-  if ((st = check_keys(c, box, w, "bodies[].box")) || (st = get_vec3(c, box, w, "cells", 1, cells)) ||
-      (st = get_vec3(c, box, w, "size", 0, b->box_size)))
-    return st;
-  bs_schema_range r;
-  char wc[600], rt[96];
-  bs_schema_range_(bs_schema_find_("bodies[].box", "cells"), &r);
-  bs_schema_range_text_(&r, rt, sizeof rt);
-  snprintf(wc, sizeof wc, "%s.cells", w);
-  for (int k = 0; k < 3; k++) {
-    if (cells[k] != floor(cells[k]) || !bs_schema_in_range_(&r, cells[k]))
-      return fail(c, wc, "element %d must be an integer in %s, got %.17g", k, rt, cells[k]);
-    b->box_cells[k] = (int)cells[k];
-  }
-  return 0;
-}
-
 static int parse_body(ctx *c, const cJSON *o, const char *where, bs_scene_body *b) {
   int st;
   if ((st = check_keys(c, o, where, "bodies[]"))) return st;
-  if ((st = get_str(c, o, where, "mesh", 1, b->mesh, sizeof b->mesh))) return st;
+  bs__scene_body_defaults(b);
   char w[512];
-  bs_scene_body_defaults_(b);
   const cJSON *box = cJSON_GetObjectItemCaseSensitive(o, "box");
   join(w, sizeof w, where, "box");
+  if ((st = get_section(c, o, where, "bodies[]", b))) return st;
   if (strcmp(b->mesh, "box") == 0) {
     if (!box) return fail(c, w, "missing: \"mesh\": \"box\" needs \"box\": {\"cells\": [nx, ny, nz], \"size\": [lx, ly, lz]}");
-    if ((st = parse_body_box(c, box, w, b))) return st;
+    if ((st = check_keys(c, box, w, "bodies[].box")) || (st = get_section(c, box, w, "bodies[].box", b))) return st;
   } else if (box) {
     return fail(c, w, "only allowed with \"mesh\": \"box\"");
   }
-  int reorder = (int)b->reorder; /* the table's order: none, metis, rcm */
-  if ((st = get_num(c, o, where, "mesh_size", 0, &b->mesh_size)) ||
-      (st = get_num(c, o, where, "min_dihedral", 0, &b->min_dihedral)) ||
-      (st = get_int(c, o, where, "bodies[]", "refine", &b->refine)) ||
-      (st = get_bool(c, o, where, "close_holes", &b->close_holes)) || (st = get_mesher(c, o, where, &b->mesher)) ||
-      (st = get_choice(c, o, where, "bodies[]", "reorder", &reorder)))
-    return st;
-  b->reorder = (bs_order)reorder;
-  const cJSON *sc = cJSON_GetObjectItemCaseSensitive(o, "scale");
-  if (cJSON_IsNumber(sc)) b->scale[0] = b->scale[1] = b->scale[2] = sc->valuedouble;
-  else if ((st = get_vec3(c, o, where, "scale", 0, b->scale))) return st;
-  if ((st = get_vec3(c, o, where, "translate", 0, b->translate)) || (st = get_vec3(c, o, where, "rotate", 0, b->rotate)) ||
-      (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
-      (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
-    return st;
-
   if ((st = parse_body_materials(c, o, where, b)) || (st = parse_body_init(c, o, where, b))) return st;
   return parse_body_scripts(c, o, where, b);
 }
@@ -551,27 +559,10 @@ static int parse_obstacle_keys(ctx *c, const cJSON *o, const char *where, bs_sce
 }
 
 static int parse_obstacle(ctx *c, const cJSON *o, const char *where, bs_scene_obstacle *b) {
-  int st, shape = 0, collision = BS_COLLIDE_CONSTRAINT;
+  int st;
   if ((st = check_keys(c, o, where, "obstacles[]"))) return st;
-  bs_scene_obstacle_defaults_(b);
-  if ((st = get_enum(c, o, where, "obstacles[]", "shape", parse_shape, &shape))) return st;
-  b->shape = (bs_shape)shape;
-  if ((st = get_vec3(c, o, where, "normal", 0, b->normal)) || (st = get_num(c, o, where, "offset", 0, &b->offset)) ||
-      (st = get_vec3(c, o, where, "center", 0, b->center)) || (st = get_num(c, o, where, "radius", 0, &b->radius)) ||
-      (st = get_vec3(c, o, where, "half_extents", 0, b->half_extents)) ||
-      (st = get_vec3(c, o, where, "axis", 0, b->axis)) ||
-      (st = get_num(c, o, where, "half_height", 0, &b->half_height)) ||
-      (st = get_num(c, o, where, "major", 0, &b->major)) || (st = get_num(c, o, where, "minor", 0, &b->minor)) ||
-      (st = get_bool(c, o, where, "inside_out", &b->inside_out)) ||
-      (st = get_str(c, o, where, "file", 0, b->grid_file, sizeof b->grid_file)) ||
-      (st = get_num(c, o, where, "grid_h", 0, &b->grid_h)) ||
-      (st = get_enum(c, o, where, "obstacles[]", "collision", parse_collide, &collision)) ||
-      (st = get_num(c, o, where, "stiffness", 0, &b->stiffness)) ||
-      (st = get_num(c, o, where, "friction", 0, &b->friction)) ||
-      (st = get_vec3(c, o, where, "velocity", 0, b->velocity)) ||
-      (st = get_vec3(c, o, where, "angular_velocity", 0, b->angular_velocity)))
-    return st;
-  b->collision = (bs_collide_mode)collision;
+  bs__scene_obstacle_defaults(b);
+  if ((st = get_section(c, o, where, "obstacles[]", b))) return st;
   return parse_obstacle_keys(c, o, where, b);
 }
 
@@ -581,22 +572,14 @@ static int parse_self_collision(ctx *c, const cJSON *root, bs_scene *s) {
   if (!sc) return 0;
   if ((st = check_keys(c, sc, "self_collision", "self_collision"))) return st;
   s->self_collision = 1;
-  s->self_stiffness = 1e5;
-  s->self_friction = 0;
-  if ((st = get_num(c, sc, "self_collision", "stiffness", 0, &s->self_stiffness)) ||
-      (st = get_num(c, sc, "self_collision", "friction", 0, &s->self_friction)))
-    return st;
-  return 0;
+  return get_section(c, sc, "self_collision", "self_collision", s);
 }
 
 static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
   if (!t) return 0;
-  if ((st = check_keys(c, t, "time", "time")) || (st = get_num(c, t, "time", "fps", 0, &s->fps)) ||
-      (st = get_int(c, t, "time", "time", "frames", &s->frames)) ||
-      (st = get_int(c, t, "time", "time", "steps_per_frame", &s->steps_per_frame)))
-    return st;
+  if ((st = check_keys(c, t, "time", "time")) || (st = get_section(c, t, "time", "time", s))) return st;
   if (!(s->fps > 0)) return fail(c, "time.fps", "must be > 0, got %g", s->fps);
   double dt = 0;
   if ((st = get_num(c, t, "time", "dt", 0, &dt))) return st;
@@ -636,51 +619,12 @@ static int parse_sigma(ctx *c, const cJSON *so, bs_scene *s) {
   return 0;
 }
 
-/* The solver's string keys. */
-static int parse_solver_choices(ctx *c, const cJSON *so, bs_scene *s) {
-  int st, method = (int)s->solver.method, linear = (int)s->solver.min.linear;
-  int current = !s->solver.amg_at_rest, stat = s->mode == BS_MODE_STATIC, backend = (int)s->backend,
-      glob = (int)s->solver.min.globalization;
-  if ((st = get_enum(c, so, "solver", "solver", "method", parse_method, &method)) ||
-      (st = get_enum(c, so, "solver", "solver", "linear", parse_linear, &linear)) ||
-      (st = get_choice(c, so, "solver", "solver", "cg_precision", &s->solver.min.cg_single)) ||
-      (st = get_choice(c, so, "solver", "solver", "amg_matrix", &current)) ||
-      (st = get_choice(c, so, "solver", "solver", "cg_forcing", &s->solver.min.forcing_ew)) ||
-      (st = get_choice(c, so, "solver", "solver", "contact_hessian", &s->solver.min.convexify)) ||
-      (st = get_choice(c, so, "solver", "solver", "penalty_hessian", &s->solver.penalty_secant)) ||
-      (st = get_choice(c, so, "solver", "solver", "mode", &stat)) ||
-      (st = get_choice(c, so, "solver", "solver", "backend", &backend)) ||
-      (st = get_choice(c, so, "solver", "solver", "globalization", &glob)))
-    return st;
-  s->solver.min.globalization = (bs_globalization)glob;
-  s->backend = (bs_scene_backend)backend;
-  s->solver.method = (bs_method)method;
-  s->solver.min.linear = (bs_lin_kind)linear;
-  s->solver.amg_at_rest = !current;
-  s->mode = stat ? BS_MODE_STATIC : BS_MODE_DYNAMIC;
-  return 0;
-}
-
 static int parse_solver(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *so = cJSON_GetObjectItemCaseSensitive(root, "solver");
   if (!so) return 0;
-  if ((st = check_keys(c, so, "solver", "solver")) || (st = parse_solver_choices(c, so, s))) return st;
-  if ((st = get_num(c, so, "solver", "amg_rebuild_factor", 0, &s->solver.min.amg_rebuild_factor)) ||
-      (st = get_int(c, so, "solver", "solver", "amg_rebuild_every", &s->solver.min.amg_rebuild_every)) ||
-      (st = get_num(c, so, "solver", "tolerance", 0, &s->solver.min.tol)) || (st = parse_sigma(c, so, s)) ||
-      (st = get_num(c, so, "solver", "tr_radius", 0, &s->solver.min.tr_radius)) ||
-      (st = get_num(c, so, "solver", "rtol", 0, &s->solver.min.rtol)) ||
-      (st = get_num(c, so, "solver", "load_rtol", 0, &s->solver.min.load_rtol)) ||
-      (st = get_bool(c, so, "solver", "cg_downhill", &s->solver.min.cg_downhill)) ||
-      (st = get_int(c, so, "solver", "solver", "max_iterations", &s->solver.min.max_iter)) ||
-      (st = get_int(c, so, "solver", "solver", "newton_max_iterations", &s->solver.min.newton_max_iter)) ||
-      (st = get_int(c, so, "solver", "solver", "cg_max_iterations", &s->solver.min.cg_max_iter)) ||
-      (st = get_int(c, so, "solver", "solver", "newton_k", &s->solver.newton_k)) ||
-      (st = get_int(c, so, "solver", "solver", "load_steps", &s->load_steps)) ||
-      (st = get_choice(c, so, "solver", "solver", "project_hessian", &s->project_hessian)))
-    return st;
-  return 0;
+  if ((st = check_keys(c, so, "solver", "solver")) || (st = get_section(c, so, "solver", "solver", s))) return st;
+  return parse_sigma(c, so, s);
 }
 
 static int parse_bodies(ctx *c, const cJSON *root, bs_scene *s) {
@@ -716,28 +660,18 @@ static int parse_obstacles(ctx *c, const cJSON *root, bs_scene *s) {
 
 /* One quantity of interest: its keys, then the kind's own requirements. */
 static int parse_one_qoi(ctx *c, const cJSON *o, const char *where, bs_scene *s) {
-  int st, kind = 0, comp = 0, red = 0, term = BS_QOI_TOTAL;
-  char name[BS_MAX_NAME];
-  bs_scene_qoi *q;
-  if ((st = check_keys(c, o, where, "qoi[]")) || (st = get_str(c, o, where, "name", 1, name, sizeof name)) ||
-      (st = get_choice(c, o, where, "qoi[]", "quantity", &kind)) ||
-      (st = get_choice(c, o, where, "qoi[]", "component", &comp)) ||
-      (st = get_choice(c, o, where, "qoi[]", "reduce", &red)) || (st = get_choice(c, o, where, "qoi[]", "term", &term)))
-    return st;
+  int st;
+  bs_scene_qoi q0 = {0}, *q;
+  bs__scene_qoi_defaults(&q0);
+  if ((st = check_keys(c, o, where, "qoi[]")) || (st = get_section(c, o, where, "qoi[]", &q0))) return st;
   for (int i = 0; i < s->n_qoi; i++)
-    if (!strcmp(s->qoi[i].name, name)) return fail(c, where, "name '%s' is used by qoi.%d too", name, i);
-  if ((st = bs_scene_add_qoi(s, name, (bs_qoi_kind)kind, &q, c->err))) return st;
-  q->component = comp;
-  q->reduce = (bs_qoi_reduce)red;
-  q->energy = (bs_qoi_energy)term;
+    if (!strcmp(s->qoi[i].name, q0.name)) return fail(c, where, "name '%s' is used by qoi.%d too", q0.name, i);
+  if ((st = bs_scene_add_qoi(s, q0.name, q0.kind, &q, c->err))) return st;
+  *q = q0;
   q->has_at = cJSON_HasObjectItem(o, "at");
-  if ((st = get_int(c, o, where, "qoi[]", "body", &q->body)) || (st = get_int(c, o, where, "qoi[]", "obstacle", &q->obstacle)) ||
-      (st = get_str(c, o, where, "group", 0, q->group, sizeof q->group)) ||
-      (st = get_vec3(c, o, where, "at", 0, q->at)))
-    return st;
-  int kinematic = kind <= BS_QOI_VELOCITY;
+  int kinematic = q->kind <= BS_QOI_VELOCITY;
   if (kinematic && !!q->group[0] + q->has_at != 1) return fail(c, where, "give exactly one of \"group\" or \"at\"");
-  if (kind == BS_QOI_REACTION && !q->group[0]) return fail(c, where, "a reaction needs the scripted \"group\"");
+  if (q->kind == BS_QOI_REACTION && !q->group[0]) return fail(c, where, "a reaction needs the scripted \"group\"");
   return 0;
 }
 
@@ -757,13 +691,8 @@ static int parse_output(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *out = cJSON_GetObjectItemCaseSensitive(root, "output");
   if (!out) return 0;
-  if ((st = check_keys(c, out, "output", "output")) ||
-      (st = get_str(c, out, "output", "dir", 0, s->out_dir, sizeof s->out_dir)) ||
-      (st = get_int(c, out, "output", "output", "vtu_every", &s->vtu_every)) ||
-      (st = get_int(c, out, "output", "output", "checkpoint_every", &s->checkpoint_every)) ||
-      (st = get_bool(c, out, "output", "stats", &s->stats_csv)) || (st = get_bool(c, out, "output", "states", &s->states)) ||
-      (st = get_bool(c, out, "output", "compress", &s->out_compress)) ||
-      (st = bs_fields_parse_json_(cJSON_GetObjectItemCaseSensitive(out, "fields"), c->file, &s->out_fields, c->err)))
+  if ((st = check_keys(c, out, "output", "output")) || (st = get_section(c, out, "output", "output", s)) ||
+      (st = bs__fields_parse_json(cJSON_GetObjectItemCaseSensitive(out, "fields"), c->file, &s->out_fields, c->err)))
     return st;
   return 0;
 }
@@ -787,8 +716,7 @@ static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
     return st;
   if ((st = parse_time(c, root, s))) return st;
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
-  if ((st = parse_solver(c, root, s)) || (st = get_vec3(c, root, "", "gravity", 0, s->gravity)) ||
-      (st = get_num(c, root, "", "drag", 0, &s->drag)) || (st = parse_bodies(c, root, s)) ||
+  if ((st = parse_solver(c, root, s)) || (st = get_section(c, root, "", "", s)) || (st = parse_bodies(c, root, s)) ||
       (st = parse_obstacles(c, root, s)) || (st = parse_qoi(c, root, s)))
     return st;
   return parse_output(c, root, s);
@@ -892,7 +820,7 @@ static int resolve_files(bs_scene *s, bs_error *err) {
 static int malformed(const char *text, const char *at, const char *name, bs_error *err) {
   size_t len = strlen(text);
   const char *what = NULL;
-  if (!bs_json_locate_(text, &at, &what) && (!at || at < text || at > text + len)) at = text + len;
+  if (!bs__json_locate(text, &at, &what) && (!at || at < text || at > text + len)) at = text + len;
   int line = 1, col = 1;
   for (const char *p = text; p < at; p++) {
     if (*p == '\n') line++, col = 1;

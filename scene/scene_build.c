@@ -10,6 +10,7 @@
 #include "bs_field_names.h"
 #include "bs_scene.h"
 #include "scene_internal.h"
+#include "scene_schema.h"
 
 static const char *const shape_names[] = {"plane", "sphere", "box", "cylinder", "torus", "grid"};
 
@@ -26,61 +27,39 @@ int bs_shape_parse(const char *name, bs_shape *out, bs_error *err) {
   return bs_error_set(err, BS_EINPUT, "must be plane, sphere, box, cylinder, torus or grid, got \"%s\"", name);
 }
 
-void bs_scene_defaults_(bs_scene *s) {
-  s->fps = 24;
-  s->frames = 24;
-  s->steps_per_frame = 1;
-  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+/* The defaults are the schema table's (scene_schema.c); set here by hand are
+ * only what the table does not bind: the integrator's options that are no
+ * scene key, cg_sigma (a number or "auto"), the derived dt, the output
+ * fields and the box's cells (required with mesh "box"). */
+void bs__scene_defaults(bs_scene *s) {
   bs_integrator_opts_default(&s->solver);
-  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
+  static const char *const scene_sections[] = {"", "time", "solver", "self_collision", "output"};
+  for (int i = 0; i < 5; i++) bs__schema_defaults(scene_sections[i], s);
+  s->dt = 1.0 / (s->fps * s->steps_per_frame);
+  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
-  s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (README, Scenes) */
-  s->solver.penalty_secant = BS_PENALTY_SECANT_OBSTACLES; /* penalty_hessian "obstacles" (README, Scenes) */
-  s->mode = BS_MODE_DYNAMIC;
-  s->load_steps = 1;
-  s->gravity[0] = 0;
-  s->gravity[1] = -9.8;
-  s->gravity[2] = 0;
-  s->drag = 0;
-  s->vtu_every = 1;
-  s->checkpoint_every = 1;
-  s->stats_csv = 1;
   s->out_fields = BS_FIELDS_DEFAULT;
-  s->out_compress = 0; /* raw: faster to write (README, Output fields) */
 }
 
-void bs_scene_body_defaults_(bs_scene_body *b) {
+void bs__scene_body_defaults(bs_scene_body *b) {
+  bs__schema_defaults("bodies[]", b);
+  bs__schema_defaults("bodies[].box", b);
   b->box_cells[0] = b->box_cells[1] = b->box_cells[2] = 4;
-  b->box_size[0] = b->box_size[1] = b->box_size[2] = 1;
-  b->scale[0] = b->scale[1] = b->scale[2] = 1;
-  b->reorder = BS_ORDER_NONE;
-  b->min_dihedral = BS_MESH_MIN_DIHEDRAL;
   b->init = BS_INIT_REST;
   b->init_seed = 1;
 }
 
-void bs_scene_material_defaults_(bs_scene_material *m) {
-  m->model = BS_MODEL_FIXED_COROTATED;
-  m->rayleigh = 0;
-}
+void bs__scene_material_defaults(bs_scene_material *m) { bs__schema_defaults("bodies[].material", m); }
 
-void bs_scene_obstacle_defaults_(bs_scene_obstacle *b) {
-  b->normal[1] = 1;
-  b->axis[1] = 1;
-  b->radius = 0.5;
-  b->half_extents[0] = b->half_extents[1] = b->half_extents[2] = 0.5;
-  b->half_height = 0.5;
-  b->major = 1;
-  b->minor = 0.25;
-  b->collision = BS_COLLIDE_CONSTRAINT;
-  b->stiffness = 1e6;
-}
+void bs__scene_obstacle_defaults(bs_scene_obstacle *b) { bs__schema_defaults("obstacles[]", b); }
+
+void bs__scene_qoi_defaults(bs_scene_qoi *q) { bs__schema_defaults("qoi[]", q); }
 
 int bs_scene_create(bs_scene **out, bs_error *err) {
   *out = calloc(1, sizeof **out);
   if (!*out) return bs_error_set(err, BS_ENOMEM, "out of memory");
   snprintf((*out)->path, sizeof (*out)->path, "<scene>");
-  bs_scene_defaults_(*out);
+  bs__scene_defaults(*out);
   return 0;
 }
 
@@ -103,12 +82,12 @@ int bs_scene_add_body(bs_scene *s, const char *mesh, bs_scene_body **out, bs_err
   if (!b) return BS_ENOMEM;
   s->bodies = b;
   b += s->n_bodies;
-  bs_scene_body_defaults_(b);
+  bs__scene_body_defaults(b);
   snprintf(b->mesh, sizeof b->mesh, "%s", mesh);
   b->materials = calloc(1, sizeof *b->materials);
   if (!b->materials) return bs_error_set(err, BS_ENOMEM, "out of memory");
   b->n_materials = 1;
-  bs_scene_material_defaults_(&b->materials[0]);
+  bs__scene_material_defaults(&b->materials[0]);
   s->n_bodies++;
   *out = b;
   return 0;
@@ -166,7 +145,7 @@ int bs_scene_add_obstacle(bs_scene *s, bs_shape shape, bs_scene_obstacle **out, 
   if (!o) return BS_ENOMEM;
   s->obstacles = o;
   o += s->n_obstacles++;
-  bs_scene_obstacle_defaults_(o);
+  bs__scene_obstacle_defaults(o);
   o->shape = shape;
   *out = o;
   return 0;
@@ -182,7 +161,8 @@ int bs_scene_add_qoi(bs_scene *s, const char *name, bs_qoi_kind kind, bs_scene_q
   if (!q) return BS_ENOMEM;
   s->qoi = q;
   q += s->n_qoi++;
-  *q = (bs_scene_qoi){.kind = kind, .reduce = BS_QOI_MEAN, .energy = BS_QOI_TOTAL};
+  bs__scene_qoi_defaults(q);
+  q->kind = kind;
   snprintf(q->name, sizeof q->name, "%s", name);
   *out = q;
   return 0;

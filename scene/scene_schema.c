@@ -3,10 +3,12 @@
  * scene_build.c sets (test_scene_schema.c compares them with a resolved
  * scene); the ranges are the ones the loader and scene_check.c enforce. */
 #include <ctype.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_scene.h"
 #include "fields_json.h"
 #include "scene_schema.h"
 
@@ -17,16 +19,24 @@
 #define BOOL BS_SCHEMA_BOOLEAN
 #define VEC3 BS_SCHEMA_VEC3
 #define ZERO3 "[0, 0, 0]"
+/* The struct field a key is bound to (scene_schema.h), by section. */
+#define BIND(T, m) .offset = offsetof(T, m), .size = sizeof(((T *)0)->m)
+#define SC(m) BIND(bs_scene, m)
+#define BD(m) BIND(bs_scene_body, m)
+#define MT(m) BIND(bs_scene_material, m)
+#define OB(m) BIND(bs_scene_obstacle, m)
+#define QO(m) BIND(bs_scene_qoi, m)
+#define VALUES(...) .values = ((const int[]){__VA_ARGS__})
 
-const bs_schema_key bs_schema_keys_[] = {
+const bs_schema_key bs__schema_keys[] = {
     /* ---- the top level ---- */
     {"", "$schema", STR, .doc = "the JSON Schema this file follows (for editors; the loader ignores it)"},
     {"", "description", STR, .doc = "free text"},
     {"", "time", BS_SCHEMA_OBJECT, .sub = "time", .doc = "frames and time steps"},
     {"", "solver", BS_SCHEMA_OBJECT, .sub = "solver", .doc = "the integrator and its linear solver"},
-    {"", "gravity", VEC3, .def = "[0, -9.8, 0]", .doc = "gravitational acceleration (m/s^2)"},
+    {"", "gravity", VEC3, .def = "[0, -9.8, 0]", SC(gravity), .doc = "gravitational acceleration (m/s^2)"},
     {"", "drag", NUM, .range = "[0, )", .def = "0",
-     .doc = "simple drag coefficient k (1/s) of k/(2 dt) (x - x_n)^T M (x - x_n)"},
+     SC(drag), .doc = "simple drag coefficient k (1/s) of k/(2 dt) (x - x_n)^T M (x - x_n)"},
     {"", "bodies", BS_SCHEMA_ARRAY, 1, .sub = "bodies[]", .range = "[1, )", .doc = "the deformable bodies"},
     {"", "obstacles", BS_SCHEMA_ARRAY, .sub = "obstacles[]", .doc = "collision objects as level sets"},
     {"", "self_collision", BS_SCHEMA_OBJECT, .sub = "self_collision",
@@ -35,109 +45,109 @@ const bs_schema_key bs_schema_keys_[] = {
     {"", "qoi", BS_SCHEMA_ARRAY, .sub = "qoi[]", .doc = "quantities of interest, written per frame to qoi.csv"},
 
     /* ---- time ---- */
-    {"time", "fps", NUM, .range = "[1e-9, 1e9]", .def = "24", .doc = "frames per second"},
-    {"time", "frames", INT, .range = "[0, 10000000]", .def = "24", .doc = "frames to simulate"},
-    {"time", "steps_per_frame", INT, .range = "[1, 1000000]", .def = "1", .doc = "time steps per frame"},
+    {"time", "fps", NUM, .range = "[1e-9, 1e9]", .def = "24", SC(fps), .doc = "frames per second"},
+    {"time", "frames", INT, .range = "[0, 10000000]", .def = "24", SC(frames), .doc = "frames to simulate"},
+    {"time", "steps_per_frame", INT, .range = "[1, 1000000]", .def = "1", SC(steps_per_frame), .doc = "time steps per frame"},
     {"time", "dt", NUM, .range = "(0, )",
      .doc = "time step (s) instead of steps_per_frame; 1/(fps dt) must be a whole number"},
 
     /* ---- solver ---- */
     {"solver", "method", STR, .choices = CHOICES("optimization", "newton", "newton_k"), .def = "\"optimization\"",
-     .doc = "optimization (the paper's integrator), newton (the baseline), newton_k (k Newton steps)"},
+     SC(solver.method), .doc = "optimization (the paper's integrator), newton (the baseline), newton_k (k Newton steps)"},
     {"solver", "linear", STR, .choices = CHOICES("cg", "pcg", "amg", "cholmod"), .def = "\"cg\"",
-     .doc = "linear solver of the Newton steps"},
-    {"solver", "tolerance", NUM, .range = "(0, )", .def = "0.001", .doc = "tau on ||grad E|| (N)"},
+     SC(solver.min.linear), VALUES(BS_LIN_CG, BS_LIN_PCG, BS_LIN_AMG, BS_LIN_CHOLMOD), .doc = "linear solver of the Newton steps"},
+    {"solver", "tolerance", NUM, .range = "(0, )", .def = "0.001", SC(solver.min.tol), .doc = "tau on ||grad E|| (N)"},
     {"solver", "rtol", NUM, .range = "[0, 1)", .def = "0",
-     .doc = "also converged when ||grad E|| < rtol x ||grad E|| at the step's initial guess (0: off)"},
+     SC(solver.min.rtol), .doc = "also converged when ||grad E|| < rtol x ||grad E|| at the step's initial guess (0: off)"},
     {"solver", "load_rtol", NUM, .range = "[0, 1)", .def = "0",
-     .doc = "also converged when ||grad E|| < load_rtol x the external load's norm (gravity, N; 0: off)"},
-    {"solver", "max_iterations", INT, .range = "[1, 100000000]", .def = "500", .doc = "Newton iterations per step"},
+     SC(solver.min.load_rtol), .doc = "also converged when ||grad E|| < load_rtol x the external load's norm (gravity, N; 0: off)"},
+    {"solver", "max_iterations", INT, .range = "[1, 100000000]", .def = "500", SC(solver.min.max_iter), .doc = "Newton iterations per step"},
     {"solver", "newton_max_iterations", INT, .range = "[1, 100000000]", .def = "50",
-     .doc = "method newton: iterations per step (it also stops as soon as it diverges)"},
+     SC(solver.min.newton_max_iter), .doc = "method newton: iterations per step (it also stops as soon as it diverges)"},
     {"solver", "cg_max_iterations", INT, .range = "[0, 100000000]", .def = "0",
-     .doc = "Krylov iterations per solve; 0: 2 x free dofs + 100"},
+     SC(solver.min.cg_max_iter), .doc = "Krylov iterations per solve; 0: 2 x free dofs + 100"},
     {"solver", "newton_k", INT, .range = "[1, 1000000]", .def = "1",
-     .doc = "k of newton_k (1: linearized backward Euler)"},
+     SC(solver.newton_k), .doc = "k of newton_k (1: linearized backward Euler)"},
     {"solver", "backend", STR, .choices = CHOICES("serial", "petsc"), .def = "\"serial\"",
-     .doc = "serial: this process; petsc: distributed over MPI ranks (mpirun -np N bigstep run SCENE)"},
+     SC(backend), .doc = "serial: this process; petsc: distributed over MPI ranks (mpirun -np N bigstep run SCENE)"},
     {"solver", "mode", STR, .choices = CHOICES("dynamic", "static"), .def = "\"dynamic\"",
-     .doc = "dynamic, or static (minimize the potential energy alone)"},
-    {"solver", "load_steps", INT, .range = "[1, 100000]", .def = "1", .doc = "load increments of a static solve"},
+     SC(mode), .doc = "dynamic, or static (minimize the potential energy alone)"},
+    {"solver", "load_steps", INT, .range = "[1, 100000]", .def = "1", SC(load_steps), .doc = "load increments of a static solve"},
     {"solver", "project_hessian", STR, .choices = CHOICES("none", "all", "inverted", "auto"), .def = "\"none\"",
-     .doc = "definiteness fix of the tets' elastic Hessians: none, all (PSD projection), inverted (det F <= 0) "
+     SC(project_hessian), .doc = "definiteness fix of the tets' elastic Hessians: none, all (PSD projection), inverted (det F <= 0) "
             "only, auto (inverted where mu dt^2 / (rho h^2) >= 10)"},
     {"solver", "cg_sigma", BS_SCHEMA_NUM_OR_CHOICE, .choices = CHOICES("auto"), .range = "(0, )", .def = "\"auto\"",
      .doc = "sigma of the CG tolerance min(1/2, sigma sqrt(max(||grad E||, tau))), or auto (unitless)"},
     {"solver", "cg_sigma_scale", NUM, .range = "(0, )", .def = "1", .doc = "c of cg_sigma auto"},
     {"solver", "cg_forcing", STR, .choices = CHOICES("paper", "eisenstat_walker", "adaptive"), .def = "\"adaptive\"",
-     .doc = "CG forcing terms: the paper's, or also capped by Eisenstat and Walker's choice 2 (always, or "
+     SC(solver.min.forcing_ew), .doc = "CG forcing terms: the paper's, or also capped by Eisenstat and Walker's choice 2 (always, or "
             "adaptive: after a full Newton step)"},
     {"solver", "globalization", STR, .choices = CHOICES("line_search", "trust_region"), .def = "\"line_search\"",
-     .doc = "how a step is found from the Newton direction: the paper's line search, or Steihaug's CG in a trust "
+     SC(solver.min.globalization), .doc = "how a step is found from the Newton direction: the paper's line search, or Steihaug's CG in a trust "
             "region (follows negative curvature; linear cg, pcg or amg)"},
     {"solver", "tr_radius", NUM, .range = "(0, )", .def = "0.1",
-     .doc = "trust_region: the first radius of each step's solve, as an RMS displacement per free vertex (m)"},
+     SC(solver.min.tr_radius), .doc = "trust_region: the first radius of each step's solve, as an RMS displacement per free vertex (m)"},
     {"solver", "contact_hessian", STR, .choices = CHOICES("exact", "adaptive"), .def = "\"adaptive\"",
-     .doc = "the Newton model's self-collision contacts: exact Hessians (the paper's), or adaptive: each "
+     SC(solver.min.convexify), .doc = "the Newton model's self-collision contacts: exact Hessians (the paper's), or adaptive: each "
             "contact's Hessian projected onto the PSD cone after a solve met negative curvature, until a full "
             "Newton step"},
     {"solver", "penalty_hessian", STR, .choices = CHOICES("exact", "obstacles", "all"), .def = "\"obstacles\"",
-     .doc = "the Newton model of the penalties: exact Hessians (the paper's), or the secant model (each "
+     SC(solver.penalty_secant), .doc = "the Newton model of the penalties: exact Hessians (the paper's), or the secant model (each "
             "contact's stiffness along its normal from its depth and the depth where the penalty balances the "
             "other forces) for the penalty obstacles, or for them and the self-collision contacts (optimization "
             "method)"},
     {"solver", "cg_downhill", BOOL, .def = "true",
-     .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
+     SC(solver.min.cg_downhill), .doc = "replace a Krylov answer failing the downhill test by the last CG iterate passing it"},
     {"solver", "cg_precision", STR, .choices = CHOICES("double", "single"), .def = "\"double\"",
-     .doc = "precision of the Hessian values inside cg, pcg and amg solves"},
+     SC(solver.min.cg_single), .doc = "precision of the Hessian values inside cg, pcg and amg solves"},
     {"solver", "amg_matrix", STR, .choices = CHOICES("rest", "current"), .def = "\"rest\"",
-     .doc = "what the AMG is built from: the rest-state stiffness, or the Hessian at the iterate"},
+     SC(solver.amg_at_rest), VALUES(1, 0), .doc = "what the AMG is built from: the rest-state stiffness, or the Hessian at the iterate"},
     {"solver", "amg_rebuild_factor", NUM, .range = "[0, )", .def = "3",
-     .doc = "rebuild the AMG when iterations per decade grow past this factor (0: never; else >= 1)"},
+     SC(solver.min.amg_rebuild_factor), .doc = "rebuild the AMG when iterations per decade grow past this factor (0: never; else >= 1)"},
     {"solver", "amg_rebuild_every", INT, .range = "[0, 100000000]", .def = "0",
-     .doc = "rebuild the AMG every N solves (0: never)"},
+     SC(solver.min.amg_rebuild_every), .doc = "rebuild the AMG every N solves (0: never)"},
 
     /* ---- bodies[] ---- */
-    {"bodies[]", "mesh", STR, 1, .doc = "a mesh or geometry file (against the working, then the scene's folder), or box"},
+    {"bodies[]", "mesh", STR, 1, BD(mesh), .path = 1, .doc = "a mesh or geometry file (against the working, then the scene's folder), or box"},
     {"bodies[]", "box", BS_SCHEMA_OBJECT, .sub = "bodies[].box", .doc = "the structured box (required with mesh box)"},
     {"bodies[]", "mesh_size", NUM, .range = "[0, )", .def = "0",
-     .doc = "target mesh size (m) for geometry inputs; 0: the file's own"},
+     BD(mesh_size), .doc = "target mesh size (m) for geometry inputs; 0: the file's own"},
     {"bodies[]", "min_dihedral", NUM, .range = "[0, 70.5)", .def = "10",
-     .doc = "quality gate (degrees) for a mesh bigstep makes (not a .msh): optimised until every tet's smallest "
+     BD(min_dihedral), .doc = "quality gate (degrees) for a mesh bigstep makes (not a .msh): optimised until every tet's smallest "
             "dihedral angle reaches it, else an error naming the worst region; 0: no gate"},
     {"bodies[]", "mesher", STR, .choices = CHOICES("auto", "cgal", "remesh"), .def = "\"auto\"",
-     .doc = "a closed surface at mesh_size: cgal (CGAL Mesh_3), remesh (CGAL remeshes the surface, Gmsh HXT meshes "
+     BD(mesher), VALUES(BS_SURFACE_AUTO, BS_SURFACE_CGAL, BS_SURFACE_REMESH), .doc = "a closed surface at mesh_size: cgal (CGAL Mesh_3), remesh (CGAL remeshes the surface, Gmsh HXT meshes "
             "the volume) or auto (remesh above about 2e5 tets, else or if refused cgal)"},
-    {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", .doc = "uniform 1-to-8 refinements"},
+    {"bodies[]", "refine", INT, .range = "[0, 6]", .def = "0", BD(refine), .doc = "uniform 1-to-8 refinements"},
     {"bodies[]", "close_holes", BOOL, .def = "false",
-     .doc = "a surface (.off, .obj, .ply): close holes up to 0.2 of its bounding-box diagonal (else an open one is refused)"},
+     BD(close_holes), .doc = "a surface (.off, .obj, .ply): close holes up to 0.2 of its bounding-box diagonal (else an open one is refused)"},
     {"bodies[]", "reorder", STR, .choices = CHOICES("none", "metis", "rcm"), .def = "\"none\"",
-     .doc = "vertex renumbering"},
+     BD(reorder), .doc = "vertex renumbering"},
     {"bodies[]", "scale", BS_SCHEMA_NUM_OR_VEC3, .range = "(0, )", .def = "[1, 1, 1]",
-     .doc = "scale factors (a number or 3), applied first"},
-    {"bodies[]", "rotate", VEC3, .def = ZERO3, .doc = "rotation axis x angle (degrees), applied after scale"},
-    {"bodies[]", "translate", VEC3, .def = ZERO3, .doc = "translation (m), applied last"},
+     BD(scale), .doc = "scale factors (a number or 3), applied first"},
+    {"bodies[]", "rotate", VEC3, .def = ZERO3, BD(rotate), .doc = "rotation axis x angle (degrees), applied after scale"},
+    {"bodies[]", "translate", VEC3, .def = ZERO3, BD(translate), .doc = "translation (m), applied last"},
     {"bodies[]", "material", BS_SCHEMA_OBJECT, 1, .sub = "bodies[].material", .doc = "the body's material"},
     {"bodies[]", "materials", BS_SCHEMA_MAP, .sub = "bodies[].material",
      .doc = "{3-D physical group: material}: per group overrides"},
-    {"bodies[]", "velocity", VEC3, .def = ZERO3, .doc = "initial velocity (m/s)"},
+    {"bodies[]", "velocity", VEC3, .def = ZERO3, BD(velocity), .doc = "initial velocity (m/s)"},
     {"bodies[]", "angular_velocity", VEC3, .def = ZERO3,
-     .doc = "initial angular velocity (rad/s) about the vertex centroid"},
+     BD(angular_velocity), .doc = "initial angular velocity (rad/s) about the vertex centroid"},
     {"bodies[]", "initial_state", BS_SCHEMA_OBJECT, .sub = "bodies[].initial_state",
      .doc = "the free vertices' initial positions"},
     {"bodies[]", "scripted", BS_SCHEMA_ARRAY, .sub = "bodies[].scripted[]",
      .doc = "vertex groups whose positions are prescribed"},
 
-    {"bodies[].box", "cells", BS_SCHEMA_IVEC3, 1, .range = "[1, 4096]", .doc = "cells [nx, ny, nz]"},
-    {"bodies[].box", "size", VEC3, .range = "(0, )", .def = "[1, 1, 1]", .doc = "edge lengths (m)"},
+    {"bodies[].box", "cells", BS_SCHEMA_IVEC3, 1, .range = "[1, 4096]", BD(box_cells), .doc = "cells [nx, ny, nz]"},
+    {"bodies[].box", "size", VEC3, .range = "(0, )", .def = "[1, 1, 1]", BD(box_size), .doc = "edge lengths (m)"},
 
     {"bodies[].material", "model", STR,
      .choices = CHOICES("fixed_corotated", "corotated", "neo_hookean", "stable_neo_hookean", "linear"),
-     .def = "\"fixed_corotated\"", .doc = "constitutive model"},
-    {"bodies[].material", "youngs", NUM, 1, .range = "(0, )", .doc = "Young's modulus (Pa)"},
-    {"bodies[].material", "poisson", NUM, 1, .range = "(-1, 0.5)", .doc = "Poisson's ratio"},
-    {"bodies[].material", "density", NUM, 1, .range = "(0, )", .doc = "density (kg/m^3)"},
-    {"bodies[].material", "rayleigh", NUM, .range = "[0, )", .def = "0", .doc = "lagged Rayleigh damping k (s)"},
+     .def = "\"fixed_corotated\"", MT(model), .doc = "constitutive model"},
+    {"bodies[].material", "youngs", NUM, 1, .range = "(0, )", MT(youngs), .doc = "Young's modulus (Pa)"},
+    {"bodies[].material", "poisson", NUM, 1, .range = "(-1, 0.5)", MT(poisson), .doc = "Poisson's ratio"},
+    {"bodies[].material", "density", NUM, 1, .range = "(0, )", MT(density), .doc = "density (kg/m^3)"},
+    {"bodies[].material", "rayleigh", NUM, .range = "[0, )", .def = "0", MT(rayleigh), .doc = "lagged Rayleigh damping k (s)"},
 
     {"bodies[].initial_state", "type", STR, 1, .choices = CHOICES("rest", "random", "point"),
      .doc = "rest, random (uniform in the box lo..hi) or point (all at one point)"},
@@ -156,26 +166,26 @@ const bs_schema_key bs_schema_keys_[] = {
 
     /* ---- obstacles[] ---- */
     {"obstacles[]", "shape", STR, 1, .choices = CHOICES("plane", "sphere", "box", "cylinder", "torus", "grid"),
-     .doc = "the level set's shape"},
-    {"obstacles[]", "normal", VEC3, .def = "[0, 1, 0]", .doc = "plane: outward normal"},
-    {"obstacles[]", "offset", NUM, .def = "0", .doc = "plane: normal . x >= offset is outside (m)"},
-    {"obstacles[]", "center", VEC3, .def = ZERO3, .doc = "sphere, box, cylinder, torus: the center (m)"},
-    {"obstacles[]", "radius", NUM, .def = "0.5", .doc = "sphere, cylinder: the radius (m)"},
-    {"obstacles[]", "half_extents", VEC3, .def = "[0.5, 0.5, 0.5]", .doc = "box: half edge lengths (m)"},
-    {"obstacles[]", "axis", VEC3, .def = "[0, 1, 0]", .doc = "cylinder, torus: the axis"},
-    {"obstacles[]", "half_height", NUM, .def = "0.5", .doc = "cylinder: half its height (m)"},
-    {"obstacles[]", "major", NUM, .def = "1", .doc = "torus: major radius (m)"},
-    {"obstacles[]", "minor", NUM, .def = "0.25", .doc = "torus: minor radius (m)"},
-    {"obstacles[]", "inside_out", BOOL, .def = "false", .doc = "the complement of the shape (a bowl, a hole)"},
-    {"obstacles[]", "file", STR, .def = "\"\"", .doc = "grid: a grid level-set file (bigstep levelset)"},
+     OB(shape), .doc = "the level set's shape"},
+    {"obstacles[]", "normal", VEC3, .def = "[0, 1, 0]", OB(normal), .doc = "plane: outward normal"},
+    {"obstacles[]", "offset", NUM, .def = "0", OB(offset), .doc = "plane: normal . x >= offset is outside (m)"},
+    {"obstacles[]", "center", VEC3, .def = ZERO3, OB(center), .doc = "sphere, box, cylinder, torus: the center (m)"},
+    {"obstacles[]", "radius", NUM, .def = "0.5", OB(radius), .doc = "sphere, cylinder: the radius (m)"},
+    {"obstacles[]", "half_extents", VEC3, .def = "[0.5, 0.5, 0.5]", OB(half_extents), .doc = "box: half edge lengths (m)"},
+    {"obstacles[]", "axis", VEC3, .def = "[0, 1, 0]", OB(axis), .doc = "cylinder, torus: the axis"},
+    {"obstacles[]", "half_height", NUM, .def = "0.5", OB(half_height), .doc = "cylinder: half its height (m)"},
+    {"obstacles[]", "major", NUM, .def = "1", OB(major), .doc = "torus: major radius (m)"},
+    {"obstacles[]", "minor", NUM, .def = "0.25", OB(minor), .doc = "torus: minor radius (m)"},
+    {"obstacles[]", "inside_out", BOOL, .def = "false", OB(inside_out), .doc = "the complement of the shape (a bowl, a hole)"},
+    {"obstacles[]", "file", STR, .def = "\"\"", OB(grid_file), .path = 1, .doc = "grid: a grid level-set file (bigstep levelset)"},
     {"obstacles[]", "grid_h", NUM, .range = "[0, )", .def = "0",
-     .doc = "> 0: sample the analytic shape onto a grid of this spacing (m)"},
+     OB(grid_h), .doc = "> 0: sample the analytic shape onto a grid of this spacing (m)"},
     {"obstacles[]", "collision", STR, .choices = CHOICES("constraint", "penalty", "postprocess"),
-     .def = "\"constraint\"", .doc = "gradient projection, penalty k(-phi)^3, or push out after the solve"},
-    {"obstacles[]", "stiffness", NUM, .range = "(0, )", .def = "1000000", .doc = "penalty stiffness k"},
-    {"obstacles[]", "friction", NUM, .range = "[0, )", .def = "0", .doc = "friction coefficient mu"},
-    {"obstacles[]", "velocity", VEC3, .def = ZERO3, .doc = "constant velocity (m/s)"},
-    {"obstacles[]", "angular_velocity", VEC3, .def = ZERO3, .doc = "constant angular velocity (rad/s)"},
+     .def = "\"constraint\"", OB(collision), .doc = "gradient projection, penalty k(-phi)^3, or push out after the solve"},
+    {"obstacles[]", "stiffness", NUM, .range = "(0, )", .def = "1000000", OB(stiffness), .doc = "penalty stiffness k"},
+    {"obstacles[]", "friction", NUM, .range = "[0, )", .def = "0", OB(friction), .doc = "friction coefficient mu"},
+    {"obstacles[]", "velocity", VEC3, .def = ZERO3, OB(velocity), .doc = "constant velocity (m/s)"},
+    {"obstacles[]", "angular_velocity", VEC3, .def = ZERO3, OB(angular_velocity), .doc = "constant angular velocity (rad/s)"},
     {"obstacles[]", "keyframes", BS_SCHEMA_ARRAY, .sub = "obstacles[].keyframes[]", .range = "[1, )",
      .doc = "motion by keyframes (instead of velocity)"},
     {"obstacles[].keyframes[]", "t", NUM, 1, .doc = "time (s), increasing"},
@@ -183,39 +193,39 @@ const bs_schema_key bs_schema_keys_[] = {
     {"obstacles[].keyframes[]", "rotate", VEC3, .def = ZERO3, .doc = "rotation axis x angle (degrees)"},
 
     /* ---- self_collision, output ---- */
-    {"self_collision", "stiffness", NUM, .range = "(0, )", .def = "100000", .doc = "penalty stiffness k"},
-    {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", .doc = "friction coefficient mu"},
+    {"self_collision", "stiffness", NUM, .range = "(0, )", .def = "100000", SC(self_stiffness), .doc = "penalty stiffness k"},
+    {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", SC(self_friction), .doc = "friction coefficient mu"},
 
-    {"output", "dir", STR, .def = "\"\"", .doc = "output folder (empty: no files)"},
-    {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", .doc = "frames between VTU files (0: none)"},
+    {"output", "dir", STR, .def = "\"\"", SC(out_dir), .doc = "output folder (empty: no files)"},
+    {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", SC(vtu_every), .doc = "frames between VTU files (0: none)"},
     {"output", "checkpoint_every", INT, .range = "[0, 1000000]", .def = "1",
-     .doc = "frames between checkpoints (checkpoint.bin, for bigstep run --resume; 0: none)"},
-    {"output", "stats", BOOL, .def = "true", .doc = "write stats.csv"},
-    {"output", "states", BOOL, .def = "false", .doc = "write state.bin (time, x, v of every frame)"},
-    {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs_field_names_,
+     SC(checkpoint_every), .doc = "frames between checkpoints (checkpoint.bin, for bigstep run --resume; 0: none)"},
+    {"output", "stats", BOOL, .def = "true", SC(stats_csv), .doc = "write stats.csv"},
+    {"output", "states", BOOL, .def = "false", SC(states), .doc = "write state.bin (time, x, v of every frame)"},
+    {"output", "fields", BS_SCHEMA_STRINGS, .choices = bs__field_names,
      .def = "[\"displacement\", \"velocity\", \"scripted\", \"body\", \"material\", \"detF\", \"inverted\", "
             "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\", \"elastic_force\", "
             "\"contact_force\", \"friction_impulse\"]",
      .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
-    {"output", "compress", BOOL, .def = "false", .doc = "zlib-compressed VTU frames and obstacle surfaces"},
-    {"qoi[]", "name", STR, 1, .doc = "the qoi.csv column (unique, no comma)"},
+    {"output", "compress", BOOL, .def = "false", SC(out_compress), .doc = "zlib-compressed VTU frames and obstacle surfaces"},
+    {"qoi[]", "name", STR, 1, QO(name), .doc = "the qoi.csv column (unique, no comma)"},
     {"qoi[]", "quantity", STR, 1,
      .choices = CHOICES("displacement", "position", "velocity", "reaction", "contact", "energy"),
-     .doc = "what is measured (README, Quantities of interest)"},
+     QO(kind), .doc = "what is measured (README, Quantities of interest)"},
     {"qoi[]", "component", STR, .choices = CHOICES("x", "y", "z", "magnitude"), .def = "\"x\"",
-     .doc = "the vector component (or its length)"},
+     QO(component), .doc = "the vector component (or its length)"},
     {"qoi[]", "reduce", STR, .choices = CHOICES("mean", "max", "min"), .def = "\"mean\"",
-     .doc = "over a group's vertices (displacement, position, velocity)"},
-    {"qoi[]", "body", INT, .range = "[0, 1000000]", .def = "0", .doc = "the body of `group` or `at`"},
-    {"qoi[]", "group", STR, .doc = "a physical group of the body's mesh (reaction: a scripted group)"},
-    {"qoi[]", "at", VEC3, .doc = "the body's vertex nearest this rest position (m), instead of a group"},
-    {"qoi[]", "obstacle", INT, .range = "[0, 1000000]", .def = "0", .doc = "contact: the obstacle's index"},
+     QO(reduce), .doc = "over a group's vertices (displacement, position, velocity)"},
+    {"qoi[]", "body", INT, .range = "[0, 1000000]", .def = "0", QO(body), .doc = "the body of `group` or `at`"},
+    {"qoi[]", "group", STR, QO(group), .doc = "a physical group of the body's mesh (reaction: a scripted group)"},
+    {"qoi[]", "at", VEC3, QO(at), .doc = "the body's vertex nearest this rest position (m), instead of a group"},
+    {"qoi[]", "obstacle", INT, .range = "[0, 1000000]", .def = "0", QO(obstacle), .doc = "contact: the obstacle's index"},
     {"qoi[]", "term", STR, .choices = CHOICES("kinetic", "elastic", "gravity", "total"), .def = "\"total\"",
-     .doc = "energy: which one (J)"},
+     QO(energy), .doc = "energy: which one (J)"},
 };
-const int bs_schema_n_keys_ = (int)(sizeof bs_schema_keys_ / sizeof bs_schema_keys_[0]);
+const int bs__schema_n_keys = (int)(sizeof bs__schema_keys / sizeof bs__schema_keys[0]);
 
-const bs_schema_section bs_schema_sections_[] = {
+const bs_schema_section bs__schema_sections[] = {
     {"", NULL},
     {"time", NULL},
     {"solver", NULL},
@@ -231,25 +241,25 @@ const bs_schema_section bs_schema_sections_[] = {
     {"output", NULL},
     {"qoi[]", NULL},
 };
-const int bs_schema_n_sections_ = (int)(sizeof bs_schema_sections_ / sizeof bs_schema_sections_[0]);
+const int bs__schema_n_sections = (int)(sizeof bs__schema_sections / sizeof bs__schema_sections[0]);
 
 /* ---- lookups ------------------------------------------------------------- */
 
-const bs_schema_key *bs_schema_find_(const char *section, const char *key) {
-  for (int i = 0; i < bs_schema_n_keys_; i++)
-    if (!strcmp(bs_schema_keys_[i].section, section) && !strcmp(bs_schema_keys_[i].key, key)) return &bs_schema_keys_[i];
+const bs_schema_key *bs__schema_find(const char *section, const char *key) {
+  for (int i = 0; i < bs__schema_n_keys; i++)
+    if (!strcmp(bs__schema_keys[i].section, section) && !strcmp(bs__schema_keys[i].key, key)) return &bs__schema_keys[i];
   return NULL;
 }
 
-int bs_schema_section_keys_(const char *section, const char **keys, int cap) {
+int bs__schema_section_keys(const char *section, const char **keys, int cap) {
   int n = 0;
-  for (int i = 0; i < bs_schema_n_keys_ && n + 1 < cap; i++)
-    if (!strcmp(bs_schema_keys_[i].section, section)) keys[n++] = bs_schema_keys_[i].key;
+  for (int i = 0; i < bs__schema_n_keys && n + 1 < cap; i++)
+    if (!strcmp(bs__schema_keys[i].section, section)) keys[n++] = bs__schema_keys[i].key;
   if (cap > 0) keys[n] = NULL;
   return n;
 }
 
-int bs_schema_choice_(const bs_schema_key *k, const char *value) {
+int bs__schema_choice(const bs_schema_key *k, const char *value) {
   if (!k || !k->choices) return -1;
   for (int i = 0; k->choices[i]; i++)
     if (!strcmp(k->choices[i], value)) return i;
@@ -270,7 +280,7 @@ static const char *parse_bound(const char *p, char stop, int *has, double *v) {
   return p;
 }
 
-int bs_schema_range_(const bs_schema_key *k, bs_schema_range *r) {
+int bs__schema_range(const bs_schema_key *k, bs_schema_range *r) {
   memset(r, 0, sizeof *r);
   if (!k || !k->range) return 0;
   const char *p = k->range;
@@ -291,13 +301,13 @@ int bs_schema_range_(const bs_schema_key *k, bs_schema_range *r) {
   return 1;
 }
 
-int bs_schema_in_range_(const bs_schema_range *r, double v) {
+int bs__schema_in_range(const bs_schema_range *r, double v) {
   if (r->has_lo && (r->lo_open ? !(v > r->lo) : !(v >= r->lo))) return 0;
   if (r->has_hi && (r->hi_open ? !(v < r->hi) : !(v <= r->hi))) return 0;
   return 1;
 }
 
-void bs_schema_range_text_(const bs_schema_range *r, char *out, size_t n) {
+void bs__schema_range_text(const bs_schema_range *r, char *out, size_t n) {
   if (r->has_lo && r->has_hi)
     snprintf(out, n, "%c%.17g, %.17g%c", r->lo_open ? '(' : '[', r->lo, r->hi, r->hi_open ? ')' : ']');
   else if (r->has_lo) snprintf(out, n, "%s %.17g", r->lo_open ? ">" : ">=", r->lo);
@@ -338,7 +348,7 @@ static int common_prefix(const char *a, const char *b) {
 
 /* The nearest candidate; of equally near ones, the one sharing the longest
  * start with the word ("yx" is taken for "y", not "x"). */
-const char *bs_schema_nearest_(const char *word, const char *const *cands, int n) {
+const char *bs__schema_nearest(const char *word, const char *const *cands, int n) {
   int len = (int)strlen(word), best = 1000, best_prefix = -1;
   const char *pick = NULL;
   for (int i = 0; n >= 0 ? i < n : cands[i] != NULL; i++) {
@@ -351,4 +361,73 @@ const char *bs_schema_nearest_(const char *word, const char *const *cands, int n
   }
   int limit = len >= 6 ? 2 : 1;
   return pick && best <= limit && best < len ? pick : NULL;
+}
+
+/* ---- keys bound to struct fields ---------------------------------------- */
+
+int bs__schema_bound(const bs_schema_key *k) { return k && k->size > 0; }
+
+int bs__schema_choice_value(const bs_schema_key *k, int i) { return k->values ? k->values[i] : i; }
+
+const char *bs__schema_choice_name(const bs_schema_key *k, int v) {
+  for (int i = 0; k && k->choices && k->choices[i]; i++)
+    if (bs__schema_choice_value(k, i) == v) return k->choices[i];
+  return NULL;
+}
+
+/* The numbers of a default "x" or "[x, y, z]" into v (up to 3); the count. */
+static int def_numbers(const char *def, double v[3]) {
+  const char *p = def + (*def == '[');
+  int n = 0;
+  while (n < 3) {
+    char *end;
+    double x = strtod(p, &end);
+    if (end == p) break;
+    v[n++] = x;
+    p = end;
+    while (*p == ' ' || *p == ',') p++;
+  }
+  return n;
+}
+
+/* A default string "\"text\"" into out (size n), without the quotes. */
+static void def_string(const char *def, char *out, size_t n) {
+  size_t len = strlen(def);
+  if (len >= 2 && def[0] == '"') snprintf(out, n, "%.*s", (int)(len - 2), def + 1);
+  else snprintf(out, n, "%s", def);
+}
+
+static void set_default(const bs_schema_key *k, char *field) {
+  double v[3] = {0, 0, 0};
+  char text[BS_MAX_NAME];
+  switch (k->type) {
+  case BS_SCHEMA_NUMBER: def_numbers(k->def, v); memcpy(field, &v[0], sizeof(double)); break;
+  case BS_SCHEMA_INTEGER: def_numbers(k->def, v); *(int *)(void *)field = (int)v[0]; break;
+  case BS_SCHEMA_BOOLEAN: *(int *)(void *)field = !strcmp(k->def, "true"); break;
+  case BS_SCHEMA_VEC3:
+  case BS_SCHEMA_NUM_OR_VEC3:
+    if (def_numbers(k->def, v) == 1) v[1] = v[2] = v[0];
+    memcpy(field, v, sizeof v);
+    break;
+  case BS_SCHEMA_IVEC3:
+    def_numbers(k->def, v);
+    for (int i = 0; i < 3; i++) ((int *)(void *)field)[i] = (int)v[i];
+    break;
+  case BS_SCHEMA_STRING:
+    if (!k->choices) {
+      def_string(k->def, field, k->size);
+      break;
+    }
+    def_string(k->def, text, sizeof text);
+    *(int *)(void *)field = bs__schema_choice_value(k, bs__schema_choice(k, text));
+    break;
+  default: break;
+  }
+}
+
+void bs__schema_defaults(const char *section, void *base) {
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
+    if (bs__schema_bound(k) && k->def && !strcmp(k->section, section)) set_default(k, (char *)base + k->offset);
+  }
 }

@@ -53,7 +53,7 @@ static void move_members(cJSON *to, cJSON *from) {
 /* The value schema of one key, without description and default. */
 static cJSON *value_schema(const bs_schema_key *k) {
   bs_schema_range r;
-  bs_schema_range_(k, &r);
+  bs__schema_range(k, &r);
   cJSON *o = NULL;
   switch (k->type) {
   case BS_SCHEMA_NUMBER: return scalar("number", &r);
@@ -128,8 +128,8 @@ static void add_one_of(cJSON *o, const char *one_of) {
 static cJSON *section_schema(const char *name) {
   cJSON *o = scalar("object", NULL), *props = cJSON_AddObjectToObject(o, "properties");
   cJSON *req = cJSON_CreateArray();
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     if (strcmp(k->section, name)) continue;
     cJSON_AddItemToObject(props, k->key, key_schema(k));
     if (k->required) cJSON_AddItemToArray(req, cJSON_CreateString(k->key));
@@ -137,9 +137,9 @@ static cJSON *section_schema(const char *name) {
   if (cJSON_GetArraySize(req)) cJSON_AddItemToObject(o, "required", req);
   else cJSON_Delete(req);
   cJSON_AddFalseToObject(o, "additionalProperties");
-  for (int i = 0; i < bs_schema_n_sections_; i++)
-    if (!strcmp(bs_schema_sections_[i].name, name) && bs_schema_sections_[i].one_of)
-      add_one_of(o, bs_schema_sections_[i].one_of);
+  for (int i = 0; i < bs__schema_n_sections; i++)
+    if (!strcmp(bs__schema_sections[i].name, name) && bs__schema_sections[i].one_of)
+      add_one_of(o, bs__schema_sections[i].one_of);
   return o;
 }
 
@@ -155,7 +155,7 @@ int bs_scene_schema_json(char **out, bs_error *err) {
                           "cannot express.");
   cJSON *body = section_schema("");
   move_members(root, body);
-  *out = bs_json_print_(root);
+  *out = bs__json_print(root);
   cJSON_Delete(root);
   return *out ? 0 : bs_error_set(err, BS_ENOMEM, "out of memory writing the scene schema");
 }

@@ -50,7 +50,7 @@ static cJSON *element(writer *w, cJSON *arr) {
 
 /* The table's name of choice i of section.key ("?" outside the list). */
 static const char *choice(const char *section, const char *key, int i) {
-  const bs_schema_key *k = bs_schema_find_(section, key);
+  const bs_schema_key *k = bs__schema_find(section, key);
   int n = 0;
   while (k && k->choices && k->choices[n]) n++;
   return i >= 0 && i < n ? k->choices[i] : "?";
@@ -62,46 +62,47 @@ static void path(writer *w, cJSON *o, const char *key, const char *p) {
   str(w, o, key, p[0] && realpath(p, abs) ? abs : p);
 }
 
-static void write_solver(writer *w, cJSON *o, const bs_scene *s) {
-  const bs_minimize_opts *m = &s->solver.min;
-  str(w, o, "method", bs_method_name(s->solver.method));
-  str(w, o, "linear", bs_lin_kind_name(m->linear));
-  num(w, o, "tolerance", m->tol);
-  num(w, o, "rtol", m->rtol);
-  num(w, o, "load_rtol", m->load_rtol);
-  num(w, o, "max_iterations", m->max_iter);
-  num(w, o, "newton_max_iterations", m->newton_max_iter);
-  num(w, o, "cg_max_iterations", m->cg_max_iter);
-  num(w, o, "newton_k", s->solver.newton_k);
-  str(w, o, "mode", choice("solver", "mode", s->mode == BS_MODE_STATIC));
-  str(w, o, "backend", choice("solver", "backend", (int)s->backend));
-  num(w, o, "load_steps", s->load_steps);
-  str(w, o, "project_hessian", choice("solver", "project_hessian", s->project_hessian));
-  if (m->sigma_auto) {
-    str(w, o, "cg_sigma", "auto");
-    num(w, o, "cg_sigma_scale", m->sigma);
-  } else {
-    num(w, o, "cg_sigma", m->sigma);
+/* One key bound to a struct field (scene_schema.h), written as its type says. */
+static void write_bound(writer *w, cJSON *o, const bs_schema_key *k, const char *field) {
+  const int *ip = (const int *)(const void *)field;
+  const char *name;
+  switch (k->type) {
+  case BS_SCHEMA_NUMBER: num(w, o, k->key, *(const double *)(const void *)field); break;
+  case BS_SCHEMA_INTEGER: num(w, o, k->key, *ip); break;
+  case BS_SCHEMA_BOOLEAN: boolean(w, o, k->key, *ip); break;
+  case BS_SCHEMA_VEC3:
+  case BS_SCHEMA_NUM_OR_VEC3: vec3(w, o, k->key, (const double *)(const void *)field); break;
+  case BS_SCHEMA_IVEC3: put(w, o, k->key, cJSON_CreateIntArray(ip, 3)); break;
+  case BS_SCHEMA_STRING:
+    if (k->choices) {
+      name = bs__schema_choice_name(k, *ip);
+      str(w, o, k->key, name ? name : "?");
+    } else if (k->path && strcmp(field, "box")) {
+      path(w, o, k->key, field);
+    } else {
+      str(w, o, k->key, field);
+    }
+    break;
+  default: break;
   }
-  str(w, o, "cg_forcing", choice("solver", "cg_forcing", m->forcing_ew));
-  str(w, o, "globalization", choice("solver", "globalization", (int)m->globalization));
-  num(w, o, "tr_radius", m->tr_radius);
-  str(w, o, "contact_hessian", choice("solver", "contact_hessian", m->convexify));
-  str(w, o, "penalty_hessian", choice("solver", "penalty_hessian", s->solver.penalty_secant));
-  boolean(w, o, "cg_downhill", m->cg_downhill);
-  str(w, o, "cg_precision", choice("solver", "cg_precision", m->cg_single != 0));
-  str(w, o, "amg_matrix", choice("solver", "amg_matrix", !s->solver.amg_at_rest));
-  num(w, o, "amg_rebuild_factor", m->amg_rebuild_factor);
-  num(w, o, "amg_rebuild_every", m->amg_rebuild_every);
 }
 
-static void write_material(writer *w, cJSON *o, const bs_scene_material *m) {
+/* What a section writes by hand: its unbound keys (objects, arrays, keys
+ * with rules) and the bound keys with neither a default nor `required`
+ * (optional values, written only when set); called with each such key in
+ * the table's order. */
+typedef void (*hand_fn)(writer *w, cJSON *o, const char *key, const void *base);
+
+/* Every key of `section`, in the table's order: bound keys from the struct
+ * at base, the others through hand (NULL: none). */
+static void write_section(writer *w, cJSON *o, const char *section, const void *base, hand_fn hand) {
   if (!o) return;
-  str(w, o, "model", bs_model_name(m->model));
-  num(w, o, "youngs", m->youngs);
-  num(w, o, "poisson", m->poisson);
-  num(w, o, "density", m->density);
-  num(w, o, "rayleigh", m->rayleigh);
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
+    if (strcmp(k->section, section)) continue;
+    if (bs__schema_bound(k) && (k->def || k->required)) write_bound(w, o, k, (const char *)base + k->offset);
+    else if (hand) hand(w, o, k->key, base);
+  }
 }
 
 static void write_script(writer *w, cJSON *o, const bs_scene_script *sc) {
@@ -120,70 +121,40 @@ static void write_script(writer *w, cJSON *o, const bs_scene_script *sc) {
   }
 }
 
-/* box, materials, initial state and scripts of a body. */
-static void write_body_parts(writer *w, cJSON *o, const bs_scene_body *b) {
-  cJSON *mats = object(w, o, "materials");
-  for (int m = 1; m < b->n_materials && mats; m++) write_material(w, object(w, mats, b->materials[m].group), &b->materials[m]);
-  vec3(w, o, "velocity", b->velocity);
-  vec3(w, o, "angular_velocity", b->angular_velocity);
-  cJSON *is = object(w, o, "initial_state");
-  if (is) {
-    str(w, is, "type", choice("bodies[].initial_state", "type", (int)b->init));
-    if (b->init == BS_INIT_RANDOM) {
-      vec3(w, is, "lo", b->init_lo);
-      vec3(w, is, "hi", b->init_hi);
-    }
-    if (b->init == BS_INIT_POINT) vec3(w, is, "point", b->init_lo);
-    num(w, is, "seed", b->init_seed);
+static void write_initial_state(writer *w, cJSON *is, const bs_scene_body *b) {
+  if (!is) return;
+  str(w, is, "type", choice("bodies[].initial_state", "type", (int)b->init));
+  if (b->init == BS_INIT_RANDOM) {
+    vec3(w, is, "lo", b->init_lo);
+    vec3(w, is, "hi", b->init_hi);
   }
-  cJSON *scr = array(w, o, "scripted");
-  for (int k = 0; k < b->n_scripts; k++) write_script(w, element(w, scr), &b->scripts[k]);
+  if (b->init == BS_INIT_POINT) vec3(w, is, "point", b->init_lo);
+  num(w, is, "seed", b->init_seed);
 }
 
-static void write_body(writer *w, cJSON *o, const bs_scene_body *b) {
-  if (!o) return;
-  int box = !strcmp(b->mesh, "box");
-  if (box) str(w, o, "mesh", b->mesh);
-  else path(w, o, "mesh", b->mesh);
-  cJSON *bx = box ? object(w, o, "box") : NULL;
-  if (bx) {
-    put(w, bx, "cells", cJSON_CreateIntArray(b->box_cells, 3));
-    vec3(w, bx, "size", b->box_size);
+/* A body's keys that are not bound: box, materials, initial state, scripts. */
+static void body_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_scene_body *b = base;
+  if (!strcmp(key, "box") && !strcmp(b->mesh, "box")) {
+    write_section(w, object(w, o, "box"), "bodies[].box", b, NULL);
+  } else if (!strcmp(key, "material") && b->n_materials > 0) {
+    write_section(w, object(w, o, "material"), "bodies[].material", &b->materials[0], NULL);
+  } else if (!strcmp(key, "materials")) {
+    cJSON *mats = object(w, o, "materials");
+    for (int m = 1; m < b->n_materials && mats; m++)
+      write_section(w, object(w, mats, b->materials[m].group), "bodies[].material", &b->materials[m], NULL);
+  } else if (!strcmp(key, "initial_state")) {
+    write_initial_state(w, object(w, o, "initial_state"), b);
+  } else if (!strcmp(key, "scripted")) {
+    cJSON *scr = array(w, o, "scripted");
+    for (int k = 0; k < b->n_scripts; k++) write_script(w, element(w, scr), &b->scripts[k]);
   }
-  num(w, o, "mesh_size", b->mesh_size);
-  num(w, o, "min_dihedral", b->min_dihedral);
-  num(w, o, "refine", b->refine);
-  boolean(w, o, "close_holes", b->close_holes);
-  str(w, o, "mesher", bs_mesh_mesher_name(b->mesher));
-  str(w, o, "reorder", choice("bodies[]", "reorder", (int)b->reorder));
-  vec3(w, o, "scale", b->scale);
-  vec3(w, o, "rotate", b->rotate);
-  vec3(w, o, "translate", b->translate);
-  if (b->n_materials > 0) write_material(w, object(w, o, "material"), &b->materials[0]);
-  write_body_parts(w, o, b);
 }
 
-static void write_obstacle(writer *w, cJSON *o, const bs_scene_obstacle *b) {
-  if (!o) return;
-  str(w, o, "shape", bs_shape_name(b->shape));
-  vec3(w, o, "normal", b->normal);
-  num(w, o, "offset", b->offset);
-  vec3(w, o, "center", b->center);
-  num(w, o, "radius", b->radius);
-  vec3(w, o, "half_extents", b->half_extents);
-  vec3(w, o, "axis", b->axis);
-  num(w, o, "half_height", b->half_height);
-  num(w, o, "major", b->major);
-  num(w, o, "minor", b->minor);
-  boolean(w, o, "inside_out", b->inside_out);
-  path(w, o, "file", b->grid_file);
-  num(w, o, "grid_h", b->grid_h);
-  str(w, o, "collision", bs_collide_mode_name(b->collision));
-  num(w, o, "stiffness", b->stiffness);
-  num(w, o, "friction", b->friction);
-  vec3(w, o, "velocity", b->velocity);
-  vec3(w, o, "angular_velocity", b->angular_velocity);
-  if (b->n_keys < 1) return;
+/* An obstacle's keyframes (its only key that is not bound). */
+static void obstacle_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_scene_obstacle *b = base;
+  if (strcmp(key, "keyframes") || b->n_keys < 1) return;
   cJSON *keys = array(w, o, "keyframes");
   for (int i = 0; i < b->n_keys; i++) {
     cJSON *k = element(w, keys);
@@ -194,45 +165,55 @@ static void write_obstacle(writer *w, cJSON *o, const bs_scene_obstacle *b) {
   }
 }
 
-/* Sections after the bodies: obstacles, self_collision, output. */
-static void write_qoi(writer *w, cJSON *o, const bs_scene_qoi *q) {
-  if (!o) return;
-  str(w, o, "name", q->name);
-  str(w, o, "quantity", choice("qoi[]", "quantity", (int)q->kind));
-  str(w, o, "component", choice("qoi[]", "component", q->component));
-  str(w, o, "reduce", choice("qoi[]", "reduce", (int)q->reduce));
-  num(w, o, "body", q->body);
-  if (q->group[0]) str(w, o, "group", q->group);
-  if (q->has_at) vec3(w, o, "at", q->at);
-  num(w, o, "obstacle", q->obstacle);
-  str(w, o, "term", choice("qoi[]", "term", (int)q->energy));
+/* A quantity's group or point, written when it has one. */
+static void qoi_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_scene_qoi *q = base;
+  if (!strcmp(key, "group") && q->group[0]) str(w, o, "group", q->group);
+  if (!strcmp(key, "at") && q->has_at) vec3(w, o, "at", q->at);
 }
 
-static void write_tail(writer *w, cJSON *root, const bs_scene *s) {
-  if (s->n_qoi > 0) {
+/* cg_sigma: "auto" with its scale, or a number. */
+static void solver_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_minimize_opts *m = &((const bs_scene *)base)->solver.min;
+  if (!strcmp(key, "cg_sigma")) {
+    if (m->sigma_auto) str(w, o, "cg_sigma", "auto");
+    else num(w, o, "cg_sigma", m->sigma);
+  } else if (!strcmp(key, "cg_sigma_scale") && m->sigma_auto) {
+    num(w, o, "cg_sigma_scale", m->sigma);
+  }
+}
+
+/* output.fields, as the names of the set. */
+static void output_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_scene *s = base;
+  if (strcmp(key, "fields")) return;
+  const char *names[BS_FIELD_COUNT];
+  int n = 0;
+  for (int f = 0; f < BS_FIELD_COUNT; f++)
+    if (s->out_fields & BS_FIELD_BIT(f)) names[n++] = bs_field_name((bs_field)f);
+  put(w, o, "fields", cJSON_CreateStringArray(names, n));
+}
+
+/* The top level's keys that are not bound: the notes and the sections. */
+static void root_hand(writer *w, cJSON *root, const char *key, const void *base) {
+  const bs_scene *s = base;
+  if (!strcmp(key, "description") && s->description) str(w, root, "description", s->description);
+  else if (!strcmp(key, "time")) write_section(w, object(w, root, "time"), "time", s, NULL);
+  else if (!strcmp(key, "solver")) write_section(w, object(w, root, "solver"), "solver", s, solver_hand);
+  else if (!strcmp(key, "bodies")) {
+    cJSON *bodies = array(w, root, "bodies");
+    for (int i = 0; i < s->n_bodies; i++) write_section(w, element(w, bodies), "bodies[]", &s->bodies[i], body_hand);
+  } else if (!strcmp(key, "obstacles")) {
+    cJSON *obs = array(w, root, "obstacles");
+    for (int i = 0; i < s->n_obstacles; i++)
+      write_section(w, element(w, obs), "obstacles[]", &s->obstacles[i], obstacle_hand);
+  } else if (!strcmp(key, "self_collision") && s->self_collision) {
+    write_section(w, object(w, root, "self_collision"), "self_collision", s, NULL);
+  } else if (!strcmp(key, "output")) {
+    write_section(w, object(w, root, "output"), "output", s, output_hand);
+  } else if (!strcmp(key, "qoi") && s->n_qoi > 0) {
     cJSON *qa = array(w, root, "qoi");
-    for (int i = 0; i < s->n_qoi; i++) write_qoi(w, element(w, qa), &s->qoi[i]);
-  }
-  cJSON *obs = array(w, root, "obstacles");
-  for (int i = 0; i < s->n_obstacles; i++) write_obstacle(w, element(w, obs), &s->obstacles[i]);
-  cJSON *sc = s->self_collision ? object(w, root, "self_collision") : NULL;
-  if (sc) {
-    num(w, sc, "stiffness", s->self_stiffness);
-    num(w, sc, "friction", s->self_friction);
-  }
-  cJSON *out = object(w, root, "output");
-  if (out) {
-    str(w, out, "dir", s->out_dir);
-    num(w, out, "vtu_every", s->vtu_every);
-    num(w, out, "checkpoint_every", s->checkpoint_every);
-    boolean(w, out, "stats", s->stats_csv);
-    boolean(w, out, "states", s->states);
-    const char *names[BS_FIELD_COUNT];
-    int n = 0;
-    for (int f = 0; f < BS_FIELD_COUNT; f++)
-      if (s->out_fields & BS_FIELD_BIT(f)) names[n++] = bs_field_name((bs_field)f);
-    put(w, out, "fields", cJSON_CreateStringArray(names, n));
-    boolean(w, out, "compress", s->out_compress);
+    for (int i = 0; i < s->n_qoi; i++) write_section(w, element(w, qa), "qoi[]", &s->qoi[i], qoi_hand);
   }
 }
 
@@ -241,21 +222,8 @@ int bs_scene_write_json(const bs_scene *s, char **out, bs_error *err) {
   writer w = {0};
   cJSON *root = cJSON_CreateObject();
   if (!root) return bs_error_set(err, BS_ENOMEM, "out of memory writing the resolved scene");
-  if (s->description) str(&w, root, "description", s->description);
-  cJSON *t = object(&w, root, "time");
-  if (t) {
-    num(&w, t, "fps", s->fps);
-    num(&w, t, "frames", s->frames);
-    num(&w, t, "steps_per_frame", s->steps_per_frame);
-  }
-  cJSON *so = object(&w, root, "solver");
-  if (so) write_solver(&w, so, s);
-  vec3(&w, root, "gravity", s->gravity);
-  num(&w, root, "drag", s->drag);
-  cJSON *bodies = array(&w, root, "bodies");
-  for (int i = 0; i < s->n_bodies; i++) write_body(&w, element(&w, bodies), &s->bodies[i]);
-  write_tail(&w, root, s);
-  *out = w.oom ? NULL : bs_json_print_(root);
+  write_section(&w, root, "", s, root_hand);
+  *out = w.oom ? NULL : bs__json_print(root);
   cJSON_Delete(root);
   return *out ? 0 : bs_error_set(err, BS_ENOMEM, "out of memory writing the resolved scene");
 }

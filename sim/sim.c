@@ -65,14 +65,14 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if ((st = bs_term_elastic_create_step(s->fem, &s->step, sc->project_hessian, &T[s->n_terms++], err))) return st;
   if ((st = damping_term(s, err))) return st;
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
-  if (sc->n_obstacles > 0 && (st = bs_sim_make_obstacles_(s, err))) return st;
+  if (sc->n_obstacles > 0 && (st = bs__sim_make_obstacles(s, err))) return st;
   if (sc->self_collision) {
     if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err)) ||
         (st = bs_term_self_set_secant(s->self, sc->solver.penalty_secant == BS_PENALTY_SECANT_ALL, err)))
       return st;
     s->terms[s->n_terms++] = s->self;
   }
-  return bs_sim_make_friction_(s, err);
+  return bs__sim_make_friction(s, err);
 }
 
 /* The integrator over the current terms, with the hooks. */
@@ -83,10 +83,10 @@ static int make_integrator(bs_sim *s, bs_error *err) {
   io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
   io.penalty_secant = sc->solver.method == BS_METHOD_OPTIMIZATION ? sc->solver.penalty_secant : BS_PENALTY_EXACT;
   int st = bs_integrator_create(s->fem, &s->step, s->n_terms, s->terms, s->mask,
-                                s->n_scripts ? bs_sim_script_positions_ : NULL, s, &io, &s->integrator, err);
+                                s->n_scripts ? bs__sim_script_positions : NULL, s, &io, &s->integrator, err);
   if (st) return st;
   bs_step_hooks hooks;
-  bs_sim_hooks_(s, &hooks);
+  bs__sim_hooks(s, &hooks);
   bs_integrator_set_hooks(s->integrator, &hooks);
   return 0;
 }
@@ -102,7 +102,7 @@ int bs_sim_create(const bs_scene *sc, bs_sim **out, bs_error *err) {
   if (!s->steps) st = bs_error_set(err, BS_ENOMEM, "out of memory (%d steps per frame)", sc->steps_per_frame);
   bs_memory_estimate me;
   if (!st) st = bs_scene_memory_estimate(sc, &me, err);
-  if (!st) st = bs_sim_make_bodies_(s, err);
+  if (!st) st = bs__sim_make_bodies(s, err);
   if (!st) st = bs_memory_check(sc, s->mesh->n_vertices, s->mesh->n_tets, &me, err);
   if (!st) s->memory_bytes = me.bytes;
   if (!st) st = bs_fem_create(s->mesh, s->n_materials, s->materials, s->tet_material, &s->fem, err);

@@ -192,7 +192,7 @@ static int per_body(bs_sim *s, bs_mesh **meshes, const int32_t *toff, const int 
   return 0;
 }
 
-int bs_sim_make_bodies_(bs_sim *s, bs_error *err) {
+int bs__sim_make_bodies(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   int nb = sc->n_bodies, st = 0, n_scripts = 0;
   s->n_bodies = nb;

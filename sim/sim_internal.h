@@ -7,15 +7,15 @@
 
 /* sim_bodies.c: the merged, transformed mesh and per-vertex state, the
  * materials per tet, the scripted vertices and the initial state. */
-int bs_sim_make_bodies_(bs_sim *s, bs_error *err);
+int bs__sim_make_bodies(bs_sim *s, bs_error *err);
 
 /* sim_obstacles.c: the scene's obstacles (and their penalty terms, appended
  * to s->terms); the hooks handed to the integrator; scripted positions. */
-int bs_sim_make_obstacles_(bs_sim *s, bs_error *err);
-void bs_sim_hooks_(bs_sim *s, bs_step_hooks *hooks);
+int bs__sim_make_obstacles(bs_sim *s, bs_error *err);
+void bs__sim_hooks(bs_sim *s, bs_step_hooks *hooks);
 /* The friction impulse buffers (s->friction_impulse, s->v_pre) when a
  * dynamic scene has friction; after the obstacles and self-collision. */
-int bs_sim_make_friction_(bs_sim *s, bs_error *err);
-void bs_sim_script_positions_(double t, double *x, void *ctx);
+int bs__sim_make_friction(bs_sim *s, bs_error *err);
+void bs__sim_script_positions(double t, double *x, void *ctx);
 
 #endif

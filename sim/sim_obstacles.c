@@ -28,7 +28,7 @@ void bs_scene_script_offset(const bs_scene_script *sc, double t, double off[3]) 
   }
 }
 
-void bs_sim_script_positions_(double t, double *x, void *ctx) {
+void bs__sim_script_positions(double t, double *x, void *ctx) {
   bs_sim *s = ctx;
   for (int i = 0; i < s->n_scripts; i++) {
     const bs_sim_script *ss = &s->scripts[i];
@@ -79,7 +79,7 @@ static int sim_post_solve(const double *x_n, double *x, const double *g, double 
   return 0;
 }
 
-int bs_sim_make_friction_(bs_sim *s, bs_error *err) {
+int bs__sim_make_friction(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   const int self = sc->self_collision && sc->self_friction > 0;
   int any = self;
@@ -93,7 +93,7 @@ int bs_sim_make_friction_(bs_sim *s, bs_error *err) {
   return 0;
 }
 
-void bs_sim_hooks_(bs_sim *s, bs_step_hooks *hooks) {
+void bs__sim_hooks(bs_sim *s, bs_step_hooks *hooks) {
   memset(hooks, 0, sizeof *hooks);
   if (s->obstacles) bs_obstacles_hooks(s->obstacles, &s->obstacle_hooks);
   *hooks = s->obstacle_hooks;
@@ -164,7 +164,7 @@ static int obstacle_levelset(const bs_sim *s, int i, bs_levelset **out, bs_error
   return bs_scene_obstacle_levelset(&s->scene->obstacles[i], lo, hi, s->size, out, err);
 }
 
-int bs_sim_make_obstacles_(bs_sim *s, bs_error *err) {
+int bs__sim_make_obstacles(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   int st = bs_obstacles_create(s->fem, &s->step, s->mask, &s->obstacles, err);
   if (st) return st;

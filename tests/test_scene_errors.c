@@ -51,14 +51,14 @@ Test(scene_errors, far_key_gets_no_guess) {
 
 Test(scene_errors, nearest_is_close_enough_only) {
   const char *const keys[] = {"fps", "frames", "steps_per_frame", "dt", NULL};
-  cr_expect_str_eq(bs_schema_nearest_("frame", keys, -1), "frames");
-  cr_expect_str_eq(bs_schema_nearest_("steps_per_fram", keys, -1), "steps_per_frame");
-  cr_expect_str_eq(bs_schema_nearest_("step_per_fram", keys, -1), "steps_per_frame"); /* 6+ letters: 2 edits */
-  cr_expect_null(bs_schema_nearest_("stp_per_fram", keys, -1));                      /* 3 edits */
-  cr_expect_null(bs_schema_nearest_("fram", keys, -1));                              /* 2 edits, 4 letters */
-  cr_expect_null(bs_schema_nearest_("t", keys, -1));                /* as long as the distance */
-  cr_expect_str_eq(bs_schema_nearest_("td", keys + 3, 1), "dt");    /* counted list; a transposition */
-  cr_expect_null(bs_schema_nearest_("speed", keys, -1));
+  cr_expect_str_eq(bs__schema_nearest("frame", keys, -1), "frames");
+  cr_expect_str_eq(bs__schema_nearest("steps_per_fram", keys, -1), "steps_per_frame");
+  cr_expect_str_eq(bs__schema_nearest("step_per_fram", keys, -1), "steps_per_frame"); /* 6+ letters: 2 edits */
+  cr_expect_null(bs__schema_nearest("stp_per_fram", keys, -1));                      /* 3 edits */
+  cr_expect_null(bs__schema_nearest("fram", keys, -1));                              /* 2 edits, 4 letters */
+  cr_expect_null(bs__schema_nearest("t", keys, -1));                /* as long as the distance */
+  cr_expect_str_eq(bs__schema_nearest("td", keys + 3, 1), "dt");    /* counted list; a transposition */
+  cr_expect_null(bs__schema_nearest("speed", keys, -1));
 }
 
 Test(scene_errors, wrong_type_says_what_it_got) {

@@ -37,8 +37,8 @@ static char *read_text(const char *path) {
 }
 
 static int is_section(const char *name) {
-  for (int i = 0; i < bs_schema_n_sections_; i++)
-    if (!strcmp(bs_schema_sections_[i].name, name)) return 1;
+  for (int i = 0; i < bs__schema_n_sections; i++)
+    if (!strcmp(bs__schema_sections[i].name, name)) return 1;
   return 0;
 }
 
@@ -83,15 +83,15 @@ static void expect_default_fits(const bs_schema_key *k) {
   cJSON *d = cJSON_Parse(k->def);
   cr_assert_not_null(d, "%s.%s: default %s is not JSON", k->section, k->key, k->def);
   bs_schema_range r;
-  int ranged = bs_schema_range_(k, &r);
+  int ranged = bs__schema_range(k, &r);
   switch (k->type) {
   case BS_SCHEMA_NUMBER:
   case BS_SCHEMA_INTEGER:
-    cr_expect(cJSON_IsNumber(d) && (!ranged || bs_schema_in_range_(&r, d->valuedouble)), "%s.%s: default %s",
+    cr_expect(cJSON_IsNumber(d) && (!ranged || bs__schema_in_range(&r, d->valuedouble)), "%s.%s: default %s",
               k->section, k->key, k->def);
     break;
   case BS_SCHEMA_STRING:
-    cr_expect(cJSON_IsString(d) && (!k->choices || bs_schema_choice_(k, d->valuestring) >= 0), "%s.%s: default %s",
+    cr_expect(cJSON_IsString(d) && (!k->choices || bs__schema_choice(k, d->valuestring) >= 0), "%s.%s: default %s",
               k->section, k->key, k->def);
     break;
   case BS_SCHEMA_BOOLEAN: cr_expect(cJSON_IsBool(d), "%s.%s: default %s", k->section, k->key, k->def); break;
@@ -99,15 +99,15 @@ static void expect_default_fits(const bs_schema_key *k) {
   case BS_SCHEMA_NUM_OR_VEC3:
     cr_expect(cJSON_IsArray(d) && cJSON_GetArraySize(d) == 3, "%s.%s: default %s", k->section, k->key, k->def);
     for (int i = 0; ranged && i < cJSON_GetArraySize(d); i++)
-      cr_expect(bs_schema_in_range_(&r, cJSON_GetArrayItem(d, i)->valuedouble), "%s.%s", k->section, k->key);
+      cr_expect(bs__schema_in_range(&r, cJSON_GetArrayItem(d, i)->valuedouble), "%s.%s", k->section, k->key);
     break;
   case BS_SCHEMA_NUM_OR_CHOICE:
-    cr_expect(cJSON_IsNumber(d) || bs_schema_choice_(k, d->valuestring) >= 0, "%s.%s", k->section, k->key);
+    cr_expect(cJSON_IsNumber(d) || bs__schema_choice(k, d->valuestring) >= 0, "%s.%s", k->section, k->key);
     break;
   case BS_SCHEMA_STRINGS:
     cr_expect(cJSON_IsArray(d), "%s.%s: default %s", k->section, k->key, k->def);
     for (const cJSON *e = d->child; e; e = e->next)
-      cr_expect(cJSON_IsString(e) && (!k->choices || bs_schema_choice_(k, e->valuestring) >= 0), "%s.%s: default %s",
+      cr_expect(cJSON_IsString(e) && (!k->choices || bs__schema_choice(k, e->valuestring) >= 0), "%s.%s: default %s",
                 k->section, k->key, k->def);
     break;
   default: cr_expect(0, "%s.%s: a default on an object or array key", k->section, k->key);
@@ -116,8 +116,8 @@ static void expect_default_fits(const bs_schema_key *k) {
 }
 
 Test(scene_schema, table_is_consistent) {
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     cr_expect(is_section(k->section), "%s.%s: section not in the sections list", k->section, k->key);
     cr_expect(k->doc && k->doc[0], "%s.%s: no description", k->section, k->key);
     int nested = k->type == BS_SCHEMA_OBJECT || k->type == BS_SCHEMA_ARRAY || k->type == BS_SCHEMA_MAP;
@@ -127,18 +127,83 @@ Test(scene_schema, table_is_consistent) {
               "%s.%s: choices", k->section, k->key);
     cr_expect(k->type != BS_SCHEMA_NUM_OR_CHOICE || k->choices, "%s.%s: no choices", k->section, k->key);
     bs_schema_range r;
-    if (bs_schema_range_(k, &r)) cr_expect(r.has_lo || r.has_hi, "%s.%s: range %s", k->section, k->key, k->range);
+    if (bs__schema_range(k, &r)) cr_expect(r.has_lo || r.has_hi, "%s.%s: range %s", k->section, k->key, k->range);
     if (k->def) expect_default_fits(k);
     cr_expect(!(k->required && k->def), "%s.%s: required with a default", k->section, k->key);
     for (int j = 0; j < i; j++)
-      cr_expect(strcmp(k->section, bs_schema_keys_[j].section) || strcmp(k->key, bs_schema_keys_[j].key),
+      cr_expect(strcmp(k->section, bs__schema_keys[j].section) || strcmp(k->key, bs__schema_keys[j].key),
                 "%s.%s: twice", k->section, k->key);
   }
-  for (int s = 1; s < bs_schema_n_sections_; s++) { /* every section but the top is some key's value */
+  for (int s = 1; s < bs__schema_n_sections; s++) { /* every section but the top is some key's value */
     int used = 0;
-    for (int i = 0; i < bs_schema_n_keys_; i++) used |= bs_schema_keys_[i].sub && !strcmp(bs_schema_keys_[i].sub, bs_schema_sections_[s].name);
-    cr_expect(used, "section %s is no key's value", bs_schema_sections_[s].name);
+    for (int i = 0; i < bs__schema_n_keys; i++) used |= bs__schema_keys[i].sub && !strcmp(bs__schema_keys[i].sub, bs__schema_sections[s].name);
+    cr_expect(used, "section %s is no key's value", bs__schema_sections[s].name);
   }
+}
+
+/* The size of the field a bound key of this type fills (0: no such key). */
+static size_t bound_size(const bs_schema_key *k) {
+  switch (k->type) {
+  case BS_SCHEMA_NUMBER: return sizeof(double);
+  case BS_SCHEMA_INTEGER:
+  case BS_SCHEMA_BOOLEAN: return sizeof(int);
+  case BS_SCHEMA_VEC3:
+  case BS_SCHEMA_NUM_OR_VEC3: return 3 * sizeof(double);
+  case BS_SCHEMA_IVEC3: return 3 * sizeof(int);
+  case BS_SCHEMA_STRING: return k->choices ? sizeof(int) : k->size;
+  default: return 0;
+  }
+}
+
+/* Every bound key fills a field of its type's size inside its section's
+ * struct; a choice's stored values are distinct; paths are strings. */
+Test(scene_schema, bound_keys_fit_their_fields) {
+  int n_bound = 0;
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
+    cr_expect(!k->path || (k->type == BS_SCHEMA_STRING && !k->choices), "%s.%s: path", k->section, k->key);
+    if (!bs__schema_bound(k)) continue;
+    n_bound++;
+    size_t want = bound_size(k);
+    cr_expect(want > 0 && k->size == want, "%s.%s: a field of %zu bytes, the type needs %zu", k->section, k->key,
+              k->size, want);
+    const char *sec = k->section;
+    size_t whole = !strcmp(sec, "bodies[].material") ? sizeof(bs_scene_material)
+                   : !strncmp(sec, "bodies[]", 8)     ? sizeof(bs_scene_body)
+                   : !strcmp(sec, "obstacles[]")      ? sizeof(bs_scene_obstacle)
+                   : !strcmp(sec, "qoi[]")            ? sizeof(bs_scene_qoi)
+                                                      : sizeof(bs_scene);
+    cr_expect(k->offset + k->size <= whole, "%s.%s: outside its struct", k->section, k->key);
+    for (int a = 0; k->choices && k->choices[a]; a++)
+      for (int b = 0; b < a; b++)
+        cr_expect(bs__schema_choice_value(k, a) != bs__schema_choice_value(k, b), "%s.%s: %s and %s store the same",
+                  k->section, k->key, k->choices[a], k->choices[b]);
+  }
+  cr_expect(n_bound >= 80, "only %d keys are bound to fields", n_bound);
+}
+
+/* A key bound to a field is read into it, written from it, and starts at
+ * its default: solver.tolerance and bodies[].mesher (a choice whose stored
+ * values are not its index) through a load, and a scene built in C. */
+Test(scene_schema, bound_keys_are_read_written_and_defaulted) {
+  bs_scene *s = NULL;
+  bs_error err;
+  const char *sets[] = {"solver.tolerance=0.25", "bodies.0.mesher=\"cgal\"", "solver.amg_matrix=\"current\""};
+  cr_assert_eq(bs_scene_parse(bs_test_full_scene, "full.json", 3, sets, &s, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->solver.min.tol, 0.25);
+  cr_expect_eq(s->bodies[0].mesher, BS_SURFACE_CGAL);
+  cr_expect_eq(s->solver.amg_at_rest, 0);
+  char *text = NULL;
+  cr_assert_eq(bs_scene_write_json(s, &text, &err), 0, "%s", err.msg);
+  cr_expect(strstr(text, "\"mesher\": \"cgal\"") != NULL, "%s", text);
+  cr_expect(strstr(text, "\"amg_matrix\": \"current\"") != NULL, "%s", text);
+  free(text);
+  bs_scene_destroy(&s);
+  cr_assert_eq(bs_scene_create(&s, &err), 0);
+  cr_expect_eq(s->solver.min.tol, 1e-3);
+  cr_expect_eq(s->self_stiffness, 1e5);
+  cr_expect_eq(s->solver.amg_at_rest, 1);
+  bs_scene_destroy(&s);
 }
 
 /* ---- the table against the loader, key by key ---------------------------- */
@@ -180,8 +245,8 @@ Test(scene_schema, types_agree_with_the_loader) {
       [BS_SCHEMA_BOOLEAN] = "1", [BS_SCHEMA_VEC3] = "[1, 2]", [BS_SCHEMA_IVEC3] = "\"x\"",
       [BS_SCHEMA_NUM_OR_VEC3] = "[1, 2]", [BS_SCHEMA_NUM_OR_CHOICE] = "true", [BS_SCHEMA_OBJECT] = "5",
       [BS_SCHEMA_ARRAY] = "{}", [BS_SCHEMA_MAP] = "[1]", [BS_SCHEMA_STRINGS] = "[\"a\", 1]"};
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     char path[256], set[512], parent[256];
     bs_test_key_path(k->section, k->key, path, sizeof path);
     bs_test_section_path(k->section, parent, sizeof parent);
@@ -194,7 +259,7 @@ Test(scene_schema, types_agree_with_the_loader) {
  * accepted. */
 static void range_cases(const bs_schema_key *k, const char *path, const char *parent) {
   bs_schema_range r;
-  bs_schema_range_(k, &r);
+  bs__schema_range(k, &r);
   char set[512];
   int vec = k->type == BS_SCHEMA_VEC3 || k->type == BS_SCHEMA_IVEC3 || k->type == BS_SCHEMA_NUM_OR_VEC3;
   double mid = r.has_lo ? r.lo + 1 : r.has_hi ? r.hi - 1 : 0;
@@ -224,10 +289,10 @@ static void range_cases(const bs_schema_key *k, const char *path, const char *pa
 
 Test(scene_schema, ranges_agree_with_the_loader) {
   int n = 0;
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     bs_schema_range r;
-    if (!bs_schema_range_(k, &r)) continue;
+    if (!bs__schema_range(k, &r)) continue;
     char path[256], parent[256];
     bs_test_key_path(k->section, k->key, path, sizeof path);
     bs_test_section_path(k->section, parent, sizeof parent);
@@ -239,8 +304,8 @@ Test(scene_schema, ranges_agree_with_the_loader) {
 
 /* Every allowed string loads; a near miss is refused with the right guess. */
 Test(scene_schema, choices_agree_with_the_loader) {
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     if (!k->choices) continue;
     char path[256], set[2][600], hint[128];
     bs_test_key_path(k->section, k->key, path, sizeof path);
@@ -278,8 +343,8 @@ static cJSON *at_path(cJSON *root, const char *path, cJSON **parent) {
 Test(scene_schema, required_keys_agree_with_the_loader) {
   static const char *const needed[] = {"bodies.0.box", "bodies.0.initial_state.lo", "bodies.0.initial_state.hi",
                                        "bodies.0.scripted.0.keyframes", NULL};
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     char path[256];
     bs_test_key_path(k->section, k->key, path, sizeof path);
     cJSON *root = cJSON_Parse(bs_test_full_scene), *parent;

@@ -194,8 +194,8 @@ Test(scene_write, defaults_agree_with_the_table) {
   cJSON *root = cJSON_Parse(text);
   cr_assert_not_null(root);
   int n = 0;
-  for (int i = 0; i < bs_schema_n_keys_; i++) {
-    const bs_schema_key *k = &bs_schema_keys_[i];
+  for (int i = 0; i < bs__schema_n_keys; i++) {
+    const bs_schema_key *k = &bs__schema_keys[i];
     if (!k->def) continue;
     char path[256], buf[256];
     bs_test_key_path(k->section, k->key, path, sizeof path);
