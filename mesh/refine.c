@@ -216,9 +216,9 @@ static int refine_group(const bs_group *g, const edge_table *e, int32_t nv, int3
   return BS_OK;
 }
 
-int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err) {
-  if (!out) return bs_error_set(err, BS_EINPUT, "refine: output pointer is NULL");
-  *out = NULL;
+/* The input's checks: a non-empty mesh whose tets use its vertices, and a
+ * fine mesh that fits in int32 indices. */
+static int refine_check(const bs_mesh *m, bs_error *err) {
   if (!m || !m->x || !m->tets || m->n_vertices <= 0 || m->n_tets <= 0)
     return bs_error_set(err, BS_EINPUT, "refine: empty or NULL mesh");
   const int32_t nv = m->n_vertices, nt = m->n_tets;
@@ -230,10 +230,91 @@ int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err) {
       if (m->tets[4 * (size_t)t + k] < 0 || m->tets[4 * (size_t)t + k] >= nv)
         return bs_error_set(err, BS_EINPUT, "refine: tet %d uses vertex %d (mesh has %d)", t,
                             m->tets[4 * (size_t)t + k], nv);
+  return BS_OK;
+}
 
-  edge_table e = {0};
-  int rc = edge_table_build(m, &e, err);
+/* Fine vertices: the coarse ones, then the edge midpoints in edge-id order. */
+static void refine_vertices(const bs_mesh *m, const edge_table *e, double *x) {
+  const int32_t nv = m->n_vertices;
+  memcpy(x, m->x, 3 * (size_t)nv * sizeof(double));
+  for (int32_t a = 0; a < nv; a++)
+    for (int64_t i = e->ptr[a]; i < e->ptr[a + 1]; i++) {
+      int32_t b = e->adj[i];
+      double *p = x + 3 * ((size_t)nv + (size_t)i);
+      for (int k = 0; k < 3; k++) p[k] = 0.5 * (m->x[3 * (size_t)a + k] + m->x[3 * (size_t)b + k]);
+    }
+}
+
+/* The 8 children of tet t: its 4 corners, then the octahedron split around
+ * its shortest diagonal (x: the fine vertices). */
+static int refine_tet(const bs_mesh *m, const edge_table *e, const double *x, int32_t t, int32_t *tets,
+                      bs_error *err) {
+  const int32_t nv = m->n_vertices;
+  int32_t l[10];
+  for (int k = 0; k < 4; k++) l[k] = m->tets[4 * (size_t)t + k];
+  for (int k = 0; k < 6; k++) {
+    int64_t id = edge_find(e, l[edge_ends[k][0]], l[edge_ends[k][1]]);
+    if (id < 0) /* cannot happen: every tet edge is in the table */
+      return bs_error_set(err, BS_EINTERNAL, "refine: edge %d-%d of tet %d missing from the edge table",
+                          l[edge_ends[k][0]], l[edge_ends[k][1]], t);
+    l[4 + k] = nv + (int32_t)id;
+  }
+  int32_t *c = tets + 32 * (size_t)t;
+  for (int j = 0; j < 4; j++)
+    for (int k = 0; k < 4; k++) *c++ = l[corner_child[j][k]];
+  int best = 0;
+  double dbest = dist2(x, l[oct_diag[0][0]], l[oct_diag[0][1]]);
+  for (int d = 1; d < 3; d++) {
+    double dd = dist2(x, l[oct_diag[d][0]], l[oct_diag[d][1]]);
+    if (dd < dbest) {
+      dbest = dd;
+      best = d;
+    }
+  }
+  for (int j = 0; j < 4; j++)
+    for (int k = 0; k < 4; k++) *c++ = l[oct_child[best][j][k]];
+  return BS_OK;
+}
+
+/* The fine mesh from its arrays (taken over: *x, *tets, *groups are nulled),
+ * without a copy of the big arrays: the input is a valid mesh, so tags are
+ * positive and unique and the groups already in (dim, tag) order;
+ * bs_mesh_finalize derives the rest. Children inherit their parent's
+ * material (also what the 3-D groups say). */
+static int refine_assemble(const bs_mesh *m, int32_t fnv, double **x, int32_t **tets, bs_group **groups,
+                           bs_mesh **out, bs_error *err) {
+  bs_mesh *f = bs_calloc(1, sizeof *f, "refine: mesh", err);
+  if (!f) return BS_ENOMEM;
+  f->n_vertices = fnv;
+  f->x = *x;
+  f->n_tets = 8 * m->n_tets;
+  f->tets = *tets;
+  f->n_groups = m->n_groups;
+  f->groups = *groups;
+  *x = NULL;
+  *tets = NULL;
+  *groups = NULL;
+  int rc = bs_mesh_finalize(f, err);
+  if (rc) {
+    bs_error_prefix(err, "refine");
+    bs_mesh_destroy(&f);
+    return rc;
+  }
+  if (m->material && f->material)
+    for (int32_t t = 0; t < m->n_tets; t++)
+      for (int c = 0; c < 8; c++) f->material[8 * (size_t)t + c] = m->material[t];
+  *out = f;
+  return BS_OK;
+}
+
+int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "refine: output pointer is NULL");
+  *out = NULL;
+  int rc = refine_check(m, err);
   if (rc) return rc;
+  const int32_t nv = m->n_vertices, nt = m->n_tets;
+  edge_table e = {0};
+  if ((rc = edge_table_build(m, &e, err))) return rc;
   if ((int64_t)nv + e.n_edges > INT32_MAX) {
     rc = bs_error_set(err, BS_EINPUT, "refine: %d vertices + %lld edge midpoints exceed 2^31", nv,
                       (long long)e.n_edges);
@@ -241,90 +322,15 @@ int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err) {
     return rc;
   }
   const int32_t fnv = nv + (int32_t)e.n_edges;
-  const int32_t fnt = 8 * nt;
   double *x = bs_calloc(3 * (size_t)fnv, sizeof(double), "refine: fine vertices", err);
-  int32_t *tets = bs_calloc(4 * (size_t)fnt, sizeof(int32_t), "refine: fine tets", err);
+  int32_t *tets = bs_calloc(4 * (size_t)(8 * nt), sizeof(int32_t), "refine: fine tets", err);
   bs_group *groups = NULL;
-  bs_mesh *f = NULL;
   if (m->n_groups > 0) groups = bs_calloc((size_t)m->n_groups, sizeof(bs_group), "refine: groups", err);
-  if (!x || !tets || (m->n_groups > 0 && !groups)) {
-    rc = BS_ENOMEM;
-    goto done;
-  }
-
-  /* vertices: coarse ones, then edge midpoints in edge-id order */
-  memcpy(x, m->x, 3 * (size_t)nv * sizeof(double));
-  for (int32_t a = 0; a < nv; a++)
-    for (int64_t i = e.ptr[a]; i < e.ptr[a + 1]; i++) {
-      int32_t b = e.adj[i];
-      double *p = x + 3 * ((size_t)nv + (size_t)i);
-      for (int k = 0; k < 3; k++) p[k] = 0.5 * (m->x[3 * (size_t)a + k] + m->x[3 * (size_t)b + k]);
-    }
-
-  /* tets: 4 corners, then the octahedron around its shortest diagonal */
-  for (int32_t t = 0; t < nt; t++) {
-    int32_t l[10];
-    for (int k = 0; k < 4; k++) l[k] = m->tets[4 * (size_t)t + k];
-    for (int k = 0; k < 6; k++) {
-      int64_t id = edge_find(&e, l[edge_ends[k][0]], l[edge_ends[k][1]]);
-      if (id < 0) { /* cannot happen: every tet edge is in the table */
-        rc = bs_error_set(err, BS_EINTERNAL, "refine: edge %d-%d of tet %d missing from the edge table",
-                          l[edge_ends[k][0]], l[edge_ends[k][1]], t);
-        goto done;
-      }
-      l[4 + k] = nv + (int32_t)id;
-    }
-    int32_t *c = tets + 32 * (size_t)t;
-    for (int j = 0; j < 4; j++)
-      for (int k = 0; k < 4; k++) *c++ = l[corner_child[j][k]];
-    int best = 0;
-    double dbest = dist2(x, l[oct_diag[0][0]], l[oct_diag[0][1]]);
-    for (int d = 1; d < 3; d++) {
-      double dd = dist2(x, l[oct_diag[d][0]], l[oct_diag[d][1]]);
-      if (dd < dbest) {
-        dbest = dd;
-        best = d;
-      }
-    }
-    for (int j = 0; j < 4; j++)
-      for (int k = 0; k < 4; k++) *c++ = l[oct_child[best][j][k]];
-  }
-
-  for (int g = 0; g < m->n_groups; g++) {
-    rc = refine_group(&m->groups[g], &e, nv, nt, &groups[g], err);
-    if (rc) goto done;
-  }
-
-  /* Assemble the fine mesh directly (no copy of the big arrays): the input
-   * is a valid mesh, so tags are positive and unique and the groups already
-   * in (dim, tag) order; bs_mesh_finalize derives the rest. */
-  f = bs_calloc(1, sizeof *f, "refine: mesh", err);
-  if (!f) {
-    rc = BS_ENOMEM;
-    goto done;
-  }
-  f->n_vertices = fnv;
-  f->x = x;
-  f->n_tets = fnt;
-  f->tets = tets;
-  f->n_groups = m->n_groups;
-  f->groups = groups;
-  x = NULL;
-  tets = NULL;
-  groups = NULL;
-  rc = bs_mesh_finalize(f, err);
-  if (rc) {
-    bs_error_prefix(err, "refine");
-    bs_mesh_destroy(&f);
-    goto done;
-  }
-  *out = f;
-  /* children inherit the parent's material (also what the 3-D groups say) */
-  if (m->material && (*out)->material)
-    for (int32_t t = 0; t < nt; t++)
-      for (int c = 0; c < 8; c++) (*out)->material[8 * (size_t)t + c] = m->material[t];
-
-done:
+  if (!x || !tets || (m->n_groups > 0 && !groups)) rc = BS_ENOMEM;
+  if (!rc) refine_vertices(m, &e, x);
+  for (int32_t t = 0; t < nt && !rc; t++) rc = refine_tet(m, &e, x, t, tets, err);
+  for (int g = 0; g < m->n_groups && !rc; g++) rc = refine_group(&m->groups[g], &e, nv, nt, &groups[g], err);
+  if (!rc) rc = refine_assemble(m, fnv, &x, &tets, &groups, out, err);
   free(x);
   free(tets);
   bs__groups_free(groups, m->n_groups);

@@ -130,47 +130,30 @@ fail:
   return rc;
 }
 
-int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
-  if (!m || !perm) return bs_error_set(err, BS_EINPUT, "permute: %s is NULL", m ? "perm" : "mesh");
-  const int32_t nv = m->n_vertices, nt = m->n_tets;
-  int rc = BS_OK;
-  int32_t *iperm = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: inverse permutation", err);
-  int32_t *count = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: tet buckets", err);
-  int32_t *tip = bs_calloc((size_t)nt + 1, sizeof(int32_t), "permute: tet map", err);
-  double *x = bs_calloc(3 * (size_t)nv + 1, sizeof(double), "permute: vertices", err);
-  int32_t *tets = bs_calloc(4 * (size_t)nt + 1, sizeof(int32_t), "permute: tets", err);
-  int32_t *mat = bs_calloc((size_t)nt + 1, sizeof(int32_t), "permute: materials", err);
-  int32_t **gel = bs_calloc((size_t)m->n_groups + 1, sizeof(int32_t *), "permute: groups", err);
-  int32_t **gvs = bs_calloc((size_t)m->n_groups + 1, sizeof(int32_t *), "permute: groups", err);
-  if (!iperm || !count || !tip || !x || !tets || !mat || !gel || !gvs) {
-    rc = BS_ENOMEM;
-    goto done;
-  }
-  /* perm must be a bijection of 0..nv-1 */
+/* iperm from perm, which must be a bijection of 0..nv-1 (iperm holds nv). */
+static int invert_perm(const int32_t *perm, int32_t nv, int32_t *iperm, bs_error *err) {
   for (int32_t i = 0; i < nv; i++) iperm[i] = -1;
   for (int32_t i = 0; i < nv; i++) {
     int32_t o = perm[i];
-    if (o < 0 || o >= nv) {
-      rc = bs_error_set(err, BS_EINPUT, "permute: perm[%d] = %d is out of range [0, %d)", i, o, nv);
-      goto done;
-    }
-    if (iperm[o] >= 0) {
-      rc = bs_error_set(err, BS_EINPUT, "permute: vertex %d appears twice in perm (at %d and %d)", o, iperm[o], i);
-      goto done;
-    }
+    if (o < 0 || o >= nv) return bs_error_set(err, BS_EINPUT, "permute: perm[%d] = %d is out of range [0, %d)", i, o, nv);
+    if (iperm[o] >= 0)
+      return bs_error_set(err, BS_EINPUT, "permute: vertex %d appears twice in perm (at %d and %d)", o, iperm[o], i);
     iperm[o] = i;
   }
-  for (int32_t i = 0; i < nv; i++) memcpy(x + 3 * (size_t)i, m->x + 3 * (size_t)perm[i], 3 * sizeof(double));
+  return BS_OK;
+}
 
-  /* tets relabelled and counting-sorted (stably) by their smallest new vertex */
+/* The tets relabelled and counting-sorted (stably) by their smallest new
+ * vertex into tets and mat; tip[t] the new index of tet t (count: nv + 1
+ * zeroed ints of work). */
+static int permute_tets(const bs_mesh *m, const int32_t *iperm, int32_t *count, int32_t *tip, int32_t *tets,
+                        int32_t *mat, bs_error *err) {
+  const int32_t nv = m->n_vertices, nt = m->n_tets;
   for (int32_t t = 0; t < nt; t++) {
     int32_t lo = INT32_MAX;
     for (int k = 0; k < 4; k++) {
       int32_t v = m->tets[4 * (size_t)t + k];
-      if (v < 0 || v >= nv) {
-        rc = bs_error_set(err, BS_EINPUT, "permute: tet %d uses vertex %d (mesh has %d)", t, v, nv);
-        goto done;
-      }
+      if (v < 0 || v >= nv) return bs_error_set(err, BS_EINPUT, "permute: tet %d uses vertex %d (mesh has %d)", t, v, nv);
       if (iperm[v] < lo) lo = iperm[v];
     }
     tip[t] = lo;
@@ -187,22 +170,22 @@ int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
     for (int k = 0; k < 4; k++) tets[4 * (size_t)nt_new + k] = iperm[m->tets[4 * (size_t)t + k]];
     mat[nt_new] = m->material ? m->material[t] : 0;
   }
+  return BS_OK;
+}
 
-  for (int g = 0; g < m->n_groups; g++) {
-    rc = permute_group(&m->groups[g], iperm, nv, tip, nt, &gel[g], &gvs[g], err);
-    if (rc) goto done;
-  }
-
-  /* commit: the mesh changes only from here on */
+/* The new arrays put in m (taken over: the pointers are nulled), then the
+ * derived data made again. */
+static int permute_commit(bs_mesh *m, double **x, int32_t **tets, int32_t **mat, int32_t **gel, int32_t **gvs,
+                          bs_error *err) {
   free(m->x);
-  m->x = x;
-  x = NULL;
+  m->x = *x;
+  *x = NULL;
   free(m->tets);
-  m->tets = tets;
-  tets = NULL;
+  m->tets = *tets;
+  *tets = NULL;
   free(m->material);
-  m->material = mat;
-  mat = NULL;
+  m->material = *mat;
+  *mat = NULL;
   for (int g = 0; g < m->n_groups; g++) {
     free(m->groups[g].elems);
     free(m->groups[g].vertices);
@@ -210,14 +193,33 @@ int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
     m->groups[g].vertices = gvs[g];
     gel[g] = gvs[g] = NULL;
   }
-  rc = bs_mesh_finalize(m, err);
+  int rc = bs_mesh_finalize(m, err);
   if (rc) bs_error_prefix(err, "permute");
+  return rc;
+}
 
-done:
-  if (gel)
-    for (int g = 0; g < m->n_groups; g++) free(gel[g]);
-  if (gvs)
-    for (int g = 0; g < m->n_groups; g++) free(gvs[g]);
+int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
+  if (!m || !perm) return bs_error_set(err, BS_EINPUT, "permute: %s is NULL", m ? "perm" : "mesh");
+  const int32_t nv = m->n_vertices, nt = m->n_tets;
+  int rc = BS_OK;
+  int32_t *iperm = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: inverse permutation", err);
+  int32_t *count = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: tet buckets", err);
+  int32_t *tip = bs_calloc((size_t)nt + 1, sizeof(int32_t), "permute: tet map", err);
+  double *x = bs_calloc(3 * (size_t)nv + 1, sizeof(double), "permute: vertices", err);
+  int32_t *tets = bs_calloc(4 * (size_t)nt + 1, sizeof(int32_t), "permute: tets", err);
+  int32_t *mat = bs_calloc((size_t)nt + 1, sizeof(int32_t), "permute: materials", err);
+  int32_t **gel = bs_calloc((size_t)m->n_groups + 1, sizeof(int32_t *), "permute: groups", err);
+  int32_t **gvs = bs_calloc((size_t)m->n_groups + 1, sizeof(int32_t *), "permute: groups", err);
+  if (!iperm || !count || !tip || !x || !tets || !mat || !gel || !gvs) rc = BS_ENOMEM;
+  if (!rc) rc = invert_perm(perm, nv, iperm, err);
+  for (int32_t i = 0; i < nv && !rc; i++) memcpy(x + 3 * (size_t)i, m->x + 3 * (size_t)perm[i], 3 * sizeof(double));
+  if (!rc) rc = permute_tets(m, iperm, count, tip, tets, mat, err);
+  for (int g = 0; g < m->n_groups && !rc; g++) rc = permute_group(&m->groups[g], iperm, nv, tip, nt, &gel[g], &gvs[g], err);
+  if (!rc) rc = permute_commit(m, &x, &tets, &mat, gel, gvs, err); /* the mesh changes only here */
+  for (int g = 0; g < m->n_groups; g++) {
+    if (gel) free(gel[g]);
+    if (gvs) free(gvs[g]);
+  }
   free(gel);
   free(gvs);
   free(iperm);
