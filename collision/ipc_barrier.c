@@ -12,7 +12,8 @@ int bs_ipc_barrier(double d, double dhat2, double out[3]) {
   if (!isfinite(d) || !isfinite(dhat2) || !(dhat2 > 0)) return BS_EINPUT;
   if (!(d > 0)) return BS_IPC_ECONTACT;
   if (d >= dhat2) return BS_OK;
-  const double L = log1p((d - dhat2) / dhat2), r = dhat2 / d, dd = d - dhat2; /* L = ln(d / dhat2) */
+  /* L = ln(d / dhat2); log1p near dhat2, where d / dhat2 - 1 is exact */
+  const double L = d > 0.5 * dhat2 ? log1p((d - dhat2) / dhat2) : log(d / dhat2), r = dhat2 / d, dd = d - dhat2;
   out[0] = -dd * dd * L;
   out[1] = -dd * (2 * L - r + 1);
   out[2] = (r + 2) * r - 2 * L - 3;
