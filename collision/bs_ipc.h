@@ -244,12 +244,13 @@ double bs_ipc_kappa_d2_eps(double bbox_diag);
  *
  * The vertices move linearly: x(t) = x0 + t (x1 - x0), t in [0, 1]. x0, x1
  * are 4 points each (12 doubles): (p, t0, t1, t2) for bs_ccd_pt, (ea0, ea1,
- * eb0, eb1) for bs_ccd_ee. The result *t is a SAFE step fraction: the
- * primitives stay apart over all of [0, *t], and at *t their distance is at
- * least s d_lo(0) (d_lo(0): the certified lower bound of the start distance,
- * which is the start distance up to rounding); *t = 1 when no contact happens
- * in [0, 1] (the gap-free motion is certified). *t is not the time of
- * impact: it is below it by at least what the gap costs.
+ * eb0, eb1) for bs_ccd_ee. The result *t is a SAFE step fraction: over all
+ * of [0, *t] the distance stays >= s^2 d_lo(0) > 0 (d_lo(0): the certified
+ * lower bound of the start distance, which is the start distance up to
+ * rounding), and at *t < 1 it is >= s d_lo(0) (the gap). *t = 1 when the
+ * whole motion is certified contact-free (the end may then be nearer than the
+ * gap, but by the same certificate never nearer than s^2 d_lo(0)). *t is not
+ * the time of impact: it is below it by at least what the gap costs.
  *
  * Algorithm. Displacements are made relative (their mean subtracted: a common
  * translation does not change distances), and lp = max |displacement| over
