@@ -25,10 +25,10 @@
  *     if (st == BS_IPC_ECONTACT) ... the pair touches: the step that got
  *                                    here should have been cut by the CCD
  *     ... scatter g and H into the global system ...
- *     double x0[12] = {p, t0, t1, t2 at the step's start},
- *            x1[12] = {the same at the Newton direction's end};
+ *     // x0: p, t0, t1, t2 at the step's start (12 doubles), x1: the same at
+ *     // the end of the Newton step; t: the fraction of it known safe
  *     double t;
- *     bs_ccd_pt(x0, x1, 0.1, 10000, &t, &err);   // largest certified step
+ *     bs_ccd_pt(x0, x1, 0.1, 10000, &t, &err);
  */
 #ifndef BS_IPC_H
 #define BS_IPC_H
@@ -275,8 +275,10 @@ double bs_ipc_kappa_d2_eps(double bbox_diag);
  *    (pair of lines) is treated as degenerate: every point of a triangle is
  *    within h = |n| / (longest edge) of its edges, and two near-parallel
  *    segments' distance is within |n| / (sqrt2 max(|a|, |b|)) of their
- *    endpoint-segment distances, so min(those) - h is a lower bound with an
- *    error below sqrt(64 u) of the size. The interior feature is included
+ *    endpoint-segment distances, so min(those) - h is a lower bound; the
+ *    smaller of the two errors is at worst ~sqrt(32 u) (~6e-8) times the
+ *    primitives' size (slivers, edges ~1e-7 rad from parallel), and ~32 u
+ *    times it for well-shaped ones. The interior feature is included
  *    with a tolerance on its inside test covering that test's rounding:
  *    including it wrongly only lowers the bound (the plane is nearer than the
  *    triangle).

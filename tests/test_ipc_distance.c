@@ -240,12 +240,12 @@ Test(ipc_distance, derivatives_random) {
   fprintf(stderr, "ipc_distance random: worst FD relative error gradient %.3g Hessian %.3g\n", worst_g, worst_H);
 }
 
-/* Rotates the 4 points of x by a random rotation and shifts them (the
+/* Rotates the n points of x by a random rotation and shifts them (the
  * near-degenerate cases are built axis-aligned). */
-static void place(double *x) {
+static void place(double *x, int n) {
   double Q[9], s[3] = {nrand(), nrand(), nrand()};
   rand_rot(Q);
-  for (int k = 0; k < 4; k++) {
+  for (int k = 0; k < n; k++) {
     double y[3];
     for (int r = 0; r < 3; r++) y[r] = Q[3 * r] * x[3 * k] + Q[3 * r + 1] * x[3 * k + 1] + Q[3 * r + 2] * x[3 * k + 2];
     for (int r = 0; r < 3; r++) x[3 * k + r] = y[r] + s[r];
@@ -261,30 +261,30 @@ Test(ipc_distance, derivatives_near_degenerate) {
       const double sh = th > 0 ? 0.3 : 1.3; /* exactly parallel: apart along the axis (overlapping
                                               ones are at a kink: any tilt makes the type EA_EB) */
       double x[12] = {0, 0, 0, 1, 0, 0, sh, 0.1, 0.05, sh + cos(th), 0.1 + sin(th), 0.05};
-      place(x);
+      place(x, 4);
       fd_check(f_ee, 12, x, th > 0 ? fmin(1, 30 * th) : 1, 1e-5, "EE nearly parallel");
     }
     double xc[12] = {-1, 0, 0, 1, 0, 0, 0.2, -1, 0, 0.2 + 0.3 * urand(), 1, 0}; /* crossing: d = 0 */
-    place(xc);
+    place(xc, 4);
     fd_check(f_ee, 12, xc, 1, 1e-6, "EE crossing");
     fd_check(f_line, 12, xc, 1, 1e-6, "EE lines crossing");
     double xp[9] = {0.3, 0, 0, 0, 0, 0, 1, 0, 0}; /* a point on an edge */
-    place(xp);
+    place(xp, 3);
     fd_check(f_pe, 9, xp, 1, 1e-6, "PE on the edge");
     /* p just outside edge E0 in the plane, 1e-6 from it: P_E0 */
     double xe[12] = {0.4, -1e-6, 0, 0, 0, 0, 1, 0, 0, 0.2, 1, 0};
-    place(xe);
+    place(xe, 4);
     fd_check(f_pt, 12, xe, 1e-7, 1e-5, "PT beside an edge");
     /* p in t0's region 1e-3 from the P_E0 region's boundary, and in E0's
      * region 1e-3 from the P_T one, above the plane */
     double xv[12] = {-1e-3, -0.2, 0.3, 0, 0, 0, 1, 0, 0, 0.2, 1, 0};
-    place(xv);
+    place(xv, 4);
     fd_check(f_pt, 12, xv, 1e-3, 1e-5, "PT vertex region near an edge region");
     double xf[12] = {0.5, -1e-3, 0.3, 0, 0, 0, 1, 0, 0, 0.2, 1, 0};
-    place(xf);
+    place(xf, 4);
     fd_check(f_pt, 12, xf, 1e-3, 1e-5, "PT edge region near the face region");
     double xo[12] = {0.3, 0.3, 1e-4, 0, 0, 0, 1, 0, 0, 0.2, 1, 0}; /* nearly on the face */
-    place(xo);
+    place(xo, 4);
     fd_check(f_pt, 12, xo, 1e-4, 1e-5, "PT over the face");
   }
   fprintf(stderr, "ipc_distance near-degenerate: worst FD relative error gradient %.3g Hessian %.3g\n", worst_g,
