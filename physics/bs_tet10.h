@@ -181,7 +181,8 @@ typedef struct bs_tet10_rest {
 /* Fills *out for the element with rest nodes X (30 doubles, VTK order) under
  * the rule id. BS_OK; BS_EINPUT for an unknown rule; BS_ENUMERIC for a
  * non-finite coordinate or a folded element (out->fault, out->fault_where,
- * out->fault_detJ say which and where; the message too). */
+ * out->fault_detJ say which and where; the message too). A refused cache has
+ * n_points = 0 and volume 0: the kernels below then add nothing. */
 int bs_tet10_rest_init(const double X[30], bs_tet10_rule_id rule, bs_tet10_rest *out, bs_error *err);
 
 /* ---- kinematics and elastic energy ---- */

@@ -114,6 +114,8 @@ static double jacobian(const double X[30], const double dN[30], double J[9]) {
 
 /* Records the fault and its message; returns BS_ENUMERIC. */
 static int refuse(bs_tet10_rest *out, bs_tet10_fault f, int where, double detJ, bs_error *err) {
+  out->n_points = 0; /* a refused cache evaluates to nothing */
+  out->volume = 0.0;
   out->fault = f;
   out->fault_where = where;
   out->fault_detJ = detJ;
@@ -142,7 +144,7 @@ int bs_tet10_rest_init(const double X[30], bs_tet10_rule_id rule, bs_tet10_rest 
   out->fault_where = -1;
   out->rule = bs_tet10_rule_get(rule);
   if (!out->rule) {
-    out->fault = BS_TET10_BAD_RULE;
+    out->fault = BS_TET10_BAD_RULE; /* n_points stays 0 */
     return bs_error_set(err, BS_EINPUT, "tet10: unknown quadrature rule %d", (int)rule);
   }
   out->n_points = out->rule->n_points;

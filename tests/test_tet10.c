@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_element.h"
 #include "bs_svd.h"
 #include "bs_tet10.h"
 
@@ -242,6 +243,13 @@ Test(tet10_patch, affine_reproduced_straight_and_curved) {
     bs_material m = make(BS_MODEL_NEO_HOOKEAN, 1e5, 0.3);
     const double E = bs_tet10_energy(&m, &r, x), want = r.volume * bs_material_psi(&m, A);
     cr_assert(fabs(E - want) <= 1e-12 * fabs(want), "uniform F: energy %.17g, V Psi(A) %.17g", E, want);
+    if (curved == 0.0) { /* a straight tet10 under an affine map is the tet4 of its vertices (bs_element.h) */
+      double Dm_inv[9], vol;
+      bs_tet_rest(X, Dm_inv, &vol);
+      const double E4 = bs_tet_energy(&m, x, Dm_inv, vol);
+      cr_assert(fabs(vol - r.volume) <= 1e-14 * vol && fabs(E4 - E) <= 1e-12 * fabs(E4),
+                "straight tet10 vs tet4: volume %g vs %g, energy %.17g vs %.17g", r.volume, vol, E, E4);
+    }
   }
 }
 
@@ -568,6 +576,7 @@ Test(tet10_rest, folded_refused) {
   cr_assert(r.fault == BS_TET10_FOLDED_AT_NODE || r.fault == BS_TET10_FOLDED_AT_POINT, "fault %s",
             bs_tet10_fault_name(r.fault));
   cr_assert(r.fault_detJ <= 0 && r.fault_where >= 0, "fault at %d, det J %g", r.fault_where, r.fault_detJ);
+  cr_assert(r.n_points == 0 && r.volume == 0, "a refused cache must evaluate to nothing");
   cr_assert(strstr(err.msg, "folded"), "%s", err.msg);
   /* node 4 at 1/5 of its edge: dX/dxi at vertex 0 along the edge is 4 m - 3 X0 - X1 < 0 */
   for (int k = 0; k < 3; k++) Y[12 + k] = X[k] + 0.2 * (X[3 + k] - X[k]);
