@@ -32,10 +32,10 @@ void bs_scene_defaults_(bs_scene *s) {
   s->steps_per_frame = 1;
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
   bs_integrator_opts_default(&s->solver);
-  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (README, Scenes) */
+  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (docs/design/cg-forcing.md) */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
-  s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (README, Scenes) */
-  s->solver.penalty_secant = BS_PENALTY_SECANT_OBSTACLES; /* penalty_hessian "obstacles" (README, Scenes) */
+  s->solver.min.forcing_ew = 2; /* cg_forcing "adaptive" (docs/design/cg-forcing.md) */
+  s->solver.penalty_secant = BS_PENALTY_SECANT_OBSTACLES; /* penalty_hessian "obstacles" (docs/design/contact-models.md) */
   s->mode = BS_MODE_DYNAMIC;
   s->load_steps = 1;
   s->gravity[0] = 0;
@@ -46,7 +46,7 @@ void bs_scene_defaults_(bs_scene *s) {
   s->checkpoint_every = 1;
   s->stats_csv = 1;
   s->out_fields = BS_FIELDS_DEFAULT;
-  s->out_compress = 0; /* raw: faster to write (README, Output fields) */
+  s->out_compress = 0; /* raw: faster to write (docs/design/output.md) */
 }
 
 void bs_scene_body_defaults_(bs_scene_body *b) {

@@ -8,6 +8,8 @@
  *    mean" suggestions;
  *  - bs_scene_schema_json (scene_schema_json.c): the published JSON Schema,
  *    data/scene.schema.json;
+ *  - bs_scene_schema_markdown (scene_schema_markdown.c): the scene-key
+ *    reference, docs/scene-keys.md (test_scene_keys_doc.c keeps it in step);
  *  - the tests (test_scene_schema.c): defaults against a resolved scene,
  *    ranges, types and required keys against the loader, every shipped scene.
  *
@@ -105,5 +107,14 @@ const char *bs_schema_nearest_(const char *word, const char *const *cands, int n
 /* The candidate keys of a section, NULL-terminated, into keys (room for cap
  * entries); the count. */
 int bs_schema_section_keys_(const char *section, const char **keys, int cap);
+
+/* The design note (a path relative to docs/, e.g. "design/globalization.md")
+ * of the key path ("solver.globalization", "bodies[].mesher", a section such
+ * as "self_collision"), or NULL; the reference links each key to its note. */
+const char *bs_schema_design_note_(const char *path);
+
+/* Every (key path, design note) pair of that table into *paths and *notes
+ * (static arrays, not to be freed); the count. */
+int bs_schema_design_notes_(const char *const **paths, const char *const **notes);
 
 #endif
