@@ -1,7 +1,7 @@
 /* bs_amg.h — one V-cycle of hypre's BoomerAMG as a preconditioner, built from
  * a 3x3 block CSR matrix (bs_bsr) on the free dofs of a mask.
  *
- * Settings (tuned for 3-D elasticity, issue 7): systems AMG with 3 functions
+ * Settings (tuned for 3-D elasticity; the measurements are in bench/README.md): systems AMG with 3 functions
  * per node (dofs interleaved, dof 3i+a is function a) and nodal coarsening
  * (the block row-sum norm, HYPRE_BoomerAMGSetNodal 4, nodal diagonal 1), HMIS
  * coarsening, one level of aggressive coarsening, extended+i interpolation
