@@ -17,7 +17,7 @@ static const char *run_help =
     "                         [--set key.path=value]... [--out DIR] [--replace] [--quiet] [--trace]\n"
     "                         [--resume [DIR]]\n"
     "\n"
-    "Runs a scene (JSON; see README.md, 'Scenes'). Prints a line per frame and a\n"
+    "Runs a scene (JSON; see docs/scenes.md). Prints a line per frame and a\n"
     "summary in the columns of the paper's Figure 11; writes VTU/PVD files and a\n"
     "per-step stats CSV into the output folder. On a terminal the frame lines\n"
     "update one progress line (frames, elapsed time, s/frame, ETA); otherwise each\n"

@@ -18,7 +18,7 @@ static const char *main_help =
     "  check DIR|FILE.vtu|FILE.pvd        audit saved states (inverted tets, self-intersections, obstacles)\n"
     "  mesh info|refine|reorder|convert   read, inspect, refine, renumber and convert meshes\n"
     "  levelset SURFACE OUT               a grid level set (signed distance) from a closed surface\n"
-    "  schema                             the scene schema as a JSON Schema (for editors)\n"
+    "  schema [--markdown]                the scene schema as a JSON Schema (for editors), or the key reference\n"
     "\n"
     "  bigstep COMMAND --help   help on a command\n"
     "  bigstep --version        the version\n"

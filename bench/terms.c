@@ -9,7 +9,7 @@
  * shifted by 1e-9 m per component pattern, so that the self-collision
  * term's cache of its last detection (same positions, bitwise) never
  * answers. Uses as many threads as OMP_NUM_THREADS gives. Never run by the
- * test suite. Measured: README, Benchmarks (fig1). */
+ * test suite. Measured: bench/README.md (fig1). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -10,7 +10,7 @@
  *      - project: P(x) applies, for every free vertex p and every constraint
  *        obstacle b IN THE ORDER THEY WERE ADDED, P_bp to x_p when (b, p) is
  *        labeled active or violated (phi_b(x_p) < 0); P = P_B o ... o P_1.
- *        Added to the paper: an active pair outside the obstacle is projected
+ *        Beyond the paper: an active pair outside the obstacle is projected
  *        only while grad phi_b there is within 45 degrees of its normal at
  *        registration; past an edge or corner (a box) it is released, left
  *        free, because projecting would pull a vertex sliding off a face back

@@ -5,23 +5,15 @@
  *  - a surface vertex p (a vertex of a boundary triangle) collides when it
  *    lies in a closed tet none of whose vertices is p or an edge neighbour
  *    of p (exact test, bs_shim_point_in_tet >= 0). The paper (5.3) excludes
- *    only the tets that have p as a vertex; with that rule E jumps when one
- *    of p's own tets inverts with p passing through its opposite face: p is
- *    then in the next tet, about one edge length from every admissible
- *    triangle, and Phi steps from 0 to ~k h^3. Line searches stall on such a
- *    jump (paper 3.3); a penalty striker crushing a soft box did exactly
- *    that (data/scenes/paper/fig14_box_stack.json, frame 9 on 15^3-cell
- *    boxes). Excluding the neighbours' tets too keeps a vertex that inverts
- *    its own tets clear of collisions, and the interface faces (below) make
- *    leaving that neighbourhood through the body continuous. Contact between
- *    parts of a body closer than that (in the mesh) is left to the elastic
- *    energy. Tets are found through a bounding-volume
+ *    only the tets that have p as a vertex; excluding the neighbours' tets
+ *    too keeps a vertex that inverts its own tets clear of collisions.
+ *    Contact between parts of a body closer than that (in the mesh) is left
+ *    to the elastic energy. Tets are found through a bounding-volume
  *    hierarchy over tet boxes (bs_bvh.h): its topology is built at creation
  *    and rebuilt at a begin_step (at xⁿ) when its cost (bs_bvh_cost) there
  *    exceeds BS_SELF_REBUILD_GROWTH times its cost at the last rebuild, its
  *    boxes are refit at every evaluation. Which tet a vertex is found in
- *    only seeds the primitive search, whose result is the closest primitive
- *    (ties to the lowest triangle index): the contacts do not depend on the
+ *    only seeds the primitive search: the contacts do not depend on the
  *    hierarchy, so neither do the results on when it was rebuilt (a resumed
  *    run rebuilds at its first step);
  *  - the primitive of a colliding p is the feature (triangle interior, edge
@@ -32,31 +24,20 @@
  *    (about 100 per vertex). So the distance is to the boundary of the
  *    region where p collides, and it is 0 wherever p enters that region:
  *    through the surface, or through its own excluded neighbourhood (a
- *    vertex pushed through its own body then meets Phi = 0 at the crossing
- *    and is pushed back towards its neighbourhood, where without the
- *    interface faces Phi jumped to k times the cube of its depth below the
- *    surface: ~4e4 J in test self_detect/leaving_the_neighbourhood_is_continuous).
- *    The paper takes every boundary triangle without p: then a surface
- *    vertex inside another body within about an edge of that body's surface
- *    was measured to its own surface next to it (its neighbours' triangles,
- *    less than an edge away on a structured grid), pushed along that
- *    surface instead of out of the other body, and on a symmetric mesh
- *    equidistant from two such triangles, where the force switched between
- *    them (test self_term/many_contacts_same_hessian_with_any_thread_count:
- *    two 12^3-cell boxes overlapping by 0.8 of a cell: H v and the central
- *    difference of the gradient along v differed by 3.9e3 max |H v| at
- *    h = 1e-5 and ten times that at 1e-6, a jump; 5e-10 with this rule).
- *    More than about two edges inside another body, p is still measured to
- *    its own surface beyond its neighbours (sqrt 2 edges away on such a
- *    grid), with the same switches. The search starts from the distance to the triangle p collided
- *    with last (hint) or, for a new collision, to the triangle closest in the
- *    rest shape to p's rest-shape image (barycentric in the tet it is in),
- *    and gathers every triangle within that distance from a hierarchy of
- *    the boundary triangles (bs_bvh.h; built with the tets', refit to x when
- *    some vertex collides); the radius doubles when no
+ *    vertex pushed through its own body meets Phi = 0 at the crossing and
+ *    is pushed back towards its neighbourhood). More than about two edges
+ *    inside another body, p can be measured to its own surface beyond its
+ *    neighbours. The search starts from the distance to the triangle p
+ *    collided with last (hint) or, for a new collision, to the triangle
+ *    closest in the rest shape to p's rest-shape image (barycentric in the
+ *    tet it is in), and gathers every triangle within that distance from a
+ *    hierarchy of the boundary triangles (bs_bvh.h; built with the tets',
+ *    refit to x when some vertex collides); the radius doubles when no
  *    admissible triangle is within it. The result is the exact minimum over
- *    admissible triangles (ties: the smallest triangle index), whatever the
- *    start: the hint only makes the search faster.
+ *    admissible primitives (ties: the smallest triangle index), whatever
+ *    the start: the hint only makes the search faster.
+ *    Why this rule and not the paper's, with the tests and runs that chose
+ *    it: docs/design/self-collision.md.
  *
  * Energy per colliding vertex: Phi = k d sqrt(d + eps), eps = 1e-15 m^2,
  * d = squared distance from p to its primitive, differentiated exactly with

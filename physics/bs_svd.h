@@ -45,8 +45,8 @@ void bs_svd3(const double F[9], double U[9], double sigma[3], double V[9]);
  * (matrix i at F + 9 i). Results are bit for bit those of bs_svd3 on each
  * matrix. On a CPU with AVX2 the work is done 4 matrices at a time in the
  * lanes of AVX2 registers (branch-free selects; a sweep runs while any of the
- * 4 still rotates): ~120 ns per matrix against ~370 for bs_svd3 (65k matrices
- * near I); elsewhere it is bs_svd3 on each matrix. */
+ * 4 still rotates, about 3 times faster than bs_svd3; bench/README.md);
+ * elsewhere it is bs_svd3 on each matrix. */
 void bs_svd3_batch(int n, const double *F, double *U, double *sigma, double *V);
 
 /* The rotation R of the polar decomposition F = R S (S symmetric positive

@@ -128,7 +128,7 @@ int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs
  * dominates the step's Hessian (M / dt^2 against the elastic stiffness), the
  * exact Hessian with CG's negative-curvature exit does better than any fix;
  * where stiffness dominates, the inverted tets' indefiniteness sends CG out
- * after a few iterations (README, solver.project_hessian: the measurements). */
+ * after a few iterations (docs/design/project-hessian.md: the measurements). */
 int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int project_psd, bs_term **out,
                                 bs_error *err);
 /* k: one coefficient per fem material (seconds, >= 0). */

@@ -10,8 +10,8 @@
  *    "scene.json: obstacles.0.friction: must be >= 0, got -0.5"; an unknown
  *    key names the nearest allowed one ("did you mean 'gravity'?"), a wrong
  *    type what it got ("must be a number, got string \"24\""), malformed
- *    JSON its line and column. The schema is documented in README.md
- *    ("Scenes") and published as a JSON Schema (bs_scene_schema_json);
+ *    JSON its line and column. The schema is documented in docs/scenes.md
+ *    and docs/scene-keys.md and published as a JSON Schema (bs_scene_schema_json);
  *  - in C, without any JSON: bs_scene_create gives a scene holding every
  *    default of the JSON schema and no body; bs_scene_add_body,
  *    bs_scene_body_add_script, bs_scene_body_add_material and
@@ -71,7 +71,7 @@ extern "C" {
 /* solver.cg_sigma_scale's default: c in the CG tolerance of cg_sigma "auto",
  * min(1/2, c sqrt(max(||grad E||, tau) / ||grad E_0||)). Smaller values cut
  * Newton iterations on the paper's scenes but slow the recovery from tangled
- * states (README, Scenes). */
+ * states (docs/scenes.md). */
 #define BS_SCENE_SIGMA_SCALE 1.0
 
 typedef enum { BS_SCRIPT_FIXED = 0, BS_SCRIPT_VELOCITY, BS_SCRIPT_KEYFRAMES } bs_script_kind;
@@ -274,6 +274,13 @@ int bs_scene_check(const bs_scene *s, bs_error *err);
  * (data/scene.schema.json holds a copy; `bigstep schema` prints it). *out is
  * malloc'd (free it), ending in a newline. 0, or BS_ENOMEM. */
 int bs_scene_schema_json(char **out, bs_error *err);
+
+/* The scene-key reference as Markdown, generated from the same table: one
+ * table per section, one row per key (path, type, default, range or
+ * choices, description, and a link to its design note where there is one).
+ * docs/scene-keys.md holds a copy; `bigstep schema --markdown` prints it.
+ * *out is malloc'd (free it), ending in a newline. 0, or BS_ENOMEM. */
+int bs_scene_schema_markdown(char **out, bs_error *err);
 
 /* The resolved scene as JSON text in the input layout: every key the loader
  * reads, with its value (defaults filled in), mesh and grid paths made

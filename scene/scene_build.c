@@ -36,7 +36,7 @@ void bs__scene_defaults(bs_scene *s) {
   static const char *const scene_sections[] = {"", "time", "solver", "self_collision", "output"};
   for (int i = 0; i < 5; i++) bs__schema_defaults(scene_sections[i], s);
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
-  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" */
+  s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (docs/design/cg-forcing.md) */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;
   s->out_fields = BS_FIELDS_DEFAULT;
 }

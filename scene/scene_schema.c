@@ -206,12 +206,12 @@ const bs_schema_key bs__schema_keys[] = {
      .def = "[\"displacement\", \"velocity\", \"scripted\", \"body\", \"material\", \"detF\", \"inverted\", "
             "\"cauchy\", \"von_mises\", \"green_strain\", \"stretches\", \"energy_density\", \"elastic_force\", "
             "\"contact_force\", \"friction_impulse\"]",
-     .doc = "the arrays of the VTU frames (README, What the frames hold; displacement is always written)"},
+     .doc = "the arrays of the VTU frames (docs/running.md, What the frames hold; displacement is always written)"},
     {"output", "compress", BOOL, .def = "false", SC(out_compress), .doc = "zlib-compressed VTU frames and obstacle surfaces"},
     {"qoi[]", "name", STR, 1, QO(name), .doc = "the qoi.csv column (unique, no comma)"},
     {"qoi[]", "quantity", STR, 1,
      .choices = CHOICES("displacement", "position", "velocity", "reaction", "contact", "energy"),
-     QO(kind), .doc = "what is measured (README, Quantities of interest)"},
+     QO(kind), .doc = "what is measured (docs/scenes.md, Quantities of interest)"},
     {"qoi[]", "component", STR, .choices = CHOICES("x", "y", "z", "magnitude"), .def = "\"x\"",
      QO(component), .doc = "the vector component (or its length)"},
     {"qoi[]", "reduce", STR, .choices = CHOICES("mean", "max", "min"), .def = "\"mean\"",

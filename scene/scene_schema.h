@@ -8,6 +8,8 @@
  *    mean" suggestions;
  *  - bs_scene_schema_json (scene_schema_json.c): the published JSON Schema,
  *    data/scene.schema.json;
+ *  - bs_scene_schema_markdown (scene_schema_markdown.c): the scene-key
+ *    reference, docs/scene-keys.md (test_scene_keys_doc.c keeps it in step);
  *  - the tests (test_scene_schema.c): defaults against a resolved scene,
  *    ranges, types and required keys against the loader, every shipped scene.
  *
@@ -134,5 +136,14 @@ void bs__schema_defaults(const char *section, void *base);
 /* The candidate keys of a section, NULL-terminated, into keys (room for cap
  * entries); the count. */
 int bs__schema_section_keys(const char *section, const char **keys, int cap);
+
+/* The design note (a path relative to docs/, e.g. "design/globalization.md")
+ * of the key path ("solver.globalization", "bodies[].mesher", a section such
+ * as "self_collision"), or NULL; the reference links each key to its note. */
+const char *bs__schema_design_note(const char *path);
+
+/* Every (key path, design note) pair of that table into *paths and *notes
+ * (static arrays, not to be freed); the count. */
+int bs__schema_design_notes(const char *const **paths, const char *const **notes);
 
 #endif

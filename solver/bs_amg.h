@@ -1,15 +1,15 @@
 /* bs_amg.h — one V-cycle of hypre's BoomerAMG as a preconditioner, built from
  * a 3x3 block CSR matrix (bs_bsr) on the free dofs of a mask.
  *
- * Settings (tuned for 3-D elasticity, issue 7): systems AMG with 3 functions
- * per node (dofs interleaved, dof 3i+a is function a) and nodal coarsening
- * (the block row-sum norm, HYPRE_BoomerAMGSetNodal 4, nodal diagonal 1), HMIS
- * coarsening, one level of aggressive coarsening, extended+i interpolation
- * with at most 4 entries per row (P_max 4), strength threshold 0.5, hypre's
- * default smoothers (hybrid Gauss-Seidel forward down, backward up: a
- * symmetric cycle) and a direct solve on the coarsest level. One V-cycle from
- * a zero guess per apply: z = B r with B symmetric positive definite when the
- * matrix it was built from is.
+ * Settings (tuned for 3-D elasticity; measurements in bench/README.md):
+ * systems AMG with 3 functions per node (dofs interleaved, dof 3i+a is
+ * function a) and nodal coarsening (the block row-sum norm,
+ * HYPRE_BoomerAMGSetNodal 4, nodal diagonal 1), HMIS coarsening, one level of
+ * aggressive coarsening, extended+i interpolation with at most 4 entries per
+ * row (P_max 4), strength threshold 0.5, hypre's default smoothers (hybrid
+ * Gauss-Seidel forward down, backward up: a symmetric cycle) and a direct
+ * solve on the coarsest level. One V-cycle from a zero guess per apply: z = B
+ * r with B symmetric positive definite when the matrix it was built from is.
  *
  * The matrix P given to bs_amg_setup must be symmetric positive definite on
  * the free dofs (e.g. a rest-state stiffness plus M/dt^2, or a PSD-projected

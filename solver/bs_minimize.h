@@ -51,8 +51,8 @@
  *      within opts.max_ls trial points, the lowest trial point with
  *      phi < phi(0) is taken (ls_failures); if there is none along a Newton
  *      direction (dx or -dx) not parallel to -g, whose predicted decrease is
- *      above the rounding floor, the search is made again along -g (added;
- *      counted in fallback_neg_grad: a kink of E, such as a self-collision
+ *      above the rounding floor, the search is made again along -g (counted
+ *      in fallback_neg_grad: a kink of E, such as a self-collision
  *      contact switching primitives, can block the Newton direction and not
  *      -g); if there is still none the solve stops with BS_MIN_LINE_SEARCH. An accepted step never increases E (except,
  *      by at most the rounding level of E, with opts.accept_noise; off by
@@ -61,7 +61,7 @@
  * The initial guess is projected too. Fixed dofs (mask 0) never move: they are
  * restored after every projection, and directions are zero there.
  *
- * Rounding floor (added; paper 3.3 notes that E is noisy): E is known to
+ * Rounding floor (beyond the paper, whose 3.3 notes that E is noisy): E is known to
  * about its rounding level, noise(E) = 64 eps |E|, and grad E to its own
  * rounding level, which the minimizer cannot see. An iteration is at the
  * noise level when its direction is Newton's (dx or -dx, not -grad E) and
@@ -78,15 +78,14 @@
  * larger ||g|| is not acceptable, compare stats.grad_norm with what you
  * need.
  *
- * Convexified model (added; opts.convexify, obj->hessian_convexified): the
+ * Convexified model (beyond the paper; opts.convexify, obj->hessian_convexified): the
  * paper's CG returns its last iterate when it meets negative curvature
  * (step 4). Where that curvature comes from penalty contacts pressed deep
  * (self-collision: the distance to a triangle falls as the triangle tilts,
  * a negative stiffness of about 3 k depth^3 / h^2 against elastic
  * stiffnesses of about E h), CG stops after a few iterations with a
- * direction far too long, the line search cuts it to alpha 6e-4..0.3,
- * and the far phase of an impact takes tens of such
- * iterations (data/scenes/paper/fig7_two_spheres.json, README). So once
+ * direction far too long, which the line search cuts short, and an impact
+ * takes many such iterations (docs/design/contact-models.md). So once
  * a system of the solve has met negative curvature, the following
  * iterations solve with the convexified Hessian, and the exact one comes
  * back after an iteration that took the full Newton step (a Newton
@@ -120,7 +119,7 @@
  * for fast convergence; any symmetric matrix still gives a descent method
  * through step 5.
  *
- * Trust region (added; opts.globalization = trust_region, Nocedal & Wright
+ * Trust region (beyond the paper; opts.globalization = trust_region, Nocedal & Wright
  * Algorithms 4.1 and 7.2): steps 4-9 become: solve H p = -g by Steihaug's
  * truncated CG in the ball ||p|| <= Delta (bs_linsolve_set_radius: negative
  * curvature and an iterate leaving the ball both end on the boundary, so the
@@ -273,32 +272,32 @@ typedef struct bs_objective {
      search to skip expensive terms (section 3.3 self-collision shortcut): if
      lower_bound > E(x_i), value() need not be called. Nonzero: not evaluable. */
   int (*value_lower_bound)(const double *x, double *E_lb, void *ctx);
-  /* Optional (NULL), added: g <- J_P(x)^T g in place at a feasible x, i.e. grad E from
+  /* Optional (NULL): g <- J_P(x)^T g in place at a feasible x, i.e. grad E from
      grad E' for the pairs labeled active by the last register_active (for a level-set
      constraint with normal n at an active vertex: g_v <- g_v - (g_v.n) n). */
   void (*project_gradient)(const double *x, double *g, void *ctx);
   /* Optional (NULL): called instead of hessian, with g_raw = the unprojected gradient the
      minimizer has just computed at the same x (saves the objective recomputing it). */
   int (*hessian_g)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
-  /* Optional (NULL), added: the convexified Hessian at x (see "Convexified model"), as
+  /* Optional (NULL): the convexified Hessian at x (see "Convexified model"), as
      hessian_g (g_raw given, H zeroed by the objective): the Hessian with the negative
      curvature of the terms that offer a convexified form removed (self-collision: each
      contact's Hessian projected onto the positive semidefinite cone). Nonzero: not
      evaluable (BS_MIN_NONFINITE). */
   int (*hessian_convexified)(const double *x, const double *g_raw, bs_bsr *H, void *ctx);
-  /* Optional (NULL), added: with opts.linear = amg, the matrix the AMG preconditioner
+  /* Optional (NULL): with opts.linear = amg, the matrix the AMG preconditioner
      is built from, at x, assembled into P (the fem pattern, zeroed by the minimizer;
      extras are ignored): symmetric positive definite on the free dofs. Called only when
      a setup is due (see "AMG reuse"). Nonzero: not evaluable (BS_MIN_NONFINITE). */
   int (*precond_matrix)(const double *x, bs_bsr *P, void *ctx);
-  /* Optional (NULL), added: called after every accepted step of bs_minimize
+  /* Optional (NULL): called after every accepted step of bs_minimize
      and every step of bs_newton. */
   void (*trace)(const bs_min_iter *it, void *ctx);
   void *ctx;
-  /* Added: the 2-norm of the external load on the free dofs (N; e.g. gravity's forces),
+  /* The 2-norm of the external load on the free dofs (N; e.g. gravity's forces),
      the scale of opts.load_rtol; 0 when there is none. */
   double load_norm;
-  /* Added: 1 when E is exactly quadratic in x (constant Hessian, no projection): a
+  /* 1 when E is exactly quadratic in x (constant Hessian, no projection): a
      full Newton step then leaves the linear solve's residual as the gradient, so step 4
      asks the solver for min(forcing term, max(tau_eff / (4 ||g||), 1e-13)) and the
      solve ends in one or two iterations; and the rounding floor (BS_MIN_FLOOR) is
@@ -319,15 +318,15 @@ int bs_globalization_parse(const char *name, bs_globalization *out, bs_error *er
 
 typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default() */
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
-  double rtol;         /* added, default 0 (off): also converged when ||g|| < rtol ||g_0||, */
+  double rtol;         /* default 0 (off): also converged when ||g|| < rtol ||g_0||,        */
                        /* g_0 the gradient at the solve's first iterate (unitless, >= 0)    */
-  double load_rtol;    /* added, default 0 (off): also converged when ||g|| < load_rtol *   */
+  double load_rtol;    /* default 0 (off): also converged when ||g|| < load_rtol *          */
                        /* obj->load_norm, the external load (unitless, >= 0). The solve's  */
                        /* tolerance is tau_eff = max(tol, rtol ||g_0||, load_rtol load)    */
                        /* (stats.tol_used); every "tol" below means tau_eff                */
   int max_iter;        /* Newton iterations cap, default 500 (>= 0)                        */
   double sigma;        /* CG tolerance scale, default 1 (> 0)                              */
-  int sigma_auto;      /* added, default 0. 1: the tolerance's scale is sigma/sqrt(||g_0||),*/
+  int sigma_auto;      /* default 0. 1: the tolerance's scale is sigma/sqrt(||g_0||),       */
                        /* g_0 the gradient at the solve's first iterate, so that          */
                        /* min(1/2, sigma sqrt(max(||g||, tol)/||g_0||)) has no units       */
                        /* (sigma is then a pure number: 1 gives 1/2 at the first solve)    */
@@ -338,43 +337,43 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   int naive_guess;     /* 1: take at least one iteration even if ||g|| < tol                */
   bs_lin_kind linear;  /* cg (default), pcg, amg, cholmod (minres accepted too)            */
   int cg_max_iter;     /* Krylov iterations cap per solve; 0 (default): 2 x free dofs + 100 */
-  int cg_single;       /* added, default 0. 1: cg, pcg and amg solves read the Hessian's    */
+  int cg_single;       /* default 0. 1: cg, pcg and amg solves read the Hessian's           */
                        /* values in single precision from their 6th product on             */
                        /* (bs_linsolve_set_single): 40 bytes per block, not 76             */
-  int forcing_ew;      /* added, default 0. 1: from the second iteration on, the CG         */
+  int forcing_ew;      /* default 0. 1: from the second iteration on, the CG                */
                        /* tolerance of step 4 is also capped by Eisenstat & Walker's       */
                        /* (1996) choice 2, eta_k = 0.9 (||g_k|| / ||g_k-1||)^2, kept >=    */
                        /* 0.9 eta_k-1^2 when that exceeds 0.1: solves tighten where Newton */
                        /* converges fast and stay loose where it does not. 2: the same cap */
                        /* only after an iteration that took the full Newton step (Newton   */
                        /* direction, no negative curvature, alpha = 1 at its first trial) */
-  int cg_downhill;      /* added, default 1. 1: a Krylov answer that fails step 5's test     */
+  int cg_downhill;      /* default 1. 1: a Krylov answer that fails step 5's test            */
                        /* is replaced by the last CG iterate that passed it (step 5);      */
                        /* 0: the paper's rule (-g when neither dx nor -dx passes)          */
   double newton_rel_tol; /* bs_newton's MINRES relative tolerance, default 1e-10 (> 0)    */
   int newton_max_iter;  /* bs_newton's iteration cap, default 50 (the paper's baseline takes */
                        /* 15-50; >= 1); max_iter is the optimization integrator's           */
-  int accept_noise;    /* added, default 0 (the paper's rule: stop). 1: when the decrease a  */
+  int accept_noise;    /* default 0 (the paper's rule: stop). 1: when the decrease a         */
                        /* step predicts, |g.d|, is below the rounding level of E            */
                        /* (64 eps |E|) and a = 1 fails sufficient decrease, search on the   */
                        /* slope for an approximate Wolfe point (Hager & Zhang 2005):        */
                        /* E(y) <= E(x) + 64 eps |E|, c2 phi'(0) <= phi'(a) <= -0.8 phi'(0), */
                        /* so that tol can go below what E resolves; counted in noise_steps */
-  int64_t hessian_extra; /* added: room for Hessian blocks outside the pattern (bs_bsr     */
+  int64_t hessian_extra; /* room for Hessian blocks outside the pattern (bs_bsr            */
                        /* extra list, e.g. self-collision couplings), default 0; read by   */
                        /* bs_minimizer_create only                                          */
-  double amg_rebuild_factor; /* added: AMG rebuild when the cost per decade grows past this */
+  double amg_rebuild_factor; /* AMG rebuild when the cost per decade grows past this        */
                        /* factor times the post-setup one (see "AMG reuse"); default 3;     */
                        /* 0: never (>= 0, else 0 or >= 1)                                   */
-  int amg_rebuild_every; /* added: AMG rebuild every N bs_minimize calls; 0 (default): no  */
-  bs_globalization globalization; /* added, default line_search (the paper's); trust_region */
+  int amg_rebuild_every; /* AMG rebuild every N bs_minimize calls; 0 (default): no         */
+  bs_globalization globalization; /* default line_search (the paper's); trust_region        */
                        /* needs linear cg, pcg or amg and no vecops (see "Trust region")   */
-  int convexify;       /* added, default 1: after a Newton system met negative curvature, */
+  int convexify;       /* default 1: after a Newton system met negative curvature,        */
                        /* later iterations solve with obj->hessian_convexified (when given) */
                        /* until one takes the full Newton step of a solve of 2 or more      */
                        /* Krylov iterations (see "Convexified model"); 0: always the        */
                        /* Hessian (the paper's rule alone). Line-search globalization only */
-  double tr_radius;    /* added: trust_region's radius at each solve's start, as an RMS   */
+  double tr_radius;    /* trust_region's radius at each solve's start, as an RMS          */
                        /* length per free vertex (units of x): Delta_0 = tr_radius sqrt(free */
                        /* vertices), at most clamp; default 0.1 (> 0)                      */
 } bs_minimize_opts;
@@ -413,20 +412,20 @@ int bs_min_reason_converged(bs_min_reason r);
 typedef struct bs_minimize_stats {
   int iterations, cg_iterations, indefinite_exits, fallback_neg_dx, fallback_neg_grad,
       clamps, ls_evaluations, cholmod_fallbacks;
-  int ls_failures;                           /* added: steps taken without a Wolfe point  */
-  int noise_steps;                           /* added: steps taken by opts.accept_noise   */
-  int amg_setups;                            /* added: AMG hierarchies built (linear = amg) */
-  int downhill_iterates;                     /* added: Newton directions that are an earlier */
+  int ls_failures;                           /* steps taken without a Wolfe point         */
+  int noise_steps;                           /* steps taken by opts.accept_noise          */
+  int amg_setups;                            /* AMG hierarchies built (linear = amg)        */
+  int downhill_iterates;                     /* Newton directions that are an earlier        */
                                              /* CG iterate (opts.cg_downhill)              */
-  int convexified;                           /* added: iterations that solved with the     */
+  int convexified;                           /* iterations that solved with the            */
                                              /* convexified Hessian (opts.convexify)       */
-  int tr_rejections;                         /* added: trust_region trial steps rejected   */
-  int tr_boundary;                           /* added: accepted steps on the boundary      */
-  double tr_radius;                          /* added: trust_region radius at the end      */
-  double t_amg_setup;                        /* added: seconds in AMG setups (in t_linear) */
+  int tr_rejections;                         /* trust_region trial steps rejected          */
+  int tr_boundary;                           /* accepted steps on the boundary             */
+  double tr_radius;                          /* trust_region radius at the end             */
+  double t_amg_setup;                        /* seconds in AMG setups (in t_linear)        */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */
   double grad_norm, E;                       /* final                                      */
-  double tol_used;                           /* added: tau_eff of this solve (N)           */
+  double tol_used;                           /* tau_eff of this solve (N)                  */
   double t_eval, t_assembly, t_linear, t_line_search, t_total; /* seconds per phase        */
   bs_min_reason reason;
   const char *reason_text;

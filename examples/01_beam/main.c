@@ -28,7 +28,7 @@
   } while (0)
 
 /* Step 1: the scene, in C. bs_scene_create gives every default of the JSON
- * schema (README, "Scenes"); we add one body and say what differs. */
+ * schema (docs/scene-keys.md); we add one body and say what differs. */
 static bs_scene *beam_scene(int refine) {
   bs_error err;
   bs_scene *sc = NULL;
