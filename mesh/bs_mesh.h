@@ -176,7 +176,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
  * removed, holes closed when opts->close_holes and no larger than
  * opts->max_hole, self-intersections removed, oriented outward). *pts (3 per
  * point) and *tris (3 per triangle) are allocated by the shim: free them with
- * bs_shim_free. opts (may be NULL: no hole closed) supplies close_holes and
+ * bs_surface_free. opts (may be NULL: no hole closed) supplies close_holes and
  * max_hole only; rep (may be NULL) gets the counts. Errors name the file:
  * BS_EIO (unreadable), BS_EINPUT (a malformed file, or a surface the repair
  * refuses: open, or self-intersections it cannot remove; the message says
@@ -184,9 +184,12 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
  *     double *x; int32_t *t; int64_t np, nt; bs_surface_report r;
  *     bs_mesh_read_opts o = {.close_holes = 1};
  *     if (bs_surface_prepare("scan.off", &x, &np, &t, &nt, &o, &r, &err)) ...
- *     bs_shim_free(x); bs_shim_free(t); */
+ *     bs_surface_free(x); bs_surface_free(t); */
 int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
                        const bs_mesh_read_opts *opts, struct bs_surface_report *rep, bs_error *err);
+
+/* Frees an array bs_surface_prepare returned (NULL accepted). */
+void bs_surface_free(void *p);
 
 /* The security rule for Gmsh scripts: a .geo file (with what it includes or
  * merges, and FILE.opt beside it) that runs a program (SystemCall,

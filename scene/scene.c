@@ -287,9 +287,9 @@ static int get_array(ctx *c, const cJSON *obj, const char *where, const char *ke
   return 0;
 }
 
-/* ---- sections ------------------------------------------------------------ */
+/* ---- keys bound to struct fields (scene_schema.h) ------------------------ */
 
-/* "box": its cells, integers in the table's range (an IVEC3 key). */
+/* An IVEC3 key (bodies[].box.cells): integers in the table's range. */
 static int get_ivec3(ctx *c, const cJSON *obj, const char *where, const bs_schema_key *k, int out[3]) {
   double v[3];
   int st = get_vec3(c, obj, where, k->key, k->required, v);
@@ -343,58 +343,6 @@ static int get_section(ctx *c, const cJSON *obj, const char *where, const char *
     if (st) return st;
   }
   return 0;
-}
-
-/* ---- sections ------------------------------------------------------------ */
-
-/* An enum parsed from a string that the table allows: `parse` maps the name
- * (the module's own parser); *out untouched when absent. */
-static int get_enum(ctx *c, const cJSON *obj, const char *where, const char *section, const char *key,
-                    int (*parse)(const char *, int *, bs_error *), int *out) {
-  char buf[64], w[512];
-  int st = get_choice_str(c, obj, where, section, key, buf, sizeof buf);
-  if (st || !buf[0]) return st;
-  bs_error e2;
-  if (parse(buf, out, &e2)) {
-    join(w, sizeof w, where, key);
-    return fail(c, w, "%s", e2.msg);
-  }
-  return 0;
-}
-
-static int parse_model(const char *name, int *out, bs_error *err) {
-  bs_model m;
-  int st = bs_model_parse(name, &m, err);
-  *out = (int)m;
-  return st;
-}
-
-static int parse_shape(const char *name, int *out, bs_error *err) {
-  bs_shape s;
-  int st = bs_shape_parse(name, &s, err);
-  *out = (int)s;
-  return st;
-}
-
-static int parse_collide(const char *name, int *out, bs_error *err) {
-  bs_collide_mode m;
-  int st = bs_collide_mode_parse(name, &m, err);
-  *out = (int)m;
-  return st;
-}
-
-static int parse_method(const char *name, int *out, bs_error *err) {
-  bs_method m;
-  int st = bs_method_parse(name, &m, err);
-  *out = (int)m;
-  return st;
-}
-
-static int parse_linear(const char *name, int *out, bs_error *err) {
-  bs_lin_kind k;
-  int st = bs_lin_kind_parse(name, &k, err);
-  *out = (int)k;
-  return st;
 }
 
 /* ---- sections ------------------------------------------------------------ */
