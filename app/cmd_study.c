@@ -155,8 +155,10 @@ static int parse_args(study_args *A, int argc, char **argv) {
   if (!A->scene) return bs_app_usage_error("study", "missing SCENE");
   if (A->n_knobs == 0) return bs_app_usage_error("study", "nothing to vary: give at least one --vary KEY=v1,v2,...");
   if (A->ref_dir) {
-    char p[1400];
-    snprintf(p, sizeof p, "%s/state.bin", A->ref_dir);
+    char p[BS_STUDY_FILE_PATH];
+    bs_error err;
+    if (bs_study_file_path(A->ref_dir, "state.bin", p, &err))
+      return bs_app_usage_error("study", "--reference: %s", err.msg);
     if (access(p, R_OK))
       return bs_app_usage_error("study", "--reference '%s': no state.bin in that folder (a study run folder)",
                                 A->ref_dir);
@@ -176,8 +178,9 @@ static void args_line(const bs_study_run *r, char *buf, size_t n) {
 /* Reads the done marker; 0 when present and made from the same scene
  * content (its key line equals key). */
 static int read_done(bs_study_run *r, const char *key) {
-  char p[1500];
-  snprintf(p, sizeof p, "%s/done", r->dir);
+  char p[BS_STUDY_FILE_PATH];
+  bs_error err;
+  if (bs_study_file_path(r->dir, "done", p, &err)) return -1;
   FILE *f = fopen(p, "r");
   if (!f) return -1;
   char line[8192];
@@ -196,9 +199,12 @@ static int read_done(bs_study_run *r, const char *key) {
 }
 
 static void write_done(const bs_study *S, const bs_study_run *r) {
-  char p[1500], args[8192], key[BS_STUDY_KEY_LEN + 1] = "none";
+  char p[BS_STUDY_FILE_PATH], args[8192], key[BS_STUDY_KEY_LEN + 1] = "none";
   bs_error err;
-  snprintf(p, sizeof p, "%s/done", r->dir);
+  if (bs_study_file_path(r->dir, "done", p, &err)) {
+    fprintf(stderr, "bigstep study: %s\n", err.msg);
+    return;
+  }
   args_line(r, args, sizeof args);
   if (bs_study_run_key(S, r, key, &err)) fprintf(stderr, "bigstep study: %s (the run will not be reused)\n", err.msg);
   FILE *f = fopen(p, "w");
@@ -234,15 +240,18 @@ static void fmt_time(double s, char *buf, size_t n) {
 }
 
 static int start_run(const bs_study *S, bs_study_run *r, slot *sl, const char *omp) {
-  char p[1500];
-  snprintf(p, sizeof p, "%s/done", r->dir);
-  unlink(p);
+  char p[BS_STUDY_FILE_PATH];
   bs_error err;
+  if (bs_study_file_path(r->dir, "done", p, &err)) {
+    fprintf(stderr, "bigstep study: %s\n", err.msg);
+    return -1;
+  }
+  unlink(p);
   if (bs_mkdir_p(r->dir, &err)) {
     fprintf(stderr, "bigstep study: cannot create folder '%s'\n", r->dir);
     return -1;
   }
-  snprintf(p, sizeof p, "%s/run.log", r->dir);
+  bs_study_file_path(r->dir, "run.log", p, &err); /* fits: "done" did */
   char **argv = calloc((size_t)(2 * r->n_sets + 8), sizeof(char *));
   int a = 0;
   argv[a++] = "bigstep";
@@ -385,8 +394,12 @@ static int run_all(bs_study *S, slot *sl, int jobs, int n_pending, double budget
 
 /* Runs gnuplot on plots.gp in the study folder (its output in plots.log). */
 static int run_gnuplot(const bs_study *S, char *msg, size_t msg_n) {
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plots.log", S->out);
+  char p[BS_STUDY_FILE_PATH];
+  bs_error err;
+  if (bs_study_file_path(S->out, "plots.log", p, &err)) {
+    snprintf(msg, msg_n, "%s", err.msg);
+    return -1;
+  }
   fflush(stdout);
   fflush(stderr);
   pid_t pid = fork();
@@ -454,7 +467,7 @@ static int report(bs_study *S) {
     fprintf(stderr, "bigstep study: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
-  char msg[1600] = "";
+  char msg[BS_ERROR_MSG + BS_STUDY_FILE_PATH] = ""; /* a library message, or gnuplot's naming plots.log */
   int plots = bs_study_plots_write(S, &err);
   if (plots) snprintf(msg, sizeof msg, "%s", err.msg);
   else plots = run_gnuplot(S, msg, sizeof msg);

@@ -76,6 +76,21 @@ extern "C" {
 #define BS_STUDY_MAX_RUNS 100000
 #define BS_STUDY_MAX_QOI 16
 
+/* Sizes (bytes, with the terminating NUL). Folders (the study's, the
+ * reference's, each run's OUT/NAME) are at most BS_MAX_PATH: a longer one is
+ * refused (BS_EINPUT naming it). A run's name "key=value,..." is at most
+ * BS_STUDY_NAME_LEN (a longer one is refused). A file in such a folder
+ * (bs_study_file_path) is the folder, '/' and a name of at most
+ * BS_STUDY_FILE_NAME_MAX - 1 bytes (every file a study and its caller write
+ * there: study.csv, plot_*.dat, plots.gp, done, run.log, ...). */
+#define BS_STUDY_NAME_LEN 512
+#define BS_STUDY_FILE_NAME_MAX 64
+#define BS_STUDY_FILE_PATH (BS_MAX_PATH + BS_STUDY_FILE_NAME_MAX)
+
+/* "DIR/NAME" into p: 0, or BS_EINPUT naming the path when it does not fit
+ * (DIR longer than BS_MAX_PATH - 1 or NAME than BS_STUDY_FILE_NAME_MAX - 1). */
+int bs_study_file_path(const char *dir, const char *name, char p[BS_STUDY_FILE_PATH], bs_error *err);
+
 /* ---- convergence of a quantity (pure; study_gci.c) --------------------- */
 
 /* Richardson extrapolation and the grid convergence index (GCI) of a
@@ -147,7 +162,8 @@ int bs_study_knob_is_time(const bs_study_knob *k);
 
 typedef struct bs_study_run {
   int idx[BS_STUDY_MAX_KNOBS]; /* value index of each knob                  */
-  char name[512], dir[1400];   /* "key=value,key=value", OUT/name           */
+  char name[BS_STUDY_NAME_LEN]; /* "key=value,key=value"                   */
+  char dir[BS_MAX_PATH];       /* OUT/name                                  */
   int n_sets;
   char **sets;                 /* owned "key=value": defaults, the user's, the knobs', output.* */
   /* from the run's scene */
@@ -187,8 +203,8 @@ typedef struct bs_study_opts {
 } bs_study_opts;
 
 typedef struct bs_study {
-  char scene_path[BS_MAX_PATH], name[256], out[1200];
-  char ref_dir[1200];           /* "" : the reference is runs[ref]             */
+  char scene_path[BS_MAX_PATH], name[256], out[BS_MAX_PATH];
+  char ref_dir[BS_MAX_PATH];    /* "" : the reference is runs[ref]             */
   int n_user;
   char **user_sets;
   int n_knobs;
@@ -209,7 +225,8 @@ typedef struct bs_study {
 } bs_study;
 
 /* Copies the options and loads the scene with the user's settings (its
- * body count; at most BS_STUDY_MAX_BODIES). */
+ * body count; at most BS_STUDY_MAX_BODIES). A scene path, reference or
+ * study folder of BS_MAX_PATH bytes or more is BS_EINPUT naming it. */
 int bs_study_create(const bs_study_opts *o, bs_study **out, bs_error *err);
 void bs_study_destroy(bs_study **S);
 
@@ -218,7 +235,8 @@ void bs_study_destroy(bs_study **S);
 int bs_study_check_bodies(const bs_study *S, bs_error *err);
 
 /* The runs (see the top). Each run's settings go through bs_scene_load:
- * "run NAME: message". Refinement knobs need bodies.*.reorder none. */
+ * "run NAME: message". Refinement knobs need bodies.*.reorder none. A run
+ * name or folder longer than its size (see Sizes) is BS_EINPUT naming it. */
 int bs_study_plan(bs_study *S, bs_error *err);
 
 /* Body size L and the per-body counts of the unrefined meshes. */
@@ -233,9 +251,8 @@ int bs_study_measure_bodies(bs_study *S, bs_error *err);
 #define BS_STUDY_KEY_LEN 32
 int bs_study_run_key(const bs_study *S, const bs_study_run *r, char key[BS_STUDY_KEY_LEN + 1], bs_error *err);
 
-/* Rows of a complete frames.csv of run r (header excluded), and whether
- * r->dir holds that many. */
-int bs_study_run_rows(const bs_study_run *r);
+/* Whether r->dir holds a complete frames.csv (the rows a run of r's scene
+ * writes, header excluded: frames + 1, or 2 for a static scene). */
 int bs_study_run_complete(const bs_study_run *r);
 
 /* ---- results ---------------------------------------------------------------- */
@@ -244,75 +261,6 @@ int bs_study_run_complete(const bs_study_run *r);
  * marks the Pareto front; returns the number of runs that could not be
  * compared (their errors are NAN, or untouched when a state file is missing). */
 int bs_study_evaluate(bs_study *S);
-void bs_study_read_costs(bs_study *S);
-int bs_study_compare(bs_study *S);
-void bs_study_mark_pareto(bs_study *S);
-
-/* Vertex count of a body with counts c (V, E, F, T) after r uniform
- * refinements; the offsets of each body's block in a run with the given
- * refinement per body (returns the total vertex count). */
-int64_t bs_study_body_vertices(const int64_t c[4], int r);
-int64_t bs_study_offsets(const bs_study *S, const int *refine, int64_t *off);
-
-/* Errors of one state file against another at common frame times (|t_a -
- * t_b| <= 1e-9 (1 + |t_b|)), over n_blocks blocks: count[q] vertices from
- * off_a[q] in a and off_b[q] in b. Reads both readers to their end. The
- * errors are NAN first; 0 when at least one frame was common, else -1 (also
- * when a block lies outside a reader). */
-typedef struct bs_study_errors {
-  double pos_max, pos_last, vel_max, vel_last;
-  int n_common;
-} bs_study_errors;
-
-int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
-                            const int64_t *off_b, const int64_t *count, double size, double vscale,
-                            bs_study_errors *e);
-
-/* Errors of run r against the run folder ref_dir whose body blocks start at
- * off_ref, into r's error fields (left as they are when a state file cannot
- * be opened, NAN when the vertices do not match); 0, or -1 when not compared. */
-int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref);
-
-/* The quantities of interest: each run's qoi.csv column of every S->qoi
- * name, compared with the reference's at common frame times (as the
- * states): error = |q - q_ref| / Q, Q = the reference's largest |q| over its
- * frames (1 when that is 0, making the error absolute). Returns the number
- * of complete runs whose qoi.csv could not be read or lacks a name. */
-int bs_study_read_qoi(bs_study *S);
-
-/* GCI of quantity q (an index into S->qoi) along knob k for method: the
- * three finest complete runs of the knob's group (other knobs at the
- * reference, distinct h), their q_last values.
- * used[3] gets their run indices (-1: missing), *n_skipped the runs of the
- * group that failed or timed out. BS_GCI_BAD_INPUT with fewer than three. */
-bs_gci_status bs_study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
-                               int *n_skipped);
-
-/* Largest vertex speed over all frames of dir/state.bin (m/s); 0 if unreadable. */
-double bs_study_max_speed(const char *dir);
-
-/* ---- orders ----------------------------------------------------------------- */
-
-typedef struct bs_study_order {
-  double p, logc;
-  int used;
-} bs_study_order;
-
-/* The runs of method with every knob but k (and the method) at its finest
- * value, into out (n_runs entries); returns how many. */
-int bs_study_group(const bs_study *S, int k, const char *method, int *out);
-/* h of run r for knob k: 2^-refine (space) or dt (time). */
-double bs_study_knob_h(const bs_study *S, const bs_study_run *r, int k);
-/* Whether run r of a knob-k group enters the fit against the reference. */
-int bs_study_fit_point(const bs_study *S, const bs_study_run *r, int k);
-/* The order of knob k for method against the reference. */
-bs_study_order bs_study_order_fit(const bs_study *S, int k, const char *method);
-/* The order of knob k from successive levels (each run of the group against
- * the next finer one; reads their state files). pts (may be NULL) gets a
- * line "LEVEL ERROR" per pair. NAN when fewer than two pairs. */
-double bs_study_order_successive(const bs_study *S, int k, const char *method, int *used, FILE *pts);
-/* The distinct methods of the runs, in run order (pointers into the runs). */
-int bs_study_methods(const bs_study *S, const char **names, int max);
 
 /* ---- metrics: pure functions ------------------------------------------------ */
 

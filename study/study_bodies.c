@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "bs_sim.h"
-#include "bs_study.h"
+#include "study_internal.h"
 
 /* Vertex count after r uniform refinements: V' = V + E, E' = 2E + 3F + T,
  * F' = 4F + 8T, T' = 8T (F counts every triangle). */

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 /* Squared position and velocity differences summed over the blocks. */
 static void block_sums(const bs_state_reader *a, const bs_state_reader *b, int n_blocks, const int64_t *off_a,

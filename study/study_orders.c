@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 int bs_study_group(const bs_study *S, int k, const char *method, int *out) {
   int n = 0;

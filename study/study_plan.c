@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 static char *xstrdup(const char *s) {
   size_t n = strlen(s) + 1;
@@ -66,10 +66,19 @@ int bs_study_create(const bs_study_opts *o, bs_study **out, bs_error *err) {
   bs_study *S = calloc(1, sizeof *S);
   if (!S) return bs_error_set(err, BS_ENOMEM, "out of memory (study)");
   S->ref = -1;
+  int st = 0;
+  const char *const paths[3] = {o->scene, o->reference, o->out};
+  static const char *const what[3] = {"scene", "reference folder", "study folder"};
+  for (int i = 0; i < 3 && !st; i++)
+    if (paths[i] && strlen(paths[i]) >= BS_MAX_PATH)
+      st = bs_error_set(err, BS_EINPUT, "%s '%.80s...': longer than %d bytes", what[i], paths[i], BS_MAX_PATH - 1);
+  if (st) {
+    free(S);
+    return st;
+  }
   snprintf(S->scene_path, sizeof S->scene_path, "%s", o->scene);
   if (o->reference) snprintf(S->ref_dir, sizeof S->ref_dir, "%s", o->reference);
   study_names(S, o->out);
-  int st = 0;
   S->user_sets = calloc((size_t)o->n_sets + 1, sizeof(char *));
   if (!S->user_sets) st = bs_error_set(err, BS_ENOMEM, "out of memory (study)");
   for (int i = 0; !st && i < o->n_sets; i++)
@@ -130,15 +139,35 @@ static void add_set(bs_study_run *r, char *s, int *oom) {
   r->sets[r->n_sets++] = s;
 }
 
+/* Run r's name from its knobs' values, and its folder OUT/name. */
+static int run_name(const bs_study *S, bs_study_run *r, bs_error *err) {
+  size_t len = 0;
+  for (int k = 0; k < S->n_knobs; k++) {
+    char sv[128];
+    sanitize(S->knobs[k].vals[r->idx[k]], sv, sizeof sv);
+    int n = snprintf(r->name + len, sizeof r->name - len, "%s%s=%s", k ? "," : "", S->knobs[k].key, sv);
+    if (n < 0 || (size_t)n >= sizeof r->name - len)
+      return bs_error_set(err, BS_EINPUT, "run '%.100s...': the name is longer than %d bytes", r->name,
+                          BS_STUDY_NAME_LEN - 1);
+    len += (size_t)n;
+  }
+  int n = snprintf(r->dir, sizeof r->dir, "%s/%s", S->out, r->name);
+  if (n < 0 || (size_t)n >= sizeof r->dir)
+    return bs_error_set(err, BS_EINPUT, "run %.200s: its folder of %d bytes is longer than %d bytes: '%.100s.../%s'",
+                        r->name, n, BS_MAX_PATH - 1, S->out, r->name);
+  return 0;
+}
+
 /* The --set list of run r: study defaults, the user's, the knobs' values, the
- * outputs; its name and folder. */
-static int build_sets(const bs_study *S, bs_study_run *r) {
+ * outputs (its name and folder made first). */
+static int build_sets(const bs_study *S, bs_study_run *r, bs_error *err) {
+  int st = run_name(S, r, err);
+  if (st) return st;
   int cap = 8 + S->n_user + S->n_knobs * (S->n_bodies + 1), oom = 0;
-  if (!(r->sets = calloc((size_t)cap, sizeof(char *)))) return -1;
+  if (!(r->sets = calloc((size_t)cap, sizeof(char *)))) return bs_error_set(err, BS_ENOMEM, "out of memory (study)");
   add_set(r, xstrdup("output.vtu_every=0"), &oom);
   add_set(r, xstrdup("output.checkpoint_every=0"), &oom); /* a study's runs are measured, never resumed */
   for (int i = 0; i < S->n_user; i++) add_set(r, xstrdup(S->user_sets[i]), &oom);
-  char name[512] = "";
   for (int k = 0; k < S->n_knobs; k++) {
     const bs_study_knob *v = &S->knobs[k];
     const char *val = v->vals[r->idx[k]];
@@ -151,17 +180,11 @@ static int build_sets(const bs_study *S, bs_study_run *r) {
     } else {
       add_set(r, xprintf("%s=%s", v->path, val), &oom);
     }
-    char sv[128];
-    sanitize(val, sv, sizeof sv);
-    size_t len = strlen(name);
-    snprintf(name + len, sizeof name - len, "%s%s=%s", k ? "," : "", v->key, sv);
   }
-  snprintf(r->name, sizeof r->name, "%s", name);
-  snprintf(r->dir, sizeof r->dir, "%s/%s", S->out, name);
   add_set(r, xprintf("output.dir=%s%s", r->dir, ""), &oom);
   add_set(r, xstrdup("output.states=true"), &oom);
   add_set(r, xstrdup("output.stats=true"), &oom);
-  return oom ? -1 : 0;
+  return oom ? bs_error_set(err, BS_ENOMEM, "out of memory (study)") : 0;
 }
 
 /* Run r's scene: validated, and what the study needs of it. */
@@ -210,7 +233,7 @@ int bs_study_plan(bs_study *S, bs_error *err) {
       q /= S->knobs[k].n;
       fin &= r->idx[k] == S->knobs[k].finest;
     }
-    if (build_sets(S, r)) st = bs_error_set(err, BS_ENOMEM, "out of memory (study)");
+    st = build_sets(S, r, err);
     if (!st) st = run_scene(S, r, any_refine, err);
     if (!st && fin && !S->ref_dir[0]) {
       r->is_ref = 1;

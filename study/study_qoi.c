@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 const char *bs_study_run_status(const bs_study_run *r) {
   return r->timed_out ? "timeout" : r->exit_code != 0 ? "failed" : "ok";

@@ -6,13 +6,37 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 #define MAX_METHODS 256
 
+int bs_study_file_path(const char *dir, const char *name, char p[BS_STUDY_FILE_PATH], bs_error *err) {
+  size_t dl = strlen(dir), nl = strlen(name);
+  if (dl >= BS_MAX_PATH || nl >= BS_STUDY_FILE_NAME_MAX) {
+    p[0] = 0;
+    return bs_error_set(err, BS_EINPUT,
+                        "'%.100s%s/%.80s': the path is too long (a folder of %zu bytes, at most %d; a file name of "
+                        "%zu, at most %d)",
+                        dir, dl > 100 ? "..." : "", name, dl, BS_MAX_PATH - 1, nl, BS_STUDY_FILE_NAME_MAX - 1);
+  }
+  memcpy(p, dir, dl);
+  p[dl] = '/';
+  memcpy(p + dl + 1, name, nl + 1);
+  return 0;
+}
+
+/* A file of the study's folder opened for writing, or NULL (a path too long
+ * or a file that cannot be opened). */
+static FILE *open_out(const bs_study *S, const char *name, char p[BS_STUDY_FILE_PATH]) {
+  bs_error e;
+  if (bs_study_file_path(S->out, name, p, &e)) return NULL;
+  return fopen(p, "w");
+}
+
 int bs_study_csv_write(const bs_study *S, bs_error *err) {
-  char p[1400];
-  snprintf(p, sizeof p, "%s/study.csv", S->out);
+  char p[BS_STUDY_FILE_PATH];
+  int st = bs_study_file_path(S->out, "study.csv", p, err);
+  if (st) return st;
   FILE *f = fopen(p, "w");
   if (!f) return bs_error_set(err, BS_EIO, "cannot write '%s'", p);
   fprintf(f, "run");
@@ -43,9 +67,8 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
 
 /* plot_pareto.dat: the front (error > 0) sorted by cost. */
 static void pareto_data(const bs_study *S) {
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plot_pareto.dat", S->out);
-  FILE *d = fopen(p, "w");
+  char p[BS_STUDY_FILE_PATH];
+  FILE *d = open_out(S, "plot_pareto.dat", p);
   if (!d) return;
   fprintf(d, "# Pareto front (error > 0): s_per_frame pos_err_max\n");
   int *ord = malloc(sizeof(int) * ((size_t)S->n_runs + 1)), no = 0;
@@ -81,9 +104,8 @@ static double plot_cost_of(const bs_study_run *r) {
 /* plot_cost.dat: per method the runs with a positive error (cost, error,
  * label), then one block of the failed and timed-out runs; the points written. */
 static int cost_data(const bs_study *S, const char **methods, int nm) {
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plot_cost.dat", S->out);
-  FILE *d = fopen(p, "w");
+  char p[BS_STUDY_FILE_PATH];
+  FILE *d = open_out(S, "plot_cost.dat", p);
   int n = 0;
   for (int m = 0; d && m <= nm; m++) {
     fprintf(d, m < nm ? "# method %s: s_per_frame pos_err_max setting\n" : "# failed or timeout%s: cost floor\n",
@@ -188,11 +210,11 @@ static int refine_points(const bs_study *S, int k, const char **methods, int nm,
  * (log-log), with the fitted order. */
 static void plot_refine(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
   const int is_t = bs_study_knob_is_time(&S->knobs[k]);
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plot_refine_%d.dat", S->out, k);
-  FILE *d = fopen(p, "w");
-  snprintf(p, sizeof p, "%s/plot_refine_successive_%d.dat", S->out, k);
-  FILE *ds = fopen(p, "w");
+  char p[BS_STUDY_FILE_PATH], name[BS_STUDY_FILE_NAME_MAX];
+  snprintf(name, sizeof name, "plot_refine_%d.dat", k);
+  FILE *d = open_out(S, name, p);
+  snprintf(name, sizeof name, "plot_refine_successive_%d.dat", k);
+  FILE *ds = open_out(S, name, p);
   if (is_t)
     fprintf(gp, "set output 'error_vs_dt%s%s.png'\nset logscale xy\nset key inside top left\n"
                 "set xlabel 'time step dt (s) [%s]'\n",
@@ -215,9 +237,8 @@ static void plot_refine(const bs_study *S, int k, const char **methods, int nm, 
 
 /* 3. iterations per step against steps per frame (knob k). */
 static void plot_iterations(const bs_study *S, int k, const char **methods, int nm, int *grp, FILE *gp) {
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plot_iterations.dat", S->out);
-  FILE *d = fopen(p, "w");
+  char p[BS_STUDY_FILE_PATH];
+  FILE *d = open_out(S, "plot_iterations.dat", p);
   for (int m = 0; d && m < nm; m++) {
     int ng = bs_study_group(S, k, methods[m], grp);
     fprintf(d, "# method %s: steps_per_frame newton_per_step cg_per_step\n", methods[m]);
@@ -242,8 +263,9 @@ static void plot_iterations(const bs_study *S, int k, const char **methods, int 
 int bs_study_plots_write(const bs_study *S, bs_error *err) {
   const char *methods[MAX_METHODS];
   int nm = bs_study_methods(S, methods, MAX_METHODS);
-  char p[1400];
-  snprintf(p, sizeof p, "%s/plots.gp", S->out);
+  char p[BS_STUDY_FILE_PATH];
+  int st = bs_study_file_path(S->out, "plots.gp", p, err);
+  if (st) return st;
   int *grp = malloc(sizeof(int) * ((size_t)S->n_runs + 1));
   if (!grp) return bs_error_set(err, BS_ENOMEM, "out of memory (study plots)");
   FILE *gp = fopen(p, "w");

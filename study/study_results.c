@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 /* s/frame from summary.txt's row and the peak memory (MiB). */
 static int read_summary(const char *dir, double *spf_s, double *peak) {

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bs_study.h"
+#include "study_internal.h"
 
 #define MAX_METHODS 256
 
@@ -171,7 +171,7 @@ void bs_study_summary_write(const bs_study *S, FILE *f) {
     n_failed += S->runs[i].exit_code != 0 && !S->runs[i].timed_out;
     n_timeout += S->runs[i].timed_out;
   }
-  char ref_desc[1600];
+  char ref_desc[sizeof "the run in " + BS_MAX_PATH];
   if (S->ref_dir[0]) snprintf(ref_desc, sizeof ref_desc, "the run in %s", S->ref_dir);
   else snprintf(ref_desc, sizeof ref_desc, "%s", S->ref >= 0 ? S->runs[S->ref].name : "?");
   fprintf(f, "\nstudy %s: %d runs (%d failed, %d timed out), body size %.4g m; reference: %s\n", S->name, S->n_runs,

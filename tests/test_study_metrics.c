@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "bs_study.h"
+#include "study_internal.h" /* the steps of the evaluation, private to study/ */
 
 /* ---- order fits ------------------------------------------------------------ */
 

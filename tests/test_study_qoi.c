@@ -14,6 +14,7 @@
 
 #include "bs_runfolder.h"
 #include "bs_study.h"
+#include "study_internal.h" /* the steps of the evaluation, private to study/ */
 
 static const char *scene =
     "{\"time\": {\"fps\": 24, \"frames\": 2, \"steps_per_frame\": 1},\n"
