@@ -16,7 +16,8 @@ include(CMakePackageConfigHelpers)
 # The installed headers: bigstep's public API, listed here and nowhere else.
 # The API proper: base (errors, limits), scene, sim (the simulation, its
 # fields, forces, QoIs, memory estimate), terms for user energy terms,
-# mesh, runfolder, study. With them the headers whose types they expose:
+# mesh, runfolder (with the audit of saved frames), study, and the sampling
+# of a surface into a level set. With them the headers whose types they expose:
 # materials, the fem and the step options (physics/), the block matrix user
 # terms assemble into and the minimizer's options (solver/), obstacles and
 # level sets (collision/). Every other header is internal: not installed,
@@ -30,13 +31,8 @@ set(BS_PUBLIC_HEADERS
     solver/bs_bsr.h solver/bs_minimize.h solver/bs_linsolve.h solver/bs_amg.h
     collision/bs_obstacles.h collision/bs_levelset.h
     mesh/bs_mesh.h mesh/bs_vtu_read.h
-    runfolder/bs_runfolder.h
+    runfolder/bs_runfolder.h runfolder/bs_audit.h collision/bs_ls_sample.h
     study/bs_study.h)
-foreach(_h IN ITEMS runfolder/bs_audit.h)
-  if(EXISTS ${PROJECT_SOURCE_DIR}/${_h}) # a header whose module is landing
-    list(APPEND BS_PUBLIC_HEADERS ${_h})
-  endif()
-endforeach()
 
 get_property(BS_LIBRARIES GLOBAL PROPERTY BS_LIBRARIES)
 

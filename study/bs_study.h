@@ -181,7 +181,7 @@ typedef struct bs_study_run {
   long newton, cg, failed_steps;
   double s_per_frame, newton_per_step, cg_per_step, peak_mib;
   double pos_max, pos_last, vel_max, vel_last, drift, pen_max;
-  /* quantities of interest (bs_study_read_qoi; NAN where not measured) */
+  /* quantities of interest (bs__study_read_qoi; NAN where not measured) */
   double q_last[BS_STUDY_MAX_QOI];     /* the value at the last frame       */
   double q_err_last[BS_STUDY_MAX_QOI]; /* |q - q_ref| / Q at the last common frame */
   double q_err_max[BS_STUDY_MAX_QOI];  /* the max over common frames        */

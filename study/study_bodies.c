@@ -12,7 +12,7 @@
 
 /* Vertex count after r uniform refinements: V' = V + E, E' = 2E + 3F + T,
  * F' = 4F + 8T, T' = 8T (F counts every triangle). */
-int64_t bs_study_body_vertices(const int64_t c[4], int r) {
+int64_t bs__study_body_vertices(const int64_t c[4], int r) {
   int64_t V = c[0], E = c[1], F = c[2], T = c[3];
   for (int i = 0; i < r; i++) {
     int64_t V1 = V + E, E1 = 2 * E + 3 * F + T, F1 = 4 * F + 8 * T, T1 = 8 * T;
@@ -24,11 +24,11 @@ int64_t bs_study_body_vertices(const int64_t c[4], int r) {
   return V;
 }
 
-int64_t bs_study_offsets(const bs_study *S, const int *refine, int64_t *off) {
+int64_t bs__study_offsets(const bs_study *S, const int *refine, int64_t *off) {
   int64_t o = 0;
   for (int b = 0; b < S->n_bodies; b++) {
     off[b] = o;
-    o += bs_study_body_vertices(S->counts[b], refine[b]);
+    o += bs__study_body_vertices(S->counts[b], refine[b]);
   }
   return o;
 }

@@ -23,7 +23,7 @@ static void block_sums(const bs_state_reader *a, const bs_state_reader *b, int n
   }
 }
 
-int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
+int bs__study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
                             const int64_t *off_b, const int64_t *count, double size, double vscale,
                             bs_study_errors *e) {
   e->pos_max = e->vel_max = e->pos_last = e->vel_last = NAN;
@@ -59,7 +59,7 @@ int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks
 /* Errors of run r against the folder ref_dir, whose body blocks start at
  * off_ref: into r's error fields (left as they are when a state file cannot
  * be opened; NAN when the vertices do not match or no frame time is common). */
-int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref) {
+int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref) {
   bs_state_reader a, b;
   bs_error e;
   if (bs_state_open(r->dir, &a, &e)) return -1;
@@ -68,11 +68,11 @@ int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir
     return -1;
   }
   int64_t off_r[BS_STUDY_MAX_BODIES], zero = 0, all = a.n;
-  int ok = S->direct ? a.n == b.n : bs_study_offsets(S, r->body_refine, off_r) == a.n;
+  int ok = S->direct ? a.n == b.n : bs__study_offsets(S, r->body_refine, off_r) == a.n;
   bs_study_errors er = {NAN, NAN, NAN, NAN, 0};
   int st = -1;
-  if (ok && S->direct) st = bs_study_compare_states(&a, &b, 1, &zero, &zero, &all, S->size, S->vscale, &er);
-  else if (ok) st = bs_study_compare_states(&a, &b, S->n_bodies, off_r, off_ref, S->cmp, S->size, S->vscale, &er);
+  if (ok && S->direct) st = bs__study_compare_states(&a, &b, 1, &zero, &zero, &all, S->size, S->vscale, &er);
+  else if (ok) st = bs__study_compare_states(&a, &b, S->n_bodies, off_r, off_ref, S->cmp, S->size, S->vscale, &er);
   r->pos_max = er.pos_max;
   r->pos_last = er.pos_last;
   r->vel_max = er.vel_max;
@@ -82,7 +82,7 @@ int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir
   return st;
 }
 
-double bs_study_max_speed(const char *dir) {
+double bs__study_max_speed(const char *dir) {
   bs_state_reader s;
   bs_error e;
   if (bs_state_open(dir, &s, &e)) return 0;
@@ -106,11 +106,11 @@ static int given_levels(const bs_study *S, int *ref_refine, int64_t *off_ref) {
   if (bs_state_open(S->ref_dir, &sf, &e)) return 0;
   for (int lvl = 0; lvl <= 10 && !found; lvl++) {
     for (int b = 0; b < S->n_bodies; b++) ref_refine[b] = lvl;
-    if (bs_study_offsets(S, ref_refine, off_ref) == sf.n) found = 1;
+    if (bs__study_offsets(S, ref_refine, off_ref) == sf.n) found = 1;
   }
   if (!found) {
     for (int b = 0; b < S->n_bodies; b++) ref_refine[b] = S->runs[0].body_refine[b];
-    found = bs_study_offsets(S, ref_refine, off_ref) == sf.n;
+    found = bs__study_offsets(S, ref_refine, off_ref) == sf.n;
   }
   bs_state_close(&sf);
   return found;
@@ -125,24 +125,24 @@ static void reference_blocks(bs_study *S, int64_t *off_ref) {
     for (int i = 1; i < S->n_runs; i++)
       if (S->runs[i].body_refine[b] < mn) mn = S->runs[i].body_refine[b];
     ref_refine[b] = S->ref_dir[0] ? 0 : S->runs[S->ref].body_refine[b];
-    S->cmp[b] = bs_study_body_vertices(S->counts[b], mn);
+    S->cmp[b] = bs__study_body_vertices(S->counts[b], mn);
   }
   S->direct = 0;
   if (S->ref_dir[0]) {
     int found = given_levels(S, ref_refine, off_ref);
     if (!found) S->direct = 1; /* no refinement relation: same vertex count required */
     for (int b = 0; found && b < S->n_bodies; b++) {
-      int64_t nv = bs_study_body_vertices(S->counts[b], ref_refine[b]);
+      int64_t nv = bs__study_body_vertices(S->counts[b], ref_refine[b]);
       if (S->cmp[b] > nv) S->cmp[b] = nv;
     }
   }
-  bs_study_offsets(S, ref_refine, off_ref);
+  bs__study_offsets(S, ref_refine, off_ref);
   const char *ref_dir = S->ref_dir[0] ? S->ref_dir : S->runs[S->ref].dir;
-  S->vscale = bs_study_max_speed(ref_dir);
+  S->vscale = bs__study_max_speed(ref_dir);
   if (!(S->vscale > 0)) S->vscale = 1.0;
 }
 
-int bs_study_compare(bs_study *S) {
+int bs__study_compare(bs_study *S) {
   int64_t off_ref[BS_STUDY_MAX_BODIES];
   reference_blocks(S, off_ref);
   const char *ref_dir = S->ref_dir[0] ? S->ref_dir : S->runs[S->ref].dir;
@@ -156,6 +156,6 @@ int bs_study_compare(bs_study *S) {
   }
   int n_bad = 0;
   for (int i = 0; i < S->n_runs; i++)
-    if (bs_study_compare_run(S, &S->runs[i], ref_dir, off_ref)) n_bad++;
+    if (bs__study_compare_run(S, &S->runs[i], ref_dir, off_ref)) n_bad++;
   return n_bad;
 }

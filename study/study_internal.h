@@ -10,22 +10,22 @@
 #include "bs_study.h"
 
 /* Rows of a complete frames.csv of run r (header excluded). */
-int bs_study_run_rows(const bs_study_run *r);
+int bs__study_run_rows(const bs_study_run *r);
 
 /* ---- results ---------------------------------------------------------------- */
 
 /* The three steps of bs_study_evaluate: the costs of every run (frames.csv,
  * summary.txt); the errors against the reference (returns the runs not
  * compared); the Pareto front. */
-void bs_study_read_costs(bs_study *S);
-int bs_study_compare(bs_study *S);
-void bs_study_mark_pareto(bs_study *S);
+void bs__study_read_costs(bs_study *S);
+int bs__study_compare(bs_study *S);
+void bs__study_mark_pareto(bs_study *S);
 
 /* Vertex count of a body with counts c (V, E, F, T) after r uniform
  * refinements; the offsets of each body's block in a run with the given
  * refinement per body (returns the total vertex count). */
-int64_t bs_study_body_vertices(const int64_t c[4], int r);
-int64_t bs_study_offsets(const bs_study *S, const int *refine, int64_t *off);
+int64_t bs__study_body_vertices(const int64_t c[4], int r);
+int64_t bs__study_offsets(const bs_study *S, const int *refine, int64_t *off);
 
 /* Errors of one state file against another at common frame times (|t_a -
  * t_b| <= 1e-9 (1 + |t_b|)), over n_blocks blocks: count[q] vertices from
@@ -37,32 +37,32 @@ typedef struct bs_study_errors {
   int n_common;
 } bs_study_errors;
 
-int bs_study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
+int bs__study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
                             const int64_t *off_b, const int64_t *count, double size, double vscale,
                             bs_study_errors *e);
 
 /* Errors of run r against the run folder ref_dir whose body blocks start at
  * off_ref, into r's error fields (left as they are when a state file cannot
  * be opened, NAN when the vertices do not match); 0, or -1 when not compared. */
-int bs_study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref);
+int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_dir, const int64_t *off_ref);
 
 /* The quantities of interest: each run's qoi.csv column of every S->qoi
  * name, compared with the reference's at common frame times (as the
  * states): error = |q - q_ref| / Q, Q = the reference's largest |q| over its
  * frames (1 when that is 0, making the error absolute). Returns the number
  * of complete runs whose qoi.csv could not be read or lacks a name. */
-int bs_study_read_qoi(bs_study *S);
+int bs__study_read_qoi(bs_study *S);
 
 /* GCI of quantity q (an index into S->qoi) along knob k for method: the
  * three finest complete runs of the knob's group (other knobs at the
  * reference, distinct h), their q_last values.
  * used[3] gets their run indices (-1: missing), *n_skipped the runs of the
  * group that failed or timed out. BS_GCI_BAD_INPUT with fewer than three. */
-bs_gci_status bs_study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
+bs_gci_status bs__study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
                                int *n_skipped);
 
 /* Largest vertex speed over all frames of dir/state.bin (m/s); 0 if unreadable. */
-double bs_study_max_speed(const char *dir);
+double bs__study_max_speed(const char *dir);
 
 /* ---- orders ----------------------------------------------------------------- */
 
@@ -73,18 +73,18 @@ typedef struct bs_study_order {
 
 /* The runs of method with every knob but k (and the method) at its finest
  * value, into out (n_runs entries); returns how many. */
-int bs_study_group(const bs_study *S, int k, const char *method, int *out);
+int bs__study_group(const bs_study *S, int k, const char *method, int *out);
 /* h of run r for knob k: 2^-refine (space) or dt (time). */
-double bs_study_knob_h(const bs_study *S, const bs_study_run *r, int k);
+double bs__study_knob_h(const bs_study *S, const bs_study_run *r, int k);
 /* Whether run r of a knob-k group enters the fit against the reference. */
-int bs_study_fit_point(const bs_study *S, const bs_study_run *r, int k);
+int bs__study_fit_point(const bs_study *S, const bs_study_run *r, int k);
 /* The order of knob k for method against the reference. */
-bs_study_order bs_study_order_fit(const bs_study *S, int k, const char *method);
+bs_study_order bs__study_order_fit(const bs_study *S, int k, const char *method);
 /* The order of knob k from successive levels (each run of the group against
  * the next finer one; reads their state files). pts (may be NULL) gets a
  * line "LEVEL ERROR" per pair. NAN when fewer than two pairs. */
-double bs_study_order_successive(const bs_study *S, int k, const char *method, int *used, FILE *pts);
+double bs__study_order_successive(const bs_study *S, int k, const char *method, int *used, FILE *pts);
 /* The distinct methods of the runs, in run order (pointers into the runs). */
-int bs_study_methods(const bs_study *S, const char **names, int max);
+int bs__study_methods(const bs_study *S, const char **names, int max);
 
 #endif

@@ -243,6 +243,6 @@ int bs_study_plan(bs_study *S, bs_error *err) {
   return st;
 }
 
-int bs_study_run_rows(const bs_study_run *r) { return r->is_static ? 2 : r->frames + 1; }
+int bs__study_run_rows(const bs_study_run *r) { return r->is_static ? 2 : r->frames + 1; }
 
-int bs_study_run_complete(const bs_study_run *r) { return bs_frames_csv_lines(r->dir) == bs_study_run_rows(r) + 1; }
+int bs_study_run_complete(const bs_study_run *r) { return bs_frames_csv_lines(r->dir) == bs__study_run_rows(r) + 1; }

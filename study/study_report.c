@@ -163,14 +163,14 @@ static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp)
 static void plot_refine_method(const bs_study *S, int k, int m, const char *method, int *grp, FILE *d, FILE *ds,
                                FILE *gp) {
   const int is_t = bs_study_knob_is_time(&S->knobs[k]);
-  bs_study_order o = bs_study_order_fit(S, k, method);
-  int ng = bs_study_group(S, k, method, grp);
+  bs_study_order o = bs__study_order_fit(S, k, method);
+  int ng = bs__study_group(S, k, method, grp);
   if (d) {
     fprintf(d, "# method %s: %s pos_err_max\n", method, is_t ? "dt" : "level");
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
-      if (!bs_study_fit_point(S, r, k) || !(r->pos_max > 0)) continue;
-      if (is_t) fprintf(d, "%.9g %.9g\n", bs_study_knob_h(S, r, k), r->pos_max);
+      if (!bs__study_fit_point(S, r, k) || !(r->pos_max > 0)) continue;
+      if (is_t) fprintf(d, "%.9g %.9g\n", bs__study_knob_h(S, r, k), r->pos_max);
       else fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
     }
     fprintf(d, "\n\n");
@@ -185,7 +185,7 @@ static void plot_refine_method(const bs_study *S, int k, int m, const char *meth
             method, o.p, o.used);
   int used = 0;
   if (ds) fprintf(ds, "# method %s: level, position error against the next finer level\n", method);
-  double ps = is_t ? NAN : bs_study_order_successive(S, k, method, &used, ds);
+  double ps = is_t ? NAN : bs__study_order_successive(S, k, method, &used, ds);
   if (ds) fprintf(ds, "\n\n");
   if (ds && used > 0) {
     char ord[64] = "";
@@ -200,8 +200,8 @@ static void plot_refine_method(const bs_study *S, int k, int m, const char *meth
 static int refine_points(const bs_study *S, int k, const char **methods, int nm, int *grp) {
   int n = 0;
   for (int m = 0; m < nm; m++) {
-    int ng = bs_study_group(S, k, methods[m], grp);
-    for (int i = 0; i < ng; i++) n += bs_study_fit_point(S, &S->runs[grp[i]], k) && S->runs[grp[i]].pos_max > 0;
+    int ng = bs__study_group(S, k, methods[m], grp);
+    for (int i = 0; i < ng; i++) n += bs__study_fit_point(S, &S->runs[grp[i]], k) && S->runs[grp[i]].pos_max > 0;
   }
   return n;
 }
@@ -240,7 +240,7 @@ static void plot_iterations(const bs_study *S, int k, const char **methods, int 
   char p[BS_STUDY_FILE_PATH];
   FILE *d = open_out(S, "plot_iterations.dat", p);
   for (int m = 0; d && m < nm; m++) {
-    int ng = bs_study_group(S, k, methods[m], grp);
+    int ng = bs__study_group(S, k, methods[m], grp);
     fprintf(d, "# method %s: steps_per_frame newton_per_step cg_per_step\n", methods[m]);
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
@@ -262,7 +262,7 @@ static void plot_iterations(const bs_study *S, int k, const char **methods, int 
 
 int bs_study_plots_write(const bs_study *S, bs_error *err) {
   const char *methods[MAX_METHODS];
-  int nm = bs_study_methods(S, methods, MAX_METHODS);
+  int nm = bs__study_methods(S, methods, MAX_METHODS);
   char p[BS_STUDY_FILE_PATH];
   int st = bs_study_file_path(S->out, "plots.gp", p, err);
   if (st) return st;

@@ -55,11 +55,11 @@ static void read_costs(bs_study_run *r) {
   bs_frames_table_free(&F);
 }
 
-void bs_study_read_costs(bs_study *S) {
+void bs__study_read_costs(bs_study *S) {
   for (int i = 0; i < S->n_runs; i++) read_costs(&S->runs[i]);
 }
 
-void bs_study_mark_pareto(bs_study *S) {
+void bs__study_mark_pareto(bs_study *S) {
   int n = S->n_runs;
   double *cost = calloc((size_t)n + 1, sizeof(double)), *error = calloc((size_t)n + 1, sizeof(double));
   int *ok = calloc((size_t)n + 1, sizeof(int)), *front = calloc((size_t)n + 1, sizeof(int));
@@ -79,8 +79,8 @@ void bs_study_mark_pareto(bs_study *S) {
 }
 
 int bs_study_evaluate(bs_study *S) {
-  bs_study_read_costs(S);
-  int n_bad = bs_study_compare(S);
-  bs_study_mark_pareto(S);
-  return n_bad + bs_study_read_qoi(S);
+  bs__study_read_costs(S);
+  int n_bad = bs__study_compare(S);
+  bs__study_mark_pareto(S);
+  return n_bad + bs__study_read_qoi(S);
 }

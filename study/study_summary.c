@@ -62,7 +62,7 @@ static void summary_cheapest(const bs_study *S, const char **methods, int nm, FI
 static void summary_order(const bs_study *S, int k, const char *method, FILE *f) {
   const bs_study_knob *v = &S->knobs[k];
   int is_t = bs_study_knob_is_time(v);
-  bs_study_order o = bs_study_order_fit(S, k, method);
+  bs_study_order o = bs__study_order_fit(S, k, method);
   if (isfinite(o.p))
     fprintf(f, "order in %s (error ~ %s^p, vs %s): method %s p = %.3f over %d runs\n", is_t ? "time" : "space",
             is_t ? "dt" : "h", v->key, method, o.p, o.used);
@@ -72,7 +72,7 @@ static void summary_order(const bs_study *S, int k, const char *method, FILE *f)
   if (isfinite(o.p) && o.used < 3)
     fprintf(f, "  (only %d runs: a line through them, not a fit; read the order from successive levels)\n", o.used);
   int used = 0;
-  double ps = bs_study_order_successive(S, k, method, &used, NULL);
+  double ps = bs__study_order_successive(S, k, method, &used, NULL);
   if (isfinite(ps))
     fprintf(f, "  from successive levels (each run against the next finer): p = %.3f over %d pairs\n", ps, used);
 }
@@ -105,7 +105,7 @@ static void summary_qoi_runs(const bs_study *S, FILE *f) {
 static void summary_gci(const bs_study *S, int k, const char *method, int q, FILE *f, double *ext) {
   bs_gci g;
   int used[3], skipped;
-  bs_gci_status st = bs_study_qoi_gci(S, k, method, q, &g, used, &skipped);
+  bs_gci_status st = bs__study_qoi_gci(S, k, method, q, &g, used, &skipped);
   fprintf(f, "  %s along %s (%s), method %s: ", S->qoi[q], S->knobs[k].key,
           bs_study_knob_is_time(&S->knobs[k]) ? "h = dt" : "h = 2^-level", method);
   if (used[2] < 0) {
@@ -165,7 +165,7 @@ static void summary_qoi(const bs_study *S, const char **methods, int nm, FILE *f
 
 void bs_study_summary_write(const bs_study *S, FILE *f) {
   const char *methods[MAX_METHODS];
-  int nm = bs_study_methods(S, methods, MAX_METHODS);
+  int nm = bs__study_methods(S, methods, MAX_METHODS);
   int n_failed = 0, n_timeout = 0;
   for (int i = 0; i < S->n_runs; i++) {
     n_failed += S->runs[i].exit_code != 0 && !S->runs[i].timed_out;

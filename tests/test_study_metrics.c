@@ -146,7 +146,7 @@ Test(study_metrics, compare_states_through_vertex_blocks) {
   cr_assert_eq(bs_state_open(db, &b, &err), 0, "%s", err.msg);
   int64_t off_a = 0, off_b = 1, count = 2;
   bs_study_errors e;
-  cr_expect_eq(bs_study_compare_states(&a, &b, 1, &off_a, &off_b, &count, 2.0, 1.0, &e), 0);
+  cr_expect_eq(bs__study_compare_states(&a, &b, 1, &off_a, &off_b, &count, 2.0, 1.0, &e), 0);
   cr_expect_eq(e.n_common, 2, "frames 0 and 0.1 are common, got %d", e.n_common);
   /* frame 0: sqrt(4 / 2) / 2; frame 1: sqrt(16 / 2) / 2; velocity sqrt(1 / 2) / 1 */
   cr_expect(fabs(e.pos_max - sqrt(8.0) / 2) < 1e-12 && fabs(e.pos_last - sqrt(8.0) / 2) < 1e-12, "pos %g", e.pos_max);
@@ -157,7 +157,7 @@ Test(study_metrics, compare_states_through_vertex_blocks) {
   cr_assert_eq(bs_state_open(da, &a, &err), 0);
   cr_assert_eq(bs_state_open(db, &b, &err), 0);
   off_b = 2;
-  cr_expect_eq(bs_study_compare_states(&a, &b, 1, &off_a, &off_b, &count, 2.0, 1.0, &e), -1);
+  cr_expect_eq(bs__study_compare_states(&a, &b, 1, &off_a, &off_b, &count, 2.0, 1.0, &e), -1);
   cr_expect(isnan(e.pos_max));
   bs_state_close(&a);
   bs_state_close(&b);
