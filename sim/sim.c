@@ -66,7 +66,9 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if ((st = damping_term(s, err))) return st;
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
   if (sc->n_obstacles > 0 && (st = bs__sim_make_obstacles(s, err))) return st;
-  if (sc->self_collision) {
+  if (sc->self_collision && sc->self_model == BS_SELF_MODEL_BARRIER) {
+    if ((st = bs__sim_make_barrier(s, err))) return st;
+  } else if (sc->self_collision) {
     if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err)) ||
         (st = bs_term_self_set_secant(s->self, sc->solver.penalty_secant == BS_PENALTY_SECANT_ALL, err)))
       return st;
