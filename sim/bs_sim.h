@@ -199,6 +199,11 @@ typedef struct bs_sim_measures {
   double max_depth;       /* m                                                     */
   int64_t self_intersections; /* intersecting boundary triangle pairs (exact, CGAL), */
                           /* counted up to BS_SIM_SELF_CAP; -1 if not computed        */
+  double contact_min_distance; /* barrier contact: the smallest distance between     */
+                          /* surface primitives within dhat (m; +Inf: none, or no  */
+                          /* barrier model)                                        */
+  int64_t contact_pairs;  /* barrier contact: pairs within dhat (0 without)        */
+  double kappa;           /* barrier contact: the stiffness in force (0 without)   */
 } bs_sim_measures;
 
 #define BS_SIM_SELF_CAP 100000

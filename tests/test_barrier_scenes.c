@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bs_ipc_term.h"
+#include "bs_runfolder.h"
 #include "bs_scene.h"
 #include "bs_sim.h"
 
@@ -106,6 +107,20 @@ Test(barrier_scenes, resting_box_keeps_a_gap_within_dhat, .timeout = 600) {
   cr_assert_gt(st.min_distance, 0);
   cr_assert_leq(st.min_distance, 0.002, "gap %g", st.min_distance);
   cr_assert_gt(st.pairs_pt + st.pairs_ee, 0, "not in contact at the end");
+  /* frames.csv's contact columns: min distance, pairs, CCD-limited searches, kappa */
+  bs_sim_measures m;
+  bs_sim_measure(s, 0, &m);
+  cr_assert_eq(m.contact_min_distance, st.min_distance);
+  cr_assert_eq(m.contact_pairs, st.pairs_pt + st.pairs_ee);
+  cr_assert_gt(m.kappa, 0);
+  bs_frame_stats fs = {0};
+  char row[512];
+  bs_frames_csv_row(row, sizeof row, s->time, &fs, &m);
+  int commas = 0, hdr = 0;
+  for (const char *c = row; *c; c++) commas += *c == ',';
+  for (const char *c = BS_FRAMES_CSV_HEADER; *c; c++) hdr += *c == ',';
+  cr_assert_eq(commas, hdr, "%s", row);
+  cr_assert(strstr(BS_FRAMES_CSV_HEADER, ",contact_min_distance,contact_pairs,ccd_limited,kappa"));
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
 }
