@@ -89,6 +89,15 @@ typedef struct bs_term_ops {
      not checked against differences of the gradient; it must tend to the
      Hessian as x tends to a minimizer. */
   int (*hessian_g)(const bs_term *t, const double *x, const double *g, bs_bsr *H);
+  /* May be NULL: the largest alpha such that x + a d stays in the term's domain
+     for every a in [0, alpha] (barrier contact: continuous collision detection
+     certifies that no two surface primitives touch), written to *alpha (in
+     [0, 1]: 1 when the whole motion x -> x + d is certified). The integrator
+     hands the smallest over its terms to the minimizer as the line search's
+     bound (bs_minimize.h, obj->max_step, "Step bound") and clips its initial
+     guesses with it. A bs_term_status: NOT_EVALUABLE when it cannot run (a
+     non-finite x or d). */
+  int (*max_step)(const bs_term *t, const double *x, const double *d, double *alpha);
 } bs_term_ops;
 
 struct bs_term {

@@ -22,6 +22,7 @@ struct bs_integrator {
   int has_expensive;
   int has_convexified;    /* a term offers hessian_convexified         */
   int has_hessian_g;      /* a term offers hessian_g and opts.penalty_secant */
+  int has_max_step;       /* a term offers max_step (barrier contact: CCD) */
   double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
 };
@@ -100,6 +101,7 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
     if (terms[i]->expensive) I->has_expensive = 1;
     if (terms[i]->ops->hessian_convexified) I->has_convexified = 1;
     if (terms[i]->ops->hessian_g) I->has_hessian_g = 1;
+    if (terms[i]->ops->max_step) I->has_max_step = 1;
   }
   if (mask) memcpy(I->mask, mask, nv);
   else memset(I->mask, 1, nv);
@@ -270,6 +272,38 @@ static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
   return 0;
 }
 
+/* The line search's bound (bs_minimize.h, "Step bound"): the smallest of the
+ * active terms' max_step along d (CCD), 1 when none bounds it. */
+static int obj_max_step(const double *x, const double *d, double *alpha, void *ctx) {
+  bs_integrator *I = ctx;
+  double a = INFINITY;
+  for (int i = 0; i < I->n_terms; i++) {
+    const bs_term *t = I->terms[i];
+    double ai;
+    if (!t->ops->max_step || !term_active(I, t)) continue;
+    int rc = t->ops->max_step(t, x, d, &ai);
+    if (rc) return rc;
+    a = fmin(a, ai);
+  }
+  *alpha = a;
+  return 0;
+}
+
+/* Step 3 with barrier contact: candidate g clipped by the CCD from xⁿ,
+ * g <- xⁿ + alpha (g - xⁿ) on the free vertices (scripted ones keep their
+ * positions), so that the guess offered is contact-free; alpha 0 (xⁿ) when
+ * the CCD cannot run. I->gh is the scratch (free before the solve). */
+static void clip_guess(bs_integrator *I, double *g) {
+  if (!I->has_max_step) return;
+  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  for (size_t i = 0; i < n3; i++) I->gh[i] = g[i] - I->x_n[i];
+  double a = 0;
+  if (obj_max_step(I->x_n, I->gh, &a, I) || !(a >= 0)) a = 0;
+  if (a >= 1) return;
+  for (size_t i = 0; i < n3; i++)
+    if (I->mask[i / 3]) g[i] = I->x_n[i] + a * I->gh[i];
+}
+
 static void hook_project_gradient(const double *x, double *g, void *ctx) {
   bs_integrator *I = ctx;
   I->hooks.project_gradient(x, g, I->hooks.ctx);
@@ -336,6 +370,7 @@ void bs_step_stats_add(bs_step_stats *st, const bs_step_stats *sub) {
   st->min.cholmod_fallbacks += sub->min.cholmod_fallbacks;
   st->min.ls_failures += sub->min.ls_failures;
   st->min.noise_steps += sub->min.noise_steps;
+  st->min.ccd_limited += sub->min.ccd_limited;
   st->min.tol_used = sub->min.tol_used;
   st->min.reason = sub->min.reason;
   st->min.reason_text = sub->min.reason_text;
@@ -361,6 +396,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
   o->precond_matrix = obj_precond;
   o->trace = I->opts.trace ? obj_trace : NULL;
+  o->max_step = I->has_max_step ? obj_max_step : NULL;
   o->ctx = I;
 }
 
@@ -452,6 +488,7 @@ static double offer_candidate(bs_integrator *I, double t1, double Eb, bs_guess k
       for (int k = 0; k < 3; k++) g[3 * vtx + k] = I->x_n[3 * vtx + k];
   if (I->script) I->script(t1, g, I->script_ctx);
   if (I->hooks.project) I->hooks.project(g, I->hooks.ctx);
+  clip_guess(I, g);
   const double Ec = guess_energy(I, g, guess_part(I, g, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
   if (!isfinite(Ec) || (isfinite(Eb) && Ec >= Eb)) return Eb;
   memcpy(x, g, sizeof(double) * 3 * nv);
@@ -479,6 +516,8 @@ static void previous_step_guess(bs_integrator *I, double t, double dt, double *x
  * Returns its E (+Inf when none is evaluable). */
 static double paper_guesses(bs_integrator *I, double t, double dt, double *x, int *naive, bs_step_stats *st) {
   const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  clip_guess(I, I->g1);
+  clip_guess(I, I->g2);
   /* the candidate with the smaller cheap part first: the other's expensive
      terms are then often skipped (and the detection left for the solve is the
      chosen guess's) */

@@ -171,6 +171,9 @@ typedef struct bs_scene_qoi {
 typedef enum { BS_MODE_DYNAMIC = 0, BS_MODE_STATIC } bs_scene_mode;
 typedef enum { BS_BACKEND_SERIAL = 0, BS_BACKEND_PETSC } bs_scene_backend;
 
+/* self_collision.model: how surfaces in contact repel (bs_scene.self_model). */
+enum { BS_SELF_MODEL_PENALTY = 0, BS_SELF_MODEL_BARRIER = 1 };
+
 typedef struct bs_scene {
   char path[BS_MAX_PATH];  /* the scene file; "<scene>" for one built in C     */
   char *description;       /* "description" (owned, malloc'd); NULL: none       */
@@ -193,6 +196,11 @@ typedef struct bs_scene {
   bs_scene_qoi *qoi;       /* quantities of interest (qoi.csv)                  */
   int self_collision;      /* penalty self-collisions (section 5.3)             */
   double self_stiffness, self_friction;
+  int self_model;          /* BS_SELF_MODEL_PENALTY (the paper's) or _BARRIER   */
+  double contact_dhat;     /* barrier activation distance (m); 0: automatic,    */
+                           /* 1e-3 x the bodies' bounding-box diagonal at t = 0 */
+  double contact_kappa;    /* barrier stiffness (J/m^4); 0: automatic (IPC's    */
+                           /* initial value, adapted per step)                  */
   char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
   int vtu_every;           /* frames between VTU files (0: none)               */
   int checkpoint_every;    /* frames between checkpoints (0: none; bs_runfolder.h) */

@@ -523,6 +523,19 @@ static int parse_self_collision(ctx *c, const cJSON *root, bs_scene *s) {
   return get_section(c, sc, "self_collision", "self_collision", s);
 }
 
+/* contact: dhat and kappa, each > 0 when given (absent: automatic, 0). */
+static int parse_contact(ctx *c, const cJSON *root, bs_scene *s) {
+  int st;
+  const cJSON *o = cJSON_GetObjectItemCaseSensitive(root, "contact");
+  if (!o) return 0;
+  if ((st = check_keys(c, o, "contact", "contact")) || (st = get_section(c, o, "contact", "contact", s))) return st;
+  if (cJSON_GetObjectItemCaseSensitive(o, "dhat") && !(s->contact_dhat > 0))
+    return fail(c, "contact.dhat", "must be > 0 (m), got %g", s->contact_dhat);
+  if (cJSON_GetObjectItemCaseSensitive(o, "kappa") && !(s->contact_kappa > 0))
+    return fail(c, "contact.kappa", "must be > 0 (J/m^4), got %g", s->contact_kappa);
+  return 0;
+}
+
 static int parse_time(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
   const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
@@ -660,7 +673,8 @@ static int parse_notes(ctx *c, const cJSON *root, bs_scene *s) {
 
 static int parse_scene(ctx *c, const cJSON *root, bs_scene *s) {
   int st;
-  if ((st = check_keys(c, root, "", "")) || (st = parse_notes(c, root, s)) || (st = parse_self_collision(c, root, s)))
+  if ((st = check_keys(c, root, "", "")) || (st = parse_notes(c, root, s)) || (st = parse_self_collision(c, root, s)) ||
+      (st = parse_contact(c, root, s)))
     return st;
   if ((st = parse_time(c, root, s))) return st;
   s->dt = 1.0 / (s->fps * s->steps_per_frame);

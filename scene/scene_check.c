@@ -161,6 +161,12 @@ int bs_scene_check(const bs_scene *s, bs_error *err) {
     return bad(s, err, "self_collision.stiffness: must be > 0, got %g", s->self_stiffness);
   if (s->self_collision && !(s->self_friction >= 0))
     return bad(s, err, "self_collision.friction: must be >= 0, got %g", s->self_friction);
+  if (!(s->contact_dhat >= 0) || !isfinite(s->contact_dhat))
+    return bad(s, err, "contact.dhat: must be > 0 (m; 0 in the struct: automatic), got %g", s->contact_dhat);
+  if (!(s->contact_kappa >= 0) || !isfinite(s->contact_kappa))
+    return bad(s, err, "contact.kappa: must be > 0 (J/m^4; 0 in the struct: automatic), got %g", s->contact_kappa);
+  if (s->self_model != BS_SELF_MODEL_PENALTY && s->self_model != BS_SELF_MODEL_BARRIER)
+    return bad(s, err, "self_collision.model: must be penalty or barrier, got %d", s->self_model);
   if (s->n_bodies < 1) return bad(s, err, "bodies: must be a non-empty array");
   for (int i = 0; i < s->n_bodies; i++)
     if ((st = check_body(s, &s->bodies[i], i, err))) return st;

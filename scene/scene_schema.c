@@ -41,6 +41,8 @@ const bs_schema_key bs__schema_keys[] = {
     {"", "obstacles", BS_SCHEMA_ARRAY, .sub = "obstacles[]", .doc = "collision objects as level sets"},
     {"", "self_collision", BS_SCHEMA_OBJECT, .sub = "self_collision",
      .doc = "penalty self-collisions (section 5.3), also between bodies; absent: none"},
+    {"", "contact", BS_SCHEMA_OBJECT, .sub = "contact",
+     .doc = "parameters of the barrier contact model (self_collision.model \"barrier\")"},
     {"", "output", BS_SCHEMA_OBJECT, .sub = "output", .doc = "what is written, and where"},
     {"", "qoi", BS_SCHEMA_ARRAY, .sub = "qoi[]", .doc = "quantities of interest, written per frame to qoi.csv"},
 
@@ -195,6 +197,14 @@ const bs_schema_key bs__schema_keys[] = {
     /* ---- self_collision, output ---- */
     {"self_collision", "stiffness", NUM, .range = "(0, )", .def = "100000", SC(self_stiffness), .doc = "penalty stiffness k"},
     {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", SC(self_friction), .doc = "friction coefficient mu"},
+    {"self_collision", "model", STR, .choices = CHOICES("penalty", "barrier"), .def = "\"penalty\"", SC(self_model),
+     .doc = "penalty (the paper's, section 5.3) or barrier (IPC: log barrier within contact.dhat, line searches bounded "
+            "by continuous collision detection, no intersections)"},
+    {"contact", "dhat", NUM, .range = "(0, )", SC(contact_dhat),
+     .doc = "barrier activation distance (m); absent: 1e-3 x the diagonal of the bodies' bounding box at t = 0"},
+    {"contact", "kappa", NUM, .range = "(0, )", SC(contact_kappa),
+     .doc = "barrier stiffness (J/m^4); absent: IPC's choice (balancing the other forces at t = 0 within [kappa_min, "
+            "100 kappa_min]), doubled at a step's start while surfaces keep closing in below 1e-9 diagonals"},
 
     {"output", "dir", STR, .def = "\"\"", SC(out_dir), .doc = "output folder (empty: no files)"},
     {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", SC(vtu_every), .doc = "frames between VTU files (0: none)"},
@@ -238,6 +248,7 @@ const bs_schema_section bs__schema_sections[] = {
     {"obstacles[]", NULL},
     {"obstacles[].keyframes[]", NULL},
     {"self_collision", NULL},
+    {"contact", NULL},
     {"output", NULL},
     {"qoi[]", NULL},
 };

@@ -194,6 +194,13 @@ static void output_hand(writer *w, cJSON *o, const char *key, const void *base) 
   put(w, o, "fields", cJSON_CreateStringArray(names, n));
 }
 
+/* contact's keys (bound, no default): written when given (> 0). */
+static void contact_hand(writer *w, cJSON *o, const char *key, const void *base) {
+  const bs_scene *s = base;
+  if (!strcmp(key, "dhat") && s->contact_dhat > 0) num(w, o, "dhat", s->contact_dhat);
+  if (!strcmp(key, "kappa") && s->contact_kappa > 0) num(w, o, "kappa", s->contact_kappa);
+}
+
 /* The top level's keys that are not bound: the notes and the sections. */
 static void root_hand(writer *w, cJSON *root, const char *key, const void *base) {
   const bs_scene *s = base;
@@ -209,6 +216,8 @@ static void root_hand(writer *w, cJSON *root, const char *key, const void *base)
       write_section(w, element(w, obs), "obstacles[]", &s->obstacles[i], obstacle_hand);
   } else if (!strcmp(key, "self_collision") && s->self_collision) {
     write_section(w, object(w, root, "self_collision"), "self_collision", s, NULL);
+  } else if (!strcmp(key, "contact") && (s->contact_dhat > 0 || s->contact_kappa > 0)) {
+    write_section(w, object(w, root, "contact"), "contact", s, contact_hand);
   } else if (!strcmp(key, "output")) {
     write_section(w, object(w, root, "output"), "output", s, output_hand);
   } else if (!strcmp(key, "qoi") && s->n_qoi > 0) {

@@ -57,6 +57,9 @@ extern "C" {
 #endif
 
 #define BS_SIM_MAX_TERMS 64
+/* contact.dhat when the scene does not give it: this fraction of the
+ * diagonal of the bodies' bounding box at t = 0 (IPC's usual 1e-3). */
+#define BS_SIM_DHAT_FRACTION 1e-3
 
 typedef struct bs_sim_script {
   const bs_scene_script *script;
@@ -122,6 +125,8 @@ typedef struct bs_sim {
   bs_term *terms[BS_SIM_MAX_TERMS]; /* the scene's terms (penalty terms are the obstacles') */
   bs_obstacles *obstacles; /* NULL when the scene has none                  */
   bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
+  bs_term *barrier;        /* the barrier contact term (in terms[]; self_collision.model */
+                           /* "barrier", bs_ipc_term.h) or NULL              */
   bs_step_hooks obstacle_hooks;
   double *friction_impulse; /* 3n (N s): what Coulomb friction (obstacles and  */
                           /* self-contact) gave each vertex in the last step,   */
@@ -194,6 +199,11 @@ typedef struct bs_sim_measures {
   double max_depth;       /* m                                                     */
   int64_t self_intersections; /* intersecting boundary triangle pairs (exact, CGAL), */
                           /* counted up to BS_SIM_SELF_CAP; -1 if not computed        */
+  double contact_min_distance; /* barrier contact: the smallest distance between     */
+                          /* surface primitives within dhat (m; +Inf: none, or no  */
+                          /* barrier model)                                        */
+  int64_t contact_pairs;  /* barrier contact: pairs within dhat (0 without)        */
+  double kappa;           /* barrier contact: the stiffness in force (0 without)   */
 } bs_sim_measures;
 
 #define BS_SIM_SELF_CAP 100000

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_ipc_term.h"
 #include "bs_penalty.h"
 #include "bs_selfcollide.h"
 #include "bs_shim.h"
@@ -66,7 +67,9 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if ((st = damping_term(s, err))) return st;
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
   if (sc->n_obstacles > 0 && (st = bs__sim_make_obstacles(s, err))) return st;
-  if (sc->self_collision) {
+  if (sc->self_collision && sc->self_model == BS_SELF_MODEL_BARRIER) {
+    if ((st = bs__sim_make_barrier(s, err))) return st;
+  } else if (sc->self_collision) {
     if ((st = bs_term_self_create(s->fem, &s->step, sc->self_stiffness, &s->self, err)) ||
         (st = bs_term_self_set_secant(s->self, sc->solver.penalty_secant == BS_PENALTY_SECANT_ALL, err)))
       return st;
@@ -174,10 +177,20 @@ void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const
   m->penetrating = 0;
   m->max_depth = 0;
   m->self_intersections = -1;
+  m->contact_min_distance = INFINITY;
+  m->contact_pairs = 0;
+  m->kappa = 0;
 }
 
 void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
   bs_measure_state(s->fem, s->x, s->v, s->scene->gravity, m);
   bs_sim_penetration(s, &m->penetrating, &m->max_depth);
   m->self_intersections = intersections ? surface_self_intersections(s) : -1;
+  bs_ipc_stats is;
+  bs_error err;
+  if (s->barrier && bs_term_ipc_detect(s->barrier, s->x, &is, &err) == 0) {
+    m->contact_min_distance = is.pairs_pt + is.pairs_ee > 0 ? is.min_distance : INFINITY;
+    m->contact_pairs = is.pairs_pt + is.pairs_ee;
+    m->kappa = is.kappa;
+  }
 }

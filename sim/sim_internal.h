@@ -17,5 +17,9 @@ void bs__sim_hooks(bs_sim *s, bs_step_hooks *hooks);
  * dynamic scene has friction; after the obstacles and self-collision. */
 int bs__sim_make_friction(bs_sim *s, bs_error *err);
 void bs__sim_script_positions(double t, double *x, void *ctx);
+/* sim_contact.c: the barrier self-contact term (self_collision.model
+ * "barrier") into s->barrier and s->terms; refuses a start whose surfaces
+ * intersect (naming the bodies and the count) or touch. */
+int bs__sim_make_barrier(bs_sim *s, bs_error *err);
 
 #endif

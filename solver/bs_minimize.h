@@ -98,6 +98,24 @@
  * curvature is kept (the paper's rule). E and its gradient never change,
  * only the model: the line search and the convergence test are as before.
  *
+ * Step bound (obj->max_step, e.g. a barrier contact term's continuous
+ * collision detection): before each line search (also the one made again
+ * along -g) the hook gives alpha_max along the search direction d, and the
+ * search is the strong Wolfe search of step 7 on [0, alpha_max]: the first
+ * trial point is min(1, alpha_max), extrapolation stops at alpha_max, and at
+ * alpha_max, when sufficient decrease holds but the slope is still steep and
+ * negative, alpha_max itself is taken (BS_LSEARCH_BOUND: the best point of
+ * the interval). No trial point beyond alpha_max is ever evaluated; a bound
+ * of 0 means no step (BS_MIN_LINE_SEARCH, the reason text says so). The
+ * indefinite-CG exit, the downhill check and the clamp come first,
+ * unchanged. A search some of whose trial points the bound shortened is
+ * counted in stats.ccd_limited. Trust region: a trial step longer than its
+ * bound is scaled to it (before the model's decrease is computed); bs_newton
+ * takes min(1, alpha_max) of its step. Without the hook every result is bit
+ * for bit what it was before the hook existed. The projection hook P is
+ * applied after the bound: an objective with both must keep P's moves
+ * feasible itself.
+ *
  * Line-search constants: c1 = 1e-4 (sufficient decrease) and c2 = 0.9
  * (curvature) by default, Nocedal & Wright's choice for Newton-type methods.
  * Extrapolation (a > 1): the minimizer of the cubic through the last two trial
@@ -221,10 +239,12 @@ typedef enum {
   BS_LSEARCH_CAPPED = 0,       /* no Wolfe point within max_ls: the lowest trial point     */
                                /* below phi(0) (ls_failures)                              */
   BS_LSEARCH_WOLFE = 1,        /* a point that satisfies the strong Wolfe conditions       */
-  BS_LSEARCH_NOISE = 2         /* a rounding-level step of opts.accept_noise (noise_steps) */
+  BS_LSEARCH_NOISE = 2,        /* a rounding-level step of opts.accept_noise (noise_steps) */
+  BS_LSEARCH_BOUND = 3         /* the step bound alpha_max (obj->max_step) itself: E still */
+                               /* decreases steeply there (sufficient decrease, phi' < 0)  */
 } bs_lsearch_status;
 
-/* "no_decrease", "capped", "wolfe", "noise"; "unknown" for a value outside the enum. */
+/* "no_decrease", "capped", "wolfe", "noise", "bound"; "unknown" for a value outside the enum. */
 const char *bs_lsearch_status_name(bs_lsearch_status s);
 
 /* One accepted iteration of bs_minimize (or a full step of bs_newton: alpha
@@ -246,6 +266,7 @@ typedef struct bs_min_iter {
   int ls_evaluations;    /* trial points of this line search                          */
   double grad_norm;      /* ||grad E(x)|| before the step                             */
   double lin_rel_tol;    /* relative tolerance asked of the linear solver            */
+  double alpha_bound;    /* obj->max_step's bound along d (+Inf without the hook)     */
   double alpha;          /* step length taken                                         */
   double phi0, dphi0;    /* E(x) and grad E(x).d                                      */
   double phi, dphi;      /* E(y) and grad E(y).d at the accepted point y             */
@@ -303,6 +324,13 @@ typedef struct bs_objective {
      solve ends in one or two iterations; and the rounding floor (BS_MIN_FLOOR) is
      declared after one noise-level iteration that does not halve ||g||, not three. */
   int quadratic;
+  /* Optional (NULL): the step bound (see "Step bound"). The largest alpha
+     such that every point x + a d, a in [0, alpha], is feasible (contact: every
+     pair of surface primitives stays apart), written to *alpha_max (>= 0; +Inf
+     or >= 1e10: no bound; a bound that certifies the motion x -> x + d only
+     returns at most 1). Nonzero, or a NaN or negative alpha: counted as 0 (no
+     step along d). With vecops every rank must return the same value. */
+  int (*max_step)(const double *x, const double *d, double *alpha_max, void *ctx);
 } bs_objective;
 
 /* How an iteration finds its step from the Newton direction (bs_minimize). */
@@ -421,6 +449,9 @@ typedef struct bs_minimize_stats {
                                              /* convexified Hessian (opts.convexify)       */
   int tr_rejections;                         /* trust_region trial steps rejected          */
   int tr_boundary;                           /* accepted steps on the boundary             */
+  int ccd_limited;                           /* line searches (trust-region trials, Newton */
+                                             /* steps) whose trial steps the bound of      */
+                                             /* obj->max_step shortened                    */
   double tr_radius;                          /* trust_region radius at the end             */
   double t_amg_setup;                        /* seconds in AMG setups (in t_linear)        */
   double alpha_last, alpha_min, alpha_max;   /* alphas chosen (0 when no step was taken)   */

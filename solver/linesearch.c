@@ -36,6 +36,9 @@ typedef struct {
   const double *x;
   bs_minimize_stats *st;
   double phi0;
+  double a_top;   /* largest trial step: min(ALPHA_MAX, the step bound) */
+  int bounded;    /* 1: a_top is the step bound (obj->max_step)      */
+  int limited;    /* 1: the bound shortened a trial step             */
   double cur_a;   /* alpha whose point m->y holds (NaN: none)       */
   int cur_grad;   /* 1: m->gy_raw / m->gy belong to that point      */
 } ls_state;
@@ -112,13 +115,14 @@ static double trial(ls_state *s, double a, int want_grad, int *has_grad, double 
  * a point where the slope has fallen by the factor c2 without overshooting
  * far. The bracket on the slope's sign is narrowed by the secant of phi'
  * (kept 10% inside the bracket, else bisection); a = 1 first, doubling while
- * the slope stays steep and no upper end is known. Gradients are evaluated at
+ * the slope stays steep and no upper end is known (never beyond s->a_top:
+ * min(1, a_top) first, the doubling stops there). Gradients are evaluated at
  * every trial point (no lower-bound shortcut: these searches are rare and
  * short). Returns 1 with res filled when a point is found within the budget. */
 static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__ls_result *res) {
   const double c2 = s->m->opts.c2, noise = bs__noise_level(s->phi0);
   const double up = -0.8 * dphi0, down = c2 * dphi0; /* accept phi' in [down, up] */
-  double lo = 0, dlo = dphi0, hi = NAN, dhi = NAN, a = 1.0;
+  double lo = 0, dlo = dphi0, hi = NAN, dhi = NAN, a = fmin(1.0, s->a_top);
   for (int k = 0; k < budget; ++k) {
     double dphi;
     make_point(s, a);
@@ -136,8 +140,13 @@ static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__l
       return 1;
     }
     if (isnan(hi)) {
+      const double a_was = a;
       a = 2 * a;
-      if (a > ALPHA_MAX) return 0;
+      if (a > s->a_top) {
+        if (!s->bounded || a_was >= s->a_top) return 0;
+        a = s->a_top;
+        s->limited = 1;
+      }
       continue;
     }
     const double w = hi - lo;
@@ -149,10 +158,11 @@ static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__l
 }
 
 void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0, double dphi0,
-                     bs_minimize_stats *st, bs__ls_result *res) {
+                     double amax, bs_minimize_stats *st, bs__ls_result *res) {
   const bs_minimize_opts *o = &m->opts;
   const double c1 = o->c1, c2 = o->c2;
-  ls_state s = {m, obj, x, st, phi0, NAN, 0};
+  if (!(amax >= 0)) amax = 0;
+  ls_state s = {m, obj, x, st, phi0, fmin(ALPHA_MAX, amax), amax < ALPHA_MAX, amax < 1.0, NAN, 0};
   int evals = 0;
   double best_a = 0, best_phi = phi0; /* lowest trial value below phi(0) */
   double acc_a = 0, acc_phi = 0, acc_dphi = 0;
@@ -161,6 +171,9 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
   int hi_d = 0;
   memset(res, 0, sizeof *res);
   res->status = BS_LSEARCH_NO_DECREASE;
+  res->bound = amax;
+  res->limited = s.limited;
+  if (!(s.a_top > 0)) return; /* the bound allows no step */
 
 #define NOTE_BEST(a_, phi_)                                                                                           \
   do {                                                                                                                \
@@ -170,9 +183,9 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
     }                                                                                                                 \
   } while (0)
 
-  /* Algorithm 3.5: bracketing, a_1 = 1 first, growing while the slope stays
-   * negative and too steep. */
-  double a_prev = 0, phi_prev = phi0, dphi_prev = dphi0, a = 1.0;
+  /* Algorithm 3.5: bracketing, a_1 = 1 first (the bound if below 1),
+   * growing while the slope stays negative and too steep, up to the bound. */
+  double a_prev = 0, phi_prev = phi0, dphi_prev = dphi0, a = fmin(1.0, s.a_top);
   for (int i = 0;; ++i) {
     if (evals >= o->max_ls) goto capped;
     int hg;
@@ -184,6 +197,7 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
        * on the slope (approximate Wolfe conditions) instead. */
       if (noise_search(&s, dphi0, o->max_ls - evals, &evals, res)) {
         res->evals = evals;
+        res->limited = s.limited;
         return;
       }
       /* None found: the trial points stay what they were (phi(1) is the
@@ -205,13 +219,19 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
       hi = a_prev, phi_hi = phi_prev, dphi_hi = dphi_prev, hi_d = 1;
       break;
     }
-    if (a >= ALPHA_MAX) goto capped;
+    if (a >= s.a_top) {
+      if (!s.bounded) goto capped;
+      acc_a = a, acc_phi = phi, acc_dphi = dphi; /* the bound, E still falling steeply */
+      res->status = BS_LSEARCH_BOUND;
+      goto taken;
+    }
     /* Extrapolate: cubic minimizer kept in [a + (a - a_prev)/2, a + 10 (a - a_prev)]. */
     double w = a - a_prev, c = cubic_min(a_prev, phi_prev, dphi_prev, a, phi, dphi), a_next;
     if (isfinite(c) && c > a) a_next = fmin(fmax(c, a + 0.5 * w), a + 10.0 * w);
     else a_next = a + 4.0 * w;
     a_prev = a, phi_prev = phi, dphi_prev = dphi;
-    a = fmin(a_next, ALPHA_MAX);
+    if (s.bounded && a_next > s.a_top) s.limited = 1;
+    a = fmin(a_next, s.a_top);
   }
 
   /* Algorithm 3.6: zoom in the bracket (lo, hi); lo satisfies sufficient
@@ -254,6 +274,7 @@ void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, 
 capped:
   /* No Wolfe point within the cap: the lowest decreasing point, if any. */
   res->evals = evals;
+  res->limited = s.limited;
   if (!(best_phi < phi0)) return;
   if (!(s.cur_a == best_a && s.cur_grad)) {
     double dphi;
@@ -271,8 +292,10 @@ capped:
   return;
 
 accept:
-  res->evals = evals;
   res->status = BS_LSEARCH_WOLFE;
+taken:
+  res->evals = evals;
+  res->limited = s.limited;
   res->alpha = acc_a;
   res->phi = acc_phi;
   res->dphi = acc_dphi;

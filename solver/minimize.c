@@ -183,6 +183,7 @@ const char *bs_lsearch_status_name(bs_lsearch_status s) {
   case BS_LSEARCH_CAPPED: return "capped";
   case BS_LSEARCH_WOLFE: return "wolfe";
   case BS_LSEARCH_NOISE: return "noise";
+  case BS_LSEARCH_BOUND: return "bound";
   }
   return "unknown";
 }
@@ -595,19 +596,35 @@ static double restart_along_gradient(bs_minimizer *m, double E, double gnorm, do
   return bs__mdot(m, m->d, m->g);
 }
 
+double bs__step_bound(bs_minimizer *m, const bs_objective *obj, const double *x, bs_minimize_stats *st) {
+  if (!obj->max_step) return INFINITY;
+  double a = 0;
+  const double t = bs_seconds();
+  const int rc = obj->max_step(x, m->d, &a, obj->ctx);
+  st->t_eval += bs_seconds() - t;
+  return rc == 0 && a >= 0 ? a : 0.0;
+}
+
+/* One line search along m->d under the step bound there (rec->alpha_bound). */
+static void search_once(bs_minimizer *m, const bs_objective *obj, const double *x, double E, double dphi0,
+                        bs_minimize_stats *st, bs_min_iter *rec, bs__ls_result *ls) {
+  rec->alpha_bound = bs__step_bound(m, obj, x, st);
+  bs__line_search(m, obj, x, E, dphi0, rec->alpha_bound, st, ls);
+  st->ls_evaluations += ls->evals;
+  st->ccd_limited += ls->limited;
+}
+
 /* Steps 7-9's line search along m->d from x (E, slope *dphi0), made again
  * along -g when it finds no decrease (restart_along_gradient: *dphi0 and
  * rec follow); ls receives the last search. */
 static void search(bs_minimizer *m, const bs_objective *obj, const double *x, double E, double gnorm, double *dphi0,
                    bs_minimize_stats *st, bs_min_iter *rec, bs__ls_result *ls) {
   const double t = bs_seconds();
-  bs__line_search(m, obj, x, E, *dphi0, st, ls);
-  st->ls_evaluations += ls->evals;
+  search_once(m, obj, x, E, *dphi0, st, rec, ls);
   double dg;
   if (ls->status == BS_LSEARCH_NO_DECREASE && (dg = restart_along_gradient(m, E, gnorm, *dphi0, st, rec)) < 0) {
     *dphi0 = dg;
-    bs__line_search(m, obj, x, E, *dphi0, st, ls);
-    st->ls_evaluations += ls->evals;
+    search_once(m, obj, x, E, *dphi0, st, rec, ls);
   }
   st->t_line_search += bs_seconds() - t;
 }
@@ -618,7 +635,12 @@ static void search(bs_minimizer *m, const bs_objective *obj, const double *x, do
  * a converged state (bs_minimize.h, "Rounding floor"). */
 static void no_decrease_reason(bs_minimizer *m, bs_minimize_stats *st, const bs__ls_result *ls, int it, double E,
                                double gnorm, double dphi0, bs_direction dir) {
-  if (-dphi0 <= bs__noise_level(E) && dir != BS_DIR_NEG_GRAD)
+  if (!(ls->bound > 0))
+    bs__set_reason(m, st, BS_MIN_LINE_SEARCH,
+                   "the step bound (max_step) allows no motion along the search direction at iteration %d "
+                   "(|grad E| = %.3e, E = %.9e)",
+                   it, gnorm, E);
+  else if (-dphi0 <= bs__noise_level(E) && dir != BS_DIR_NEG_GRAD)
     bs__set_reason(m, st, BS_MIN_FLOOR,
                    "converged at the rounding floor of E after %d iterations: no decrease in %d trial points, the "
                    "predicted decrease |g.d| = %.3e is below the rounding level %.3e of E = %.9e (|grad E| = %.3e, "
@@ -777,6 +799,7 @@ int bs_minimize(bs_minimizer *m, const bs_objective *obj, double *x, bs_minimize
     memset(&rec, 0, sizeof rec);
     rec.iteration = it;
     rec.grad_norm = gnorm;
+    rec.alpha_bound = INFINITY;
 
     rec.convexified = m->convex;
     st->convexified += m->convex;

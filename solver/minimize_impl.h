@@ -100,6 +100,8 @@ typedef struct bs__ls_result {
   bs_lsearch_status status; /* how it ended (bs_minimize.h)                               */
   int evals;      /* trial points                                                        */
   double alpha, phi, dphi;
+  double bound;   /* the step bound the search ran under (+Inf: none)                  */
+  int limited;    /* 1: the bound shortened a trial step (stats.ccd_limited)            */
 } bs__ls_result;
 
 /* Rounding level of E below which changes of E are not resolved. */
@@ -107,12 +109,16 @@ double bs__noise_level(double E);
 /* tau_eff = max(tol, rtol g0, load_rtol obj->load_norm) (bs_minimize.h). */
 double bs__tolerance(const bs_minimize_opts *o, const bs_objective *obj, double g0);
 
-/* Strong Wolfe line search along m->d from x (phi0 = E(x), dphi0 = g.d < 0).
+/* Strong Wolfe line search along m->d from x (phi0 = E(x), dphi0 = g.d < 0)
+ * on [0, amax] (amax >= 0; +Inf: no bound; bs_minimize.h "Step bound").
  * On any status but BS_LSEARCH_NO_DECREASE: m->y = P(x + alpha d), m->gy_raw
  * its raw gradient, m->gy the masked projected gradient, phi and dphi their
  * values. */
 void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0,
-                     double dphi0, bs_minimize_stats *st, bs__ls_result *res);
+                     double dphi0, double amax, bs_minimize_stats *st, bs__ls_result *res);
+/* obj->max_step's bound along m->d from x (+Inf without the hook; 0 when it
+ * fails or returns NaN or a negative value), timed into t_eval. */
+double bs__step_bound(bs_minimizer *m, const bs_objective *obj, const double *x, bs_minimize_stats *st);
 
 /* Step 4 (minimize.c): H d = -g on the free dofs into m->d, with the
  * forcing term of iteration it. 0, 1 when the solve produced a non-finite

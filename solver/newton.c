@@ -131,6 +131,13 @@ static int newton_step(bs_minimizer *m, const bs_objective *obj, const double *x
   if ((rc = bs__solve_outcome(m, st, rc, &e2, it, "Newton", "minres", err))) return rc;
   st->cg_iterations += ls.iterations;
   *lin_it = ls.iterations;
+  if (obj->max_step) { /* the step bound (bs_minimize.h): min(1, alpha_max) of the step */
+    const double a = bs__step_bound(m, obj, x, st);
+    if (a < 1) {
+      for (int64_t i = 0; i < N; ++i) m->d[i] *= a;
+      st->ccd_limited++;
+    }
+  }
   for (int64_t i = 0; i < N; ++i) m->y[i] = x[i] + m->d[i];
   bs__project(obj, m->y, x, st);
   const int64_t bad = bs__first_nonfinite(m->n, obj->mask, m->y);

@@ -52,6 +52,20 @@ static double trial_energy(bs_minimizer *m, const bs_objective *obj, const doubl
   return Ey;
 }
 
+/* The step bound (bs_minimize.h "Step bound"): a trial step m->d longer
+ * than obj->max_step allows is scaled to it (*dg, *dn follow). */
+static void bound_trial(bs_minimizer *m, const bs_objective *obj, const double *x, bs_minimize_stats *st,
+                        bs_min_iter *rec, double *dg, double *dn) {
+  if (!obj->max_step) return;
+  const double a = rec->alpha_bound = bs__step_bound(m, obj, x, st);
+  if (!(a < 1)) return;
+  rec->alpha_bound = 1.0; /* along the scaled step */
+  for (int64_t i = 0; i < m->n3; ++i) m->d[i] *= a;
+  *dg *= a;
+  *dn *= a;
+  st->ccd_limited++;
+}
+
 /* Algorithm 4.1's radius update for a trial step of length dn. */
 static void update_radius(bs_minimizer *m, double rho, double dn, int on_boundary) {
   if (!(rho >= 0.25)) m->tr_radius = 0.25 * fmin(m->tr_radius, dn);
@@ -86,6 +100,7 @@ int bs__tr_iteration(bs_minimizer *m, const bs_objective *obj, double *x, double
     int rc = tr_direction(m, obj, x, gnorm, it, st, rec, &dg, &dn, err);
     if (rc) return rc;
     if (trial == 1 && bs__at_floor(m, obj, st, it, *E, gnorm, dg, rec->direction)) return 1;
+    bound_trial(m, obj, x, st, rec, &dg, &dn);
     const double pred = model_decrease(m, obj, dg), Ey = trial_energy(m, obj, x, st);
     const double actual = *E - Ey;
     const double rho = pred > 0 ? actual / pred : (actual > 0 ? 1.0 : -1.0);

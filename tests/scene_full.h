@@ -38,7 +38,8 @@ static const char *const bs_test_full_scene =
     "   \"major\": 1, \"minor\": 0.25, \"inside_out\": false, \"file\": \"\", \"grid_h\": 0,\n"
     "   \"collision\": \"constraint\", \"stiffness\": 1e6, \"friction\": 0, \"velocity\": [0, 0, 0],\n"
     "   \"angular_velocity\": [0, 0, 0], \"keyframes\": [{\"t\": 0, \"translate\": [0, 0, 0], \"rotate\": [0, 0, 0]}]}],\n"
-    " \"self_collision\": {\"stiffness\": 1e5, \"friction\": 0},\n"
+    " \"self_collision\": {\"stiffness\": 1e5, \"friction\": 0, \"model\": \"penalty\"},\n"
+    " \"contact\": {\"dhat\": 0.001, \"kappa\": 1e6},\n"
     " \"qoi\": [{\"name\": \"q\", \"quantity\": \"energy\", \"component\": \"magnitude\", \"reduce\": \"max\", \"body\": 0,\n"
     "   \"group\": \"ymin\", \"obstacle\": 0, \"term\": \"elastic\"}],\n"
     " \"output\": {\"dir\": \"\", \"vtu_every\": 1, \"stats\": true, \"states\": false}}\n";

@@ -1955,3 +1955,183 @@ Test(minimize, trust_region_options) {
   cr_assert(strstr(err.msg, "dogleg"), "%s", err.msg);
   bs_bsr_destroy(&P);
 }
+
+/* ---- the step bound (obj->max_step) -------------------------------------------- */
+
+/* A wall at u = 1 on dof 0 that the objective cannot see from the far side:
+ * E = (u - 3)^2 / 2 - mu ln((1 - u)^2) + |v - 1/2|^2 / 2 over the other dofs
+ * v, defined on both sides of the wall (a Newton step from u = 0 jumps over
+ * it to the minimum near u = 3: "tunnelling"). */
+static int ev_wall(fx *f, const double *u, double *E, double *g, bs_bsr *H) {
+  const double mu = 0.01, w = 1 - u[0];
+  if (w == 0) return 1;
+  double e = 0.5 * (u[0] - 3) * (u[0] - 3) - mu * log(w * w);
+  if (g) g[0] = (u[0] - 3) + 2 * mu / w;
+  if (H) hadd(H, 0, 0, 1 + 2 * mu / (w * w));
+  for (int k = 1; k < 3 * f->n; ++k) {
+    e += 0.5 * (u[k] - 0.5) * (u[k] - 0.5);
+    if (g) g[k] = u[k] - 0.5;
+    if (H) hadd(H, k, k, 1);
+  }
+  *E = e;
+  return 0;
+}
+
+/* The CCD of the wall: the fraction 0.9 of the way to u = 1 when d moves
+ * towards it, no bound otherwise; counts its calls. */
+typedef struct wall_ctx {
+  fx f;
+  int calls, beyond; /* hook calls; trace records past the bound or the wall */
+  double fixed;      /* nonzero: return this bound instead                   */
+} wall_ctx;
+
+static int wall_step(const double *x, const double *d, double *amax, void *ctx) {
+  wall_ctx *w = ctx;
+  w->calls++;
+  if (w->fixed != 0) *amax = w->fixed;
+  else *amax = d[0] > 0 ? 0.9 * (1 - x[0]) / d[0] : INFINITY;
+  return 0;
+}
+
+static int wall_value(const double *x, double *E, void *ctx) { return cb_value(x, E, &((wall_ctx *)ctx)->f); }
+static int wall_gradient(const double *x, double *E, double *g, void *ctx) {
+  return cb_gradient(x, E, g, &((wall_ctx *)ctx)->f);
+}
+static int wall_hessian(const double *x, bs_bsr *H, void *ctx) { return cb_hessian(x, H, &((wall_ctx *)ctx)->f); }
+static void wall_trace(const bs_min_iter *it, void *ctx) {
+  wall_ctx *w = ctx;
+  if (!(it->alpha <= it->alpha_bound) || (w->fixed == 0 && !(it->y[0] < 1))) w->beyond++;
+  w->f.n_rec++;
+}
+
+static bs_objective wall_obj(wall_ctx *w, int hook) {
+  bs_objective o;
+  memset(&o, 0, sizeof o);
+  o.n = w->f.n;
+  o.value = wall_value;
+  o.gradient = wall_gradient;
+  o.hessian = wall_hessian;
+  o.trace = wall_trace;
+  o.max_step = hook ? wall_step : NULL;
+  o.ctx = w;
+  return o;
+}
+
+/* Without the bound the first Newton step jumps the wall and the solve ends
+ * on its far side; with it every step stays in [0, alpha_max], no iterate
+ * crosses, and the solve converges to the minimum near the wall. */
+Test(minimize, step_bound_keeps_the_iterates_behind_the_wall) {
+  for (int tr = 0; tr < 2; ++tr) {
+    bs_bsr *P = pattern_chain(2);
+    bs_minimize_opts o;
+    bs_minimize_opts_default(&o);
+    o.tol = 1e-10;
+    o.globalization = tr ? BS_GLOBAL_TRUST_REGION : BS_GLOBAL_LINE_SEARCH;
+    for (int hook = 0; hook < 2; ++hook) {
+      wall_ctx w;
+      memset(&w, 0, sizeof w);
+      fx_init(&w.f, 2, ev_wall);
+      bs_objective obj = wall_obj(&w, hook);
+      double x[6] = {0, 0, 0, 0, 0, 0};
+      bs_minimize_stats st;
+      min_run_obj(P, &o, &obj, x, &st);
+      cr_assert(bs_min_reason_converged(st.reason), "tr %d hook %d: %s", tr, hook, st.reason_text);
+      for (int k = 1; k < 6; ++k) cr_assert_float_eq(x[k], 0.5, 1e-9);
+      if (!hook) {
+        if (!tr) cr_assert_gt(x[0], 1.0, "without the bound the solve tunnels (u = %g)", x[0]);
+        cr_assert_eq(st.ccd_limited, 0);
+        continue;
+      }
+      cr_assert_lt(x[0], 1.0, "tr %d: u = %.17g crossed the wall", tr, x[0]);
+      /* the minimum behind the wall: (u - 3)(1 - u) + 2 mu = 0 */
+      cr_assert_float_eq(x[0], 2 - sqrt(1 + 0.02), 1e-9, "tr %d: u = %.17g", tr, x[0]);
+      cr_assert_eq(w.beyond, 0, "tr %d: %d steps beyond the bound or the wall", tr, w.beyond);
+      cr_assert_gt(st.ccd_limited, 0, "tr %d", tr);
+      cr_assert_gt(w.calls, 0);
+    }
+    bs_bsr_destroy(&P);
+  }
+}
+
+/* A bound above 1 stops the extrapolation: the step the undershooting
+ * Hessian needs (alpha ~ 20) is cut at alpha_max = 2, taken as the bound
+ * itself (E still falls steeply there), and the solve still converges. */
+Test(minimize, step_bound_stops_the_extrapolation) {
+  const int32_t n = 3;
+  const int64_t N = 3 * n;
+  bs_bsr *P = pattern_chain(n);
+  double *A = quad_matrix(n), b[9], x[9] = {0};
+  for (int64_t i = 0; i < N; ++i) b[i] = cos(2.0 * i);
+  wall_ctx w;
+  memset(&w, 0, sizeof w);
+  fx_init(&w.f, n, ev_quad);
+  w.f.A = A;
+  w.f.b = b;
+  w.f.hess_scale = 20;
+  w.fixed = 2.0;
+  bs_objective obj = wall_obj(&w, 1);
+  bs_minimize_opts o;
+  bs_minimize_opts_default(&o);
+  o.tol = 1e-6;
+  o.max_iter = 2000;
+  bs_minimize_stats st;
+  min_run_obj(P, &o, &obj, x, &st);
+  cr_assert_eq(st.reason, BS_MIN_CONVERGED, "%s", st.reason_text);
+  cr_assert_leq(st.alpha_max, 2.0, "alpha_max = %g", st.alpha_max);
+  cr_assert_eq(st.alpha_max, 2.0, "the bound itself was taken");
+  cr_assert_gt(st.ccd_limited, 0);
+  cr_assert_eq(w.beyond, 0);
+  cr_assert_str_eq(bs_lsearch_status_name(BS_LSEARCH_BOUND), "bound");
+  bs_bsr_destroy(&P);
+  free(A);
+}
+
+/* A bound of 0 (the CCD certifies no motion) takes no step and says why. */
+Test(minimize, step_bound_zero_stops_with_a_reason) {
+  bs_bsr *P = pattern_chain(1);
+  wall_ctx w;
+  memset(&w, 0, sizeof w);
+  fx_init(&w.f, 1, ev_wall);
+  w.fixed = -1; /* negative: counted as 0 */
+  bs_objective obj = wall_obj(&w, 1);
+  double x[3] = {0, 0, 0};
+  bs_minimize_stats st;
+  min_run_obj(P, NULL, &obj, x, &st);
+  cr_assert_eq(st.reason, BS_MIN_LINE_SEARCH, "%s", st.reason_text);
+  cr_assert(strstr(st.reason_text, "max_step"), "%s", st.reason_text);
+  cr_assert_eq(x[0], 0.0);
+  cr_assert_eq(st.ls_evaluations, 0);
+  bs_bsr_destroy(&P);
+}
+
+/* A hook that never bounds (+Inf) changes nothing, bit for bit: Rosenbrock
+ * (line searches that extrapolate and zoom) with and without it. */
+static int no_bound(const double *x, const double *d, double *amax, void *ctx) {
+  (void)x, (void)d, (void)ctx;
+  *amax = INFINITY;
+  return 0;
+}
+
+Test(minimize, step_bound_without_effect_is_bit_for_bit) {
+  const int32_t n = 4;
+  bs_bsr *P = pattern_chain(n);
+  double xs[2][12];
+  bs_minimize_stats st[2];
+  for (int hook = 0; hook < 2; ++hook) {
+    fx f;
+    fx_init(&f, n, ev_rosenN);
+    bs_objective obj = make_obj(&f, NULL);
+    obj.max_step = hook ? no_bound : NULL;
+    for (int k = 0; k < 12; ++k) xs[hook][k] = k % 2 ? 1.0 : -1.2;
+    bs_minimize_opts o;
+    bs_minimize_opts_default(&o);
+    o.tol = 1e-10;
+    min_run_obj(P, &o, &obj, xs[hook], &st[hook]);
+  }
+  cr_assert_eq(memcmp(xs[0], xs[1], sizeof xs[0]), 0);
+  cr_assert_eq(st[0].iterations, st[1].iterations);
+  cr_assert_eq(st[0].ls_evaluations, st[1].ls_evaluations);
+  cr_assert_eq(st[0].E, st[1].E);
+  cr_assert_eq(st[1].ccd_limited, 0);
+  bs_bsr_destroy(&P);
+}
