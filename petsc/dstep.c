@@ -153,7 +153,7 @@ int bs_dintegrator_create(bs_dfem *df, bs_step_data *step, const uint8_t *mask, 
     if (mask) memcpy(D->mask, mask, (size_t)df->mesh->n_vertices);
     else memset(D->mask, 1, (size_t)df->mesh->n_vertices);
     for (int i = 0; i < D->n_terms; i++) {
-      if (strcmp(D->terms[i]->name, "inertia") != 0) D->potential[D->n_potential++] = D->terms[i];
+      if (D->terms[i]->kind != BS_TERM_INERTIA) D->potential[D->n_potential++] = D->terms[i];
       if (D->terms[i]->external) D->external[D->n_external++] = D->terms[i];
     }
     step->x_hat = D->x_hat_m, step->x_n = D->x_n_m, step->load = 1.0, step->dt = 0;

@@ -393,7 +393,7 @@ static int potential_gradient(bs_integrator *I, bs_error *err) {
   for (int i = 0; i < I->n_terms; i++) {
     double e;
     const bs_term *t = I->terms[i];
-    if (strcmp(t->name, "inertia") != 0 && t->ops->gradient(t, I->x_n, &e, I->grad))
+    if (t->kind != BS_TERM_INERTIA && t->ops->gradient(t, I->x_n, &e, I->grad))
       return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the positions of the step's start",
                           t->name);
   }

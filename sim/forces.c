@@ -27,7 +27,7 @@ static int picked(const bs_sim *s, const bs_term *t, pick p, int obstacle) {
   if (t->dynamic_only && s->scene->mode == BS_MODE_STATIC) return 0;
   int owner = contact_owner(s, t), contact = owner != -1;
   switch (p) {
-    case PICK_ELASTIC: return !strcmp(t->name, "elasticity");
+    case PICK_ELASTIC: return t->kind == BS_TERM_ELASTICITY;
     case PICK_ALL: return 1;
     case PICK_NOT_CONTACT: return !contact;
     case PICK_CONTACT: return contact && (obstacle < 0 || owner == obstacle);
