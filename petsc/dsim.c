@@ -207,7 +207,8 @@ void bs_dsim_destroy(bs_dsim **sp) {
   bs_obstacles_destroy(&s->obstacles);
   bs_dfem_destroy(&s->df);
   bs_dmesh_destroy(&s->mesh);
-  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm), free(s->snap);
+  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm);
+  bs_frame_snap_free(&s->snap);
   free(s);
   *sp = NULL;
 }

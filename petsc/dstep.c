@@ -78,6 +78,15 @@ static int make_solver(bs_dintegrator *D, bs_error *err) {
   return rc;
 }
 
+/* The first error of a vector operation during the last solve. */
+static int solve_error(void *ctx, bs_error *err) {
+  bs_dintegrator *D = ctx;
+  int rc = D->cb_rc;
+  if (rc && err) *err = D->cb_err;
+  D->cb_rc = 0;
+  return rc;
+}
+
 static bs_dpc preconditioner(bs_lin_kind k) {
   return k == BS_LIN_PCG ? BS_DPC_BJACOBI : k == BS_LIN_AMG ? BS_DPC_GAMG : BS_DPC_NONE;
 }
@@ -99,6 +108,7 @@ int bs_dintegrator_create(bs_dfem *df, bs_step_data *step, const uint8_t *mask, 
     bs_step_backend B = {.n_vertices = df->mesh->n_vertices, .mass = D->mass, .pattern = D->diag,
                          .vecops = &D->vecops, .caps = BS_DSTEP_CAPS, .name = "petsc", .ctx = D};
     bs__dstep_backend_ops(&B);
+    B.solve_error = solve_error;
     rc = bs_integrator_create_on(&B, step, D->n_all, D->all, mask, script, script_ctx, &o, &D->integ, err);
   }
   if (rc) bs_dintegrator_destroy(&D);
@@ -119,29 +129,17 @@ void bs_dintegrator_destroy(bs_dintegrator **pD) {
 
 /* ---- the integrator's calls ---------------------------------------------- */
 
-/* rc, or the first error of a vector operation during the call. */
-static int with_vecops(bs_dintegrator *D, int rc, bs_error *err) {
-  if (!rc && D->cb_rc) {
-    if (err) *err = D->cb_err;
-    rc = D->cb_rc;
-  }
-  D->cb_rc = 0;
-  return rc;
-}
-
 int bs_dintegrator_set_hooks(bs_dintegrator *D, const bs_step_hooks *hooks, bs_error *err) {
   return bs_integrator_set_hooks_checked(D->integ, hooks, err);
 }
 
 int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err) {
-  D->cb_rc = 0;
-  return with_vecops(D, bs_integrator_static(D->integ, t, load_steps, x, st, err), err);
+  return bs_integrator_static(D->integ, t, load_steps, x, st, err);
 }
 
 int bs_dintegrator_step(bs_dintegrator *D, double t, double dt, double *x, double *v, bs_step_stats *st,
                         bs_error *err) {
-  D->cb_rc = 0;
-  return with_vecops(D, bs_integrator_step(D->integ, t, dt, x, v, st, err), err);
+  return bs_integrator_step(D->integ, t, dt, x, v, st, err);
 }
 
 bs_integrator *bs_dintegrator_integrator(bs_dintegrator *D) { return D->integ; }

@@ -122,6 +122,9 @@ typedef struct bs_step_backend {
      (the n dynamic terms' Hessians at x and the PSD-projected elastic Hessian
      at the rest positions when at_rest, else at x). */
   int (*precond)(void *ctx, int n, bs_term *const *terms, const double *x, int at_rest, bs_bsr *P);
+  /* May be NULL: after a solve, the first error of the vector operations
+     (vecops) during it (0: none; then reset). */
+  int (*solve_error)(void *ctx, bs_error *err);
   void (*destroy)(void *ctx); /* may be NULL */
   void *ctx;
 } bs_step_backend;

@@ -504,6 +504,7 @@ static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st,
     if (err) *err = I->cb_err;
     rc = I->cb_rc;
   }
+  if (!rc && I->B.solve_error) rc = I->B.solve_error(I->B.ctx, err);
   if (rc) return rc;
   /* "k Newton steps and stop" ends by design without convergence: not a failure. */
   st->failed = !bs_min_reason_converged(st->min.reason) && st->min.reason != BS_MIN_STEPS_DONE;
