@@ -599,6 +599,7 @@ int bs_term_ipc_create(const bs_fem *fem, const bs_step_data *step, double dhat,
     return st;
   }
   t->name = "barrier_contact";
+  t->kind = BS_TERM_BARRIER_CONTACT;
   t->ops = &ipc_ops;
   t->fem = fem;
   t->step = step;
@@ -609,7 +610,7 @@ int bs_term_ipc_create(const bs_fem *fem, const bs_step_data *step, double dhat,
   return 0;
 }
 
-int bs_term_is_ipc(const bs_term *t) { return t && t->ops == &ipc_ops; }
+int bs_term_is_ipc(const bs_term *t) { return t && t->kind == BS_TERM_BARRIER_CONTACT && t->ops == &ipc_ops; }
 
 static int not_ipc(const bs_term *t, bs_error *err) {
   return bs_term_is_ipc(t) ? 0 : bs_error_set(err, BS_EINPUT, "not a barrier contact term");

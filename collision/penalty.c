@@ -157,6 +157,7 @@ int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, c
     return st;
   }
   t->name = "penalty";
+  t->kind = BS_TERM_PENALTY;
   t->ops = &penalty_ops;
   t->fem = fem;
   t->step = step;

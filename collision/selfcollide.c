@@ -1056,6 +1056,7 @@ int bs_term_self_create(const bs_fem *fem, const bs_step_data *step, double k, b
     return st;
   }
   t->name = "self_collision";
+  t->kind = BS_TERM_SELF_COLLISION;
   t->ops = &self_ops;
   t->fem = fem;
   t->step = step;

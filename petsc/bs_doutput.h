@@ -30,7 +30,9 @@ typedef struct bs_dout bs_dout;
 int bs_dout_open(const bs_dsim *d, const char *dir, int replace, bs_dout **out, bs_error *err);
 /* After frame fs (frame 0: the initial state) of d. */
 int bs_dout_frame(bs_dout *o, bs_dsim *d, const bs_frame_stats *fs, bs_error *err);
-/* summary.txt with this text. */
+/* summary.txt with this text, written through summary.txt.tmp renamed over
+ * it (bs_outfile_replace_text, base/outfile.h): a reader or a kill finds the
+ * old summary or the new one. */
 int bs_dout_finish(bs_dout *o, const char *summary, bs_error *err);
 void bs_dout_destroy(bs_dout **o);
 

@@ -38,6 +38,7 @@
 #define BS_DSIM_H
 
 #include "bs_scene.h"
+#include "bs_frame_loop.h"
 #include "bs_sim.h"
 #include "bs_dstep.h"
 
@@ -68,10 +69,7 @@ typedef struct bs_dsim {
   bs_sim_step *steps;   /* steps_per_frame records of the last frame      */
   double *xm;           /* work: 3 per local-mesh vertex                  */
   volatile sig_atomic_t *stop; /* bs_dsim_set_stop's flag (NULL: none)     */
-  double *snap;         /* with a flag: x and v at the frame's start (6n) */
-  double snap_time;
-  int snap_frame;
-  bs_min_carry snap_carry;
+  bs_frame_snap snap;   /* with a flag: the state at the frame's start    */
 } bs_dsim;
 
 /* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
@@ -97,7 +95,7 @@ int bs_dsim_advance_frame(bs_dsim *s, bs_frame_stats *fs, bs_error *err);
  * start, bit for bit) and they return BS_SIM_STOPPED (not an error; fs is not
  * written), so that the next call does that frame again as if never stopped.
  * Every rank must pass a flag or none; the flag must outlive its use.
- * Allocates the snapshot (6 doubles per local vertex) at the first flag:
+ * Allocates the snapshot (9 doubles per local vertex) at the first flag:
  * BS_ENOMEM. Not collective. */
 int bs_dsim_set_stop(bs_dsim *s, volatile sig_atomic_t *stop, bs_error *err);
 

@@ -1,44 +1,41 @@
-/* bs_dstep.h — the backward Euler step and statics of bs_step.h on a
- * distributed mesh: the same steps (x̂, the terms' begin_step, scripted
- * vertices, the paper's two initial guesses, the solve, the velocities), the
- * same minimizer (bs_minimize through a bs_vecops, bs_vecops.h: dot products
- * over owned dofs summed over the ranks, the Newton system solved by
- * bs_dlinsolve.h's CG), the same options (bs_integrator_opts; min.linear picks
- * the preconditioner: cg none, pcg point-block Jacobi, amg GAMG).
+/* bs_dstep.h — the integrator of physics/bs_step.h (one integrator: its
+ * steps, guesses, scripted vertices, projection, choice of the initial guess
+ * and statistics are bs_integrator's) on a distributed mesh: this module is
+ * its petsc backend (bs_step_backend.h): the terms of a dfem summed and
+ * assembled over the ranks, dot products over owned dofs, the Newton system
+ * solved by bs_dlinsolve.h's CG (min.linear picks the preconditioner: cg
+ * none, pcg point-block Jacobi, amg GAMG, built at rest).
  *
  * x, v: bs_dfem local vectors (3 per local vertex, consistent). The terms
  * (set on the dfem with bs_dfem_set_terms) were created with `step`, whose
- * x_hat and x_n the integrator points at its own arrays in the local mesh's
+ * x_hat and x_n the backend points at its own arrays in the local mesh's
  * order. mask: 1 free, 0 scripted or fixed, per local vertex (consistent).
  * script: the positions of the masked vertices at a time, on a local vector.
- * Constraint hooks (bs_dintegrator_set_hooks): the guesses, the start of
- * statics and the minimizer's iterates projected as in bs_step.h.
- * Also as physics/step.c: solver.rtol and solver.load_rtol (the external
- * loads' norm over the free dofs, summed over the ranks), the objective's
- * quadratic flag (bs_step_objective_quadratic) and the adaptive forcing's
- * rule for steps that start with inverted tets (bs_step_forcing, the tets
- * counted over the ranks). Not supported (refused by the caller's scene
- * check): post-solve hooks (friction), self-collision, the Newton baseline,
- * the third guess (opts.guess_xn), opts.trace; GAMG is always built at rest
- * (amg_at_rest = 1).
+ * What the backend does not run is refused by bs_step_refuse (BS_EINPUT):
+ * self-collision, post-solve hooks (friction, postprocess collisions), the
+ * Newton baseline, opts.trace, solver.linear other than cg, pcg, amg, the
+ * trust region, the AMG built at the iterate.
  *
  * Collective. Ownership: borrows dfem, step, the terms and the hooks' ctx;
- * copies the mask.
- * Status: as bs_step.h, plus BS_EINPUT for an option the backend does not
- * have (min.linear cholmod or minres, a method other than optimization,
- * guess_xn).
+ * the integrator copies the mask.
+ * Status: as bs_step.h.
  */
 #ifndef BS_DSTEP_H
 #define BS_DSTEP_H
 
 /* bs_step.h first: <complex.h>, which PETSc includes, defines I. */
 #include "bs_step.h"
+#include "bs_step_backend.h"
 #include "bs_dfem.h"
 #include "bs_dlinsolve.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* What the petsc backend runs beyond the optimization integrator
+ * (bs_step_backend.h, BS_STEP_CAN_*): nothing more. */
+#define BS_DSTEP_CAPS 0u
 
 typedef struct bs_dintegrator bs_dintegrator;
 
@@ -54,8 +51,8 @@ void bs_dintegrator_destroy(bs_dintegrator **D);
  * the same for a vertex it shares: x and g are consistent). project_hessian
  * gets each rank's partial Hessian over its owned cells before the assembly
  * (bs_dfem_hessian_with), so a block it adds per vertex must be added on one
- * rank only. hooks NULL: none. BS_EINPUT for a post_solve hook (friction is
- * not supported). Not collective; call before a step. */
+ * rank only. hooks NULL: none. BS_EINPUT for a post_solve hook
+ * (bs_step_refuse). Not collective; call before a step. */
 int bs_dintegrator_set_hooks(bs_dintegrator *D, const bs_step_hooks *hooks, bs_error *err);
 
 /* Statics in load_steps increments (as bs_integrator_static). */
@@ -77,6 +74,9 @@ void bs_dintegrator_set_carry(bs_dintegrator *D, const bs_min_carry *c);
  * is not the step's solution (undo it); statics take no further load step.
  * Not collective. */
 void bs_dintegrator_set_stop(bs_dintegrator *D, volatile sig_atomic_t *stop);
+
+/* The integrator itself (bs_step.h; its vectors are local vectors). */
+bs_integrator *bs_dintegrator_integrator(bs_dintegrator *D);
 
 /* The linear solver (GAMG figures: bs_dlin_info). */
 const bs_dlin *bs_dintegrator_linsolve(const bs_dintegrator *D);

@@ -10,6 +10,7 @@
 #include "bs_dist.h"
 #include "bs_doutput.h"
 #include "bs_runfolder.h"
+#include "outfile.h"
 
 struct bs_dout {
   char dir[BS_MAX_PATH];
@@ -162,12 +163,6 @@ int bs_dout_frame(bs_dout *o, bs_dsim *d, const bs_frame_stats *fs, bs_error *er
 
 int bs_dout_finish(bs_dout *o, const char *summary, bs_error *err) {
   int rc = BS_OK;
-  if (bs_dist_rank() == 0) {
-    char p[BS_MAX_PATH + 32];
-    snprintf(p, sizeof p, "%s/summary.txt", o->dir);
-    FILE *f = fopen(p, "w");
-    if (!f || fputs(summary, f) < 0) rc = bs_error_set(err, BS_EIO, "%s: cannot write: %s", p, strerror(errno));
-    if (f && fclose(f) && !rc) rc = bs_error_set(err, BS_EIO, "%s: cannot write: %s", p, strerror(errno));
-  }
+  if (bs_dist_rank() == 0) rc = bs_outfile_replace_text(o->dir, "summary.txt", summary, err);
   return agree(rc, err);
 }

@@ -7,6 +7,7 @@
 
 #include "bs_dist.h"
 #include "bs_dsim.h"
+#include "bs_step_backend.h"
 #include "bs_penalty.h"
 #include "dsim_internal.h"
 
@@ -29,8 +30,8 @@ static int check_body(const bs_scene *sc, const bs_scene_body *b, bs_error *err)
   return BS_OK;
 }
 
-/* Obstacles: analytic shapes with constraint or penalty collisions, no
- * friction. */
+/* Obstacles: analytic shapes (what the integrator runs of their collisions
+ * is bs_step_refuse's). */
 static int check_obstacles(const bs_scene *sc, bs_error *err) {
   char key[64];
   for (int i = 0; i < sc->n_obstacles; i++) {
@@ -38,30 +39,35 @@ static int check_obstacles(const bs_scene *sc, bs_error *err) {
     const char *why = NULL;
     if (o->shape == BS_SHAPE_GRID) snprintf(key, sizeof key, "obstacles.%d.shape", i), why = "grid level sets are not supported";
     else if (o->grid_h > 0) snprintf(key, sizeof key, "obstacles.%d.grid_h", i), why = "grid level sets are not supported";
-    else if (o->collision == BS_COLLIDE_POSTPROCESS)
-      snprintf(key, sizeof key, "obstacles.%d.collision", i), why = "postprocess collisions are not supported";
-    else if (o->friction > 0) snprintf(key, sizeof key, "obstacles.%d.friction", i), why = "friction is not supported";
     if (why) return refuse(sc, err, key, why);
   }
   if (sc->n_obstacles > BS_DSIM_MAX_OBSTACLES) return refuse(sc, err, "obstacles", "too many obstacles");
   return BS_OK;
 }
 
+/* What the scene asks of the integrator (bs_step_refuse). */
+static void scene_features(const bs_scene *sc, bs_step_features *f) {
+  memset(f, 0, sizeof *f);
+  f->self_collision = sc->self_collision;
+  f->postprocess_obstacle = f->friction_obstacle = -1;
+  for (int i = sc->n_obstacles - 1; i >= 0; i--) {
+    if (sc->obstacles[i].collision == BS_COLLIDE_POSTPROCESS) f->postprocess_obstacle = i;
+    if (sc->obstacles[i].friction > 0) f->friction_obstacle = i;
+  }
+  f->method = sc->solver.method;
+  f->linear = sc->solver.min.linear;
+  f->globalization = sc->solver.min.globalization;
+  f->amg_at_rest = sc->solver.amg_at_rest;
+}
+
 int bs_dsim_check(const bs_scene *sc, bs_error *err) {
-  if (sc->self_collision) return refuse(sc, err, "self_collision", "self-collision is not supported");
-  int rc = check_obstacles(sc, err);
+  bs_step_features f;
+  scene_features(sc, &f);
+  int rc = bs_step_refuse(&f, BS_DSTEP_CAPS, sc->path, "petsc", err);
+  if (!rc) rc = check_obstacles(sc, err);
   if (rc) return rc;
   if (sc->n_qoi > 0) return refuse(sc, err, "qoi", "quantities of interest are not supported yet");
   if (sc->n_bodies != 1) return refuse(sc, err, "bodies", "exactly one body is run");
-  if (sc->solver.method != BS_METHOD_OPTIMIZATION)
-    return refuse(sc, err, "solver.method", "only the optimization integrator runs");
-  bs_lin_kind k = sc->solver.min.linear;
-  if (k != BS_LIN_CG && k != BS_LIN_PCG && k != BS_LIN_AMG)
-    return refuse(sc, err, "solver.linear", "only cg, pcg and amg are available");
-  if (sc->solver.min.globalization != BS_GLOBAL_LINE_SEARCH)
-    return refuse(sc, err, "solver.globalization", "only line_search runs (Steihaug's CG is serial)");
-  if (k == BS_LIN_AMG && !sc->solver.amg_at_rest)
-    return refuse(sc, err, "solver.amg_matrix", "GAMG is built from the rest-state Hessian only (\"rest\")");
   return check_body(sc, &sc->bodies[0], err);
 }
 
@@ -202,7 +208,8 @@ void bs_dsim_destroy(bs_dsim **sp) {
   bs_obstacles_destroy(&s->obstacles);
   bs_dfem_destroy(&s->df);
   bs_dmesh_destroy(&s->mesh);
-  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm), free(s->snap);
+  free(s->x), free(s->v), free(s->mask), free(s->scripts), free(s->steps), free(s->xm);
+  bs_frame_snap_free(&s->snap);
   free(s);
   *sp = NULL;
 }

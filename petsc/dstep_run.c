@@ -1,194 +1,146 @@
-/* dstep_run.c — statics and one backward Euler step on a distributed mesh
- * (bs_dstep.h), as bs_integrator_static / bs_integrator_step. */
+/* dstep_run.c — the petsc backend's evaluations (bs_step_backend.h): the
+ * terms of a list on the rank's owned cells through the dfem, summed and
+ * assembled over the ranks; the constraint hooks on local-mesh copies of the
+ * local vectors, made consistent; the reductions over the ranks. */
 #include <math.h>
 #include <string.h>
 
+/* dstep_internal.h first: <complex.h>, which PETSc includes, defines I. */
 #include "dstep_internal.h"
 #include "bs_dist.h"
 #include "dist_internal.h"
 
-/* NaN / Inf in a local vector on some rank: BS_ENUMERIC on every rank. */
-static int check_finite(const bs_dintegrator *D, const double *a, const char *what, bs_error *err) {
-  int64_t bad = -1;
-  for (int64_t i = 0; i < D->df->n3 && bad < 0; i++)
-    if (!isfinite(a[i])) bad = i;
-  int64_t any = bad >= 0;
-  int rc = bs_dist_sum_i64(&any, 1, err);
-  if (rc || !any) return rc;
-  if (bad >= 0)
-    return bs_error_set(err, BS_ENUMERIC, "%s of local vertex %lld (component %d) on rank %d is not finite (%g)", what,
-                        (long long)(bad / 3), (int)(bad % 3), bs_dist_rank(), a[bad]);
-  return bs_error_set(err, BS_ENUMERIC, "a %s is not finite on another rank", what);
+static void use(bs_dintegrator *D, int n, bs_term *const *terms) { bs_dfem_set_terms(D->df, n, terms, 0); }
+static void restore(bs_dintegrator *D) { bs_dfem_set_terms(D->df, D->n_all, D->all, D->statics_all); }
+
+static void d_publish(void *ctx, bs_step_data *step, const double *x_n, const double *x_hat) {
+  bs_dintegrator *D = ctx;
+  bs_dfem_mesh_vector(D->df, x_n, D->x_n_m);
+  bs_dfem_mesh_vector(D->df, x_hat, D->x_hat_m);
+  step->x_n = D->x_n_m, step->x_hat = D->x_hat_m;
+}
+
+static int d_energy(void *ctx, int n, bs_term *const *terms, const double *x, double *E, const char **bad,
+                    bs_error *err) {
+  (void)bad;
+  bs_dintegrator *D = ctx;
+  use(D, n, terms);
+  int rc = bs_dfem_value(D->df, x, E, err);
+  restore(D);
+  if (rc) *E = NAN;
+  return rc;
+}
+
+static int d_gradient(void *ctx, int n, bs_term *const *terms, const double *x, double *E, double *g,
+                      const char **bad, bs_error *err) {
+  (void)bad;
+  bs_dintegrator *D = ctx;
+  use(D, n, terms);
+  int rc = bs_dfem_gradient(D->df, x, E, g, err);
+  restore(D);
+  return rc;
+}
+
+static void to_hook(bs_dintegrator *D, const double *x, const double *g) {
+  bs_dfem_mesh_vector(D->df, x, D->hxm);
+  if (g) bs_dfem_mesh_vector(D->df, g, D->hgm);
+}
+
+/* Inside bs_dfem_hessian_model: the rank's partial Hessian projected at the
+ * point d_hessian was given (a block the hook adds per vertex is added on
+ * one rank only: bs_dstep.h). */
+static void project_partial(bs_bsr *Hm, void *ctx) {
+  bs_dintegrator *D = ctx;
+  to_hook(D, D->hess_x, D->hess_g);
+  D->hess_hooks->project_hessian(D->hxm, D->hgm, Hm, D->hess_hooks->ctx);
+}
+
+/* The dfem's own matrix (H, convex and add unused: no convexified terms). */
+static int d_hessian(void *ctx, int n, bs_term *const *terms, const double *x, const double *g_model, int convex,
+                     int add, const bs_step_hooks *hooks, const double *g_raw, const uint8_t *mask, bs_bsr *H,
+                     bs_error *err) {
+  (void)convex, (void)add, (void)H;
+  bs_dintegrator *D = ctx;
+  int rc = 0;
+  if (hooks && !g_raw) {
+    double E;
+    rc = d_gradient(D, n, terms, x, &E, D->gtmp, NULL, err);
+    g_raw = D->gtmp;
+  }
+  if (rc) return rc;
+  D->hess_hooks = hooks, D->hess_x = x, D->hess_g = g_raw;
+  use(D, n, terms);
+  rc = bs_dfem_hessian_model(D->df, x, g_model, mask, hooks ? project_partial : NULL, D, err);
+  restore(D);
+  return rc;
+}
+
+static int d_project(void *ctx, const bs_step_hooks *h, double *x, bs_error *err) {
+  bs_dintegrator *D = ctx;
+  to_hook(D, x, NULL);
+  h->project(D->hxm, h->ctx);
+  bs_dfem_from_mesh_vector(D->df, D->hxm, x);
+  return bs_dfem_consistent(D->df, x, err);
+}
+
+static void d_register(void *ctx, const bs_step_hooks *h, const double *x, const double *g) {
+  bs_dintegrator *D = ctx;
+  to_hook(D, x, g);
+  h->register_active(D->hxm, D->hgm, h->ctx);
+}
+
+static int d_project_gradient(void *ctx, const bs_step_hooks *h, const double *x, double *g, bs_error *err) {
+  bs_dintegrator *D = ctx;
+  to_hook(D, x, g);
+  h->project_gradient(D->hxm, D->hgm, h->ctx);
+  bs_dfem_from_mesh_vector(D->df, D->hgm, g);
+  return bs_dfem_consistent(D->df, g, err);
+}
+
+static int d_sum_i64(void *ctx, int64_t *v, int n, bs_error *err) {
+  (void)ctx;
+  return bs_dist_sum_i64(v, n, err);
+}
+
+/* Over the owned free dofs, summed over the ranks. */
+static int d_free_sq(void *ctx, const double *g, const uint8_t *mask, double *out, bs_error *err) {
+  bs_dintegrator *D = ctx;
+  const bs_dmesh *m = D->df->mesh;
+  double s = 0;
+  for (int32_t v = 0; v < m->n_vertices; v++)
+    if (m->owned[v] && (!mask || mask[v]))
+      for (int k = 0; k < 3; k++) s += g[3 * (size_t)v + k] * g[3 * (size_t)v + k];
+  int rc = bs_dist_sum(&s, 1, err);
+  *out = s;
+  return rc;
+}
+
+static int d_count_inverted(void *ctx, const double *x, int64_t *n, bs_error *err) {
+  bs_dintegrator *D = ctx;
+  bs_dfem_mesh_vector(D->df, x, D->hxm);
+  *n = bs_fem_count_inverted(D->df->fem, D->hxm, NULL);
+  return bs_dist_sum_i64(n, 1, err);
 }
 
 /* GAMG: its matrix is the Hessian of the active terms at the rest positions
  * (SPD on the free dofs: the rest stiffness, plus M/dt^2 and the damping in a
  * dynamic solve), built again when dt changes. */
-static int gamg_prepare(bs_dintegrator *D, bs_error *err) {
-  const double pdt = D->df->statics ? 0.0 : D->step->dt;
+static int d_prepare_solve(void *ctx, bs_minimizer *min, bs_minimize_opts *mo, double pdt, int n,
+                           bs_term *const *terms, const uint8_t *mask, int amg_at_rest, bs_error *err) {
+  (void)min, (void)mo, (void)amg_at_rest;
+  bs_dintegrator *D = ctx;
   if (D->pc != BS_DPC_GAMG || (pdt == D->amg_dt && bs_dlin_ready(D->lin))) return BS_OK;
-  int rc = bs_dfem_hessian(D->df, D->df->mesh->x, D->mask, err);
+  use(D, n, terms);
+  int rc = bs_dfem_hessian(D->df, D->df->mesh->x, mask, err);
+  restore(D);
   if (!rc) rc = bs_dlin_setup(D->lin, D->df->H, err);
   if (!rc) D->amg_dt = pdt;
   return rc;
 }
 
-/* The 2-norm over the free dofs of the external loads' forces at x (the
- * scale of load_rtol, as physics/step.c's load_norm), computed in D->g1
- * (free once the guess is in x); 0 when there is none or it is not
- * evaluable. */
-static int load_norm(bs_dintegrator *D, const double *x, double *out, bs_error *err) {
-  *out = 0;
-  bs_dfem *df = D->df;
-  const int statics = df->statics;
-  if (D->n_external == 0) return BS_OK;
-  double E, s = 0;
-  bs_dfem_set_terms(df, D->n_external, D->external, statics);
-  int rc = bs_dfem_gradient(df, x, &E, D->g1, err);
-  bs_dfem_set_terms(df, D->n_terms, D->terms, statics);
-  if (rc) return rc > 0 ? BS_OK : rc;
-  for (int32_t v = 0; v < df->mesh->n_vertices; v++)
-    if (!D->mask[v]) memset(D->g1 + 3 * (size_t)v, 0, 3 * sizeof(double));
-  if ((rc = bs_dfem_dot(df, D->g1, D->g1, &s, err))) return rc;
-  *out = isfinite(s) ? sqrt(s) : 0;
-  return BS_OK;
-}
-
-/* The solve's options as physics/step.c's run_solver sets them: the
- * initial guess's kind, and the adaptive forcing's rule (bs_step_forcing)
- * from the inverted tets at the step's start over the ranks. */
-static int solve_opts(bs_dintegrator *D, int naive, bs_minimize_opts *mo, bs_error *err) {
-  *mo = D->opts.min;
-  mo->naive_guess = naive;
-  mo->linear = BS_LIN_CG;
-  if (mo->forcing_ew != 2) return BS_OK;
-  int64_t inv = bs_fem_count_inverted(D->df->fem, D->x_n_m, NULL);
-  int rc = bs_dist_sum_i64(&inv, 1, err);
-  mo->forcing_ew = bs_step_forcing(2, inv);
-  return rc;
-}
-
-static int run_solver(bs_dintegrator *D, double *x, int naive, bs_step_stats *st, bs_error *err) {
-  int rc = gamg_prepare(D, err);
-  if (rc) return rc;
-  bs_minimize_opts mo;
-  if ((rc = solve_opts(D, naive, &mo, err)) || (rc = bs_minimizer_set_opts(D->min, &mo, err))) return rc;
-  bs_objective obj;
-  bs__dstep_objective(D, &obj);
-  obj.quadratic = bs_step_objective_quadratic(D->n_terms, D->terms, D->df->statics, D->hooks.project != NULL);
-  if (mo.load_rtol > 0 && (rc = load_norm(D, x, &obj.load_norm, err))) return rc;
-  D->cb_rc = 0;
-  rc = bs_minimize(D->min, &obj, x, &st->min, err);
-  if (!rc && D->cb_rc) {
-    if (err) *err = D->cb_err;
-    rc = D->cb_rc;
-  }
-  st->failed = !bs_min_reason_converged(st->min.reason);
-  return rc;
-}
-
-/* x <- P(x) outside the minimizer (the guesses, the start of statics). */
-static int project_now(bs_dintegrator *D, double *x, bs_error *err) {
-  D->cb_rc = 0;
-  bs__dstep_project(D, x);
-  if (D->cb_rc && err) *err = D->cb_err;
-  return D->cb_rc;
-}
-
-int bs_dintegrator_static(bs_dintegrator *D, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err) {
-  double t0 = bs_seconds();
-  memset(st, 0, sizeof *st);
-  int rc = check_finite(D, x, "position", err);
-  if (rc) return rc;
-  if (load_steps < 1) return bs_error_set(err, BS_EINPUT, "load_steps must be >= 1, got %d", load_steps);
-  bs_dfem_set_terms(D->df, D->n_terms, D->terms, 1);
-  D->step->dt = 0;
-  D->step->time = t;
-  memcpy(D->x_n, x, (size_t)D->df->n3 * sizeof(double));
-  bs_dfem_mesh_vector(D->df, x, D->x_n_m);
-  bs_dfem_mesh_vector(D->df, x, D->x_hat_m);
-  if (D->script) D->script(t, x, D->script_ctx);
-  rc = project_now(D, x, err);
-  bs_step_stats sub;
-  for (int l = 1; l <= load_steps && !rc; l++) {
-    D->step->load = (double)l / load_steps;
-    memset(&sub, 0, sizeof sub);
-    if (!(rc = run_solver(D, x, 1, &sub, err))) bs_step_stats_add(st, &sub);
-    if (sub.min.reason == BS_MIN_STOPPED) break; /* the later load steps are not taken */
-  }
-  bs_dfem_set_terms(D->df, D->n_terms, D->terms, 0);
-  D->step->load = 1.0;
-  st->seconds = bs_seconds() - t0;
-  return rc;
-}
-
-/* ∇Φ(xⁿ) = −f(xⁿ) into D->grad: every term but inertia. */
-static int potential_gradient(bs_dintegrator *D, bs_error *err) {
-  double E;
-  bs_dfem_set_terms(D->df, D->n_potential, D->potential, 0);
-  int rc = bs_dfem_gradient(D->df, D->x_n, &E, D->grad, err);
-  bs_dfem_set_terms(D->df, D->n_terms, D->terms, 0);
-  if (rc > 0) return bs_error_set(err, BS_ENUMERIC, "a term is not evaluable at the positions of the step's start");
-  return rc;
-}
-
-/* The two initial guesses (step 3 of bs_step.h) into g1 (x̂) and g2 (x̂ +
- * dt² M⁻¹ f), scripted vertices at their positions at t. */
-static void guesses(bs_dintegrator *D, double t, double dt) {
-  const int32_t nv = D->df->mesh->n_vertices;
-  for (int32_t v = 0; v < nv; v++) {
-    double c = D->mass[v] > 0 ? dt * dt / D->mass[v] : 0;
-    for (int k = 0; k < 3; k++) D->g2[3 * v + k] = D->g1[3 * v + k] - c * D->grad[3 * v + k];
-  }
-  if (D->script) {
-    D->script(t, D->g1, D->script_ctx);
-    D->script(t, D->g2, D->script_ctx);
-  }
-  for (int32_t v = 0; v < nv; v++)
-    if (!D->mask[v])
-      for (int k = 0; k < 3; k++) {
-        if (!D->script) D->g1[3 * v + k] = D->g2[3 * v + k] = D->x_n[3 * v + k];
-        else D->g2[3 * v + k] = D->g1[3 * v + k];
-      }
-}
-
-static double guess_energy(bs_dintegrator *D, const double *x, bs_error *err) {
-  double E = NAN;
-  int rc = bs_dfem_value(D->df, x, &E, err);
-  return rc || !isfinite(E) ? INFINITY : E;
-}
-
-int bs_dintegrator_step(bs_dintegrator *D, double t, double dt, double *x, double *v, bs_step_stats *st,
-                        bs_error *err) {
-  double t0 = bs_seconds();
-  memset(st, 0, sizeof *st);
-  const size_t n3 = (size_t)D->df->n3;
-  if (!(dt > 0) || !isfinite(dt)) return bs_error_set(err, BS_EINPUT, "time step must be positive and finite, got %g", dt);
-  int rc = check_finite(D, x, "position", err);
-  if (!rc) rc = check_finite(D, v, "velocity", err);
-  if (rc) return rc;
-  bs_dfem_set_terms(D->df, D->n_terms, D->terms, 0);
-  D->step->dt = dt, D->step->time = t + dt, D->step->load = 1.0;
-  memcpy(D->x_n, x, n3 * sizeof(double));
-  for (size_t i = 0; i < n3; i++) D->g1[i] = x[i] + dt * v[i];
-  bs_dfem_mesh_vector(D->df, D->x_n, D->x_n_m);
-  bs_dfem_mesh_vector(D->df, D->g1, D->x_hat_m);
-  for (int i = 0; i < D->n_terms; i++)
-    if (D->terms[i]->ops->begin_step && (rc = D->terms[i]->ops->begin_step(D->terms[i], err))) return rc;
-  if ((rc = potential_gradient(D, err))) return rc;
-  guesses(D, t + dt, dt);
-  if ((rc = project_now(D, D->g1, err)) || (rc = project_now(D, D->g2, err))) return rc;
-  const double E1 = guess_energy(D, D->g1, err), E2 = guess_energy(D, D->g2, err);
-  int naive = 1;
-  if (isfinite(E2) && (!isfinite(E1) || E2 < E1)) {
-    memcpy(x, D->g2, n3 * sizeof(double));
-    st->guess = BS_GUESS_EXPLICIT;
-    naive = 0;
-  } else {
-    memcpy(x, D->g1, n3 * sizeof(double));
-  }
-  if ((rc = run_solver(D, x, naive, st, err))) return rc;
-  for (size_t i = 0; i < n3; i++) v[i] = (x[i] - D->x_n[i]) / dt;
-  st->seconds = bs_seconds() - t0;
-  return 0;
+void bs__dstep_backend_ops(bs_step_backend *B) {
+  B->publish = d_publish, B->energy = d_energy, B->gradient = d_gradient, B->hessian = d_hessian;
+  B->project = d_project, B->register_active = d_register, B->project_gradient = d_project_gradient;
+  B->sum_i64 = d_sum_i64, B->free_sq = d_free_sq, B->count_inverted = d_count_inverted;
+  B->prepare_solve = d_prepare_solve, B->precond = NULL, B->destroy = NULL;
 }

@@ -140,6 +140,13 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
 void bs_integrator_destroy(bs_integrator **I);
 void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks);
 
+/* The vertices of the integrator's vectors (its backend's). */
+int32_t bs_integrator_vertices(const bs_integrator *I);
+/* Tets with det F <= 0 at x, over the backend's processes (collective). */
+int bs_integrator_count_inverted(bs_integrator *I, const double *x, int64_t *n, bs_error *err);
+/* *any = 1 when flag is nonzero on some process of the backend (collective). */
+int bs_integrator_any(bs_integrator *I, int flag, int *any, bs_error *err);
+
 /* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
  * Returns 0 when the step ran (st->failed says whether it converged), a
  * negative code on errors (NaN in the state: refused before the solve;
@@ -158,8 +165,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st,
                          bs_error *err);
 
-/* Shared with the distributed integrator (petsc/bs_dstep.h), so that both
- * backends decide alike. Nothing allocates, prints or fails. */
+/* Helpers of the integrator. Nothing allocates, prints or fails. */
 
 /* bs_objective.quadratic of a solve over the terms: 1 when every term active
  * in it (statics = 1: those not dynamic_only) is quadratic and nothing

@@ -63,6 +63,20 @@ typedef struct bs_step_data {
 
 typedef struct bs_term bs_term;
 
+/* What a term is, set by its constructor (bs_term_create: BS_TERM_CUSTOM):
+ * the integrator and the force reports pick terms by kind, never by name. */
+typedef enum {
+  BS_TERM_CUSTOM = 0, /* a caller's term (bs_term_create)         */
+  BS_TERM_INERTIA,
+  BS_TERM_GRAVITY,
+  BS_TERM_ELASTICITY,
+  BS_TERM_DAMPING,
+  BS_TERM_DRAG,
+  BS_TERM_PENALTY,    /* an obstacle's penalty (bs_penalty.h)      */
+  BS_TERM_SELF_COLLISION,
+  BS_TERM_BARRIER_CONTACT /* IPC's barrier between surfaces (bs_ipc_term.h) */
+} bs_term_kind;
+
 /* What value, gradient and hessian return (see the top of this header). */
 typedef enum {
   BS_TERM_OK = 0,           /* evaluated: the outputs hold the term's value(s)           */
@@ -101,7 +115,8 @@ typedef struct bs_term_ops {
 } bs_term_ops;
 
 struct bs_term {
-  const char *name;          /* "inertia", "gravity", ...                          */
+  const char *name;          /* "inertia", "gravity", ... (for messages)           */
+  bs_term_kind kind;
   const bs_term_ops *ops;
   const bs_fem *fem;
   const bs_step_data *step;

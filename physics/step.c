@@ -4,11 +4,29 @@
 #include <string.h>
 
 #include "bs_step.h"
+#include "bs_step_backend.h"
+
+/* A list of terms handed to the backend (into bs_integrator.lists). */
+typedef struct term_list {
+  int n;
+  bs_term **t;
+} term_list;
+
+/* Which terms a sum of energies takes: all, the cheap ones (every term but
+ * the expensive ones, i.e. self-collision) or the expensive ones, which are
+ * >= 0 (section 3.3). */
+typedef enum { TERMS_ALL, TERMS_CHEAP, TERMS_EXPENSIVE } terms_which;
 
 struct bs_integrator {
-  const bs_fem *fem;
+  bs_step_backend B;      /* the vectors' home (bs_step_backend.h)   */
+  int32_t nv;             /* B.n_vertices                            */
   int n_terms;
   bs_term **terms;
+  bs_term **lists;        /* storage of the term lists below          */
+  term_list act[2][3];    /* [static_mode][terms_which]: the active    */
+  term_list dyn[2];       /* [static_mode]: active and dynamic_only    */
+  term_list external[2];  /* [static_mode]: active external loads      */
+  term_list potential;    /* every term but inertia (f(xⁿ))           */
   uint8_t *mask;          /* owned copy (n_vertices)                 */
   bs_script_fn script;
   void *script_ctx;
@@ -18,13 +36,14 @@ struct bs_integrator {
   int static_mode;        /* 1 while solving statics                 */
   bs_minimizer *min;
   double *x_n, *x_hat, *g1, *g2, *grad;
-  double *gh;             /* 3n: grad E' for the Hessian projection   */
+  double *gh;             /* 3n: grad E' for the post-solve hooks     */
   int has_expensive;
   int has_convexified;    /* a term offers hessian_convexified         */
   int has_hessian_g;      /* a term offers hessian_g and opts.penalty_secant */
   int has_max_step;       /* a term offers max_step (barrier contact: CCD) */
-  double amg_dt;          /* dt of the last AMG preconditioner matrix (-1: none) */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
+  int cb_rc;              /* the first backend error inside a callback */
+  bs_error cb_err;
 };
 
 static const char *method_names[] = {"optimization", "newton", "newton_k"};
@@ -60,6 +79,7 @@ void bs_integrator_destroy(bs_integrator **pI) {
   if (!pI || !*pI) return;
   bs_integrator *I = *pI;
   free(I->terms);
+  free(I->lists);
   free(I->mask);
   bs_minimizer_destroy(&I->min);
   free(I->x_n);
@@ -69,32 +89,98 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->grad);
   free(I->gh);
   free(I->prev.d);
+  if (I->B.destroy) I->B.destroy(I->B.ctx);
   free(I);
   *pI = NULL;
 }
 
-int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_term *const *terms, const uint8_t *mask,
-                         bs_script_fn script, void *script_ctx, const bs_integrator_opts *opts,
-                         bs_integrator **out, bs_error *err) {
+static int term_active(int static_mode, const bs_term *t) { return !(static_mode && t->dynamic_only); }
+
+/* The term lists of the integrator, in term order, in I->lists. */
+static void make_lists(bs_integrator *I) {
+  bs_term **p = I->lists;
+  const int n = I->n_terms;
+  for (int m = 0; m < 2; m++) {
+    for (int w = 0; w < 3; w++) {
+      term_list *l = &I->act[m][w];
+      l->t = p, l->n = 0;
+      for (int i = 0; i < n; i++) {
+        const bs_term *t = I->terms[i];
+        if (term_active(m, t) && (w == TERMS_ALL || !t->expensive == (w == TERMS_CHEAP))) l->t[l->n++] = I->terms[i];
+      }
+      p += n;
+    }
+    I->dyn[m].t = p, I->dyn[m].n = 0;
+    for (int i = 0; i < n; i++)
+      if (term_active(m, I->terms[i]) && I->terms[i]->dynamic_only) I->dyn[m].t[I->dyn[m].n++] = I->terms[i];
+    p += n;
+    I->external[m].t = p, I->external[m].n = 0;
+    for (int i = 0; i < n; i++)
+      if (term_active(m, I->terms[i]) && I->terms[i]->external) I->external[m].t[I->external[m].n++] = I->terms[i];
+    p += n;
+  }
+  I->potential.t = p, I->potential.n = 0;
+  for (int i = 0; i < n; i++)
+    if (I->terms[i]->kind != BS_TERM_INERTIA) I->potential.t[I->potential.n++] = I->terms[i];
+}
+
+/* What the integrator is asked to run (bs_step_refuse). */
+static void features(const bs_integrator *I, bs_step_features *f) {
+  memset(f, 0, sizeof *f);
+  f->self_collision = I->has_expensive || I->has_convexified;
+  f->postprocess_obstacle = f->friction_obstacle = -1;
+  f->post_solve = I->hooks.post_solve != NULL;
+  f->method = I->opts.method;
+  f->linear = I->opts.min.linear;
+  f->globalization = I->opts.min.globalization;
+  f->amg_at_rest = I->opts.amg_at_rest;
+  f->trace = I->opts.trace != NULL;
+}
+
+static int alloc_all(bs_integrator *I, int n_terms, bs_error *err) {
+  const size_t n3 = 3 * (size_t)I->nv, b = sizeof(double) * (n3 ? n3 : 1);
+  I->terms = malloc(sizeof *I->terms * (n_terms ? n_terms : 1));
+  I->lists = malloc(sizeof *I->lists * (size_t)(11 * n_terms + 1));
+  I->mask = malloc(I->nv ? (size_t)I->nv : 1);
+  I->x_n = calloc(1, b), I->x_hat = calloc(1, b), I->g1 = malloc(b), I->g2 = malloc(b);
+  I->grad = malloc(b), I->gh = malloc(b);
+  I->prev.d = calloc(n3 ? n3 : 1, sizeof(double));
+  if (!I->terms || !I->lists || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh ||
+      !I->prev.d)
+    return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%d vertices)", (int)I->nv);
+  return 0;
+}
+
+/* The minimizer on the backend's pattern; with the backend's vector
+ * operations, their solve replaces the linear solver (bs_vecops.h). */
+static int make_minimizer(bs_integrator *I, bs_error *err) {
+  /* Room for the Hessian blocks the terms may add outside the pattern. */
+  I->opts.min.hessian_extra = 0;
+  for (int i = 0; i < I->n_terms; i++) I->opts.min.hessian_extra += I->terms[i]->hessian_extra;
+  bs_minimize_opts mo = I->opts.min;
+  if (I->B.vecops) mo.linear = BS_LIN_CG;
+  int rc = bs_minimizer_create(I->B.pattern, &mo, &I->min, err);
+  if (!rc && I->B.vecops) rc = bs_minimizer_set_vecops(I->min, I->B.vecops, err);
+  return rc;
+}
+
+int bs_integrator_create_on(const bs_step_backend *B, bs_step_data *step, int n_terms, bs_term *const *terms,
+                            const uint8_t *mask, bs_script_fn script, void *script_ctx, const bs_integrator_opts *opts,
+                            bs_integrator **out, bs_error *err) {
   *out = NULL;
   bs_integrator *I = calloc(1, sizeof *I);
-  if (!I) return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator");
-  size_t nv = (size_t)fem->n_vertices, n3 = 3 * nv;
-  I->fem = fem;
-  I->step = step;
+  if (!I) {
+    if (B->destroy) B->destroy(B->ctx);
+    return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator");
+  }
+  I->B = *B;
+  I->nv = B->n_vertices;
   I->n_terms = n_terms;
-  I->terms = malloc(sizeof(bs_term *) * (size_t)(n_terms ? n_terms : 1));
-  I->mask = malloc(nv ? nv : 1);
-  I->x_n = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->x_hat = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->g1 = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->g2 = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->grad = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->gh = malloc(sizeof(double) * (n3 ? n3 : 1));
-  I->prev.d = calloc(n3 ? n3 : 1, sizeof(double));
-  if (!I->terms || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh || !I->prev.d) {
+  I->step = step;
+  int rc = alloc_all(I, n_terms, err);
+  if (rc) {
     bs_integrator_destroy(&I);
-    return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%zu vertices)", nv);
+    return rc;
   }
   for (int i = 0; i < n_terms; i++) {
     I->terms[i] = terms[i];
@@ -103,28 +189,45 @@ int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_
     if (terms[i]->ops->hessian_g) I->has_hessian_g = 1;
     if (terms[i]->ops->max_step) I->has_max_step = 1;
   }
-  if (mask) memcpy(I->mask, mask, nv);
-  else memset(I->mask, 1, nv);
+  make_lists(I);
+  if (mask) memcpy(I->mask, mask, (size_t)I->nv);
+  else memset(I->mask, 1, (size_t)I->nv);
   I->script = script;
   I->script_ctx = script_ctx;
   if (opts) I->opts = *opts;
   else bs_integrator_opts_default(&I->opts);
   I->has_hessian_g = I->has_hessian_g && I->opts.penalty_secant;
-  I->amg_dt = -1;
-  step->x_hat = I->x_hat;
-  step->x_n = I->x_n;
+  bs_step_features f;
+  features(I, &f);
+  rc = bs_step_refuse(&f, B->caps, "integrator", B->name, err);
+  B->publish(B->ctx, step, I->x_n, I->x_hat);
   step->load = 1.0;
   step->dt = 0;
-  /* Room for the Hessian blocks the terms may add outside the pattern. */
-  I->opts.min.hessian_extra = 0;
-  for (int i = 0; i < n_terms; i++) I->opts.min.hessian_extra += terms[i]->hessian_extra;
-  int st = bs_minimizer_create(fem->pattern, &I->opts.min, &I->min, err);
-  if (st) {
+  if (!rc) rc = make_minimizer(I, err);
+  if (rc) {
     bs_integrator_destroy(&I);
-    return st;
+    return rc;
   }
   *out = I;
   return 0;
+}
+
+int bs_integrator_create(const bs_fem *fem, bs_step_data *step, int n_terms, bs_term *const *terms, const uint8_t *mask,
+                         bs_script_fn script, void *script_ctx, const bs_integrator_opts *opts,
+                         bs_integrator **out, bs_error *err) {
+  *out = NULL;
+  bs_step_backend B;
+  int rc = bs_step_backend_serial(fem, &B, err);
+  return rc ? rc : bs_integrator_create_on(&B, step, n_terms, terms, mask, script, script_ctx, opts, out, err);
+}
+
+int bs_integrator_set_hooks_checked(bs_integrator *I, const bs_step_hooks *hooks, bs_error *err) {
+  bs_step_features f;
+  features(I, &f);
+  f.post_solve = hooks && hooks->post_solve;
+  int rc = bs_step_refuse(&f, I->B.caps, "integrator", I->B.name, err);
+  if (!rc) bs_integrator_set_hooks(I, hooks);
+  return rc;
 }
 
 void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks) {
@@ -132,35 +235,28 @@ void bs_integrator_set_hooks(bs_integrator *I, const bs_step_hooks *hooks) {
   else memset(&I->hooks, 0, sizeof I->hooks);
 }
 
-static int term_active(const bs_integrator *I, const bs_term *t) { return !(I->static_mode && t->dynamic_only); }
-
 /* ---- the objective handed to the minimizer ----------------------------- */
-/* Which terms a sum of energies takes: all, the cheap ones (every term but
- * the expensive ones, i.e. self-collision) or the expensive ones, which are
- * >= 0 (section 3.3). */
-typedef enum { TERMS_ALL, TERMS_CHEAP, TERMS_EXPENSIVE } terms_which;
+
+/* A backend's error inside a callback kept as the first (run_solver returns it). */
+static int note(bs_integrator *I, int rc) {
+  if (rc < 0 && !I->cb_rc) I->cb_rc = rc;
+  return rc;
+}
+
+/* The minimizer's status for a backend's: a term's, or 1 for an error. */
+static int min_status(int rc) { return rc > 0 ? rc : rc < 0; }
 
 /* The active terms' energies at x summed into *E, in term order. A term's
  * BS_TERM_NOT_EVALUABLE (bs_terms.h) is returned as it is (E is then NaN). */
 static int terms_energy(bs_integrator *I, const double *x, terms_which which, double *E) {
-  double s = 0;
-  *E = NAN;
-  for (int i = 0; i < I->n_terms; i++) {
-    const bs_term *t = I->terms[i];
-    if (!term_active(I, t) || (which != TERMS_ALL && !t->expensive != (which == TERMS_CHEAP))) continue;
-    double e;
-    int rc = t->ops->value(t, x, &e);
-    if (rc) return rc;
-    s += e;
-  }
-  *E = s;
-  return 0;
+  const term_list *l = &I->act[I->static_mode][which];
+  return note(I, I->B.energy(I->B.ctx, l->n, l->t, x, E, NULL, &I->cb_err));
 }
 
 /* The minimizer reads a nonzero status as "x is not evaluable". */
 static int obj_value(const double *x, double *E, void *ctx) {
   int rc = terms_energy(ctx, x, TERMS_ALL, E);
-  return rc ? rc : !isfinite(*E);
+  return rc ? min_status(rc) : !isfinite(*E);
 }
 
 /* terms_energy for the initial guesses: +Inf where a term is not evaluable
@@ -172,7 +268,7 @@ static double guess_part(bs_integrator *I, const double *x, terms_which which) {
 
 static int obj_lower_bound(const double *x, double *E, void *ctx) {
   int rc = terms_energy(ctx, x, TERMS_CHEAP, E);
-  return rc ? rc : !isfinite(*E);
+  return rc ? min_status(rc) : !isfinite(*E);
 }
 
 /* E at an initial-guess candidate whose cheap terms sum to cheap, when it may
@@ -183,74 +279,36 @@ static double guess_energy(bs_integrator *I, const double *x, double cheap, doub
   return cheap + guess_part(I, x, TERMS_EXPENSIVE);
 }
 
-/* grad E' at x, over the active terms, into g (zeroed first); the energy is
- * summed into *E in term order. Nonzero (a term's status) when a term is not
- * evaluable; *bad (may be NULL) is then its name. */
+/* grad E' at x, over the active terms, into g; the energy is summed into *E
+ * in term order. Nonzero (a term's status) when a term is not evaluable;
+ * *bad (may be NULL) is then its name when the backend knows it. */
 static int terms_gradient(bs_integrator *I, const double *x, double *E, double *g, const char **bad) {
-  memset(g, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
-  double s = 0;
-  for (int i = 0; i < I->n_terms; i++)
-    if (term_active(I, I->terms[i])) {
-      double e;
-      int rc = I->terms[i]->ops->gradient(I->terms[i], x, &e, g);
-      if (rc) {
-        if (bad) *bad = I->terms[i]->name;
-        return rc;
-      }
-      s += e;
-    }
-  *E = s;
-  return 0;
+  const term_list *l = &I->act[I->static_mode][TERMS_ALL];
+  return note(I, I->B.gradient(I->B.ctx, l->n, l->t, x, E, g, bad, &I->cb_err));
 }
 
 static int obj_gradient(const double *x, double *E, double *g, void *ctx) {
   int rc = terms_gradient(ctx, x, E, g, NULL);
   if (rc) {
     *E = NAN;
-    return rc;
+    return min_status(rc);
   }
   return isfinite(*E) ? 0 : 1;
 }
 
-/* The active terms' Hessians added into H (a term's status when one is not
- * evaluable); dynamic_only: only the terms marked so; convex: a term's
- * convexified Hessian where it offers one; g (may be NULL): grad E'(x), for
- * the terms' hessian_g models when I->has_hessian_g. */
-static int terms_hessian(bs_integrator *I, const double *x, const double *g, int dynamic_only, int convex,
-                         bs_bsr *H) {
-  for (int i = 0; i < I->n_terms; i++) {
-    const bs_term *t = I->terms[i];
-    if (!term_active(I, t) || (dynamic_only && !t->dynamic_only)) continue;
-    int rc = convex && t->ops->hessian_convexified ? t->ops->hessian_convexified(t, x, H)
-             : g && I->has_hessian_g && t->ops->hessian_g ? t->ops->hessian_g(t, x, g, H)
-                                                           : t->ops->hessian(t, x, H);
-    if (rc) return rc;
-  }
-  return 0;
-}
-
-static int obj_hessian(const double *x, bs_bsr *H, void *ctx) {
-  bs_integrator *I = ctx;
-  bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, NULL, 0, 0, H);
-  if (rc) return rc;
-  if (I->hooks.project_hessian) {
-    double E;
-    if ((rc = terms_gradient(I, x, &E, I->gh, NULL))) return rc;
-    I->hooks.project_hessian(x, I->gh, H, I->hooks.ctx);
-  }
-  return 0;
-}
-
-/* The terms' Hessians (convex: their convexified ones where offered) at x,
- * projected by the hook when there is one (g_raw: the unprojected gradient). */
+/* The active terms' Hessians at x into H, projected by the hook when there
+ * is one (g_raw: the unprojected gradient, NULL: computed); convex: a term's
+ * convexified Hessian where it offers one; g_raw is also the terms'
+ * hessian_g models' gradient when I->has_hessian_g. */
 static int hessian_projected(bs_integrator *I, const double *x, const double *g_raw, int convex, bs_bsr *H) {
-  bs_bsr_zero(H);
-  int rc = terms_hessian(I, x, g_raw, 0, convex, H);
-  if (rc) return rc;
-  if (I->hooks.project_hessian) I->hooks.project_hessian(x, g_raw, H, I->hooks.ctx);
-  return 0;
+  const term_list *l = &I->act[I->static_mode][TERMS_ALL];
+  const bs_step_hooks *h = I->hooks.project_hessian ? &I->hooks : NULL;
+  int rc = I->B.hessian(I->B.ctx, l->n, l->t, x, I->has_hessian_g ? g_raw : NULL, convex, 0, h, g_raw, I->mask, H,
+                        &I->cb_err);
+  return min_status(note(I, rc));
 }
+
+static int obj_hessian(const double *x, bs_bsr *H, void *ctx) { return hessian_projected(ctx, x, NULL, 0, H); }
 
 /* The Hessian when the minimizer hands over grad E'(x): no second gradient. */
 static int obj_hessian_g(const double *x, const double *g_raw, bs_bsr *H, void *ctx) {
@@ -266,10 +324,8 @@ static int obj_hessian_convexified(const double *x, const double *g_raw, bs_bsr 
  * Hessians plus the PSD-projected elastic Hessian at rest or at x. */
 static int obj_precond(const double *x, bs_bsr *P, void *ctx) {
   bs_integrator *I = ctx;
-  int rc = terms_hessian(I, x, NULL, 1, 0, P);
-  if (rc) return rc;
-  bs_fem_elastic_hessian(I->fem, I->opts.amg_at_rest ? I->fem->mesh->x : x, 1, 1.0, P);
-  return 0;
+  const term_list *l = &I->dyn[I->static_mode];
+  return I->B.precond(I->B.ctx, l->n, l->t, x, I->opts.amg_at_rest, P);
 }
 
 /* The line search's bound (bs_minimize.h, "Step bound"): the smallest of the
@@ -280,7 +336,7 @@ static int obj_max_step(const double *x, const double *d, double *alpha, void *c
   for (int i = 0; i < I->n_terms; i++) {
     const bs_term *t = I->terms[i];
     double ai;
-    if (!t->ops->max_step || !term_active(I, t)) continue;
+    if (!t->ops->max_step || !term_active(I->static_mode, t)) continue;
     int rc = t->ops->max_step(t, x, d, &ai);
     if (rc) return rc;
     a = fmin(a, ai);
@@ -295,7 +351,7 @@ static int obj_max_step(const double *x, const double *d, double *alpha, void *c
  * the CCD cannot run. I->gh is the scratch (free before the solve). */
 static void clip_guess(bs_integrator *I, double *g) {
   if (!I->has_max_step) return;
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  const size_t n3 = 3 * (size_t)I->nv;
   for (size_t i = 0; i < n3; i++) I->gh[i] = g[i] - I->x_n[i];
   double a = 0;
   if (obj_max_step(I->x_n, I->gh, &a, I) || !(a >= 0)) a = 0;
@@ -306,17 +362,17 @@ static void clip_guess(bs_integrator *I, double *g) {
 
 static void hook_project_gradient(const double *x, double *g, void *ctx) {
   bs_integrator *I = ctx;
-  I->hooks.project_gradient(x, g, I->hooks.ctx);
+  note(I, I->B.project_gradient(I->B.ctx, &I->hooks, x, g, &I->cb_err));
 }
 
 static void hook_project(double *x, void *ctx) {
   bs_integrator *I = ctx;
-  I->hooks.project(x, I->hooks.ctx);
+  note(I, I->B.project(I->B.ctx, &I->hooks, x, &I->cb_err));
 }
 
 static void hook_register(const double *x, const double *g, void *ctx) {
   bs_integrator *I = ctx;
-  I->hooks.register_active(x, g, I->hooks.ctx);
+  I->B.register_active(I->B.ctx, &I->hooks, x, g);
 }
 
 static void obj_trace(const bs_min_iter *it, void *ctx) {
@@ -331,23 +387,15 @@ static void obj_trace(const bs_min_iter *it, void *ctx) {
 }
 
 /* The 2-norm over the free dofs of the active external loads' forces (the
- * scale of opts.load_rtol), computed in I->g1 (free once the guess is in x). */
+ * scale of opts.load_rtol), computed in I->g1 (free once the guess is in x);
+ * 0 when there is none or it is not evaluable. */
 static double load_norm(bs_integrator *I, const double *x) {
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
-  int any = 0;
-  memset(I->g1, 0, sizeof(double) * n3);
-  for (int i = 0; i < I->n_terms; i++) {
-    double e;
-    const bs_term *t = I->terms[i];
-    if (t->external && term_active(I, t) && t->ops->gradient(t, x, &e, I->g1) == BS_TERM_OK) any = 1;
-  }
-  if (!any) return 0;
-  double s = 0;
-  for (size_t i = 0; i < n3; i++)
-    if (!I->mask || I->mask[i / 3]) s += I->g1[i] * I->g1[i];
+  const term_list *l = &I->external[I->static_mode];
+  double e, s = 0;
+  if (l->n == 0 || note(I, I->B.gradient(I->B.ctx, l->n, l->t, x, &e, I->g1, NULL, &I->cb_err))) return 0;
+  if (note(I, I->B.free_sq(I->B.ctx, I->g1, I->mask, &s, &I->cb_err))) return 0;
   return isfinite(s) ? sqrt(s) : 0;
 }
-
 int bs_step_objective_quadratic(int n_terms, bs_term *const *terms, int statics, int projected) {
   if (projected) return 0;
   for (int i = 0; i < n_terms; i++)
@@ -383,7 +431,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   memset(o, 0, sizeof *o);
   o->load_norm = I->opts.min.load_rtol > 0 ? load_norm(I, x) : 0; /* read by load_rtol only */
   o->quadratic = bs_step_objective_quadratic(I->n_terms, I->terms, I->static_mode, I->hooks.project != NULL);
-  o->n = I->fem->n_vertices;
+  o->n = I->nv;
   o->mask = I->mask;
   o->value = obj_value;
   o->gradient = obj_gradient;
@@ -394,7 +442,7 @@ static void make_objective(bs_integrator *I, const double *x, bs_objective *o) {
   o->hessian_g = I->hooks.project_hessian || I->has_hessian_g ? obj_hessian_g : NULL;
   o->hessian_convexified = I->has_convexified ? obj_hessian_convexified : NULL;
   o->value_lower_bound = I->has_expensive ? obj_lower_bound : NULL;
-  o->precond_matrix = obj_precond;
+  o->precond_matrix = I->B.precond ? obj_precond : NULL;
   o->trace = I->opts.trace ? obj_trace : NULL;
   o->max_step = I->has_max_step ? obj_max_step : NULL;
   o->ctx = I;
@@ -404,13 +452,13 @@ void bs_integrator_get_carry(const bs_integrator *I, bs_min_carry *c) { bs_minim
 void bs_integrator_set_carry(bs_integrator *I, const bs_min_carry *c) { bs_minimizer_set_carry(I->min, c); }
 
 void bs_integrator_get_previous(const bs_integrator *I, bs_previous_step *p) {
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  const size_t n3 = 3 * (size_t)I->nv;
   p->have = I->prev.have, p->dt = I->prev.dt, p->mark = I->prev.mark;
   if (p->d) memcpy(p->d, I->prev.d, sizeof(double) * n3);
 }
 
 void bs_integrator_set_previous(bs_integrator *I, const bs_previous_step *p) {
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  const size_t n3 = 3 * (size_t)I->nv;
   I->prev.have = p->have && p->d && p->dt > 0, I->prev.dt = p->dt, I->prev.mark = p->mark;
   if (I->prev.have) memcpy(I->prev.d, p->d, sizeof(double) * n3);
 }
@@ -422,47 +470,77 @@ double bs_integrator_energy(bs_integrator *I, const double *x) {
   return E;
 }
 
+int32_t bs_integrator_vertices(const bs_integrator *I) { return I->nv; }
+
+int bs_integrator_count_inverted(bs_integrator *I, const double *x, int64_t *n, bs_error *err) {
+  return I->B.count_inverted(I->B.ctx, x, n, err);
+}
+
+int bs_integrator_any(bs_integrator *I, int flag, int *any, bs_error *err) {
+  int64_t f = flag != 0;
+  int rc = I->B.sum_i64(I->B.ctx, &f, 1, err);
+  *any = f > 0;
+  return rc;
+}
+
 /* ∇Φ(xⁿ) = −f(xⁿ) into I->grad: every term but inertia. BS_ENUMERIC, naming
  * the term, when one is not evaluable at xⁿ. */
 static int potential_gradient(bs_integrator *I, bs_error *err) {
-  memset(I->grad, 0, sizeof(double) * 3 * (size_t)I->fem->n_vertices);
-  for (int i = 0; i < I->n_terms; i++) {
-    double e;
-    const bs_term *t = I->terms[i];
-    if (strcmp(t->name, "inertia") != 0 && t->ops->gradient(t, I->x_n, &e, I->grad))
-      return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the positions of the step's start",
-                          t->name);
-  }
-  return 0;
+  double e;
+  const char *bad = NULL;
+  int rc = I->B.gradient(I->B.ctx, I->potential.n, I->potential.t, I->x_n, &e, I->grad, &bad, err);
+  if (rc <= 0) return rc;
+  if (!bad) return bs_error_set(err, BS_ENUMERIC, "a term is not evaluable at the positions of the step's start");
+  return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the positions of the step's start", bad);
 }
 
-static int check_finite(const double *a, size_t n, const char *what, bs_error *err) {
-  for (size_t i = 0; i < n; i++)
-    if (!isfinite(a[i]))
-      return bs_error_set(err, BS_ENUMERIC, "%s of vertex %zu (component %zu) is not finite (%g)", what, i / 3, i % 3,
-                          a[i]);
-  return 0;
+/* NaN / Inf in a vector (on some process): BS_ENUMERIC (on every process). */
+static int check_finite(bs_integrator *I, const double *a, const char *what, bs_error *err) {
+  const size_t n = 3 * (size_t)I->nv;
+  size_t bad = n;
+  for (size_t i = 0; i < n && bad == n; i++)
+    if (!isfinite(a[i])) bad = i;
+  int any, rc = bs_integrator_any(I, bad < n, &any, err);
+  if (rc || !any) return rc;
+  if (bad == n) return bs_error_set(err, BS_ENUMERIC, "a %s is not finite on another process", what);
+  return bs_error_set(err, BS_ENUMERIC, "%s of vertex %zu (component %zu) is not finite (%g)", what, bad / 3, bad % 3,
+                      a[bad]);
+}
+
+/* The solve's options: the initial guess's kind, the adaptive forcing
+ * (cg_forcing adaptive: the paper's loose solves while the step starts
+ * tangled, where they untangle best; README, Scenes), the backend's linear
+ * solver. */
+static int solve_opts(bs_integrator *I, int naive, bs_minimize_opts *mo, bs_error *err) {
+  I->opts.min.naive_guess = naive;
+  *mo = I->opts.min;
+  int rc = 0;
+  if (mo->forcing_ew == 2) {
+    int64_t inv = 0;
+    rc = I->B.count_inverted(I->B.ctx, I->x_n, &inv, err);
+    mo->forcing_ew = bs_step_forcing(2, inv);
+  }
+  const term_list *l = &I->act[I->static_mode][TERMS_ALL];
+  const double pdt = I->static_mode ? 0.0 : I->step->dt;
+  if (!rc) rc = I->B.prepare_solve(I->B.ctx, I->min, mo, pdt, l->n, l->t, I->mask, I->opts.amg_at_rest, err);
+  if (I->B.vecops) mo->linear = BS_LIN_CG; /* their solve replaces the linear solver */
+  return rc ? rc : bs_minimizer_set_opts(I->min, mo, err);
 }
 
 static int run_solver(bs_integrator *I, double *x, int naive, bs_step_stats *st, bs_error *err) {
   bs_objective obj;
+  I->cb_rc = 0;
   make_objective(I, x, &obj);
-  int rc;
-  I->opts.min.naive_guess = naive;
-  bs_minimize_opts mo = I->opts.min;
-  /* cg_forcing adaptive: the paper's loose solves while the step starts
-   * tangled (inverted tets), where they untangle best (README, Scenes) */
-  if (mo.forcing_ew == 2) mo.forcing_ew = bs_step_forcing(2, bs_fem_count_inverted(I->fem, I->x_n, NULL));
-  if (mo.linear == BS_LIN_AMG) {
-    /* P changes with dt (M/dt^2) and between dynamic and static solves. */
-    const double pdt = I->static_mode ? 0.0 : I->step->dt;
-    if (pdt != I->amg_dt) bs_minimizer_amg_reset(I->min);
-    I->amg_dt = pdt;
-    if (I->opts.amg_at_rest) mo.amg_rebuild_factor = 0; /* P does not depend on x */
-  }
-  if ((rc = bs_minimizer_set_opts(I->min, &mo, err))) return rc;
+  bs_minimize_opts mo;
+  int rc = solve_opts(I, naive, &mo, err);
+  if (rc) return rc;
   if (I->opts.method == BS_METHOD_OPTIMIZATION) rc = bs_minimize(I->min, &obj, x, &st->min, err);
   else rc = bs_newton(I->min, &obj, I->opts.method == BS_METHOD_NEWTON_K ? I->opts.newton_k : 0, x, &st->min, err);
+  if (!rc && I->cb_rc) {
+    if (err) *err = I->cb_err;
+    rc = I->cb_rc;
+  }
+  if (!rc && I->B.solve_error) rc = I->B.solve_error(I->B.ctx, err);
   if (rc) return rc;
   /* "k Newton steps and stop" ends by design without convergence: not a failure. */
   st->failed = !bs_min_reason_converged(st->min.reason) && st->min.reason != BS_MIN_STEPS_DONE;
@@ -475,19 +553,24 @@ static uint64_t state_mark(const double *x, const double *v, size_t n3) {
   return bs_fnv1a(bs_fnv1a(BS_FNV_SEED, x, sizeof(double) * n3), v, sizeof(double) * n3);
 }
 
+/* x <- P(x) outside the minimizer (the guesses, the start of statics). */
+static int project_now(bs_integrator *I, double *x, bs_error *err) {
+  return I->hooks.project ? I->B.project(I->B.ctx, &I->hooks, x, err) : 0;
+}
+
 /* A later candidate in I->g1 (xⁿ, the previous-step guess) made admissible
  * (masked vertices at xⁿ, then scripted ones at their positions at t1, then
  * projected: constraint collisions) and taken into x as `kind` when its E is
  * below Eb, the chosen guess's. Returns the chosen guess's E after. */
 static double offer_candidate(bs_integrator *I, double t1, double Eb, bs_guess kind, double *x, int *naive,
                               bs_step_stats *st) {
-  const size_t nv = (size_t)I->fem->n_vertices;
+  const size_t nv = (size_t)I->nv;
   double *g = I->g1;
   for (size_t vtx = 0; vtx < nv; vtx++)
     if (!I->mask[vtx])
       for (int k = 0; k < 3; k++) g[3 * vtx + k] = I->x_n[3 * vtx + k];
   if (I->script) I->script(t1, g, I->script_ctx);
-  if (I->hooks.project) I->hooks.project(g, I->hooks.ctx);
+  if (note(I, project_now(I, g, &I->cb_err))) return Eb;
   clip_guess(I, g);
   const double Ec = guess_energy(I, g, guess_part(I, g, TERMS_CHEAP), isfinite(Eb) ? Eb : INFINITY);
   if (!isfinite(Ec) || (isfinite(Eb) && Ec >= Eb)) return Eb;
@@ -504,7 +587,7 @@ static double offer_candidate(bs_integrator *I, double t1, double Eb, bs_guess k
  * that step left (its mark). */
 static void previous_step_guess(bs_integrator *I, double t, double dt, double *x, const double *v, double Eb,
                                 int *naive, bs_step_stats *st) {
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  const size_t n3 = 3 * (size_t)I->nv;
   if (!I->prev.have || I->prev.mark != state_mark(I->x_n, v, n3)) return;
   const double s = dt / I->prev.dt;
   for (size_t i = 0; i < n3; i++) I->g1[i] = I->x_n[i] + s * I->prev.d[i];
@@ -515,7 +598,7 @@ static void previous_step_guess(bs_integrator *I, double t, double dt, double *x
  * opts.guess_xn: the one with the smallest E into x (st->guess, *naive).
  * Returns its E (+Inf when none is evaluable). */
 static double paper_guesses(bs_integrator *I, double t, double dt, double *x, int *naive, bs_step_stats *st) {
-  const size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  const size_t n3 = 3 * (size_t)I->nv;
   clip_guess(I, I->g1);
   clip_guess(I, I->g2);
   /* the candidate with the smaller cheap part first: the other's expensive
@@ -546,34 +629,34 @@ static double paper_guesses(bs_integrator *I, double t, double dt, double *x, in
   return offer_candidate(I, t + dt, Eb, BS_GUESS_XN, x, naive, st);
 }
 
-int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
-                       bs_error *err) {
-  double t0 = bs_seconds();
-  memset(st, 0, sizeof *st);
-  const bs_fem *fem = I->fem;
-  size_t nv = (size_t)fem->n_vertices, n3 = 3 * nv;
-  if (!(dt > 0) || !isfinite(dt)) return bs_error_set(err, BS_EINPUT, "time step must be positive and finite, got %g", dt);
-  int rc;
-  if ((rc = check_finite(x, n3, "position", err)) || (rc = check_finite(v, n3, "velocity", err))) return rc;
+/* Step 1: the step data, x̂ and the terms' begin_step. */
+static int begin_step(bs_integrator *I, double t, double dt, const double *x, const double *v, bs_error *err) {
+  const size_t n3 = 3 * (size_t)I->nv;
   I->static_mode = 0;
   I->step->dt = dt;
   I->step->time = t + dt;
   I->step->load = 1.0;
   memcpy(I->x_n, x, sizeof(double) * n3);
   for (size_t i = 0; i < n3; i++) I->x_hat[i] = x[i] + dt * v[i];
-  for (int i = 0; i < I->n_terms; i++)
-    if (I->terms[i]->ops->begin_step && (rc = I->terms[i]->ops->begin_step(I->terms[i], err))) return rc;
+  I->B.publish(I->B.ctx, I->step, I->x_n, I->x_hat);
+  int rc = 0;
+  for (int i = 0; i < I->n_terms && !rc; i++)
+    if (I->terms[i]->ops->begin_step) rc = I->terms[i]->ops->begin_step(I->terms[i], err);
+  return rc;
+}
 
-  /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
-  if ((rc = potential_gradient(I, err))) return rc;
+/* Steps 2 and 3: the paper's guesses in I->g1 (x̂) and I->g2 (x̂ + Δt² M⁻¹
+ * f(xⁿ), f = -I->grad), scripted vertices at tⁿ⁺¹ in both, projected. */
+static int make_guesses(bs_integrator *I, double t1, double dt, bs_error *err) {
+  const size_t nv = (size_t)I->nv, n3 = 3 * nv;
   memcpy(I->g1, I->x_hat, sizeof(double) * n3);
   for (size_t vtx = 0; vtx < nv; vtx++) {
-    double c = fem->mass[vtx] > 0 ? dt * dt / fem->mass[vtx] : 0;
+    double c = I->B.mass[vtx] > 0 ? dt * dt / I->B.mass[vtx] : 0;
     for (int k = 0; k < 3; k++) I->g2[3 * vtx + k] = I->x_hat[3 * vtx + k] - c * I->grad[3 * vtx + k];
   }
   if (I->script) {
-    I->script(t + dt, I->g1, I->script_ctx);
-    I->script(t + dt, I->g2, I->script_ctx);
+    I->script(t1, I->g1, I->script_ctx);
+    I->script(t1, I->g2, I->script_ctx);
   }
   /* Scripted vertices keep their scripted positions in both guesses. */
   for (size_t vtx = 0; vtx < nv; vtx++)
@@ -582,31 +665,54 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
         if (!I->script) I->g1[3 * vtx + k] = I->g2[3 * vtx + k] = I->x_n[3 * vtx + k];
         else I->g2[3 * vtx + k] = I->g1[3 * vtx + k];
       }
-  if (I->hooks.project) {
-    I->hooks.project(I->g1, I->hooks.ctx);
-    I->hooks.project(I->g2, I->hooks.ctx);
+  int rc = project_now(I, I->g1, err);
+  return rc ? rc : project_now(I, I->g2, err);
+}
+
+/* Step 5's post-solve hooks (friction) with g = grad E'(xⁿ⁺¹), and the
+ * previous-step guess they leave for the next step. */
+static int post_solve(bs_integrator *I, double dt, double *x, double *v, const bs_step_stats *st, bs_error *err) {
+  const size_t n3 = 3 * (size_t)I->nv;
+  double E;
+  const char *bad = "?";
+  int rc = terms_gradient(I, x, &E, I->gh, &bad);
+  if (rc < 0) return rc;
+  if (rc) return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the solution (post-solve hooks)", bad);
+  memcpy(I->g1, v, sizeof(double) * n3); /* the solve's own velocity, before friction */
+  if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
+  /* a stopped step is undone: keep the one before; hooks that left v as it
+     was (no friction acted) make the candidate x̂ itself: none */
+  if (st->min.reason != BS_MIN_STOPPED) {
+    I->prev.have = memcmp(v, I->g1, sizeof(double) * n3) != 0;
+    for (size_t i = 0; i < n3 && I->prev.have; i++) I->prev.d[i] = dt * I->g1[i];
+    I->prev.dt = dt;
+    I->prev.mark = I->prev.have ? state_mark(x, v, n3) : 0;
   }
+  return 0;
+}
+
+int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
+                       bs_error *err) {
+  double t0 = bs_seconds();
+  memset(st, 0, sizeof *st);
+  const size_t n3 = 3 * (size_t)I->nv;
+  if (!(dt > 0) || !isfinite(dt)) return bs_error_set(err, BS_EINPUT, "time step must be positive and finite, got %g", dt);
+  int rc;
+  if ((rc = check_finite(I, x, "position", err)) || (rc = check_finite(I, v, "velocity", err))) return rc;
+  if ((rc = begin_step(I, t, dt, x, v, err))) return rc;
+  /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
+  if ((rc = potential_gradient(I, err)) || (rc = make_guesses(I, t + dt, dt, err))) return rc;
   int naive = 1;
+  I->cb_rc = 0;
   const double Eb = paper_guesses(I, t, dt, x, &naive, st);
   if (I->hooks.post_solve) previous_step_guess(I, t, dt, x, v, Eb, &naive, st);
+  if (I->cb_rc) {
+    if (err) *err = I->cb_err;
+    return I->cb_rc;
+  }
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
   for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
-  if (I->hooks.post_solve) {
-    double E;
-    const char *bad = "?";
-    if (terms_gradient(I, x, &E, I->gh, &bad))
-      return bs_error_set(err, BS_ENUMERIC, "the %s term is not evaluable at the solution (post-solve hooks)", bad);
-    memcpy(I->g1, v, sizeof(double) * n3); /* the solve's own velocity, before friction */
-    if ((rc = I->hooks.post_solve(I->x_n, x, I->gh, v, dt, I->hooks.ctx, err))) return rc;
-    /* a stopped step is undone: keep the one before; hooks that left v as it
-       was (no friction acted) make the candidate x̂ itself: none */
-    if (st->min.reason != BS_MIN_STOPPED) {
-      I->prev.have = memcmp(v, I->g1, sizeof(double) * n3) != 0;
-      for (size_t i = 0; i < n3 && I->prev.have; i++) I->prev.d[i] = dt * I->g1[i];
-      I->prev.dt = dt;
-      I->prev.mark = I->prev.have ? state_mark(x, v, n3) : 0;
-    }
-  }
+  if (I->hooks.post_solve && (rc = post_solve(I, dt, x, v, st, err))) return rc;
   st->seconds = bs_seconds() - t0;
   return 0;
 }
@@ -614,9 +720,9 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
 int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, bs_step_stats *st, bs_error *err) {
   double t0 = bs_seconds();
   memset(st, 0, sizeof *st);
-  size_t n3 = 3 * (size_t)I->fem->n_vertices;
+  size_t n3 = 3 * (size_t)I->nv;
   int rc;
-  if ((rc = check_finite(x, n3, "position", err))) return rc;
+  if ((rc = check_finite(I, x, "position", err))) return rc;
   if (load_steps < 1) return bs_error_set(err, BS_EINPUT, "load_steps must be >= 1, got %d", load_steps);
   I->static_mode = 1;
   I->prev.have = 0;
@@ -624,11 +730,13 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
   I->step->time = t;
   memcpy(I->x_n, x, sizeof(double) * n3);
   memcpy(I->x_hat, x, sizeof(double) * n3);
+  I->B.publish(I->B.ctx, I->step, I->x_n, I->x_hat);
   if (I->script) I->script(t, x, I->script_ctx);
-  if (I->hooks.project) I->hooks.project(x, I->hooks.ctx);
+  rc = project_now(I, x, err);
   bs_step_stats sub;
-  for (int l = 1; l <= load_steps; l++) {
+  for (int l = 1; l <= load_steps && !rc; l++) {
     I->step->load = (double)l / load_steps;
+    memset(&sub, 0, sizeof sub);
     if ((rc = run_solver(I, x, 1, &sub, err))) break;
     bs_step_stats_add(st, &sub);
     if (sub.min.reason == BS_MIN_STOPPED) break; /* the later load steps are not taken */

@@ -97,7 +97,7 @@ static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia
 
 int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err) {
   int st = bs_term_create("inertia", &inertia_ops, fem, step, NULL, out, err);
-  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
+  if (!st) (*out)->kind = BS_TERM_INERTIA, (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }
 
@@ -139,7 +139,7 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
   if (!gc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the gravity term");
   memcpy(gc, g, 3 * sizeof(double));
   int st = bs_term_create("gravity", &gravity_ops, fem, step, gc, out, err);
-  if (!st) (*out)->quadratic = (*out)->external = 1;
+  if (!st) (*out)->kind = BS_TERM_GRAVITY, (*out)->quadratic = (*out)->external = 1;
   return st;
 }
 
@@ -201,6 +201,7 @@ int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int
   }
   int st = bs_term_create("elasticity", &elastic_ops, fem, step, d, out, err);
   if (st) return st;
+  (*out)->kind = BS_TERM_ELASTICITY;
   (*out)->quadratic = 1;
   for (int i = 0; i < fem->n_materials; i++)
     if (fem->materials[i].model != BS_MODEL_LINEAR) (*out)->quadratic = 0;
@@ -292,7 +293,7 @@ int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const do
   }
   memcpy(dd->k, k, sizeof(double) * (size_t)fem->n_materials);
   st = bs_term_create("damping", &damping_ops, fem, step, dd, out, err);
-  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
+  if (!st) (*out)->kind = BS_TERM_DAMPING, (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }
 
@@ -320,6 +321,6 @@ int bs_term_drag_create(const bs_fem *fem, const bs_step_data *step, double k, b
   if (!kc) return bs_error_set(err, BS_ENOMEM, "out of memory creating the drag term");
   *kc = k;
   int st = bs_term_create("drag", &drag_ops, fem, step, kc, out, err);
-  if (!st) (*out)->dynamic_only = (*out)->quadratic = 1;
+  if (!st) (*out)->kind = BS_TERM_DRAG, (*out)->dynamic_only = (*out)->quadratic = 1;
   return st;
 }

@@ -9,9 +9,10 @@
 /* Which terms a sum takes. */
 typedef enum { PICK_ELASTIC, PICK_ALL, PICK_NOT_CONTACT, PICK_CONTACT } pick;
 
-/* The penalty obstacle whose term t is (its scene index), or -1; -2 for self. */
+/* The penalty obstacle whose term t is (its scene index), or -1; -2 for
+ * contact between the bodies (the self-collision or barrier contact term). */
 static int contact_owner(const bs_sim *s, const bs_term *t) {
-  if (t == s->self) return -2;
+  if (t == s->self || t == s->barrier) return -2;
   if (!s->obstacles) return -1;
   bs_term *const *pt = NULL;
   int np = bs_obstacles_terms(s->obstacles, &pt);
@@ -27,7 +28,7 @@ static int picked(const bs_sim *s, const bs_term *t, pick p, int obstacle) {
   if (t->dynamic_only && s->scene->mode == BS_MODE_STATIC) return 0;
   int owner = contact_owner(s, t), contact = owner != -1;
   switch (p) {
-    case PICK_ELASTIC: return !strcmp(t->name, "elasticity");
+    case PICK_ELASTIC: return t->kind == BS_TERM_ELASTICITY;
     case PICK_ALL: return 1;
     case PICK_NOT_CONTACT: return !contact;
     case PICK_CONTACT: return contact && (obstacle < 0 || owner == obstacle);

@@ -1,12 +1,12 @@
-/* sim_step.c — stepping a simulation: one frame, the static solve, a whole
- * run with a callback per frame, and the run's totals. Time is advanced here
- * only: step k of frame f ends at (f - 1)/fps + (k + 1) dt, and the frame at
- * exactly f/fps. */
+/* sim_step.c — stepping a simulation: one frame and the static solve (the
+ * frame loop of bs_frame_loop.h, shared with the petsc backend), a whole run
+ * with a callback per frame, and the run's totals. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_frame_loop.h"
 #include "sim_internal.h"
 
 void bs_frame_sums(int frame, double time, int n, const bs_sim_step *steps, bs_frame_stats *fs) {
@@ -27,76 +27,15 @@ void bs_frame_sums(int frame, double time, int n, const bs_sim_step *steps, bs_f
 
 static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) { bs_frame_sums(s->frame, s->time, n, s->steps, fs); }
 
-/* The step's record: its time, inverted tets and its own copy of the reason
- * (the minimizer's text is overwritten by the next solve). */
-static void record(const bs_sim *s, bs_sim_step *rec) {
-  rec->time = s->time;
-  rec->inverted = bs_fem_count_inverted(s->fem, s->x, NULL);
-  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
-  rec->st.min.reason_text = rec->reason;
+/* The frame loop (bs_frame_loop.h) over s. */
+static bs_frame_loop loop_of(bs_sim *s) {
+  return (bs_frame_loop){s->scene, s->integrator, s->x, s->v, &s->frame, &s->time, s->steps};
 }
 
-/* The state at a frame's start (or before a static solve): x, v and the
- * previous step's displacement (9n doubles: xv, prev.d = xv + 6n), the
- * frame, the time, the minimizer's carry and the previous-step guess's. */
-typedef struct frame_snap {
-  double *xv, time;
-  int frame;
-  bs_min_carry carry;
-  bs_previous_step prev;
-} frame_snap;
-
-static void snap_take(const bs_sim *s, frame_snap *sn) {
-  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  memcpy(sn->xv, s->x, sizeof(double) * n3);
-  memcpy(sn->xv + n3, s->v, sizeof(double) * n3);
-  sn->time = s->time;
-  sn->frame = s->frame;
-  bs_integrator_get_carry(s->integrator, &sn->carry);
-  sn->prev.d = sn->xv + 2 * n3;
-  bs_integrator_get_previous(s->integrator, &sn->prev);
+int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
+  const bs_frame_loop L = loop_of(s);
+  return bs_frame_advance(&L, NULL, NULL, fs, err);
 }
-
-/* Puts the snapshot back and returns BS_SIM_STOPPED. */
-static int snap_undo(bs_sim *s, const frame_snap *sn) {
-  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  memcpy(s->x, sn->xv, sizeof(double) * n3);
-  memcpy(s->v, sn->xv + n3, sizeof(double) * n3);
-  s->time = sn->time;
-  s->frame = sn->frame;
-  bs_integrator_set_carry(s->integrator, &sn->carry);
-  bs_integrator_set_previous(s->integrator, &sn->prev);
-  return BS_SIM_STOPPED;
-}
-
-/* One frame, checking *stop (may be NULL) before every step, and through the
- * integrator's stop flag between Newton iterations; a frame cut short is
- * undone from the snapshot (sn NULL when no stop can come) and
- * BS_SIM_STOPPED returned. */
-static int advance_frame(bs_sim *s, volatile sig_atomic_t *stop, frame_snap *sn, bs_frame_stats *fs, bs_error *err) {
-  const bs_scene *sc = s->scene;
-  const int f = s->frame + 1;
-  if (sc->mode != BS_MODE_DYNAMIC) return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
-  if (sn) snap_take(s, sn);
-  for (int k = 0; k < sc->steps_per_frame; k++) {
-    if (stop && *stop && sn) return snap_undo(s, sn);
-    bs_sim_step *rec = &s->steps[k];
-    int st = bs_integrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
-    if (st) {
-      bs_error_prefix(err, "frame %d step %d", f, k);
-      return st;
-    }
-    if (rec->st.min.reason == BS_MIN_STOPPED && sn) return snap_undo(s, sn);
-    s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-    record(s, rec);
-  }
-  s->time = f / sc->fps;
-  s->frame = f;
-  frame_sums(s, sc->steps_per_frame, fs);
-  return 0;
-}
-
-int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) { return advance_frame(s, NULL, NULL, fs, err); }
 
 int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err) {
   const bs_scene *sc = s->scene;
@@ -116,17 +55,8 @@ int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_er
 }
 
 int bs_sim_statics(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
-  const bs_scene *sc = s->scene;
-  bs_sim_step *rec = &s->steps[0];
-  int st = bs_integrator_static(s->integrator, 0.0, sc->load_steps, s->x, &rec->st, err);
-  if (st) {
-    bs_error_prefix(err, "static solve");
-    return st;
-  }
-  record(s, rec);
-  s->frame = 1;
-  frame_sums(s, 1, fs);
-  return 0;
+  const bs_frame_loop L = loop_of(s);
+  return bs_frame_statics(&L, NULL, fs, err);
 }
 
 void bs_run_totals_add(bs_run_totals *T, const bs_frame_stats *fs) {
@@ -159,11 +89,12 @@ int bs_sim_run(bs_sim *s, bs_frame_fn on_frame, void *ctx, bs_run_totals *totals
   return bs_sim_run_with(s, &o, totals, err);
 }
 
-/* The frames from s->frame to the scene's last; snap: advance_frame's. */
-static int run_frames(bs_sim *s, const bs_sim_run_opts *o, frame_snap *snap, bs_run_totals *totals, bs_error *err) {
+/* The frames from s->frame to the scene's last; snap: bs_frame_advance's. */
+static int run_frames(bs_sim *s, const bs_sim_run_opts *o, bs_frame_snap *snap, bs_run_totals *totals, bs_error *err) {
+  const bs_frame_loop L = loop_of(s);
   bs_frame_stats fs;
   while (s->frame < s->scene->frames) {
-    int st = advance_frame(s, o->stop, snap, &fs, err);
+    int st = bs_frame_advance(&L, o->stop, snap, &fs, err);
     if (st) return st;
     bs_run_totals_add(totals, &fs);
     if (o->on_frame && (st = o->on_frame(s, &fs, o->ctx, err))) return st;
@@ -173,6 +104,7 @@ static int run_frames(bs_sim *s, const bs_sim_run_opts *o, frame_snap *snap, bs_
 
 int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, bs_error *err) {
   const bs_scene *sc = s->scene;
+  const bs_frame_loop L = loop_of(s);
   bs_frame_stats fs;
   bs_run_totals local;
   if (!totals) totals = &local;
@@ -185,20 +117,17 @@ int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *o, bs_run_totals *totals, 
   if (sc->mode == BS_MODE_STATIC && o->resume)
     return bs_error_set(err, BS_EINPUT, "%s: a static scene cannot be continued", sc->path);
   if (o->stop && *o->stop) return BS_SIM_STOPPED;
-  frame_snap snap = {NULL, 0, 0, {0, 0}, {0, 0, 0, NULL}};
-  if (o->stop && !(snap.xv = bs_calloc(9 * (size_t)s->mesh->n_vertices, sizeof(double), "the frame snapshot", err)))
-    return BS_ENOMEM;
+  bs_frame_snap snap = {0};
+  if (o->stop && (st = bs_frame_snap_alloc(&L, &snap, err))) return st;
   bs_integrator_set_stop(s->integrator, o->stop);
   if (sc->mode == BS_MODE_STATIC) {
-    if (snap.xv) snap_take(s, &snap);
-    st = bs_sim_statics(s, &fs, err);
-    if (!st && snap.xv && s->steps[0].st.min.reason == BS_MIN_STOPPED) st = snap_undo(s, &snap);
+    st = bs_frame_statics(&L, snap.xv ? &snap : NULL, &fs, err);
     if (!st) bs_run_totals_add(totals, &fs);
     if (!st && o->on_frame) st = o->on_frame(s, &fs, o->ctx, err);
   } else {
     st = run_frames(s, o, snap.xv ? &snap : NULL, totals, err);
   }
   bs_integrator_set_stop(s->integrator, NULL);
-  free(snap.xv);
+  bs_frame_snap_free(&snap);
   return st;
 }

@@ -1,0 +1,101 @@
+/* frame_loop.c — frames, statics and the stop snapshot on any backend of the
+ * integrator (bs_frame_loop.h). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_frame_loop.h"
+
+int bs_frame_snap_alloc(const bs_frame_loop *L, bs_frame_snap *sn, bs_error *err) {
+  memset(sn, 0, sizeof *sn);
+  const size_t n = (size_t)bs_integrator_vertices(L->integ);
+  sn->xv = bs_calloc(9 * n + 9, sizeof(double), "the frame snapshot", err);
+  return sn->xv ? 0 : BS_ENOMEM;
+}
+
+void bs_frame_snap_free(bs_frame_snap *sn) {
+  free(sn->xv);
+  sn->xv = NULL;
+}
+
+void bs_frame_snap_take(const bs_frame_loop *L, bs_frame_snap *sn) {
+  const size_t n3 = 3 * (size_t)bs_integrator_vertices(L->integ);
+  memcpy(sn->xv, L->x, sizeof(double) * n3);
+  memcpy(sn->xv + n3, L->v, sizeof(double) * n3);
+  sn->time = *L->time;
+  sn->frame = *L->frame;
+  bs_integrator_get_carry(L->integ, &sn->carry);
+  sn->prev.d = sn->xv + 2 * n3;
+  bs_integrator_get_previous(L->integ, &sn->prev);
+}
+
+int bs_frame_snap_undo(const bs_frame_loop *L, const bs_frame_snap *sn) {
+  const size_t n3 = 3 * (size_t)bs_integrator_vertices(L->integ);
+  memcpy(L->x, sn->xv, sizeof(double) * n3);
+  memcpy(L->v, sn->xv + n3, sizeof(double) * n3);
+  *L->time = sn->time;
+  *L->frame = sn->frame;
+  bs_integrator_set_carry(L->integ, &sn->carry);
+  bs_integrator_set_previous(L->integ, &sn->prev);
+  return BS_SIM_STOPPED;
+}
+
+/* The step's record: its time, inverted tets and its own copy of the reason
+ * (the minimizer's text is overwritten by the next solve). */
+static int record(const bs_frame_loop *L, bs_sim_step *rec, bs_error *err) {
+  int64_t inv = 0;
+  int rc = bs_integrator_count_inverted(L->integ, L->x, &inv, err);
+  rec->time = *L->time;
+  rec->inverted = (int32_t)inv;
+  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
+  rec->st.min.reason_text = rec->reason;
+  return rc;
+}
+
+/* Whether a stop was asked on any process (collective when stop is set). */
+static int stop_asked(const bs_frame_loop *L, volatile sig_atomic_t *stop, int *asked, bs_error *err) {
+  *asked = 0;
+  return stop ? bs_integrator_any(L->integ, *stop != 0, asked, err) : 0;
+}
+
+int bs_frame_advance(const bs_frame_loop *L, volatile sig_atomic_t *stop, bs_frame_snap *sn, bs_frame_stats *fs,
+                     bs_error *err) {
+  const bs_scene *sc = L->scene;
+  const int f = *L->frame + 1;
+  if (sc->mode != BS_MODE_DYNAMIC)
+    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
+  if (sn) bs_frame_snap_take(L, sn);
+  for (int k = 0; k < sc->steps_per_frame; k++) {
+    int asked = 0, rc = sn ? stop_asked(L, stop, &asked, err) : 0;
+    if (rc) return rc;
+    if (asked) return bs_frame_snap_undo(L, sn);
+    bs_sim_step *rec = &L->steps[k];
+    rc = bs_integrator_step(L->integ, *L->time, sc->dt, L->x, L->v, &rec->st, err);
+    if (rc) {
+      bs_error_prefix(err, "frame %d step %d", f, k);
+      return rc;
+    }
+    if (rec->st.min.reason == BS_MIN_STOPPED && sn) return bs_frame_snap_undo(L, sn);
+    *L->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
+    if ((rc = record(L, rec, err))) return rc;
+  }
+  *L->time = f / sc->fps;
+  *L->frame = f;
+  bs_frame_sums(*L->frame, *L->time, sc->steps_per_frame, L->steps, fs);
+  return 0;
+}
+
+int bs_frame_statics(const bs_frame_loop *L, bs_frame_snap *sn, bs_frame_stats *fs, bs_error *err) {
+  bs_sim_step *rec = &L->steps[0];
+  if (sn) bs_frame_snap_take(L, sn);
+  int rc = bs_integrator_static(L->integ, 0.0, L->scene->load_steps, L->x, &rec->st, err);
+  if (rc) {
+    bs_error_prefix(err, "static solve");
+    return rc;
+  }
+  if (sn && rec->st.min.reason == BS_MIN_STOPPED) return bs_frame_snap_undo(L, sn);
+  if ((rc = record(L, rec, err))) return rc;
+  *L->frame = 1;
+  bs_frame_sums(*L->frame, *L->time, 1, L->steps, fs);
+  return 0;
+}
