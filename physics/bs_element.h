@@ -40,7 +40,7 @@ double bs_tet_energy_grad(const bs_material *m, const double x[12], const double
 
 /* H = vol G^T dP/dF G (12x12 row-major); project_psd = 1 uses the PSD
  * projection of dP/dF, which makes H positive semidefinite. */
-void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
+void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, bs_psd_mode project_psd,
                     double H[144]);
 
 /* The same on n tets at once, bit for bit the single-tet results: x is 12
@@ -51,7 +51,7 @@ void bs_tet_energy_batch(const bs_material *m, int n, const double *x, const dou
 void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, const double *Dm_inv,
                               const double *vol, double *e, double *g);
 void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
-                          int project_psd, double *H);
+                          bs_psd_mode project_psd, double *H);
 
 #ifdef __cplusplus
 }

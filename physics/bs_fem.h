@@ -107,7 +107,7 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g);
 /* scale * ∂²Φ_e/∂x² ADDED into H (fem pattern). project_psd: the
  * definiteness fix of every tet's Hessian (a bs_psd_mode, bs_material.h:
  * BS_PSD_NONE exact, BS_PSD_ALL projected onto the PSD cone, ...). */
-void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H);
+void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, bs_psd_mode project_psd, double scale, bs_bsr *H);
 
 /* As bs_fem_elastic_hessian (scale applied) with the definiteness fix by
  * tet: BS_PSD_INVERTED for a tet of material m whose rest volume is <=
@@ -118,7 +118,7 @@ void bs_fem_elastic_hessian_auto(const bs_fem *fem, const double *x, const doubl
 /* As bs_fem_elastic_hessian with one scale per material: material_scale[m] *
  * ∂²Φ_e/∂x² over the tets of material m ADDED into H; tets of a material with
  * scale 0 are skipped (not evaluated). */
-void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, int project_psd,
+void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, bs_psd_mode project_psd,
                                    const double *material_scale, bs_bsr *H);
 
 /* Number of tets with det F <= 0 at x; min det F in *min_detF (may be NULL). */

@@ -140,7 +140,7 @@ double bs_material_psi_P(const bs_material *m, const double F[9], double P[9]);
 
 /* dP/dF (symmetric 9x9, see Layout); project_psd = 1: its projection onto the
  * positive semidefinite cone. */
-void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]);
+void bs_material_dPdF(const bs_material *m, const double F[9], bs_psd_mode project_psd, double dPdF[81]);
 
 /* dP/dF in the modal form above, for the element kernels (which never form
  * the 9x9 matrix): the SVD F = U diag(s) V^T and the blocks, projected as
@@ -155,7 +155,7 @@ typedef struct bs_dPdF_modes {
   double H[9];       /* symmetric 3x3 block on the d_i          */
   double lp[3], lm[3];
 } bs_dPdF_modes;
-void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project_psd, bs_dPdF_modes *out);
+void bs_material_dPdF_modes(const bs_material *m, const double F[9], bs_psd_mode project_psd, bs_dPdF_modes *out);
 
 /* The same on n matrices at once (F, P: 9 doubles per matrix, packed; psi: n;
  * modes: n), bit for bit the results of the single-matrix calls above, with
@@ -165,7 +165,7 @@ void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project
 #define BS_MATERIAL_BATCH 8
 void bs_material_psi_batch(const bs_material *m, int n, const double *F, double *psi);
 void bs_material_psi_P_batch(const bs_material *m, int n, const double *F, double *psi, double *P);
-void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, int project_psd,
+void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, bs_psd_mode project_psd,
                                   bs_dPdF_modes *out);
 
 #ifdef __cplusplus

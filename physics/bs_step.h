@@ -45,7 +45,7 @@ const char *bs_method_name(bs_method m);
 
 /* bs_integrator_opts.penalty_secant; the scene's solver.penalty_hessian
  * "exact", "obstacles", "all". */
-enum { BS_PENALTY_EXACT = 0, BS_PENALTY_SECANT_OBSTACLES = 1, BS_PENALTY_SECANT_ALL = 2 };
+typedef enum { BS_PENALTY_EXACT = 0, BS_PENALTY_SECANT_OBSTACLES = 1, BS_PENALTY_SECANT_ALL = 2 } bs_penalty_hessian;
 
 typedef struct bs_integrator_opts {
   bs_method method;
@@ -87,7 +87,7 @@ typedef struct bs_integrator_opts {
      bs_sim_create sets it from the scene's solver.penalty_hessian for the optimization
      method (the Newton baseline keeps the exact Hessian), and switches the
      self-collision term's model on for BS_PENALTY_SECANT_ALL. */
-  int penalty_secant;
+  bs_penalty_hessian penalty_secant;
 } bs_integrator_opts;
 
 void bs_integrator_opts_default(bs_integrator_opts *o);
@@ -177,7 +177,7 @@ int bs_step_objective_quadratic(int n_terms, bs_term *const *terms, int statics,
  * becomes the paper's forcing term (0) while the step starts tangled
  * (inverted > 0), where its loose solves untangle best (README, Scenes); any
  * other value is returned as it is. */
-int bs_step_forcing(int forcing_ew, int64_t inverted);
+bs_forcing bs_step_forcing(bs_forcing forcing_ew, int64_t inverted);
 
 /* Adds the statistics of one solve (a load step of statics) into st: the
  * counts summed; reason, reason_text, grad_norm, E and tol_used sub's;

@@ -142,7 +142,7 @@ int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const do
  * indefiniteness removed where it is worst, the exact Hessian elsewhere).
  * BS_EINPUT for another value, and for BS_PSD_AUTO, which needs the step
  * (below). */
-int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err);
+int bs_term_elastic_create(const bs_fem *fem, bs_psd_mode project_psd, bs_term **out, bs_error *err);
 /* The same with the step data (borrowed; may be NULL but for BS_PSD_AUTO):
  * BS_PSD_AUTO gives a tet BS_PSD_INVERTED at every Hessian when its
  * mu dt^2 / (rho h^2) >= BS_PSD_AUTO_RATIO (dt = step->dt then, h =
@@ -153,7 +153,7 @@ int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs
  * exact Hessian with CG's negative-curvature exit does better than any fix;
  * where stiffness dominates, the inverted tets' indefiniteness sends CG out
  * after a few iterations (docs/design/project-hessian.md: the measurements). */
-int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int project_psd, bs_term **out,
+int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, bs_psd_mode project_psd, bs_term **out,
                                 bs_error *err);
 /* k: one coefficient per fem material (seconds, >= 0). */
 int bs_term_damping_create(const bs_fem *fem, const bs_step_data *step, const double *k, bs_term **out,

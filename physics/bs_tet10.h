@@ -198,7 +198,7 @@ double bs_tet10_energy_grad(const bs_material *m, const bs_tet10_rest *r, const 
 
 /* H = d2E/dx2 (30x30 row-major, symmetric bit for bit); project_psd: a
  * bs_psd_mode applied to dP/dF at each quadrature point. */
-void bs_tet10_hessian(const bs_material *m, const bs_tet10_rest *r, const double x[30], int project_psd,
+void bs_tet10_hessian(const bs_material *m, const bs_tet10_rest *r, const double x[30], bs_psd_mode project_psd,
                       double H[900]);
 
 /* Stress and strain measures (bs_stress.h) at each quadrature point:

@@ -154,7 +154,7 @@ static void hessian_from_modes(const bs_dPdF_modes *md, const double Dm_inv[9], 
         for (int c = 0; c < 3; c++) H[12 * (3 * a + r) + 3 * b + c] = B[a][b][3 * r + c];
 }
 
-void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, int project_psd,
+void bs_tet_hessian(const bs_material *m, const double x[12], const double Dm_inv[9], double vol, bs_psd_mode project_psd,
                     double H[144]) {
   double F[9];
   bs_tet_F(x, Dm_inv, F);
@@ -406,7 +406,7 @@ void bs_tet_energy_grad_batch(const bs_material *m, int n, const double *x, cons
 }
 
 void bs_tet_hessian_batch(const bs_material *m, int n, const double *x, const double *Dm_inv, const double *vol,
-                          int project_psd, double *H) {
+                          bs_psd_mode project_psd, double *H) {
   if (m->model == BS_MODEL_LINEAR) {
     for (int i = 0; i < n; i++) bs_tet_hessian(m, x + 12 * i, Dm_inv + 9 * i, vol[i], project_psd, H + 144 * i);
     return;

@@ -390,7 +390,7 @@ double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
  * material_scale[m] when not NULL, tets with 0 skipped); the definiteness
  * fix project_psd, or when vmax is not NULL BS_PSD_INVERTED for the tets of
  * material m of rest volume <= vmax[m] and BS_PSD_NONE for the others. */
-static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, const double *vmax, double s,
+static void hessian_chunk(const bs_fem *fem, const double *x, bs_psd_mode project_psd, const double *vmax, double s,
                           const double *material_scale, int32_t c, bs_bsr *H) {
   const int32_t lo = fem->chunk_ptr[c], hi = fem->chunk_ptr[c + 1];
   for (int32_t k0 = lo; k0 < hi; k0 += NB) {
@@ -427,7 +427,7 @@ static void hessian_chunk(const bs_fem *fem, const double *x, int project_psd, c
   }
 }
 
-static void hessian_all(const bs_fem *fem, const double *x, int project_psd, const double *vmax, double s,
+static void hessian_all(const bs_fem *fem, const double *x, bs_psd_mode project_psd, const double *vmax, double s,
                         const double *material_scale, bs_bsr *H) {
   for (int c = 0; c < fem->n_colors; c++) {
     const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
@@ -436,7 +436,7 @@ static void hessian_all(const bs_fem *fem, const double *x, int project_psd, con
   }
 }
 
-void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, int project_psd, double scale, bs_bsr *H) {
+void bs_fem_elastic_hessian(const bs_fem *fem, const double *x, bs_psd_mode project_psd, double scale, bs_bsr *H) {
   hessian_all(fem, x, project_psd, NULL, scale, NULL, H);
 }
 
@@ -444,7 +444,7 @@ void bs_fem_elastic_hessian_auto(const bs_fem *fem, const double *x, const doubl
   hessian_all(fem, x, 0, vmax, scale, NULL, H);
 }
 
-void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, int project_psd,
+void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, bs_psd_mode project_psd,
                                    const double *material_scale, bs_bsr *H) {
   hessian_all(fem, x, project_psd, NULL, 0, material_scale, H);
 }

@@ -380,7 +380,7 @@ static void project_blocks(double H[9], double lp[3], double lm[3]) {
 
 /* The modal form of dP/dF from the SVD of F. */
 static void modes_from_svd(const bs_material *m, const double U[9], const double s[3], const double V[9],
-                           int project_psd, bs_dPdF_modes *md) {
+                           bs_psd_mode project_psd, bs_dPdF_modes *md) {
   double g[3];
   sv_eval(m, s, 2, g, md->H, md->lp, md->lm);
   /* sign(s[2]) = sign(det F) (bs_svd.h) */
@@ -390,7 +390,7 @@ static void modes_from_svd(const bs_material *m, const double U[9], const double
   memcpy(md->V, V, sizeof md->V);
 }
 
-void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project_psd, bs_dPdF_modes *out) {
+void bs_material_dPdF_modes(const bs_material *m, const double F[9], bs_psd_mode project_psd, bs_dPdF_modes *out) {
   if (m->model == BS_MODEL_LINEAR) { /* no modal form: NaN, loudly */
     double *o = (double *)out;
     for (size_t i = 0; i < sizeof *out / sizeof(double); i++) o[i] = NAN;
@@ -401,7 +401,7 @@ void bs_material_dPdF_modes(const bs_material *m, const double F[9], int project
   modes_from_svd(m, U, s, V, project_psd, out);
 }
 
-void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, double dPdF[81]) {
+void bs_material_dPdF(const bs_material *m, const double F[9], bs_psd_mode project_psd, double dPdF[81]) {
   if (m->model == BS_MODEL_LINEAR) {
     /* mu (d_ik d_jl + d_il d_jk) + lambda d_ij d_kl: constant, and PSD for
      * every admissible nu (eigenvalues 2 mu, 0 and 3 lambda + 2 mu = 3K > 0). */
@@ -420,7 +420,7 @@ void bs_material_dPdF(const bs_material *m, const double F[9], int project_psd, 
   assemble_dPdF(md.U, md.V, md.H, md.lp, md.lm, dPdF);
 }
 
-void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, int project_psd,
+void bs_material_dPdF_modes_batch(const bs_material *m, int n, const double *F, bs_psd_mode project_psd,
                                   bs_dPdF_modes *out) {
   if (m->model == BS_MODEL_LINEAR) {
     for (int i = 0; i < n; i++) bs_material_dPdF_modes(m, F + 9 * i, project_psd, out + i);

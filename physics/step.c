@@ -403,7 +403,9 @@ int bs_step_objective_quadratic(int n_terms, bs_term *const *terms, int statics,
   return 1;
 }
 
-int bs_step_forcing(int forcing_ew, int64_t inverted) { return forcing_ew == 2 && inverted > 0 ? 0 : forcing_ew; }
+bs_forcing bs_step_forcing(bs_forcing forcing_ew, int64_t inverted) {
+  return forcing_ew == BS_FORCING_ADAPTIVE && inverted > 0 ? BS_FORCING_PAPER : forcing_ew;
+}
 
 void bs_step_stats_add(bs_step_stats *st, const bs_step_stats *sub) {
   st->min.iterations += sub->min.iterations;
@@ -515,10 +517,10 @@ static int solve_opts(bs_integrator *I, int naive, bs_minimize_opts *mo, bs_erro
   I->opts.min.naive_guess = naive;
   *mo = I->opts.min;
   int rc = 0;
-  if (mo->forcing_ew == 2) {
+  if (mo->forcing_ew == BS_FORCING_ADAPTIVE) {
     int64_t inv = 0;
     rc = I->B.count_inverted(I->B.ctx, I->x_n, &inv, err);
-    mo->forcing_ew = bs_step_forcing(2, inv);
+    mo->forcing_ew = bs_step_forcing(BS_FORCING_ADAPTIVE, inv);
   }
   const term_list *l = &I->act[I->static_mode][TERMS_ALL];
   const double pdt = I->static_mode ? 0.0 : I->step->dt;

@@ -186,7 +186,7 @@ static int elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
 }
 static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, elastic_free, NULL, NULL, NULL};
 
-int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int project_psd, bs_term **out,
+int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, bs_psd_mode project_psd, bs_term **out,
                                 bs_error *err) {
   if (project_psd < BS_PSD_NONE || project_psd > BS_PSD_AUTO)
     return bs_error_set(err, BS_EINPUT, "elasticity term: project_psd %d is not a bs_psd_mode", project_psd);
@@ -208,7 +208,7 @@ int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, int
   return 0;
 }
 
-int bs_term_elastic_create(const bs_fem *fem, int project_psd, bs_term **out, bs_error *err) {
+int bs_term_elastic_create(const bs_fem *fem, bs_psd_mode project_psd, bs_term **out, bs_error *err) {
   return bs_term_elastic_create_step(fem, NULL, project_psd, out, err);
 }
 

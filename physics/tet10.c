@@ -219,7 +219,7 @@ static void add_point_hessian(const double K[81], const double d[10][3], double 
     }
 }
 
-void bs_tet10_hessian(const bs_material *m, const bs_tet10_rest *r, const double x[30], int project_psd,
+void bs_tet10_hessian(const bs_material *m, const bs_tet10_rest *r, const double x[30], bs_psd_mode project_psd,
                       double H[900]) {
   for (int i = 0; i < 900; i++) H[i] = 0.0;
   double F[9], K[81];

@@ -185,7 +185,7 @@ typedef struct bs_scene {
   bs_scene_mode mode;
   bs_scene_backend backend; /* solver.backend: serial [default] or petsc (petsc/) */
   int load_steps;
-  int project_hessian;     /* bs_psd_mode of the elastic Hessian                */
+  bs_psd_mode project_hessian; /* solver.project_hessian: the elastic Hessian's fix   */
   double gravity[3];
   double drag;
   int n_bodies;

@@ -344,6 +344,14 @@ const char *bs_globalization_name(bs_globalization g);
 /* The names above into *out; BS_EINPUT naming the string otherwise. */
 int bs_globalization_parse(const char *name, bs_globalization *out, bs_error *err);
 
+/* The CG forcing terms (bs_minimize_opts.forcing_ew; the scene's
+ * solver.cg_forcing "paper", "eisenstat_walker", "adaptive"). */
+typedef enum {
+  BS_FORCING_PAPER = 0,    /* the paper's tolerance alone                                  */
+  BS_FORCING_EW = 1,       /* also capped by Eisenstat & Walker's choice 2 from iteration 2 */
+  BS_FORCING_ADAPTIVE = 2  /* the same cap only after an iteration that took a full step   */
+} bs_forcing;
+
 typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default() */
   double tol;          /* tau, on ||grad E|| (masked 2-norm); default 1e-3 (scenes set it) */
   double rtol;         /* default 0 (off): also converged when ||g|| < rtol ||g_0||,        */
@@ -368,11 +376,12 @@ typedef struct bs_minimize_opts { /* paper defaults via bs_minimize_opts_default
   int cg_single;       /* default 0. 1: cg, pcg and amg solves read the Hessian's           */
                        /* values in single precision from their 6th product on             */
                        /* (bs_linsolve_set_single): 40 bytes per block, not 76             */
-  int forcing_ew;      /* default 0. 1: from the second iteration on, the CG                */
+  bs_forcing forcing_ew; /* default PAPER. EW: from the second iteration on, the CG        */
                        /* tolerance of step 4 is also capped by Eisenstat & Walker's       */
                        /* (1996) choice 2, eta_k = 0.9 (||g_k|| / ||g_k-1||)^2, kept >=    */
                        /* 0.9 eta_k-1^2 when that exceeds 0.1: solves tighten where Newton */
-                       /* converges fast and stay loose where it does not. 2: the same cap */
+                       /* converges fast and stay loose where it does not. ADAPTIVE: the   */
+                       /* same cap */
                        /* only after an iteration that took the full Newton step (Newton   */
                        /* direction, no negative curvature, alpha = 1 at its first trial) */
   int cg_downhill;      /* default 1. 1: a Krylov answer that fails step 5's test            */

@@ -225,8 +225,9 @@ int bs__opts_check(const bs_minimize_opts *o, bs_error *err) {
     return bs_error_set(err, BS_EINPUT, "minimizer option max_iter must be >= 0, got %d", o->max_iter);
   if (o->convexify < 0 || o->convexify > 1)
     return bs_error_set(err, BS_EINPUT, "minimizer option convexify must be 0 or 1, got %d", o->convexify);
-  if (o->forcing_ew < 0 || o->forcing_ew > 2)
-    return bs_error_set(err, BS_EINPUT, "minimizer option forcing_ew must be 0, 1 or 2, got %d", o->forcing_ew);
+  if ((int)o->forcing_ew < BS_FORCING_PAPER || (int)o->forcing_ew > BS_FORCING_ADAPTIVE)
+    return bs_error_set(err, BS_EINPUT, "minimizer option forcing_ew must be a bs_forcing (0, 1 or 2), got %d",
+                        (int)o->forcing_ew);
   if (o->newton_max_iter < 1)
     return bs_error_set(err, BS_EINPUT, "minimizer option newton_max_iter must be >= 1, got %d", o->newton_max_iter);
   if (!(o->sigma > 0) || !isfinite(o->sigma))
@@ -469,7 +470,7 @@ int bs__newton_direction(bs_minimizer *m, const bs_objective *obj, const double 
   if (obj->quadratic) rel = fmin(rel, fmax(m->tau / (4 * gnorm), 1e-13)); /* one step reaches tau */
   /* Eisenstat & Walker (1996), choice 2, gamma 0.9, alpha 2; forcing_ew 2 only
    * after a full Newton step (bs_minimize.h) */
-  if (o->forcing_ew && it > 0 && (o->forcing_ew == 1 || m->last_full)) {
+  if (o->forcing_ew != BS_FORCING_PAPER && it > 0 && (o->forcing_ew == BS_FORCING_EW || m->last_full)) {
     const double q = gnorm / m->g_prev, safe = 0.9 * m->eta_prev * m->eta_prev;
     double e = 0.9 * q * q;
     if (safe > 0.1) e = fmax(e, safe);
@@ -477,7 +478,7 @@ int bs__newton_direction(bs_minimizer *m, const bs_objective *obj, const double 
   }
   /* forcing_ew 2: a solve that follows one made only of full Newton steps
    * starts from that solve's last forcing term */
-  if (o->forcing_ew == 2 && it == 0 && m->prev_full && m->prev_eta > 0) rel = fmin(rel, m->prev_eta);
+  if (o->forcing_ew == BS_FORCING_ADAPTIVE && it == 0 && m->prev_full && m->prev_eta > 0) rel = fmin(rel, m->prev_eta);
   m->g_prev = gnorm;
   m->eta_prev = rel;
   rec->lin_rel_tol = rel;
