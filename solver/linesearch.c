@@ -157,147 +157,159 @@ static int noise_search(ls_state *s, double dphi0, int budget, int *evals, bs__l
   return 0;
 }
 
-void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0, double dphi0,
-                     double amax, bs_minimize_stats *st, bs__ls_result *res) {
-  const bs_minimize_opts *o = &m->opts;
-  const double c1 = o->c1, c2 = o->c2;
-  if (!(amax >= 0)) amax = 0;
-  ls_state s = {m, obj, x, st, phi0, fmin(ALPHA_MAX, amax), amax < ALPHA_MAX, amax < 1.0, NAN, 0};
-  int evals = 0;
-  double best_a = 0, best_phi = phi0; /* lowest trial value below phi(0) */
-  double acc_a = 0, acc_phi = 0, acc_dphi = 0;
-  double lo = 0, phi_lo = phi0, dphi_lo = dphi0;
-  double hi = 0, phi_hi = 0, dphi_hi = 0;
-  int hi_d = 0;
-  memset(res, 0, sizeof *res);
-  res->status = BS_LSEARCH_NO_DECREASE;
-  res->bound = amax;
-  res->limited = s.limited;
-  if (!(s.a_top > 0)) return; /* the bound allows no step */
+/* The search's bracket and outcomes (Algorithms 3.5 and 3.6). */
+typedef struct {
+  ls_state s;
+  double phi0, dphi0, c1, c2;
+  int evals, max_ls;
+  double best_a, best_phi;          /* lowest trial value below phi(0)   */
+  double acc_a, acc_phi, acc_dphi;  /* the accepted point                */
+  double lo, phi_lo, dphi_lo;
+  double hi, phi_hi, dphi_hi;
+  int hi_d;                         /* 1: dphi_hi is known               */
+} ls_search;
 
-#define NOTE_BEST(a_, phi_)                                                                                           \
-  do {                                                                                                                \
-    if ((phi_) < best_phi) {                                                                                          \
-      best_phi = (phi_);                                                                                              \
-      best_a = (a_);                                                                                                  \
-    }                                                                                                                 \
-  } while (0)
+typedef enum { LS_BRACKETED, LS_ACCEPT, LS_BOUND, LS_CAPPED, LS_NOISE_DONE } ls_outcome;
 
-  /* Algorithm 3.5: bracketing, a_1 = 1 first (the bound if below 1),
-   * growing while the slope stays negative and too steep, up to the bound. */
-  double a_prev = 0, phi_prev = phi0, dphi_prev = dphi0, a = fmin(1.0, s.a_top);
+static void note_best(ls_search *q, double a, double phi) {
+  if (phi < q->best_phi) {
+    q->best_phi = phi;
+    q->best_a = a;
+  }
+}
+
+static ls_outcome accept_at(ls_search *q, double a, double phi, double dphi, ls_outcome how) {
+  q->acc_a = a, q->acc_phi = phi, q->acc_dphi = dphi;
+  return how;
+}
+
+/* Algorithm 3.5: bracketing, a_1 = 1 first (the bound if below 1), growing
+ * while the slope stays negative and too steep, up to the bound. */
+static ls_outcome bracket(ls_search *q, const bs_minimize_opts *o, bs__ls_result *res) {
+  ls_state *s = &q->s;
+  double a_prev = 0, phi_prev = q->phi0, dphi_prev = q->dphi0, a = fmin(1.0, s->a_top);
   for (int i = 0;; ++i) {
-    if (evals >= o->max_ls) goto capped;
+    if (q->evals >= q->max_ls) return LS_CAPPED;
     int hg;
-    double dphi, phi = trial(&s, a, 1, &hg, &dphi);
-    ++evals;
-    if (hg) NOTE_BEST(a, phi);
-    if (i == 0 && o->accept_noise && !(phi <= phi0 + c1 * a * dphi0) && -dphi0 <= bs__noise_level(phi0)) {
+    double dphi, phi = trial(s, a, 1, &hg, &dphi);
+    ++q->evals;
+    if (hg) note_best(q, a, phi);
+    if (i == 0 && o->accept_noise && !(phi <= q->phi0 + q->c1 * a * q->dphi0) &&
+        -q->dphi0 <= bs__noise_level(q->phi0)) {
       /* E cannot resolve the decrease this step predicts (paper 3.3): search
-       * on the slope (approximate Wolfe conditions) instead. */
-      if (noise_search(&s, dphi0, o->max_ls - evals, &evals, res)) {
-        res->evals = evals;
-        res->limited = s.limited;
-        return;
-      }
-      /* None found: the trial points stay what they were (phi(1) is the
-       * one the bracket below starts from). */
-      if (evals >= o->max_ls) goto capped;
+       * on the slope (approximate Wolfe conditions) instead. None found: the
+       * trial points stay what they were (phi(1) starts the bracket below). */
+      if (noise_search(s, q->dphi0, q->max_ls - q->evals, &q->evals, res)) return LS_NOISE_DONE;
+      if (q->evals >= q->max_ls) return LS_CAPPED;
     }
-    if (!(phi <= phi0 + c1 * a * dphi0) || (i > 0 && phi >= phi_prev)) {
-      lo = a_prev, phi_lo = phi_prev, dphi_lo = dphi_prev;
-      hi = a, phi_hi = phi, dphi_hi = dphi, hi_d = hg;
-      break;
+    if (!(phi <= q->phi0 + q->c1 * a * q->dphi0) || (i > 0 && phi >= phi_prev)) {
+      q->lo = a_prev, q->phi_lo = phi_prev, q->dphi_lo = dphi_prev;
+      q->hi = a, q->phi_hi = phi, q->dphi_hi = dphi, q->hi_d = hg;
+      return LS_BRACKETED;
     }
     /* Sufficient decrease holds with a finite phi: the gradient was evaluated. */
-    if (fabs(dphi) <= -c2 * dphi0) {
-      acc_a = a, acc_phi = phi, acc_dphi = dphi;
-      goto accept;
-    }
+    if (fabs(dphi) <= -q->c2 * q->dphi0) return accept_at(q, a, phi, dphi, LS_ACCEPT);
     if (dphi >= 0) {
-      lo = a, phi_lo = phi, dphi_lo = dphi;
-      hi = a_prev, phi_hi = phi_prev, dphi_hi = dphi_prev, hi_d = 1;
-      break;
+      q->lo = a, q->phi_lo = phi, q->dphi_lo = dphi;
+      q->hi = a_prev, q->phi_hi = phi_prev, q->dphi_hi = dphi_prev, q->hi_d = 1;
+      return LS_BRACKETED;
     }
-    if (a >= s.a_top) {
-      if (!s.bounded) goto capped;
-      acc_a = a, acc_phi = phi, acc_dphi = dphi; /* the bound, E still falling steeply */
-      res->status = BS_LSEARCH_BOUND;
-      goto taken;
-    }
+    if (a >= s->a_top) /* at the bound with E still falling steeply: the bound */
+      return s->bounded ? accept_at(q, a, phi, dphi, LS_BOUND) : LS_CAPPED;
     /* Extrapolate: cubic minimizer kept in [a + (a - a_prev)/2, a + 10 (a - a_prev)]. */
     double w = a - a_prev, c = cubic_min(a_prev, phi_prev, dphi_prev, a, phi, dphi), a_next;
     if (isfinite(c) && c > a) a_next = fmin(fmax(c, a + 0.5 * w), a + 10.0 * w);
     else a_next = a + 4.0 * w;
     a_prev = a, phi_prev = phi, dphi_prev = dphi;
-    if (s.bounded && a_next > s.a_top) s.limited = 1;
-    a = fmin(a_next, s.a_top);
+    if (s->bounded && a_next > s->a_top) s->limited = 1;
+    a = fmin(a_next, s->a_top);
   }
+}
 
-  /* Algorithm 3.6: zoom in the bracket (lo, hi); lo satisfies sufficient
-   * decrease with the lowest value so far, and dphi_lo (hi - lo) < 0. */
+/* The next trial of the zoom: the safeguarded cubic (or quadratic)
+ * interpolant's minimizer in the bracket, else its midpoint. */
+static double zoom_trial(const ls_search *q, double al, double ah, double w) {
+  double aj = NAN;
+  if (q->hi_d && isfinite(q->phi_hi)) {
+    aj = cubic_min(q->lo, q->phi_lo, q->dphi_lo, q->hi, q->phi_hi, q->dphi_hi);
+  } else if (isfinite(q->phi_hi)) { /* quadratic through phi(lo), phi'(lo), phi(hi) */
+    double h = q->hi - q->lo, den = 2.0 * (q->phi_hi - q->phi_lo - q->dphi_lo * h);
+    if (den > 0) aj = q->lo - q->dphi_lo * h * h / den;
+  }
+  if (isfinite(aj)) return fmin(fmax(aj, al + 0.1 * w), ah - 0.1 * w); /* safeguard */
+  return 0.5 * (q->lo + q->hi);                                         /* bisection */
+}
+
+/* Algorithm 3.6: zoom in the bracket (lo, hi); lo satisfies sufficient
+ * decrease with the lowest value so far, and dphi_lo (hi - lo) < 0. */
+static ls_outcome zoom(ls_search *q) {
   for (;;) {
-    if (evals >= o->max_ls) goto capped;
-    double al = fmin(lo, hi), ah = fmax(lo, hi), w = ah - al;
-    if (!(w > 4.0 * DBL_EPSILON * ah)) goto capped; /* the bracket collapsed */
-    double aj = NAN;
-    if (hi_d && isfinite(phi_hi)) {
-      aj = cubic_min(lo, phi_lo, dphi_lo, hi, phi_hi, dphi_hi);
-    } else if (isfinite(phi_hi)) { /* quadratic through phi(lo), phi'(lo), phi(hi) */
-      double h = hi - lo, den = 2.0 * (phi_hi - phi_lo - dphi_lo * h);
-      if (den > 0) aj = lo - dphi_lo * h * h / den;
-    }
-    if (isfinite(aj)) aj = fmin(fmax(aj, al + 0.1 * w), ah - 0.1 * w); /* safeguard */
-    else aj = 0.5 * (lo + hi);                                          /* bisection */
+    if (q->evals >= q->max_ls) return LS_CAPPED;
+    double al = fmin(q->lo, q->hi), ah = fmax(q->lo, q->hi), w = ah - al;
+    if (!(w > 4.0 * DBL_EPSILON * ah)) return LS_CAPPED; /* the bracket collapsed */
+    double aj = zoom_trial(q, al, ah, w);
     int hg;
-    double dphi, phi = trial(&s, aj, 0, &hg, &dphi);
-    ++evals;
-    if (!(phi <= phi0 + c1 * aj * dphi0) || phi >= phi_lo) {
-      NOTE_BEST(aj, phi); /* may still lie below phi(0): a fallback if the cap is hit */
-      hi = aj, phi_hi = phi, hi_d = 0;
+    double dphi, phi = trial(&q->s, aj, 0, &hg, &dphi);
+    ++q->evals;
+    if (!(phi <= q->phi0 + q->c1 * aj * q->dphi0) || phi >= q->phi_lo) {
+      note_best(q, aj, phi); /* may still lie below phi(0): a fallback if the cap is hit */
+      q->hi = aj, q->phi_hi = phi, q->hi_d = 0;
       continue;
     }
-    phi = grad_here(&s, &dphi);
-    if (!(phi <= phi0 + c1 * aj * dphi0) || phi >= phi_lo) { /* gradient() disagreed with value() */
-      hi = aj, phi_hi = phi, dphi_hi = dphi, hi_d = s.cur_grad;
+    phi = grad_here(&q->s, &dphi);
+    if (!(phi <= q->phi0 + q->c1 * aj * q->dphi0) || phi >= q->phi_lo) { /* gradient() disagreed with value() */
+      q->hi = aj, q->phi_hi = phi, q->dphi_hi = dphi, q->hi_d = q->s.cur_grad;
       continue;
     }
-    NOTE_BEST(aj, phi);
-    if (fabs(dphi) <= -c2 * dphi0) {
-      acc_a = aj, acc_phi = phi, acc_dphi = dphi;
-      goto accept;
-    }
-    if (dphi * (hi - lo) >= 0) hi = lo, phi_hi = phi_lo, dphi_hi = dphi_lo, hi_d = 1;
-    lo = aj, phi_lo = phi, dphi_lo = dphi;
+    note_best(q, aj, phi);
+    if (fabs(dphi) <= -q->c2 * q->dphi0) return accept_at(q, aj, phi, dphi, LS_ACCEPT);
+    if (dphi * (q->hi - q->lo) >= 0) q->hi = q->lo, q->phi_hi = q->phi_lo, q->dphi_hi = q->dphi_lo, q->hi_d = 1;
+    q->lo = aj, q->phi_lo = phi, q->dphi_lo = dphi;
   }
+}
 
-capped:
-  /* No Wolfe point within the cap: the lowest decreasing point, if any. */
-  res->evals = evals;
-  res->limited = s.limited;
-  if (!(best_phi < phi0)) return;
-  if (!(s.cur_a == best_a && s.cur_grad)) {
+/* No Wolfe point within the cap: the lowest decreasing point, if any. */
+static void capped(ls_search *q, bs__ls_result *res) {
+  bs_minimizer *m = q->s.m;
+  if (!(q->best_phi < q->phi0)) return;
+  if (!(q->s.cur_a == q->best_a && q->s.cur_grad)) {
     double dphi;
-    make_point(&s, best_a);
-    double phi = grad_here(&s, &dphi);
-    if (!(phi < phi0)) return; /* not reproducible: treat as no decrease */
-    best_phi = phi;
+    make_point(&q->s, q->best_a);
+    double phi = grad_here(&q->s, &dphi);
+    if (!(phi < q->phi0)) return; /* not reproducible: treat as no decrease */
+    q->best_phi = phi;
     res->dphi = dphi;
   } else {
     res->dphi = bs__mdot(m, m->gy, m->d);
   }
   res->status = BS_LSEARCH_CAPPED;
-  res->alpha = best_a;
-  res->phi = best_phi;
-  return;
+  res->alpha = q->best_a;
+  res->phi = q->best_phi;
+}
 
-accept:
-  res->status = BS_LSEARCH_WOLFE;
-taken:
-  res->evals = evals;
-  res->limited = s.limited;
-  res->alpha = acc_a;
-  res->phi = acc_phi;
-  res->dphi = acc_dphi;
-#undef NOTE_BEST
+void bs__line_search(bs_minimizer *m, const bs_objective *obj, const double *x, double phi0, double dphi0,
+                     double amax, bs_minimize_stats *st, bs__ls_result *res) {
+  const bs_minimize_opts *o = &m->opts;
+  if (!(amax >= 0)) amax = 0;
+  ls_search q = {.s = {m, obj, x, st, phi0, fmin(ALPHA_MAX, amax), amax < ALPHA_MAX, amax < 1.0, NAN, 0},
+                 .phi0 = phi0, .dphi0 = dphi0, .c1 = o->c1, .c2 = o->c2, .max_ls = o->max_ls,
+                 .best_phi = phi0, .phi_lo = phi0, .dphi_lo = dphi0};
+  memset(res, 0, sizeof *res);
+  res->status = BS_LSEARCH_NO_DECREASE;
+  res->bound = amax;
+  res->limited = q.s.limited;
+  if (!(q.s.a_top > 0)) return; /* the bound allows no step */
+  ls_outcome out = bracket(&q, o, res);
+  if (out == LS_BRACKETED) out = zoom(&q);
+  res->evals = q.evals;
+  res->limited = q.s.limited;
+  if (out == LS_NOISE_DONE) return;
+  if (out == LS_CAPPED) {
+    capped(&q, res);
+    return;
+  }
+  res->status = out == LS_BOUND ? BS_LSEARCH_BOUND : BS_LSEARCH_WOLFE;
+  res->alpha = q.acc_a;
+  res->phi = q.acc_phi;
+  res->dphi = q.acc_dphi;
 }
