@@ -133,8 +133,12 @@ int bs_term_ipc_obstacle_add(bs_term *t, const bs_levelset *ls, double mu, int i
  * sqrt(Lx^2 + Ly^2 + Lz^2) + 1 with Lk the largest |difference| / h of
  * consecutive node values or B-spline coefficients along axis k (the
  * interpolant's derivative along k is a convex combination of those
- * differences / h; the +1 covers the unit-rate extrapolation outside the
- * grid box). *slope (may be NULL) gets max_k Lk (0 for analytic shapes). */
+ * differences / h, trilinear: of the values, cubic: of the coefficients,
+ * whose prefilter amplifies the kinks of a sampled distance, e.g. a
+ * sphere's centre, up to about 4 h: a loose bound there, making the CCD's
+ * steps shorter; the +1 covers the unit-rate extrapolation outside the grid
+ * box). *slope (may be NULL) gets the largest |value difference| / h over
+ * the axes (0 for analytic shapes): at most 1 for sampled distances. */
 double bs_ipc_obstacle_lipschitz(const bs_levelset *ls, double *slope);
 
 /* The single-vertex CCD above: the certified fraction of the segment

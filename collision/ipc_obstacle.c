@@ -266,7 +266,7 @@ double bs_ipc_obstacle_lipschitz(const bs_levelset *ls, double *slope) {
   if (!ls || ls->kind != BS_LS_GRID) return 1.0;
   const int32_t nx = ls->n[0], ny = ls->n[1], nz = ls->n[2];
   const size_t st[3] = {1, (size_t)nx, (size_t)nx * (size_t)ny};
-  double L[3] = {0, 0, 0};
+  double L[3] = {0, 0, 0}, V[3] = {0, 0, 0}; /* coefficient and value differences per axis */
   for (int32_t k = 0; k < nz; k++)
     for (int32_t j = 0; j < ny; j++)
       for (int32_t i = 0; i < nx; i++) {
@@ -274,12 +274,12 @@ double bs_ipc_obstacle_lipschitz(const bs_levelset *ls, double *slope) {
         const int32_t idx[3] = {i, j, k};
         for (int ax = 0; ax < 3; ax++) {
           if (idx[ax] + 1 >= ls->n[ax]) continue;
-          L[ax] = fmax(L[ax], fabs(ls->values[a + st[ax]] - ls->values[a]));
+          V[ax] = fmax(V[ax], fabs(ls->values[a + st[ax]] - ls->values[a]));
           L[ax] = fmax(L[ax], fabs(ls->coef[a + st[ax]] - ls->coef[a]));
         }
       }
-  for (int ax = 0; ax < 3; ax++) L[ax] /= ls->h;
-  if (slope) *slope = fmax(L[0], fmax(L[1], L[2]));
+  for (int ax = 0; ax < 3; ax++) V[ax] /= ls->h, L[ax] = fmax(L[ax] / ls->h, V[ax]);
+  if (slope) *slope = fmax(V[0], fmax(V[1], V[2]));
   return sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]) + 1.0;
 }
 
