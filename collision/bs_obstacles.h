@@ -79,6 +79,12 @@
  *      (v_t: relative tangential velocity), and apply the Coulomb impulse
  *      opposite it, clamped so that it only removes tangential velocity.
  *
+ *  barrier  IPC's barrier on phi and its friction, inside the minimization:
+ *      not this module's (bs_ipc_obstacle.h; the caller builds the term and
+ *      calls bs_obstacles_allow_barrier before adding one). Here a barrier
+ *      obstacle has no hook, no term and no post-solve friction; it counts in
+ *      bs_obstacles_penetration.
+ *
  *  postprocess (the Figure 10 baseline)  ignored by the solve; after it,
  *      every free vertex with phi_b(x_p) < 0 is pushed to P_bp(x_p) (depth
  *      d = -phi), and the normal component of its velocity relative to the

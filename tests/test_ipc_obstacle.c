@@ -6,6 +6,7 @@
  * phi equal to a brute-force distance); bad input named. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -307,4 +308,39 @@ Test(ipc_obstacle, bad_input_is_named) {
   cr_assert(strstr(err.msg, "obstacle 1 (grid)") && strstr(err.msg, "distance"), "%s", err.msg);
   bs_levelset_destroy(&g);
   fix_free(&f);
+}
+
+Test(ipc_obstacle, same_bits_on_1_and_2_threads) {
+  bs_error err = {0};
+  bs_levelset *ls = NULL;
+  const double c[3] = {0.5, 0.5, -0.5};
+  cr_assert_eq(bs_levelset_create_sphere(c, 0.51, &ls, &err), 0);
+  bs_mesh *m = NULL;
+  const double lo[3] = {0, 0, 0.02}, hi[3] = {1, 1, 1.02};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 20, 20, 20, &m, &err), 0, "%s", err.msg);
+  bs_material mat;
+  cr_assert_eq(bs_material_init(BS_MODEL_NEO_HOOKEAN, 1e5, 0.3, 1000, &mat, &err), 0);
+  bs_fem *fem = NULL;
+  cr_assert_eq(bs_fem_create(m, 1, &mat, NULL, &fem, &err), 0, "%s", err.msg);
+  bs_term *t = NULL;
+  cr_assert_eq(bs_term_ipc_obstacle_create(fem, NULL, NULL, 0.05, 3.0, &t, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_term_ipc_obstacle_add(t, ls, 0, 0, &err), 0, "%s", err.msg);
+  const size_t n3 = 3 * (size_t)m->n_vertices;
+  double *g[2], E[2], a[2], *d = malloc(sizeof(double) * n3);
+  for (size_t i = 0; i < n3; i++) d[i] = i % 3 == 2 ? -0.3 : 0.01 * sin((double)i);
+  for (int k = 0; k < 2; k++) {
+    omp_set_num_threads(k + 1);
+    g[k] = calloc(n3, sizeof(double));
+    E[k] = term_gradient(t, m->x, g[k]);
+    cr_assert_eq(bs_term_ipc_obstacle_max_step(t, m->x, d, &a[k], &err), 0);
+  }
+  cr_assert_eq(memcmp(&E[0], &E[1], sizeof E[0]), 0);
+  cr_assert_eq(memcmp(g[0], g[1], sizeof(double) * n3), 0);
+  cr_assert_eq(a[0], a[1]);
+  cr_assert(a[0] > 0 && a[0] < 1, "alpha %g", a[0]);
+  free(g[0]), free(g[1]), free(d);
+  bs_term_destroy(&t);
+  bs_levelset_destroy(&ls);
+  bs_fem_destroy(&fem);
+  bs_mesh_destroy(&m);
 }
