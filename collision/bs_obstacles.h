@@ -79,6 +79,12 @@
  *      (v_t: relative tangential velocity), and apply the Coulomb impulse
  *      opposite it, clamped so that it only removes tangential velocity.
  *
+ *  barrier  IPC's barrier on phi and its friction, inside the minimization:
+ *      not this module's (bs_ipc_obstacle.h; the caller builds the term and
+ *      calls bs_obstacles_allow_barrier before adding one). Here a barrier
+ *      obstacle has no hook, no term and no post-solve friction; it counts in
+ *      bs_obstacles_penetration.
+ *
  *  postprocess (the Figure 10 baseline)  ignored by the solve; after it,
  *      every free vertex with phi_b(x_p) < 0 is pushed to P_bp(x_p) (depth
  *      d = -phi), and the normal component of its velocity relative to the
@@ -136,9 +142,10 @@
 extern "C" {
 #endif
 
-typedef enum { BS_COLLIDE_CONSTRAINT = 0, BS_COLLIDE_PENALTY, BS_COLLIDE_POSTPROCESS } bs_collide_mode;
+typedef enum { BS_COLLIDE_CONSTRAINT = 0, BS_COLLIDE_PENALTY, BS_COLLIDE_POSTPROCESS, BS_COLLIDE_BARRIER } bs_collide_mode;
 
-/* "constraint", "penalty", "postprocess"; anything else is BS_EINPUT naming it. */
+/* "constraint", "penalty", "postprocess", "barrier"; anything else is
+ * BS_EINPUT naming it. */
 int bs_collide_mode_parse(const char *name, bs_collide_mode *out, bs_error *err);
 const char *bs_collide_mode_name(bs_collide_mode mode);
 
@@ -166,10 +173,20 @@ void bs_obstacles_set_bounds(bs_obstacles *o, const double lo[3], const double h
 /* Adds obstacle number bs_obstacles_count(o) (0-based). Takes ownership of
  * ls. constraint needs an analytic level set (error naming the obstacle
  * otherwise); stiffness k > 0 is the penalty's (ignored otherwise); friction
- * mu >= 0 and finite. */
+ * mu >= 0 and finite. barrier (IPC's barrier: bs_ipc_obstacle.h) is only
+ * recorded here (no hook, no term, no post-solve friction: the caller builds
+ * the barrier term over bs_obstacles_levelset) and needs
+ * bs_obstacles_allow_barrier first: a caller that builds no barrier term
+ * gets BS_EINPUT naming the obstacle rather than an obstacle nothing
+ * enforces. */
 int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, double stiffness, double friction,
                      bs_error *err);
 int bs_obstacles_count(const bs_obstacles *o);
+/* Declares that the caller builds the barrier term of the barrier obstacles. */
+void bs_obstacles_allow_barrier(bs_obstacles *o);
+/* Obstacle i's mode (BS_COLLIDE_CONSTRAINT when i is out of range) and friction (0 then). */
+bs_collide_mode bs_obstacles_mode(const bs_obstacles *o, int i);
+double bs_obstacles_friction(const bs_obstacles *o, int i);
 /* Obstacle i's level set (owned by o), or NULL when i is out of range. */
 const bs_levelset *bs_obstacles_levelset(const bs_obstacles *o, int i);
 

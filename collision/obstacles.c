@@ -52,24 +52,25 @@ struct bs_obstacles {
   uint8_t *owned;     /* NULL, or per vertex: 1 counted here (set_owned)       */
   int32_t n_owned;
   int32_t *own_idx;   /* the owned vertices (penalty terms' vertex subset)     */
+  int allow_barrier;  /* bs_obstacles_allow_barrier was called                */
 };
 
 /* Whether vertex p is counted by this process (bs_obstacles_set_owned). */
 static inline int counted(const bs_obstacles *o, int32_t p) { return !o->owned || o->owned[p]; }
 
-static const char *mode_names[] = {"constraint", "penalty", "postprocess"};
+static const char *mode_names[] = {"constraint", "penalty", "postprocess", "barrier"};
 
 int bs_collide_mode_parse(const char *name, bs_collide_mode *out, bs_error *err) {
-  for (int i = 0; i < 3; i++)
+  for (int i = 0; i < 4; i++)
     if (name && strcmp(name, mode_names[i]) == 0) {
       *out = (bs_collide_mode)i;
       return 0;
     }
-  return bs_error_set(err, BS_EINPUT, "unknown collision mode '%s' (constraint, penalty, postprocess)",
+  return bs_error_set(err, BS_EINPUT, "unknown collision mode '%s' (constraint, penalty, postprocess, barrier)",
                       name ? name : "(null)");
 }
 
-const char *bs_collide_mode_name(bs_collide_mode mode) { return (unsigned)mode < 3 ? mode_names[mode] : "?"; }
+const char *bs_collide_mode_name(bs_collide_mode mode) { return (unsigned)mode < 4 ? mode_names[mode] : "?"; }
 
 /* ---- small vector helpers ------------------------------------------------ */
 
@@ -168,6 +169,11 @@ int bs_obstacles_set_owned(bs_obstacles *o, const uint8_t *owned, bs_error *err)
 }
 
 int bs_obstacles_count(const bs_obstacles *o) { return o ? o->n : 0; }
+void bs_obstacles_allow_barrier(bs_obstacles *o) { o->allow_barrier = 1; }
+bs_collide_mode bs_obstacles_mode(const bs_obstacles *o, int i) {
+  return o && i >= 0 && i < o->n ? o->obs[i].mode : BS_COLLIDE_CONSTRAINT;
+}
+double bs_obstacles_friction(const bs_obstacles *o, int i) { return o && i >= 0 && i < o->n ? o->obs[i].mu : 0; }
 
 const bs_levelset *bs_obstacles_levelset(const bs_obstacles *o, int i) {
   return o && i >= 0 && i < o->n ? o->obs[i].ls : NULL;
@@ -178,8 +184,15 @@ int bs_obstacles_add(bs_obstacles *o, bs_levelset *ls, bs_collide_mode mode, dou
   int idx = o->n, rc = 0;
   if (!ls) return bs_error_set(err, BS_EINPUT, "obstacle %d: no level set", idx);
   const char *kind = bs_levelset_kind_name(bs_levelset_kind(ls));
-  if ((unsigned)mode > BS_COLLIDE_POSTPROCESS) {
+  if ((unsigned)mode > BS_COLLIDE_BARRIER) {
     rc = bs_error_set(err, BS_EINPUT, "obstacle %d (%s): unknown collision mode %d", idx, kind, (int)mode);
+    goto fail;
+  }
+  if (mode == BS_COLLIDE_BARRIER && !o->allow_barrier) {
+    rc = bs_error_set(err, BS_EINPUT,
+                      "obstacle %d (%s): collision \"barrier\" is not available here (no barrier term is built: "
+                      "this backend runs constraint, penalty and postprocess obstacles)",
+                      idx, kind);
     goto fail;
   }
   if (!(friction >= 0) || !isfinite(friction)) {
@@ -491,6 +504,7 @@ int bs_obstacles_post_solve(const double *x_n, double *x, const double *g, doubl
       double *xp = x + 3 * (size_t)p, *vp = v + 3 * (size_t)p, n[3];
       double *dvp = o->friction_dv ? o->friction_dv + 3 * (size_t)p : NULL;
       const double m = mass[p];
+      if (ob->mode == BS_COLLIDE_BARRIER) continue; /* its friction is in the barrier term */
       double phi = bs_levelset_eval_frame(ob->ls, &f, xp, n, NULL);
       if (ob->mode == BS_COLLIDE_CONSTRAINT) {
         /* active at x^{n+1}: collision force n (g'.n), g'.n >= 0 */

@@ -72,7 +72,7 @@ extern "C" {
 
 #define BS_FRAMES_CSV_HEADER                                                                            \
   "frame,time,kinetic,elastic,gravity,total,inverted,min_detF,newton,cg,failed,seconds,penetrating,max_depth," \
-  "self_intersections,contact_min_distance,contact_pairs,ccd_limited,kappa"
+  "self_intersections,contact_min_distance,contact_pairs,ccd_limited,kappa,obstacle_min_distance"
 #define BS_STATS_CSV_HEADER                                                                             \
   "frame,step,time,guess,iterations,cg_iterations,ls_evaluations,indefinite,fallback_neg_dx,"                \
   "fallback_neg_grad,clamps,cholmod_fallbacks,alpha_min,alpha_max,grad_norm,E,reason,inverted,"             \

@@ -135,11 +135,11 @@ static int write_stats_rows(bs_outfile *f, const bs_frame_stats *fs, bs_error *e
 int bs_frames_csv_row(char *buf, size_t n, double time, const bs_frame_stats *fs, const bs_sim_measures *m) {
   long ccd = 0; /* line searches of the frame bounded by the CCD (barrier contact) */
   for (int k = 0; k < fs->n_steps && fs->steps; k++) ccd += fs->steps[k].st.min.ccd_limited;
-  return snprintf(buf, n, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld,%.6e,%lld,%ld,%.6e\n",
+  return snprintf(buf, n, "%d,%.9g,%.12e,%.12e,%.12e,%.12e,%d,%.6e,%ld,%ld,%ld,%.6f,%d,%.6e,%lld,%.6e,%lld,%ld,%.6e,%.6e\n",
                   fs->frame, time, m->kinetic, m->elastic, m->gravity, m->total, m->inverted, m->min_detF,
                   fs->iterations, fs->cg_iterations, fs->failed, fs->seconds, m->penetrating, m->max_depth,
                   (long long)m->self_intersections, m->contact_min_distance, (long long)m->contact_pairs, ccd,
-                  m->kappa);
+                  m->kappa, m->obstacle_min_distance);
 }
 
 static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,

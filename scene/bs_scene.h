@@ -136,7 +136,7 @@ typedef struct bs_scene_obstacle {
   int inside_out;
   char grid_file[BS_MAX_PATH]; /* shape grid: a grid level-set file           */
   double grid_h;           /* > 0: sample the analytic shape onto a grid (m)  */
-  bs_collide_mode collision; /* constraint [default], penalty, postprocess     */
+  bs_collide_mode collision; /* constraint [default], penalty, postprocess, barrier */
   double stiffness, friction;
   double velocity[3], angular_velocity[3];
   int n_keys;
@@ -201,6 +201,7 @@ typedef struct bs_scene {
                            /* 1e-3 x the bodies' bounding-box diagonal at t = 0 */
   double contact_kappa;    /* barrier stiffness (J/m^4); 0: automatic (IPC's    */
                            /* initial value, adapted per step)                  */
+  double contact_eps_v;    /* barrier friction's smoothing speed (m/s; 1e-3)   */
   char out_dir[BS_MAX_PATH]; /* "" : no output                                 */
   int vtu_every;           /* frames between VTU files (0: none)               */
   int checkpoint_every;    /* frames between checkpoints (0: none; bs_runfolder.h) */

@@ -33,8 +33,8 @@ int bs_shape_parse(const char *name, bs_shape *out, bs_error *err) {
  * fields and the box's cells (required with mesh "box"). */
 void bs__scene_defaults(bs_scene *s) {
   bs_integrator_opts_default(&s->solver);
-  static const char *const scene_sections[] = {"", "time", "solver", "self_collision", "output"};
-  for (int i = 0; i < 5; i++) bs__schema_defaults(scene_sections[i], s);
+  static const char *const scene_sections[] = {"", "time", "solver", "self_collision", "contact", "output"};
+  for (int i = 0; i < 6; i++) bs__schema_defaults(scene_sections[i], s);
   s->dt = 1.0 / (s->fps * s->steps_per_frame);
   s->solver.min.sigma_auto = 1; /* cg_sigma "auto" (docs/design/cg-forcing.md) */
   s->solver.min.sigma = BS_SCENE_SIGMA_SCALE;

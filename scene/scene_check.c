@@ -97,7 +97,7 @@ static int check_obstacle(const bs_scene *s, const bs_scene_obstacle *o, int i, 
   if ((unsigned)o->shape > BS_SHAPE_GRID) return bad(s, err, "obstacles.%d.shape: unknown shape %d", i, (int)o->shape);
   if (o->shape == BS_SHAPE_GRID && !o->grid_file[0])
     return bad(s, err, "obstacles.%d.file: missing: shape \"grid\" needs the grid level-set file", i);
-  if ((unsigned)o->collision > BS_COLLIDE_POSTPROCESS)
+  if ((unsigned)o->collision > BS_COLLIDE_BARRIER)
     return bad(s, err, "obstacles.%d.collision: unknown collision mode %d", i, (int)o->collision);
   if (!(o->stiffness > 0)) return bad(s, err, "obstacles.%d.stiffness: must be > 0, got %g", i, o->stiffness);
   if (!(o->friction >= 0)) return bad(s, err, "obstacles.%d.friction: must be >= 0, got %g", i, o->friction);
@@ -163,6 +163,8 @@ int bs_scene_check(const bs_scene *s, bs_error *err) {
     return bad(s, err, "self_collision.friction: must be >= 0, got %g", s->self_friction);
   if (!(s->contact_dhat >= 0) || !isfinite(s->contact_dhat))
     return bad(s, err, "contact.dhat: must be > 0 (m; 0 in the struct: automatic), got %g", s->contact_dhat);
+  if (!(s->contact_eps_v > 0) || !isfinite(s->contact_eps_v))
+    return bad(s, err, "contact.eps_v: must be > 0 (m/s), got %g", s->contact_eps_v);
   if (!(s->contact_kappa >= 0) || !isfinite(s->contact_kappa))
     return bad(s, err, "contact.kappa: must be > 0 (J/m^4; 0 in the struct: automatic), got %g", s->contact_kappa);
   if (s->self_model != BS_SELF_MODEL_PENALTY && s->self_model != BS_SELF_MODEL_BARRIER)

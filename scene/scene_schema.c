@@ -182,8 +182,11 @@ const bs_schema_key bs__schema_keys[] = {
     {"obstacles[]", "file", STR, .def = "\"\"", OB(grid_file), .path = 1, .doc = "grid: a grid level-set file (bigstep levelset)"},
     {"obstacles[]", "grid_h", NUM, .range = "[0, )", .def = "0",
      OB(grid_h), .doc = "> 0: sample the analytic shape onto a grid of this spacing (m)"},
-    {"obstacles[]", "collision", STR, .choices = CHOICES("constraint", "penalty", "postprocess"),
-     .def = "\"constraint\"", OB(collision), .doc = "gradient projection, penalty k(-phi)^3, or push out after the solve"},
+    {"obstacles[]", "collision", STR, .choices = CHOICES("constraint", "penalty", "postprocess", "barrier"),
+     .def = "\"constraint\"", OB(collision),
+     .doc = "gradient projection, penalty k(-phi)^3, push out after the solve, or barrier (IPC: log barrier on the "
+            "distance within contact.dhat, line searches bounded by continuous collision detection, friction in the "
+            "solve)"},
     {"obstacles[]", "stiffness", NUM, .range = "(0, )", .def = "1000000", OB(stiffness), .doc = "penalty stiffness k"},
     {"obstacles[]", "friction", NUM, .range = "[0, )", .def = "0", OB(friction), .doc = "friction coefficient mu"},
     {"obstacles[]", "velocity", VEC3, .def = ZERO3, OB(velocity), .doc = "constant velocity (m/s)"},
@@ -205,6 +208,9 @@ const bs_schema_key bs__schema_keys[] = {
     {"contact", "kappa", NUM, .range = "(0, )", SC(contact_kappa),
      .doc = "barrier stiffness (J/m^4); absent: IPC's choice (balancing the other forces at t = 0 within [kappa_min, "
             "100 kappa_min]), doubled at a step's start while surfaces keep closing in below 1e-9 diagonals"},
+    {"contact", "eps_v", NUM, .range = "(0, )", .def = "0.001", SC(contact_eps_v),
+     .doc = "barrier friction's smoothing speed (m/s): below it, static friction is a stiff spring (IPC's epsilon_v; "
+            "obstacles[].collision \"barrier\" with friction)"},
 
     {"output", "dir", STR, .def = "\"\"", SC(out_dir), .doc = "output folder (empty: no files)"},
     {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", SC(vtu_every), .doc = "frames between VTU files (0: none)"},

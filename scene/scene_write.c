@@ -216,7 +216,7 @@ static void root_hand(writer *w, cJSON *root, const char *key, const void *base)
       write_section(w, element(w, obs), "obstacles[]", &s->obstacles[i], obstacle_hand);
   } else if (!strcmp(key, "self_collision") && s->self_collision) {
     write_section(w, object(w, root, "self_collision"), "self_collision", s, NULL);
-  } else if (!strcmp(key, "contact") && (s->contact_dhat > 0 || s->contact_kappa > 0)) {
+  } else if (!strcmp(key, "contact") && (s->contact_dhat > 0 || s->contact_kappa > 0 || s->contact_eps_v != 1e-3)) {
     write_section(w, object(w, root, "contact"), "contact", s, contact_hand);
   } else if (!strcmp(key, "output")) {
     write_section(w, object(w, root, "output"), "output", s, output_hand);

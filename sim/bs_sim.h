@@ -127,6 +127,8 @@ typedef struct bs_sim {
   bs_term *self;           /* the self-collision term (in terms[]) or NULL  */
   bs_term *barrier;        /* the barrier contact term (in terms[]; self_collision.model */
                            /* "barrier", bs_ipc_term.h) or NULL              */
+  bs_term *obstacle_barrier; /* the barrier against the obstacles with collision */
+                           /* "barrier" (in terms[]; bs_ipc_obstacle.h) or NULL */
   bs_step_hooks obstacle_hooks;
   double *friction_impulse; /* 3n (N s): what Coulomb friction (obstacles and  */
                           /* self-contact) gave each vertex in the last step,   */
@@ -204,6 +206,8 @@ typedef struct bs_sim_measures {
                           /* barrier model)                                        */
   int64_t contact_pairs;  /* barrier contact: pairs within dhat (0 without)        */
   double kappa;           /* barrier contact: the stiffness in force (0 without)   */
+  double obstacle_min_distance; /* barrier obstacles: the smallest phi of a free     */
+                          /* surface vertex (m; +Inf: no barrier obstacle)         */
 } bs_sim_measures;
 
 #define BS_SIM_SELF_CAP 100000

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_ipc_obstacle.h"
 #include "bs_ipc_term.h"
 #include "bs_penalty.h"
 #include "bs_selfcollide.h"
@@ -66,7 +67,8 @@ static int make_terms(bs_sim *s, bs_error *err) {
   if ((st = bs_term_elastic_create_step(s->fem, &s->step, sc->project_hessian, &T[s->n_terms++], err))) return st;
   if ((st = damping_term(s, err))) return st;
   if (sc->drag > 0 && dyn && (st = bs_term_drag_create(s->fem, &s->step, sc->drag, &T[s->n_terms++], err))) return st;
-  if (sc->n_obstacles > 0 && (st = bs__sim_make_obstacles(s, err))) return st;
+  if (sc->n_obstacles > 0 && ((st = bs__sim_make_obstacles(s, err)) || (st = bs__sim_make_obstacle_barrier(s, err))))
+    return st;
   if (sc->self_collision && sc->self_model == BS_SELF_MODEL_BARRIER) {
     if ((st = bs__sim_make_barrier(s, err))) return st;
   } else if (sc->self_collision) {
@@ -180,6 +182,7 @@ void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const
   m->contact_min_distance = INFINITY;
   m->contact_pairs = 0;
   m->kappa = 0;
+  m->obstacle_min_distance = INFINITY;
 }
 
 void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
@@ -193,4 +196,7 @@ void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m) {
     m->contact_pairs = is.pairs_pt + is.pairs_ee;
     m->kappa = is.kappa;
   }
+  bs_ipc_obstacle_stats os;
+  if (s->obstacle_barrier && bs_term_ipc_obstacle_detect(s->obstacle_barrier, s->x, &os, &err) == 0)
+    m->obstacle_min_distance = os.min_distance;
 }

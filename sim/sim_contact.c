@@ -1,12 +1,16 @@
-/* sim_contact.c — the barrier self-contact model (self_collision.model
- * "barrier", bs_ipc_term.h): its term from the scene's contact keys, the
- * refusal of a start whose surfaces intersect, and kappa as IPC chooses it. */
+/* sim_contact.c — the barrier contact models: self-contact
+ * (self_collision.model "barrier", bs_ipc_term.h) and obstacles
+ * (obstacles[].collision "barrier", bs_ipc_obstacle.h): their terms from the
+ * scene's contact keys, the refusal of a start in contact, and kappa as IPC
+ * chooses it. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bs_ipc.h"
+#include "bs_ipc_obstacle.h"
 #include "bs_ipc_term.h"
+#include "bs_obstacles.h"
 #include "bs_shim.h"
 #include "sim_internal.h"
 
@@ -49,8 +53,9 @@ static int refuse_intersecting(const bs_sim *s, bs_error *err) {
 /* kappa as IPC chooses it (bs_ipc.h): the bounds from the mean vertex mass
  * (per dt^2: bigstep's objective is IPC's divided by dt^2), the initial value
  * from the other terms' gradient at x0 (those that need no step: gravity,
- * elasticity, obstacles), then adapted per step. */
-static int auto_kappa(bs_sim *s, bs_term *t, double dhat, bs_error *err) {
+ * elasticity, obstacles), then adapted per step. obstacles: t is the
+ * obstacles' barrier term (bs_ipc_obstacle.h), else the self-contact's. */
+static int auto_kappa(bs_sim *s, bs_term *t, int obstacles, double dhat, bs_error *err) {
   const bs_fem *fem = s->fem;
   const double dt = s->scene->dt > 0 ? s->scene->dt : 1.0;
   const double avg = fem->total_mass / (fem->n_vertices > 0 ? fem->n_vertices : 1);
@@ -69,10 +74,64 @@ static int auto_kappa(bs_sim *s, bs_term *t, double dhat, bs_error *err) {
   for (int32_t v = 0; v < fem->n_vertices && !st; v++)
     if (!s->mask[v]) ge[3 * v] = ge[3 * v + 1] = ge[3 * v + 2] = 0;
   double k = 0;
-  if (!st) st = bs_term_ipc_kappa_init(t, s->x, ge, kmin, kmax, &k, err);
+  if (!st)
+    st = obstacles ? bs_term_ipc_obstacle_kappa_init(t, s->x, ge, kmin, kmax, &k, err)
+                   : bs_term_ipc_kappa_init(t, s->x, ge, kmin, kmax, &k, err);
   free(ge);
-  if (!st) st = bs_term_ipc_set_adaptive(t, kmax, bs_ipc_kappa_d2_eps(s->size), err);
+  if (!st)
+    st = obstacles ? bs_term_ipc_obstacle_set_adaptive(t, kmax, bs_ipc_kappa_d2_eps(s->size), err)
+                   : bs_term_ipc_set_adaptive(t, kmax, bs_ipc_kappa_d2_eps(s->size), err);
   return st;
+}
+
+/* contact.dhat, or its default; BS_EINPUT naming it when not > 0. */
+static int contact_dhat(const bs_sim *s, double *dhat, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  *dhat = sc->contact_dhat > 0 ? sc->contact_dhat : BS_SIM_DHAT_FRACTION * s->size;
+  if (!(*dhat > 0) || !isfinite(*dhat))
+    return bs_error_set(err, BS_EINPUT, "%s: contact.dhat: must be > 0 (m), got %g", sc->path, *dhat);
+  return 0;
+}
+
+/* The obstacles' barrier term with every barrier obstacle (scene order). */
+static int obstacle_barrier_term(bs_sim *s, double dhat, bs_term **out, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  int st = bs_term_ipc_obstacle_create(s->fem, &s->step, s->mask, dhat, sc->contact_kappa, out, err);
+  if (!st) st = bs_term_ipc_obstacle_set_friction(*out, sc->contact_eps_v, err);
+  for (int i = 0; i < sc->n_obstacles && !st; i++) {
+    if (sc->obstacles[i].collision != BS_COLLIDE_BARRIER) continue;
+    if ((st = bs_term_ipc_obstacle_add(*out, bs_obstacles_levelset(s->obstacles, i), sc->obstacles[i].friction, i,
+                                       err)))
+      bs_error_prefix(err, "%s: obstacles.%d.collision", sc->path, i);
+  }
+  bs_ipc_obstacle_stats os;
+  if (!st && !(st = bs_term_ipc_obstacle_detect(*out, s->x, &os, err)) && os.inside > 0)
+    st = bs_error_set(err, BS_EINPUT,
+                      "%s: obstacles[].collision \"barrier\" needs a start without contact: %lld free surface "
+                      "vertices are inside or on a barrier obstacle at t = 0 (smallest distance %g m)",
+                      sc->path, (long long)os.inside, os.min_distance);
+  return st;
+}
+
+int bs__sim_make_obstacle_barrier(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  int any = 0;
+  for (int i = 0; i < sc->n_obstacles; i++) any |= sc->obstacles[i].collision == BS_COLLIDE_BARRIER;
+  if (!any) return 0;
+  double dhat;
+  int st = contact_dhat(s, &dhat, err);
+  if (st) return st;
+  if (s->n_terms >= BS_SIM_MAX_TERMS) return bs_error_set(err, BS_EINPUT, "%s: too many terms", sc->path);
+  bs_term *t = NULL;
+  st = obstacle_barrier_term(s, dhat, &t, err);
+  if (!st && !(sc->contact_kappa > 0)) st = auto_kappa(s, t, 1, dhat, err);
+  if (st) {
+    bs_term_destroy(&t);
+    return st;
+  }
+  s->obstacle_barrier = t;
+  s->terms[s->n_terms++] = t;
+  return 0;
 }
 
 int bs__sim_make_barrier(bs_sim *s, bs_error *err) {
@@ -82,10 +141,9 @@ int bs__sim_make_barrier(bs_sim *s, bs_error *err) {
                         "%s: self_collision.friction: not available with self_collision.model \"barrier\" (got %g; "
                         "use 0)",
                         sc->path, sc->self_friction);
-  const double dhat = sc->contact_dhat > 0 ? sc->contact_dhat : BS_SIM_DHAT_FRACTION * s->size;
-  if (!(dhat > 0) || !isfinite(dhat))
-    return bs_error_set(err, BS_EINPUT, "%s: contact.dhat: must be > 0 (m), got %g", sc->path, dhat);
-  int st = refuse_intersecting(s, err);
+  double dhat;
+  int st = contact_dhat(s, &dhat, err);
+  if (!st) st = refuse_intersecting(s, err);
   if (st) return st;
   if (s->n_terms >= BS_SIM_MAX_TERMS) return bs_error_set(err, BS_EINPUT, "%s: too many terms", sc->path);
   bs_term *t = NULL;
@@ -99,7 +157,7 @@ int bs__sim_make_barrier(bs_sim *s, bs_error *err) {
                       "%s: self_collision.model \"barrier\" needs a start without contact: %lld pairs of surface "
                       "primitives touch at t = 0",
                       sc->path, (long long)is.intersecting);
-  if (!st && !(sc->contact_kappa > 0)) st = auto_kappa(s, t, dhat, err);
+  if (!st && !(sc->contact_kappa > 0)) st = auto_kappa(s, t, 0, dhat, err);
   if (st) {
     bs_term_destroy(&t);
     return st;

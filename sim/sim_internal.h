@@ -21,5 +21,9 @@ void bs__sim_script_positions(double t, double *x, void *ctx);
  * "barrier") into s->barrier and s->terms; refuses a start whose surfaces
  * intersect (naming the bodies and the count) or touch. */
 int bs__sim_make_barrier(bs_sim *s, bs_error *err);
+/* sim_contact.c: the barrier against the obstacles with collision "barrier"
+ * (bs_ipc_obstacle.h) into s->obstacle_barrier and s->terms (none without
+ * such obstacles); refuses a start with a free surface vertex inside one. */
+int bs__sim_make_obstacle_barrier(bs_sim *s, bs_error *err);
 
 #endif

@@ -168,6 +168,7 @@ int bs__sim_make_obstacles(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   int st = bs_obstacles_create(s->fem, &s->step, s->mask, &s->obstacles, err);
   if (st) return st;
+  bs_obstacles_allow_barrier(s->obstacles); /* bs__sim_make_obstacle_barrier builds its term */
   for (int i = 0; i < sc->n_obstacles; i++) {
     const bs_scene_obstacle *o = &sc->obstacles[i];
     bs_levelset *ls = NULL;

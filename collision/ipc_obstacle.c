@@ -1,0 +1,573 @@
+/* ipc_obstacle.c — the IPC barrier and lagged friction against obstacles'
+ * level sets, and its CCD (bs_ipc_obstacle.h). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_ipc.h"
+#include "bs_ipc_obstacle.h"
+#include "bs_ipc_term.h"
+#include "bs_svd.h"
+#include "bs_vec3.h"
+
+typedef struct ob_entry {
+  const bs_levelset *ls;
+  double mu, lip; /* friction coefficient, |grad phi| bound */
+  int index;
+} ob_entry;
+
+/* A friction pair lagged at xⁿ: vertex, coefficient mu lambda, basis, point. */
+typedef struct fr_pair {
+  int32_t v;
+  double mul;        /* mu lambda (N) */
+  double T[6];       /* 3x2, row-major: T[2 k + j] */
+  double r[3];
+} fr_pair;
+
+typedef struct obs_data {
+  int32_t nv, n_sv;
+  int32_t *sv;       /* free surface vertices, ascending */
+  int n_ob, cap_ob;
+  ob_entry *ob;
+  bs_levelset_frame *frames; /* per obstacle, at the evaluation time */
+  double dhat, kappa, eps_v;
+  int project, adaptive;
+  double kappa_max, d2_eps, d2_prev;
+  double *pe;        /* per surface vertex: energy, then 3 gradient, 9 Hessian (13) */
+  uint8_t *bad;      /* per surface vertex: inside some obstacle */
+  double *pmin;      /* per surface vertex: smallest phi */
+  int32_t *pcount;   /* per surface vertex: pairs within dhat */
+  fr_pair *fr;
+  int64_t n_fr, cap_fr;
+  bs_ipc_obstacle_stats st;
+} obs_data;
+
+#define PE 13
+
+static double eval_time(const bs_term *t) { return t->step ? t->step->time : 0.0; }
+
+static void set_frames(obs_data *d, double time) {
+  for (int b = 0; b < d->n_ob; b++) bs_levelset_frame_at(d->ob[b].ls, time, &d->frames[b]);
+}
+
+static int finite_all(const double *x, size_t n) {
+  for (size_t i = 0; i < n; i++)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
+/* ---- one vertex against one obstacle ------------------------------------- */
+
+/* Adds the barrier of phi at a vertex (energy, gradient, Hessian into e[13])
+ * when 0 < phi < dhat. need: 0 energy, 1 + gradient, 2 + Hessian. */
+static void vertex_barrier(const obs_data *d, double phi, const double g[3], const double Hp[9], int need,
+                           double *e) {
+  double bb[3];
+  if (bs_ipc_barrier(phi * phi, d->dhat * d->dhat, bb)) return;
+  const double k = d->kappa;
+  e[0] += k * bb[0];
+  if (need < 1) return;
+  for (int i = 0; i < 3; i++) e[1 + i] += k * bb[1] * 2 * phi * g[i];
+  if (need < 2) return;
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 3; j++)
+      e[4 + 3 * i + j] += k * (4 * phi * phi * bb[2] * g[i] * g[j] + 2 * bb[1] * (g[i] * g[j] + phi * Hp[3 * i + j]));
+}
+
+/* Vertex j (surface index) at x against every obstacle: e[13] filled, bad,
+ * pmin and pcount set. */
+static void vertex_all(obs_data *d, const double *x, int32_t j, int need) {
+  const double *p = x + 3 * (size_t)d->sv[j];
+  double *e = d->pe + PE * (size_t)j;
+  memset(e, 0, PE * sizeof(double));
+  d->bad[j] = 0;
+  d->pmin[j] = INFINITY;
+  d->pcount[j] = 0;
+  for (int b = 0; b < d->n_ob; b++) {
+    double g[3], Hp[9];
+    const double phi = bs_levelset_eval_frame(d->ob[b].ls, &d->frames[b], p, need ? g : NULL, need > 1 ? Hp : NULL);
+    d->pmin[j] = fmin(d->pmin[j], phi);
+    if (!(phi > 0)) {
+      d->bad[j] = 1;
+      continue;
+    }
+    if (phi >= d->dhat) continue;
+    d->pcount[j]++;
+    vertex_barrier(d, phi, g, Hp, need, e);
+  }
+  if (need > 1 && d->project) bs_sym_psd_project(3, e + 4);
+}
+
+/* Every surface vertex at x (parallel; per-vertex results); then the
+ * statistics in vertex order. Returns 1 when some vertex is inside. */
+static int barrier_pass(obs_data *d, const double *x, double time, int need) {
+  set_frames(d, time);
+  const int32_t n = d->n_sv;
+#pragma omp parallel for schedule(static) if (n > 2048)
+  for (int32_t j = 0; j < n; j++) vertex_all(d, x, j, need);
+  int64_t pairs = 0, inside = 0;
+  double m = INFINITY;
+  for (int32_t j = 0; j < n; j++) {
+    pairs += d->pcount[j];
+    inside += d->bad[j];
+    m = fmin(m, d->pmin[j]);
+  }
+  d->st.pairs = pairs;
+  d->st.inside = inside;
+  d->st.min_distance = m;
+  return inside > 0;
+}
+
+/* ---- friction ------------------------------------------------------------ */
+
+/* f0, f1 = f0' and f1' of IPC's smoothed friction at y >= 0, eps > 0. */
+static void friction_f(double y, double eps, double *f0, double *f1, double *f1p) {
+  if (y < eps) {
+    *f0 = -y * y * y / (3 * eps * eps) + y * y / eps + eps / 3;
+    *f1 = 2 * y / eps - y * y / (eps * eps);
+    *f1p = 2 / eps - 2 * y / (eps * eps);
+  } else {
+    *f0 = y, *f1 = 1, *f1p = 0;
+  }
+}
+
+/* Friction of pair c at x: energy returned; gradient (3) and Hessian (9)
+ * added into g and H when non-NULL. */
+static double friction_pair(const fr_pair *c, double eps, const double *x, double *g, double *H) {
+  const double *p = x + 3 * (size_t)c->v, dx[3] = {p[0] - c->r[0], p[1] - c->r[1], p[2] - c->r[2]};
+  double u[2];
+  for (int j = 0; j < 2; j++) u[j] = c->T[j] * dx[0] + c->T[2 + j] * dx[1] + c->T[4 + j] * dx[2];
+  const double y = hypot(u[0], u[1]);
+  double f0, f1, f1p;
+  friction_f(y, eps, &f0, &f1, &f1p);
+  if (g) { /* mul f1(y)/y T u; f1/y -> 2/eps at y = 0 */
+    const double w = y > 0 ? f1 / y : 2 / eps;
+    for (int k = 0; k < 3; k++) g[k] += c->mul * w * (c->T[2 * k] * u[0] + c->T[2 * k + 1] * u[1]);
+  }
+  if (H) { /* H2 = (f1' - f1/y) u u^T / y^2 + f1/y I */
+    double H2[4];
+    if (y > 0) {
+      const double a = (f1p - f1 / y) / (y * y), b = f1 / y;
+      H2[0] = a * u[0] * u[0] + b, H2[1] = H2[2] = a * u[0] * u[1], H2[3] = a * u[1] * u[1] + b;
+    } else {
+      H2[0] = H2[3] = 2 / eps, H2[1] = H2[2] = 0;
+    }
+    for (int i = 0; i < 3; i++)
+      for (int k = 0; k < 3; k++) {
+        double s = 0;
+        for (int a = 0; a < 2; a++)
+          for (int b = 0; b < 2; b++) s += c->T[2 * i + a] * H2[2 * a + b] * c->T[2 * k + b];
+        H[3 * i + k] += c->mul * s;
+      }
+  }
+  return c->mul * f0;
+}
+
+/* An orthonormal basis T (3x2, row-major) of the plane perpendicular to n. */
+static void tangent_basis(const double n[3], double T[6]) {
+  double a[3] = {0, 0, 0}, t1[3], t2[3];
+  int m = 0; /* the axis least aligned with n */
+  for (int k = 1; k < 3; k++)
+    if (fabs(n[k]) < fabs(n[m])) m = k;
+  a[m] = 1;
+  bs_cross3(n, a, t1);
+  const double l = sqrt(bs_dot3(t1, t1));
+  for (int k = 0; k < 3; k++) t1[k] /= l;
+  bs_cross3(n, t1, t2);
+  for (int k = 0; k < 3; k++) T[2 * k] = t1[k], T[2 * k + 1] = t2[k];
+}
+
+static int push_pair(obs_data *d, const fr_pair *c) {
+  if (d->n_fr == d->cap_fr) {
+    const int64_t cap = d->cap_fr ? 2 * d->cap_fr : 64;
+    fr_pair *p = realloc(d->fr, sizeof *p * (size_t)cap);
+    if (!p) return BS_ENOMEM;
+    d->fr = p, d->cap_fr = cap;
+  }
+  d->fr[d->n_fr++] = *c;
+  return 0;
+}
+
+/* The lagged friction pairs at xⁿ, obstacles at tⁿ (in obstacle, vertex order). */
+static int lag_friction(obs_data *d, const double *xn, double t0, double dt) {
+  d->n_fr = 0;
+  if (!(dt > 0)) return 0;
+  for (int b = 0; b < d->n_ob; b++) {
+    const ob_entry *o = &d->ob[b];
+    if (!(o->mu > 0)) continue;
+    bs_levelset_frame f;
+    bs_levelset_frame_at(o->ls, t0, &f);
+    for (int32_t j = 0; j < d->n_sv; j++) {
+      const int32_t v = d->sv[j];
+      const double *p = xn + 3 * (size_t)v;
+      double n[3], bb[3];
+      const double phi = bs_levelset_eval_frame(o->ls, &f, p, n, NULL);
+      if (!(phi > 0) || phi >= d->dhat || bs_ipc_barrier(phi * phi, d->dhat * d->dhat, bb)) continue;
+      fr_pair c = {.v = v, .mul = -o->mu * 2 * d->kappa * phi * bb[1]};
+      const double l = sqrt(bs_dot3(n, n));
+      if (!(l > 0) || !(c.mul > 0)) continue;
+      for (int k = 0; k < 3; k++) n[k] /= l;
+      tangent_basis(n, c.T);
+      double vo[3], rr[3] = {p[0] - f.c[0], p[1] - f.c[1], p[2] - f.c[2]};
+      bs_cross3(f.w, rr, vo);
+      for (int k = 0; k < 3; k++) c.r[k] = p[k] + dt * (f.v[k] + vo[k]);
+      if (push_pair(d, &c)) return BS_ENOMEM;
+    }
+  }
+  d->st.friction_pairs = d->n_fr;
+  return 0;
+}
+
+/* ---- the term's operations -------------------------------------------------- */
+
+static int ob_value(const bs_term *t, const double *x, double *E) {
+  obs_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv) || barrier_pass(d, x, eval_time(t), 0)) return BS_TERM_NOT_EVALUABLE;
+  double e = 0;
+  for (int32_t j = 0; j < d->n_sv; j++) e += d->pe[PE * (size_t)j];
+  for (int64_t i = 0; i < d->n_fr; i++) e += friction_pair(&d->fr[i], d->eps_v * t->step->dt, x, NULL, NULL);
+  *E = e;
+  return BS_TERM_OK;
+}
+
+static int ob_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  obs_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv) || barrier_pass(d, x, eval_time(t), 1)) return BS_TERM_NOT_EVALUABLE;
+  double e = 0;
+  for (int32_t j = 0; j < d->n_sv; j++) {
+    const double *pe = d->pe + PE * (size_t)j;
+    e += pe[0];
+    for (int k = 0; k < 3; k++) g[3 * (size_t)d->sv[j] + k] += pe[1 + k];
+  }
+  for (int64_t i = 0; i < d->n_fr; i++)
+    e += friction_pair(&d->fr[i], d->eps_v * t->step->dt, x, g + 3 * (size_t)d->fr[i].v, NULL);
+  *E = e;
+  return BS_TERM_OK;
+}
+
+static int ob_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  obs_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv) || barrier_pass(d, x, eval_time(t), 2)) return BS_TERM_NOT_EVALUABLE;
+  for (int32_t j = 0; j < d->n_sv; j++) {
+    double *B = H->val + 9 * (size_t)H->diag[d->sv[j]];
+    const double *pe = d->pe + PE * (size_t)j;
+    for (int k = 0; k < 9; k++) B[k] += pe[4 + k];
+  }
+  for (int64_t i = 0; i < d->n_fr; i++)
+    friction_pair(&d->fr[i], d->eps_v * t->step->dt, x, NULL, H->val + 9 * (size_t)H->diag[d->fr[i].v]);
+  return BS_TERM_OK;
+}
+
+/* ---- CCD --------------------------------------------------------------------- */
+
+double bs_ipc_obstacle_lipschitz(const bs_levelset *ls, double *slope) {
+  if (slope) *slope = 0;
+  if (!ls || ls->kind != BS_LS_GRID) return 1.0;
+  const int32_t nx = ls->n[0], ny = ls->n[1], nz = ls->n[2];
+  const size_t st[3] = {1, (size_t)nx, (size_t)nx * (size_t)ny};
+  double L[3] = {0, 0, 0}, V[3] = {0, 0, 0}; /* coefficient and value differences per axis */
+  for (int32_t k = 0; k < nz; k++)
+    for (int32_t j = 0; j < ny; j++)
+      for (int32_t i = 0; i < nx; i++) {
+        const size_t a = (size_t)i + st[1] * (size_t)j + st[2] * (size_t)k;
+        const int32_t idx[3] = {i, j, k};
+        for (int ax = 0; ax < 3; ax++) {
+          if (idx[ax] + 1 >= ls->n[ax]) continue;
+          V[ax] = fmax(V[ax], fabs(ls->values[a + st[ax]] - ls->values[a]));
+          L[ax] = fmax(L[ax], fabs(ls->coef[a + st[ax]] - ls->coef[a]));
+        }
+      }
+  for (int ax = 0; ax < 3; ax++) V[ax] /= ls->h, L[ax] = fmax(L[ax] / ls->h, V[ax]);
+  if (slope) *slope = fmax(V[0], fmax(V[1], V[2]));
+  return sqrt(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]) + 1.0;
+}
+
+/* The rate at which phi can fall along d (rounded up): the half-space's exact
+ * -n.d (its phi is linear), else lip |d|. */
+static double fall_rate(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double d[3]) {
+  const double up = 1 + 16 * DBL_EPSILON, nd = sqrt(bs_dot3(d, d));
+  if (ls->kind == BS_LS_HALFSPACE) {
+    const double n[3] = {f->M[2], f->M[5], f->M[8]}, s = ls->complement ? -1.0 : 1.0;
+    return fmax(0.0, -s * bs_dot3(n, d)) * up + 16 * DBL_EPSILON * nd;
+  }
+  return lip * nd * up;
+}
+
+double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double x0[3],
+                       const double d[3], double s, int max_iter) {
+  if (!finite_all(x0, 3) || !finite_all(d, 3) || !(s > 0 && s < 1) || max_iter < 1) return 0;
+  const double D = fall_rate(ls, f, lip, d);
+  double size = fmax(fabs(ls->param[0]), fmax(fabs(ls->param[1]), fabs(ls->param[2])));
+  if (ls->kind == BS_LS_GRID) size = fmax(size, fabs(ls->h) * (ls->n[0] + ls->n[1] + ls->n[2]));
+  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + sqrt(bs_dot3(d, d)) + sqrt(bs_dot3(f->c, f->c)) + size, -40);
+  const double lo0 = bs_levelset_eval_frame(ls, f, x0, NULL, NULL) - delta;
+  if (!(lo0 > delta / (s * s))) return 0;
+  if (!(D > 0)) return 1;
+  const double gap = s * lo0;
+  double t = 0, P = lo0;
+  for (int it = 0; it < max_iter; it++) {
+    const double tn = t + (1 - s) * P / D;
+    if (tn >= 1) return 1;
+    if (it > 0 || t > 0) { /* evaluate the end (the first step ends >= gap by the bound) */
+      const double y[3] = {x0[0] + tn * d[0], x0[1] + tn * d[1], x0[2] + tn * d[2]};
+      const double lo = bs_levelset_eval_frame(ls, f, y, NULL, NULL) - delta;
+      if (!(lo >= gap)) return t;
+      P = lo;
+    } else {
+      P = s * P; /* the bound at the first step's end */
+    }
+    t = tn;
+  }
+  return t;
+}
+
+static int max_step_impl(const bs_term *t, const double *x, const double *dx, double *alpha) {
+  obs_data *d = t->data;
+  const size_t n3 = 3 * (size_t)d->nv;
+  if (!finite_all(x, n3) || !finite_all(dx, n3)) return 1;
+  set_frames(d, eval_time(t));
+  const int32_t n = d->n_sv;
+#pragma omp parallel for schedule(dynamic, 64) if (n > 1024)
+  for (int32_t j = 0; j < n; j++) {
+    const int32_t v = d->sv[j];
+    const double *p = x + 3 * (size_t)v, *dv = dx + 3 * (size_t)v;
+    double a = 1;
+    if (dv[0] != 0 || dv[1] != 0 || dv[2] != 0)
+      for (int b = 0; b < d->n_ob && a > 0; b++)
+        a = fmin(a, bs_ccd_levelset(d->ob[b].ls, &d->frames[b], d->ob[b].lip, p, dv, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
+    d->pmin[j] = a;
+  }
+  double a = 1;
+  for (int32_t j = 0; j < n; j++) a = fmin(a, d->pmin[j]);
+  *alpha = a;
+  d->st.ccd_calls++;
+  d->st.ccd_limited += a < 1;
+  return 0;
+}
+
+static int ob_max_step(const bs_term *t, const double *x, const double *dx, double *alpha) {
+  return max_step_impl(t, x, dx, alpha) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
+}
+
+/* ---- step start -------------------------------------------------------------- */
+
+/* At xⁿ: the adaptive kappa (obstacles at tⁿ⁺¹), then the friction pairs
+ * (obstacles at tⁿ, with the kappa in force). */
+static int ob_begin_step(bs_term *t, bs_error *err) {
+  obs_data *d = t->data;
+  if (!t->step || !t->step->x_n) return 0;
+  const double *xn = t->step->x_n;
+  if (!finite_all(xn, 3 * (size_t)d->nv)) return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: x^n is not finite");
+  if (d->adaptive) {
+    barrier_pass(d, xn, t->step->time, 0);
+    const double dh2 = d->dhat * d->dhat, m = fmax(d->st.min_distance, 0);
+    const double d2 = fmin(m * m, dh2);
+    d->kappa = bs_ipc_kappa_update(d->kappa, d->kappa_max, d->d2_prev, d2, d->d2_eps);
+    d->d2_prev = d2;
+  }
+  if (lag_friction(d, xn, t->step->time - t->step->dt, t->step->dt))
+    return bs_error_set(err, BS_ENOMEM, "barrier obstacles: out of memory listing the friction pairs");
+  return 0;
+}
+
+/* ---- creation ------------------------------------------------------------------ */
+
+static void ob_free(void *p) {
+  obs_data *d = p;
+  if (!d) return;
+  free(d->sv);
+  free(d->ob);
+  free(d->frames);
+  free(d->pe);
+  free(d->bad);
+  free(d->pmin);
+  free(d->pcount);
+  free(d->fr);
+  free(d);
+}
+
+/* The exact Hessian is PSD for the friction; the barrier's blocks projected. */
+static int ob_hessian_convex(const bs_term *t, const double *x, bs_bsr *H) {
+  obs_data *d = t->data;
+  const int keep = d->project;
+  d->project = 1;
+  const int rc = ob_hessian(t, x, H);
+  d->project = keep;
+  return rc;
+}
+
+static const bs_term_ops ob_ops = {ob_value, ob_gradient, ob_hessian, ob_begin_step, ob_free,
+                                   ob_hessian_convex, NULL, ob_max_step};
+
+static int build_vertices(obs_data *d, const bs_mesh *m, const uint8_t *mask, bs_error *err) {
+  uint8_t *is = bs_calloc((size_t)m->n_vertices + 1, 1, "the barrier obstacles' surface", err);
+  if (!is) return BS_ENOMEM;
+  for (int32_t i = 0; i < 3 * m->n_faces; i++) is[m->faces[i]] = 1;
+  for (int32_t v = 0; v < m->n_vertices; v++) is[v] = is[v] && (!mask || mask[v]);
+  for (int32_t v = 0; v < m->n_vertices; v++) d->n_sv += is[v];
+  const size_t n = (size_t)d->n_sv + 1;
+  d->sv = bs_calloc(n, sizeof(int32_t), "the barrier obstacles' surface", err);
+  d->pe = bs_calloc(n * PE, sizeof(double), "the barrier obstacles' buffers", err);
+  d->bad = bs_calloc(n, 1, "the barrier obstacles' buffers", err);
+  d->pmin = bs_calloc(n, sizeof(double), "the barrier obstacles' buffers", err);
+  d->pcount = bs_calloc(n, sizeof(int32_t), "the barrier obstacles' buffers", err);
+  int st = !d->sv || !d->pe || !d->bad || !d->pmin || !d->pcount ? BS_ENOMEM : 0;
+  for (int32_t v = 0, j = 0; !st && v < m->n_vertices; v++)
+    if (is[v]) d->sv[j++] = v;
+  free(is);
+  return st;
+}
+
+int bs_term_ipc_obstacle_create(const bs_fem *fem, const bs_step_data *step, const uint8_t *mask, double dhat,
+                                double kappa, bs_term **out, bs_error *err) {
+  if (!out) return bs_error_set(err, BS_EINPUT, "barrier obstacles: out is NULL");
+  *out = NULL;
+  if (!fem || !fem->mesh) return bs_error_set(err, BS_EINPUT, "barrier obstacles: no fem");
+  if (!(dhat > 0) || !isfinite(dhat))
+    return bs_error_set(err, BS_EINPUT, "barrier obstacles: dhat must be finite and > 0 (m), got %g", dhat);
+  if (!(kappa >= 0) || !isfinite(kappa))
+    return bs_error_set(err, BS_EINPUT, "barrier obstacles: kappa must be finite and >= 0, got %g", kappa);
+  const bs_mesh *m = fem->mesh;
+  if (m->n_faces < 1) return bs_error_set(err, BS_EINPUT, "barrier obstacles: the mesh has no boundary triangles");
+  obs_data *d = bs_calloc(1, sizeof *d, "the barrier obstacles term", err);
+  if (!d) return BS_ENOMEM;
+  d->nv = m->n_vertices;
+  d->dhat = dhat;
+  d->kappa = kappa;
+  d->eps_v = BS_IPC_OBSTACLE_EPS_V;
+  d->d2_prev = dhat * dhat;
+  d->project = 1;
+  int st = build_vertices(d, m, mask, err);
+  bs_term *t = st ? NULL : calloc(1, sizeof *t);
+  if (!st && !t) st = bs_error_set(err, BS_ENOMEM, "out of memory creating the barrier obstacles term");
+  if (st) {
+    ob_free(d);
+    return st;
+  }
+  t->name = "barrier_obstacles";
+  t->kind = BS_TERM_BARRIER_CONTACT;
+  t->ops = &ob_ops;
+  t->fem = fem;
+  t->step = step;
+  t->data = d;
+  d->st.min_distance = INFINITY;
+  *out = t;
+  return 0;
+}
+
+int bs_term_is_ipc_obstacle(const bs_term *t) { return t && t->ops == &ob_ops; }
+
+static int not_ob(const bs_term *t, bs_error *err) {
+  return bs_term_is_ipc_obstacle(t) ? 0 : bs_error_set(err, BS_EINPUT, "not a barrier obstacles term");
+}
+
+int bs_term_ipc_obstacle_add(bs_term *t, const bs_levelset *ls, double mu, int index, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  if (!ls) return bs_error_set(err, BS_EINPUT, "obstacle %d: no level set", index);
+  const char *kind = bs_levelset_kind_name(bs_levelset_kind(ls));
+  if (!(mu >= 0) || !isfinite(mu))
+    return bs_error_set(err, BS_EINPUT, "obstacle %d (%s): friction = %g must be finite and >= 0", index, kind, mu);
+  double slope = 0;
+  const double lip = bs_ipc_obstacle_lipschitz(ls, &slope);
+  if (!(slope <= BS_IPC_OBSTACLE_MAX_SLOPE))
+    return bs_error_set(err, BS_EINPUT,
+                        "obstacle %d (%s): collision \"barrier\" needs a signed distance, but the grid's values "
+                        "change by up to %g h between nodes (a distance changes by at most h; limit %g h)",
+                        index, kind, slope, BS_IPC_OBSTACLE_MAX_SLOPE);
+  obs_data *d = t->data;
+  if (d->n_ob == d->cap_ob) {
+    const int cap = d->cap_ob ? 2 * d->cap_ob : 4;
+    ob_entry *o = realloc(d->ob, sizeof *o * (size_t)cap);
+    if (o) d->ob = o;
+    bs_levelset_frame *f = realloc(d->frames, sizeof *f * (size_t)cap);
+    if (f) d->frames = f;
+    if (!o || !f) return bs_error_set(err, BS_ENOMEM, "obstacle %d (%s): out of memory", index, kind);
+    d->cap_ob = cap;
+  }
+  d->ob[d->n_ob++] = (ob_entry){ls, mu, lip, index};
+  return 0;
+}
+
+int bs_term_ipc_obstacle_set_kappa(bs_term *t, double kappa, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  if (!(kappa >= 0) || !isfinite(kappa))
+    return bs_error_set(err, BS_EINPUT, "barrier obstacles: kappa must be finite and >= 0, got %g", kappa);
+  ((obs_data *)t->data)->kappa = kappa;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_set_project(bs_term *t, int on, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  ((obs_data *)t->data)->project = on != 0;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_set_adaptive(bs_term *t, double kappa_max, double d2_eps, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  if (!(kappa_max >= 0) || !isfinite(kappa_max) || !(d2_eps > 0) || !isfinite(d2_eps))
+    return bs_error_set(err, BS_EINPUT,
+                        "barrier obstacles: adaptive kappa needs kappa_max >= 0 and d2_eps > 0 finite, got %g and %g",
+                        kappa_max, d2_eps);
+  obs_data *d = t->data;
+  d->adaptive = kappa_max > 0;
+  d->kappa_max = kappa_max;
+  d->d2_eps = d2_eps;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_set_friction(bs_term *t, double eps_v, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  if (!(eps_v > 0) || !isfinite(eps_v))
+    return bs_error_set(err, BS_EINPUT, "barrier obstacles: eps_v must be finite and > 0 (m/s), got %g", eps_v);
+  ((obs_data *)t->data)->eps_v = eps_v;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_kappa_init(bs_term *t, const double *x, const double *grad_energy, double kappa_min,
+                                    double kappa_max, double *kappa, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  obs_data *d = t->data;
+  const size_t n3 = 3 * (size_t)d->nv;
+  const double keep = d->kappa;
+  d->kappa = 1;
+  const int bad = !finite_all(x, n3) || barrier_pass(d, x, eval_time(t), 1);
+  d->kappa = keep;
+  if (bad)
+    return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: %lld free surface vertices are inside an obstacle",
+                        (long long)d->st.inside);
+  double *gb = bs_calloc(n3 + 1, sizeof(double), "the barrier gradient", err);
+  if (!gb) return BS_ENOMEM;
+  for (int32_t j = 0; j < d->n_sv; j++)
+    for (int k = 0; k < 3; k++) gb[3 * (size_t)d->sv[j] + k] = d->pe[PE * (size_t)j + 1 + k];
+  d->kappa = bs_ipc_kappa_initial(n3, grad_energy, gb, kappa_min, kappa_max);
+  free(gb);
+  if (kappa) *kappa = d->kappa;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_stats(const bs_term *t, bs_ipc_obstacle_stats *out, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  const obs_data *d = t->data;
+  *out = d->st;
+  out->kappa = d->kappa;
+  out->dhat = d->dhat;
+  out->eps_v = d->eps_v;
+  return 0;
+}
+
+int bs_term_ipc_obstacle_detect(bs_term *t, const double *x, bs_ipc_obstacle_stats *out, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  obs_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv)) return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: x is not finite");
+  barrier_pass(d, x, eval_time(t), 0);
+  if (out) bs_term_ipc_obstacle_stats(t, out, err);
+  return 0;
+}
+
+int bs_term_ipc_obstacle_max_step(bs_term *t, const double *x, const double *dx, double *alpha, bs_error *err) {
+  if (not_ob(t, err)) return BS_EINPUT;
+  if (max_step_impl(t, x, dx, alpha))
+    return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: CCD on non-finite positions or motion");
+  return 0;
+}
