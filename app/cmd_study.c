@@ -498,6 +498,11 @@ static void print_judged(const bs_study *S, const bs_study_verdict *v) {
              j->gci.status == BS_GCI_CONVERGED        ? "converged"
              : fabs(j->gci.asymptotic - 1) < 0.1 ? "in the asymptotic range"
                                                    : "not yet asymptotic: the extrapolation is an estimate");
+    else if (j->knob >= 0)
+      printf("  %s against the reference's value %.9g (its extrapolation along %s, %.9g, has observed order %.3g < "
+             "%g: not trusted); error |q - q_ref| / %.4g\n",
+             S->qoi[j->qoi], j->target, S->knobs[j->knob].key, j->gci.extrapolated, j->gci.p, BS_STUDY_MIN_ORDER,
+             j->scale);
     else
       printf("  %s against the reference's value %.9g (no monotone refinement or time sequence of three levels to "
              "extrapolate); error |q - q_ref| / %.4g\n",

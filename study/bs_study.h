@@ -223,14 +223,20 @@ typedef struct bs_study_opts {
 /* ---- the verdict -------------------------------------------------------------- */
 
 #define BS_STUDY_N_THRESHOLDS 3 /* 1%, 0.1%, 0.01% */
+/* The smallest observed order an extrapolation is trusted with: below it
+ * the extrapolated value is the last difference times 1 / (2^p - 1) > 2.4
+ * beyond the finest level (a sequence far from its asymptotic range). */
+#define BS_STUDY_MIN_ORDER 0.5
 
 /* A quantity the verdict judges: error = |q_last - target| / scale. */
 typedef struct bs_study_judged {
   int qoi;             /* index into S->qoi                                        */
   int extrapolated;    /* 1: target = the Richardson extrapolation of q_last along  */
-                       /* knobs[knob] (GCI monotone or converged); 0: the reference's */
-                       /* value (error = the run's q_err_last)                      */
-  int knob;            /* the knob of the extrapolation; -1 when not extrapolated   */
+                       /* knobs[knob] (GCI converged, or monotone with an observed   */
+                       /* order p >= BS_STUDY_MIN_ORDER); 0: the reference's value   */
+                       /* (error = the run's q_err_last)                            */
+  int knob;            /* the knob of the GCI (monotone or converged; also when p is */
+                       /* too low to extrapolate); -1 when there is none             */
   bs_gci gci;          /* along knob, for the verdict's method                       */
   double target;       /* the extrapolated value, or the reference's last value (NAN: */
                        /* a given reference folder)                                  */

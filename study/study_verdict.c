@@ -19,8 +19,9 @@ static void verdict_method(const bs_study *S, char *m, size_t n) {
 }
 
 /* Quantity q's target: the extrapolation along the first refinement knob
- * (then the first time knob) whose GCI is monotone or converged, else the
- * reference's value. 0, or -1 when q cannot be judged (neither). */
+ * (then the first time knob) whose GCI is monotone or converged, when its
+ * observed order is at least BS_STUDY_MIN_ORDER; else the reference's value.
+ * 0, or -1 when q cannot be judged (neither). */
 static int judge_quantity(const bs_study *S, const char *method, int q, bs_study_judged *j) {
   memset(j, 0, sizeof *j);
   j->qoi = q;
@@ -37,7 +38,7 @@ static int judge_quantity(const bs_study *S, const char *method, int q, bs_study
       j->gci = g;
       j->knob = k;
     }
-  if (j->knob >= 0) {
+  if (j->knob >= 0 && (j->gci.status == BS_GCI_CONVERGED || j->gci.p >= BS_STUDY_MIN_ORDER)) {
     j->extrapolated = 1;
     j->target = j->gci.extrapolated;
     double d = fabs(j->target - S->q_origin[q]);

@@ -206,3 +206,22 @@ Test(study_verdict, a_string_knob_ranks) {
   cr_expect_eq(S->verdict.n_candidates, 2);
   bs_study_destroy(&S);
 }
+
+Test(study_verdict, a_low_order_extrapolation_is_not_trusted) {
+  bs_study *S = make_study("steps_per_frame=1,2,4", 0, NULL, 0);
+  for (int i = 0; i < S->n_runs; i++) {
+    write_qoi(S->runs[i].dir, 0.25 - 3.0 * pow(1.0 / (24.0 * S->runs[i].spf), 0.2));
+    S->runs[i].s_per_frame = S->runs[i].spf;
+  }
+  cr_expect_eq(bs__study_read_qoi(S), 0);
+  bs_study_verdict_make(S, &S->verdict);
+  const bs_study_judged *j = &S->verdict.judged[0];
+  cr_assert_eq(S->verdict.n_judged, 1);
+  cr_expect_eq(j->knob, 0, "the GCI along steps_per_frame is reported");
+  cr_expect(fabs(j->gci.p - 0.2) < 1e-9, "order %.12g", j->gci.p);
+  cr_expect_eq(j->extrapolated, 0, "p = 0.2 < %g: judged against the reference", BS_STUDY_MIN_ORDER);
+  cr_expect_eq(j->target, S->runs[2].q_last[0]);
+  cr_expect_eq(S->verdict.ref_competes, 0);
+  cr_expect_eq(S->runs[1].verdict_err, S->runs[1].q_err_last[0]);
+  bs_study_destroy(&S);
+}
