@@ -498,6 +498,10 @@ static void print_judged(const bs_study *S, const bs_study_verdict *v) {
              j->gci.status == BS_GCI_CONVERGED        ? "converged"
              : fabs(j->gci.asymptotic - 1) < 0.1 ? "in the asymptotic range"
                                                    : "not yet asymptotic: the extrapolation is an estimate");
+    else if (j->knob >= 0 && j->gci.status != BS_GCI_OK)
+      printf("  %s against the reference's value %.9g (its sequence along %s is %s: nothing to extrapolate); "
+             "error |q - q_ref| / %.4g\n",
+             S->qoi[j->qoi], j->target, S->knobs[j->knob].key, bs_gci_status_name(j->gci.status), j->scale);
     else if (j->knob >= 0)
       printf("  %s against the reference's value %.9g (its extrapolation along %s, %.9g, has observed order %.3g < "
              "%g: not trusted); error |q - q_ref| / %.4g\n",

@@ -235,9 +235,11 @@ typedef struct bs_study_judged {
                        /* knobs[knob] (GCI converged, or monotone with an observed   */
                        /* order p >= BS_STUDY_MIN_ORDER); 0: the reference's value   */
                        /* (error = the run's q_err_last)                            */
-  int knob;            /* the knob of the GCI (monotone or converged; also when p is */
-                       /* too low to extrapolate); -1 when there is none             */
-  bs_gci gci;          /* along knob, for the verdict's method                       */
+  int knob;            /* the knob of gci: the first refine (then time) knob whose */
+                       /* three finest levels converge (monotone or converged), else */
+                       /* the first with three levels; -1 when there is none        */
+  bs_gci gci;          /* along knob, for the verdict's method (its status says why  */
+                       /* a quantity is not extrapolated: p too low, or divergent...) */
   double target;       /* the extrapolated value, or the reference's last value (NAN: */
                        /* a given reference folder)                                  */
   double scale;        /* extrapolated: |target - o| (o as for Q, bs_study.h top),   */

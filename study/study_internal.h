@@ -56,9 +56,11 @@ int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_di
 
 /* The quantities of interest: each run's qoi.csv column of every S->qoi
  * name, compared with the reference's at common frame times (as the
- * states): error = |q - q_ref| / Q, Q = the reference's largest |q| over its
- * frames (1 when that is 0, making the error absolute). Returns the number
- * of complete runs whose qoi.csv could not be read or lacks a name. */
+ * states): error = |q - q_ref| / Q, Q = the reference's largest |q - o| over
+ * its frames, o its first value for a position quantity, else 0 (1 when Q is
+ * 0, making the error absolute); also S->q_origin, q_ref_last, q_ref_ok.
+ * Returns the number of complete runs whose qoi.csv could not be read or
+ * lacks a name. */
 int bs__study_read_qoi(bs_study *S);
 
 /* GCI of quantity q (an index into S->qoi) along knob k for method: the

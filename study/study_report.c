@@ -145,10 +145,10 @@ static const char *verdict_label(const bs_study *S, char *buf, size_t n) {
              S->disp > 1e-12 * S->size ? "what the reference moved" : "body size");
     return buf;
   }
-  size_t k = (size_t)snprintf(buf, n, "error of");
+  size_t k = (size_t)snprintf(buf, n, "verdict error:");
   for (int i = 0; i < v->n_judged && k < n; i++)
     k += (size_t)snprintf(buf + k, n - k, "%s %s", i ? "," : "", S->qoi[v->judged[i].qoi]);
-  if (k < n) snprintf(buf + k, n - k, " at the last frame (the verdict's, 1)");
+  if (k < n) snprintf(buf + k, n - k, " at the last frame (1)");
   return buf;
 }
 

@@ -18,27 +18,39 @@ static void verdict_method(const bs_study *S, char *m, size_t n) {
   snprintf(m, n, "%s", src);
 }
 
-/* Quantity q's target: the extrapolation along the first refinement knob
- * (then the first time knob) whose GCI is monotone or converged, when its
- * observed order is at least BS_STUDY_MIN_ORDER; else the reference's value.
- * 0, or -1 when q cannot be judged (neither). */
-static int judge_quantity(const bs_study *S, const char *method, int q, bs_study_judged *j) {
-  memset(j, 0, sizeof *j);
-  j->qoi = q;
-  j->knob = -1;
-  j->gci.status = BS_GCI_BAD_INPUT;
-  for (int pass = 0; pass < 2 && j->knob < 0; pass++)
-    for (int k = 0; k < S->n_knobs && j->knob < 0; k++) {
+/* The GCI of quantity q along the first refinement knob (then the first
+ * time knob) whose three finest levels converge (monotone or converged)
+ * into j->gci, j->knob; else along the first with three levels (j->knob -1
+ * when there is none). Returns 1 when the one found converges. */
+static int quantity_gci(const bs_study *S, const char *method, int q, bs_study_judged *j) {
+  for (int pass = 0; pass < 2; pass++)
+    for (int k = 0; k < S->n_knobs; k++) {
       const bs_study_knob *v = &S->knobs[k];
       if (pass == 0 ? v->kind != BS_KNOB_REFINE : !bs_study_knob_is_time(v)) continue;
       bs_gci g;
       int used[3], skipped;
       bs_gci_status st = bs__study_qoi_gci(S, k, method, q, &g, used, &skipped);
-      if ((st != BS_GCI_OK && st != BS_GCI_CONVERGED) || !isfinite(g.extrapolated)) continue;
-      j->gci = g;
-      j->knob = k;
+      if (st == BS_GCI_BAD_INPUT) continue;
+      int ok = (st == BS_GCI_OK || st == BS_GCI_CONVERGED) && isfinite(g.extrapolated);
+      if (j->knob < 0 || ok) {
+        j->gci = g;
+        j->knob = k;
+      }
+      if (ok) return 1;
     }
-  if (j->knob >= 0 && (j->gci.status == BS_GCI_CONVERGED || j->gci.p >= BS_STUDY_MIN_ORDER)) {
+  return 0;
+}
+
+/* Quantity q's target: its extrapolation (quantity_gci) when the order p is
+ * at least BS_STUDY_MIN_ORDER (or the levels agree: converged); else the
+ * reference's value. 0, or -1 when q cannot be judged (neither). */
+static int judge_quantity(const bs_study *S, const char *method, int q, bs_study_judged *j) {
+  memset(j, 0, sizeof *j);
+  j->qoi = q;
+  j->knob = -1;
+  j->gci.status = BS_GCI_BAD_INPUT;
+  int conv = quantity_gci(S, method, q, j);
+  if (conv && (j->gci.status == BS_GCI_CONVERGED || j->gci.p >= BS_STUDY_MIN_ORDER)) {
     j->extrapolated = 1;
     j->target = j->gci.extrapolated;
     double d = fabs(j->target - S->q_origin[q]);
