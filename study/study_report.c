@@ -57,7 +57,7 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
             r->cg_per_step, r->peak_mib, r->pos_max, r->pos_last, r->vel_max, r->vel_last, r->drift, r->inv_max,
             r->pen_max, r->is_ref, r->pareto);
     fprintf(f, ",%.6g,%s", r->verdict_err,
-            !S->verdict.on_qoi ? "position" : r->verdict_by >= 0 ? S->qoi[r->verdict_by] : "");
+            !S->verdict.on_qoi ? "position" : r->verdict_by >= 0 ? S->qoi[r->verdict_by] : "-");
     for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%.12g,%.6g,%.6g", r->q_last[q], r->q_err_last[q], r->q_err_max[q]);
     fputc('\n', f);
   }
