@@ -34,30 +34,42 @@ static const char *study_help =
     "frames.csv and a 'done' marker made from the same scene content (the scene\n"
     "file, the settings and the mesh files' bytes) is not run again), compares each run with the\n"
     "reference at common frame times, and writes study.csv, PNG plots (gnuplot) and\n"
-    "a summary: for each method the cheapest setting within 1%, 0.1% and 0.01%\n"
-    "position error, and the observed orders of convergence in space and time.\n"
-    "  --vary KEY=v1,v2,...  a scene key path or a shorthand: steps_per_frame\n"
-    "                        (time.steps_per_frame), refine (bodies.*.refine, every\n"
-    "                        body), method (solver.method), tolerance (solver.tolerance)\n"
+    "a summary: each quantity of interest with its GCI, the observed orders of\n"
+    "convergence in space and time, and ONE verdict: the runs ranked by cost with\n"
+    "their error in the judged quantity, and the cheapest within 1%, 0.1%, 0.01%.\n"
+    "  --vary KEY=v1,v2,...  any scene key path (numbers or words: solver.linear=cg,pcg)\n"
+    "                        or a shorthand: steps_per_frame (time.steps_per_frame),\n"
+    "                        refine (bodies.*.refine, every body), method\n"
+    "                        (solver.method), tolerance (solver.tolerance)\n"
     "  --set key.path=value  any scene key, as in `bigstep run` (applied to every run)\n"
     "  --reference auto      the finest setting of every varied knob [default]: largest\n"
     "                        steps_per_frame / refine / fps, smallest tolerance / dt,\n"
     "                        method optimization (else the first listed); the last listed\n"
     "                        value of any other key\n"
     "  --reference RUN_DIR   a run folder holding frames.csv and state.bin\n"
-    "  --qoi NAME            a quantity of interest of the scene (a qoi.csv column):\n"
-    "                        its error against the reference per run, and with three\n"
-    "                        or more levels of a refine or time knob its observed\n"
-    "                        order, Richardson extrapolation and GCI (Roache, Fs 1.25)\n"
+    "  --qoi NAME            a quantity of interest (a qoi.csv column) [default: the\n"
+    "                        scene's own \"qoi\", if it defines any]; --qoi none: judge\n"
+    "                        the position error. Per run its error against the\n"
+    "                        reference; with three or more levels of a refine or time\n"
+    "                        knob its observed order, Richardson extrapolation and GCI\n"
+    "                        (Roache, Fs 1.25)\n"
     "  --run-budget SECONDS  wall seconds a run may take before it is stopped and\n"
     "                        marked timeout [900]\n"
     "  --force               rerun every run, cached or not\n"
     "  --jobs N              runs in parallel [1] (each child gets OMP_NUM_THREADS =\n"
     "                        cores / N unless set)\n"
     "  --out DIR             the study folder\n"
-    "Errors: position = RMS over the compared vertices of x - x_ref over the body size\n"
-    "(bounding-box diagonal at rest); velocity = RMS of v - v_ref over the reference's\n"
-    "largest speed (1 m/s if it is 0); both the max over frames and at the last frame.\n"
+    "The verdict judges the quantities of interest at the last frame (a run's error:\n"
+    "the largest of theirs), each against its Richardson extrapolation along the\n"
+    "first refine (else time) knob with a monotone sequence of three levels, else\n"
+    "against the reference; with no quantity, the position error. It ranks every run\n"
+    "that finished, across all knobs; the reference too when a quantity is extrapolated.\n"
+    "Errors: position = RMS over the compared vertices of x - x_ref over what the\n"
+    "reference moved (the max over frames of its RMS displacement from its first\n"
+    "frame; the body size if it did not move); velocity = RMS of v - v_ref over the\n"
+    "reference's largest speed (1 m/s if it is 0); both the max over frames and at\n"
+    "the last frame. A quantity: |q - target| over its magnitude (a position: its\n"
+    "change from the first frame).\n"
     "Energy drift = max |total(t) - total(0)| over max(|total(0)|, max kinetic) (1 J if 0).\n"
     "Orders: the slope of log error against log h (h = 2^-refine or dt) over the runs\n"
     "whose other knobs are at the reference; and from successive levels (each run\n"
@@ -73,7 +85,7 @@ typedef struct study_args {
   const char **user_sets;
   int jobs, help, force;
   double budget;  /* s: a run's wall-clock budget */
-  int n_qoi;
+  int n_qoi, no_qoi; /* no_qoi: --qoi none */
   const char *qoi[BS_STUDY_MAX_QOI];
 } study_args;
 
@@ -107,6 +119,8 @@ static int parse_flag(study_args *A, const char *flag, const char *val) {
     A->user_sets[A->n_user++] = val;
   } else if (!strcmp(flag, "--reference")) {
     A->ref_dir = strcmp(val, "auto") ? val : NULL;
+  } else if (!strcmp(flag, "--qoi") && !strcmp(val, "none")) {
+    A->no_qoi = 1;
   } else if (!strcmp(flag, "--qoi")) {
     if (A->n_qoi == BS_STUDY_MAX_QOI) return bs_app_usage_error("study", "at most %d --qoi flags", BS_STUDY_MAX_QOI);
     A->qoi[A->n_qoi++] = val;
@@ -154,6 +168,7 @@ static int parse_args(study_args *A, int argc, char **argv) {
   }
   if (!A->scene) return bs_app_usage_error("study", "missing SCENE");
   if (A->n_knobs == 0) return bs_app_usage_error("study", "nothing to vary: give at least one --vary KEY=v1,v2,...");
+  if (A->no_qoi && A->n_qoi) return bs_app_usage_error("study", "--qoi none with --qoi NAME: give one or the other");
   if (A->ref_dir) {
     char p[BS_STUDY_FILE_PATH];
     bs_error err;
@@ -438,7 +453,7 @@ static int plan(const study_args *A, bs_study **S) {
   bs_error_clear(&err);
   bs_study_opts o = {.scene = A->scene, .n_sets = A->n_user, .sets = A->user_sets, .n_knobs = A->n_knobs,
                      .knobs = A->knobs, .reference = A->ref_dir, .out = A->out, .n_qoi = A->n_qoi,
-                     .qoi = A->qoi};
+                     .qoi = A->qoi, .no_scene_qoi = A->no_qoi};
   if (bs_study_create(&o, S, &err)) {
     fprintf(stderr, "bigstep study: %s\n", err.msg);
     return BS_EXIT_FAIL;
@@ -454,6 +469,110 @@ static int plan(const study_args *A, bs_study **S) {
     return BS_EXIT_FAIL;
   }
   return 0;
+}
+
+/* ---- the verdict -------------------------------------------------------- */
+
+#define RANKED_MAX 30 /* runs listed in the ranking; the rest are in study.csv */
+
+/* What the verdict judged, and against what. */
+static void print_judged(const bs_study *S, const bs_study_verdict *v) {
+  if (!v->on_qoi) {
+    printf("verdict: judged on the position error (RMS |x - x_ref| over %s, max over frames) against the "
+           "reference %s; %s\n",
+           S->disp > 1e-12 * S->size ? "what the reference moved" : "the body size",
+           S->ref >= 0 ? S->runs[S->ref].name : S->ref_dir,
+           S->n_qoi ? "the quantities of interest could not be read from the runs' qoi.csv"
+                    : "no quantity of interest (the scene defines none, or --qoi none)");
+    return;
+  }
+  printf("verdict: judged on");
+  for (int i = 0; i < v->n_judged; i++) printf("%s %s", i ? "," : "", S->qoi[v->judged[i].qoi]);
+  printf(" at the last frame%s\n", v->n_judged > 1 ? " (a run's error: the largest of theirs)" : "");
+  for (int i = 0; i < v->n_judged; i++) {
+    const bs_study_judged *j = &v->judged[i];
+    if (j->extrapolated)
+      printf("  %s against its Richardson extrapolation along %s (method %s): %.9g; error |q - q_ext| / %.4g; "
+             "observed order %.4g, GCI_fine %.3g%%, %s\n",
+             S->qoi[j->qoi], S->knobs[j->knob].key, v->method, j->target, j->scale, j->gci.p, 100 * j->gci.gci_fine,
+             j->gci.status == BS_GCI_CONVERGED        ? "converged"
+             : fabs(j->gci.asymptotic - 1) < 0.1 ? "in the asymptotic range"
+                                                   : "not yet asymptotic: the extrapolation is an estimate");
+    else if (j->knob >= 0 && j->gci.status != BS_GCI_OK)
+      printf("  %s against the reference's value %.9g (its sequence along %s is %s: nothing to extrapolate); "
+             "error |q - q_ref| / %.4g\n",
+             S->qoi[j->qoi], j->target, S->knobs[j->knob].key, bs_gci_status_name(j->gci.status), j->scale);
+    else if (j->knob >= 0)
+      printf("  %s against the reference's value %.9g (its extrapolation along %s, %.9g, has observed order %.3g < "
+             "%g: not trusted); error |q - q_ref| / %.4g\n",
+             S->qoi[j->qoi], j->target, S->knobs[j->knob].key, j->gci.extrapolated, j->gci.p, BS_STUDY_MIN_ORDER,
+             j->scale);
+    else
+      printf("  %s against the reference's value %.9g (no monotone refinement or time sequence of three levels to "
+             "extrapolate); error |q - q_ref| / %.4g\n",
+             S->qoi[j->qoi], j->target, j->scale);
+  }
+}
+
+/* A run's error and what set it, "nan" when not measured. */
+static void print_error(const bs_study *S, const bs_study_run *r) {
+  if (!isfinite(r->verdict_err)) printf("error not measured");
+  else printf("error %.3g%%", 100 * r->verdict_err);
+  if (S->verdict.on_qoi && r->verdict_by >= 0 && S->verdict.n_judged > 1) printf(" (%s)", S->qoi[r->verdict_by]);
+}
+
+/* Whether cost a ranks before cost b (an unknown cost ranks last). */
+static int cheaper(double a, double b) { return isfinite(a) && (!isfinite(b) || a < b); }
+
+/* The runs by cost (s/frame, unknown last) with their errors. */
+static void print_ranking(const bs_study *S, const bs_study_verdict *v) {
+  int *ord = malloc(sizeof(int) * ((size_t)S->n_runs + 1));
+  if (!ord) return;
+  for (int i = 0; i < S->n_runs; i++) {
+    int j = i;
+    double c = S->runs[i].s_per_frame;
+    for (; j > 0 && cheaper(c, S->runs[ord[j - 1]].s_per_frame); j--) ord[j] = ord[j - 1];
+    ord[j] = i;
+  }
+  int all_ext = 1;
+  for (int i = 0; i < v->n_judged; i++) all_ext &= v->judged[i].extrapolated;
+  printf("  runs by cost (s/frame)%s:\n",
+         !v->ref_competes ? "; the reference is not ranked (its error is 0 by construction)"
+         : all_ext        ? ""
+                          : "; the reference's error counts the extrapolated quantities (against itself it is 0)");
+  for (int n = 0; n < S->n_runs && n < RANKED_MAX; n++) {
+    const bs_study_run *r = &S->runs[ord[n]];
+    printf("    %-40s %-7s %10.4g s/frame  ", r->name, bs_study_run_status(r), r->s_per_frame);
+    print_error(S, r);
+    printf("%s\n", r->is_ref ? "  [reference]" : "");
+  }
+  if (S->n_runs > RANKED_MAX) printf("    ... %d more in study.csv (verdict_error)\n", S->n_runs - RANKED_MAX);
+  free(ord);
+}
+
+/* The verdict the library made (S->verdict): what it judged, the runs, the
+ * cheapest within each threshold. */
+static void print_verdict(const bs_study *S) {
+  const bs_study_verdict *v = &S->verdict;
+  printf("\n");
+  print_judged(S, v);
+  print_ranking(S, v);
+  static const char *const thr_name[BS_STUDY_N_THRESHOLDS] = {"1%", "0.1%", "0.01%"};
+  for (int t = 0; t < BS_STUDY_N_THRESHOLDS; t++) {
+    int b = v->cheapest[t];
+    printf("  cheapest within %-6s ", thr_name[t]);
+    if (b >= 0) {
+      printf("%s (%.4g s/frame, ", S->runs[b].name, S->runs[b].s_per_frame);
+      print_error(S, &S->runs[b]);
+      printf(")\n");
+    } else if (v->most_accurate >= 0 && (t == 0 || v->cheapest[t - 1] >= 0)) {
+      printf("none (the most accurate: %s, ", S->runs[v->most_accurate].name);
+      print_error(S, &S->runs[v->most_accurate]);
+      printf(")\n");
+    } else {
+      printf("none%s\n", v->most_accurate < 0 ? " (no run with a measured error)" : "");
+    }
+  }
 }
 
 /* Results, study.csv, plots and the summary of a study whose runs have run. */
@@ -472,6 +591,7 @@ static int report(bs_study *S) {
   if (plots) snprintf(msg, sizeof msg, "%s", err.msg);
   else plots = run_gnuplot(S, msg, sizeof msg);
   bs_study_summary_write(S, stdout);
+  print_verdict(S);
   printf("wrote %s/study.csv%s\n", S->out, plots ? "" : " and the PNG plots");
   if (plots) {
     fprintf(stderr, "bigstep study: plots: %s\n", msg);

@@ -16,20 +16,34 @@
  *             bs_study_measure_bodies  body size L and per-body mesh counts.
  *   results   bs_study_evaluate     after the runs: costs (frames.csv,
  *                                   summary.txt), errors against the
- *                                   reference (state.bin), the Pareto front.
+ *                                   reference (state.bin), the quantities
+ *                                   of interest (qoi.csv), the Pareto front.
+ *   verdict   bs_study_verdict      the one ranking: the cheapest run within
+ *                                   1%, 0.1%, 0.01% of the judged quantity
+ *                                   (below); printing it is the caller's.
  *   report    bs_study_csv_write, bs_study_plots_write (data files and
- *             plots.gp), bs_study_summary_write (into the caller's FILE *).
+ *             plots.gp), bs_study_summary_write (into the caller's FILE *:
+ *             the runs not ok, the quantities and their GCI, the orders).
  *   metrics   pure functions on arrays (no files): the order fits, the
  *             Pareto front, the cheapest run within a threshold, energy drift.
  *
  * Errors against the reference (x_ref, v_ref), over the compared vertices C
  * (refinement appends edge midpoints, so the first vertices of each body are
  * the vertices of its coarsest mesh in the study; those are compared):
- *   position e_x(t) = sqrt(sum_{i in C} |x_i - x_ref,i|^2 / |C|) / L,
- *            L = the diagonal of the bounding box of all bodies at rest;
+ *   position e_x(t) = sqrt(sum_{i in C} |x_i - x_ref,i|^2 / |C|) / D,
+ *            D = what the reference moved: the max over its frames t of
+ *            sqrt(sum_{i in C} |x_ref,i(t) - x_ref,i(t0)|^2 / |C|), t0 its
+ *            first frame (the initial state); when D <= 1e-12 L (nothing
+ *            moved), L = the diagonal of the bounding box of all bodies at
+ *            rest. A run that moved 1.5 cm on a 1 m body is judged against
+ *            1.5 cm, never against 1 m;
  *   velocity e_v(t) = sqrt(sum_{i in C} |v_i - v_ref,i|^2 / |C|) / V,
  *            V = the reference's largest vertex speed over all frames, or 1 m/s;
  * each the max over common frames and at the last common frame.
+ * Quantities of interest (qoi.csv columns; by default the scene's own):
+ *   error = |q - q_ref| / Q at common frames, Q = max over the reference's
+ *   frames of |q_ref(t) - o|, o = q_ref(t0) for a position quantity (what it
+ *   moved), else 0 (its magnitude); 1 when Q is 0.
  * Energy drift = max_t |total(t) - total(0)| / max(|total(0)|, max_t kinetic(t))
  * (1 J if both are 0). Orders: least-squares slope of log(error) against
  * log(h), h = 2^-refine (space) or dt (time), over the runs whose other knobs
@@ -185,6 +199,9 @@ typedef struct bs_study_run {
   double q_last[BS_STUDY_MAX_QOI];     /* the value at the last frame       */
   double q_err_last[BS_STUDY_MAX_QOI]; /* |q - q_ref| / Q at the last common frame */
   double q_err_max[BS_STUDY_MAX_QOI];  /* the max over common frames        */
+  /* the verdict (bs_study_evaluate, bs_study_verdict) */
+  double verdict_err;          /* the error of the judged quantity; NAN: not measured */
+  int verdict_by;              /* what set it: an index into S->qoi, -1 the position error */
 } bs_study_run;
 
 /* "ok", "failed" (nonzero exit), "timeout" (timed_out). */
@@ -198,9 +215,58 @@ typedef struct bs_study_opts {
   const bs_study_knob *knobs;   /* copied                                      */
   const char *reference;        /* a run folder; NULL: the finest run (auto)   */
   const char *out;              /* the study folder; NULL: out/study/<scene name> */
-  int n_qoi;                    /* quantities of interest measured (qoi.csv names) */
-  const char *const *qoi;
+  int n_qoi;                    /* quantities of interest measured (qoi.csv names); */
+  const char *const *qoi;       /* 0: the scene's own (bs_scene.qoi), if any      */
+  int no_scene_qoi;             /* 1: with n_qoi 0, none (judge the position error) */
 } bs_study_opts;
+
+/* ---- the verdict -------------------------------------------------------------- */
+
+#define BS_STUDY_N_THRESHOLDS 3 /* 1%, 0.1%, 0.01% */
+/* The smallest observed order an extrapolation is trusted with: below it
+ * the extrapolated value is the last difference times 1 / (2^p - 1) > 2.4
+ * beyond the finest level (a sequence far from its asymptotic range). */
+#define BS_STUDY_MIN_ORDER 0.5
+
+/* A quantity the verdict judges: error = |q_last - target| / scale. */
+typedef struct bs_study_judged {
+  int qoi;             /* index into S->qoi                                        */
+  int extrapolated;    /* 1: target = the Richardson extrapolation of q_last along  */
+                       /* knobs[knob] (GCI converged, or monotone with an observed   */
+                       /* order p >= BS_STUDY_MIN_ORDER); 0: the reference's value   */
+                       /* (error = the run's q_err_last)                            */
+  int knob;            /* the knob of gci: the first refine (then time) knob whose */
+                       /* three finest levels converge (monotone or converged), else */
+                       /* the first with three levels; -1 when there is none        */
+  bs_gci gci;          /* along knob, for the verdict's method (its status says why  */
+                       /* a quantity is not extrapolated: p too low, or divergent...) */
+  double target;       /* the extrapolated value, or the reference's last value (NAN: */
+                       /* a given reference folder)                                  */
+  double scale;        /* extrapolated: |target - o| (o as for Q, bs_study.h top),   */
+                       /* Q when that is 0; else Q                                   */
+} bs_study_judged;
+
+/* The study's one verdict. The judged quantity: the quantities of interest
+ * that can be judged (extrapolated, or present in the reference's qoi.csv),
+ * a run's error being the largest of theirs (verdict_by names which); when
+ * there are none, the position error pos_max (the max over frames, against
+ * the reference). Candidates: every run that finished (exit 0, not timed
+ * out) with a finite error and cost, across every knob (method, strings,
+ * refinement alike); the reference too when a judged quantity is
+ * extrapolated (else its error is 0 by construction and it is left out; in
+ * a quantity judged against the reference its error is 0). */
+typedef struct bs_study_verdict {
+  int on_qoi;          /* 1: judged on quantities of interest; 0: on the position error */
+  int n_judged;
+  bs_study_judged judged[BS_STUDY_MAX_QOI];
+  char method[32];     /* the method whose GCI groups gave the extrapolations  */
+  int ref_competes;    /* the reference run is a candidate (a quantity is extrapolated) */
+  double threshold[BS_STUDY_N_THRESHOLDS]; /* 1e-2, 1e-3, 1e-4                  */
+  int cheapest[BS_STUDY_N_THRESHOLDS];     /* the cheapest candidate within each (by */
+                                           /* s/frame, the first of equal costs); -1 none */
+  int most_accurate;   /* the candidate with the smallest error; -1 none        */
+  int n_candidates;
+} bs_study_verdict;
 
 typedef struct bs_study {
   char scene_path[BS_MAX_PATH], name[256], out[BS_MAX_PATH];
@@ -222,6 +288,12 @@ typedef struct bs_study {
   char qoi[BS_STUDY_MAX_QOI][BS_MAX_NAME];
   double q_ref_scale[BS_STUDY_MAX_QOI]; /* Q: the reference's largest |q| over frames (1 if 0) */
   int q_ref_ok[BS_STUDY_MAX_QOI];      /* the reference's qoi.csv had the column */
+  double q_origin[BS_STUDY_MAX_QOI];   /* o of Q (top): the reference's first value for a position */
+  double q_ref_last[BS_STUDY_MAX_QOI]; /* the reference's last value (NAN: none)  */
+  int q_kind[BS_STUDY_MAX_QOI];        /* the scene's bs_qoi_kind of the name; -1 not the scene's */
+  double disp;                  /* D: what the reference moved (m; top), 0 if unread */
+  double xscale;                /* the position error's scale: D, or L when nothing moved */
+  bs_study_verdict verdict;     /* bs_study_evaluate's                          */
 } bs_study;
 
 /* Copies the options and loads the scene with the user's settings (its
@@ -257,10 +329,16 @@ int bs_study_run_complete(const bs_study_run *r);
 
 /* ---- results ---------------------------------------------------------------- */
 
-/* Reads the costs of every run, compares every run with the reference and
- * marks the Pareto front; returns the number of runs that could not be
- * compared (their errors are NAN, or untouched when a state file is missing). */
+/* Reads the costs of every run, compares every run with the reference, reads
+ * the quantities of interest, makes the verdict (S->verdict, each run's
+ * verdict_err) and marks the Pareto front of cost against verdict_err;
+ * returns the number of runs that could not be compared (their errors are
+ * NAN, or untouched when a state file is missing). */
 int bs_study_evaluate(bs_study *S);
+
+/* The verdict (see bs_study_verdict) of a study whose costs, errors and
+ * quantities are read; sets each run's verdict_err and verdict_by. */
+void bs_study_verdict_make(bs_study *S, bs_study_verdict *v);
 
 /* ---- metrics: pure functions ------------------------------------------------ */
 
@@ -296,8 +374,9 @@ double bs_study_energy_drift(const bs_frames_table *t);
 int bs_study_csv_write(const bs_study *S, bs_error *err);
 /* OUT/plots.gp and its data files (plot_*.dat); run "gnuplot plots.gp" in OUT. */
 int bs_study_plots_write(const bs_study *S, bs_error *err);
-/* The summary: the cheapest setting per method within 1%, 0.1%, 0.01%, and
- * the observed orders. */
+/* The summary (no verdict: that is S->verdict, for the caller to print): the
+ * runs that failed or timed out, each quantity of interest per run with its
+ * GCI along each refinement or time knob, and the observed orders. */
 void bs_study_summary_write(const bs_study *S, FILE *f);
 
 #ifdef __cplusplus

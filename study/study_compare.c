@@ -24,7 +24,7 @@ static void block_sums(const bs_state_reader *a, const bs_state_reader *b, int n
 }
 
 int bs__study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_blocks, const int64_t *off_a,
-                            const int64_t *off_b, const int64_t *count, double size, double vscale,
+                            const int64_t *off_b, const int64_t *count, double xscale, double vscale,
                             bs_study_errors *e) {
   e->pos_max = e->vel_max = e->pos_last = e->vel_last = NAN;
   e->n_common = 0;
@@ -40,7 +40,7 @@ int bs__study_compare_states(bs_state_reader *a, bs_state_reader *b, int n_block
     if (fabs(ta - tb) <= eps) {
       double ex, ev;
       block_sums(a, b, n_blocks, off_a, off_b, count, &ex, &ev);
-      double px = sqrt(ex / (double)ncmp) / size, pv = sqrt(ev / (double)ncmp) / vscale;
+      double px = sqrt(ex / (double)ncmp) / xscale, pv = sqrt(ev / (double)ncmp) / vscale;
       if (!isfinite(px)) px = INFINITY;
       if (!isfinite(pv)) pv = INFINITY;
       e->pos_max = e->n_common ? fmax(e->pos_max, px) : px;
@@ -71,8 +71,8 @@ int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_di
   int ok = S->direct ? a.n == b.n : bs__study_offsets(S, r->body_refine, off_r) == a.n;
   bs_study_errors er = {NAN, NAN, NAN, NAN, 0};
   int st = -1;
-  if (ok && S->direct) st = bs__study_compare_states(&a, &b, 1, &zero, &zero, &all, S->size, S->vscale, &er);
-  else if (ok) st = bs__study_compare_states(&a, &b, S->n_bodies, off_r, off_ref, S->cmp, S->size, S->vscale, &er);
+  if (ok && S->direct) st = bs__study_compare_states(&a, &b, 1, &zero, &zero, &all, S->xscale, S->vscale, &er);
+  else if (ok) st = bs__study_compare_states(&a, &b, S->n_bodies, off_r, off_ref, S->cmp, S->xscale, S->vscale, &er);
   r->pos_max = er.pos_max;
   r->pos_last = er.pos_last;
   r->vel_max = er.vel_max;
@@ -80,6 +80,43 @@ int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_di
   bs_state_close(&a);
   bs_state_close(&b);
   return st;
+}
+
+double bs__study_disp_scale(bs_state_reader *r, int n_blocks, const int64_t *off, const int64_t *count) {
+  int64_t n = 0;
+  for (int q = 0; q < n_blocks; q++) {
+    if (count[q] < 0 || off[q] < 0 || off[q] + count[q] > r->n) return 0;
+    n += count[q];
+  }
+  double *x0 = malloc(sizeof(double) * (size_t)(3 * n + 1)), m = 0;
+  if (!x0 || bs_state_next(r)) {
+    free(x0);
+    return 0;
+  }
+  for (int q = 0, k = 0; q < n_blocks; k += 3 * (int)count[q], q++)
+    memcpy(x0 + k, r->x + 3 * off[q], sizeof(double) * 3 * (size_t)count[q]);
+  do {
+    double s = 0;
+    for (int q = 0, k = 0; q < n_blocks; k += 3 * (int)count[q], q++)
+      for (int64_t i = 0; i < 3 * count[q]; i++) {
+        double d = r->x[3 * off[q] + i] - x0[k + i];
+        s += d * d;
+      }
+    double d = n > 0 ? sqrt(s / (double)n) : 0;
+    if (d > m || !isfinite(d)) m = d;
+  } while (bs_state_next(r) == 0);
+  free(x0);
+  return isfinite(m) ? m : 0;
+}
+
+/* The displacement scale of the reference folder dir over the compared blocks. */
+static double reference_disp(const char *dir, int n_blocks, const int64_t *off, const int64_t *count) {
+  bs_state_reader s;
+  bs_error e;
+  if (bs_state_open(dir, &s, &e)) return 0;
+  double d = bs__study_disp_scale(&s, n_blocks, off, count);
+  bs_state_close(&s);
+  return d;
 }
 
 double bs__study_max_speed(const char *dir) {
@@ -140,6 +177,19 @@ static void reference_blocks(bs_study *S, int64_t *off_ref) {
   const char *ref_dir = S->ref_dir[0] ? S->ref_dir : S->runs[S->ref].dir;
   S->vscale = bs__study_max_speed(ref_dir);
   if (!(S->vscale > 0)) S->vscale = 1.0;
+  int64_t zero = 0, all = 0;
+  if (S->direct) {
+    bs_state_reader sf;
+    bs_error e;
+    if (bs_state_open(ref_dir, &sf, &e) == 0) {
+      all = sf.n;
+      bs_state_close(&sf);
+    }
+    S->disp = reference_disp(ref_dir, 1, &zero, &all);
+  } else {
+    S->disp = reference_disp(ref_dir, S->n_bodies, off_ref, S->cmp);
+  }
+  S->xscale = S->disp > 1e-12 * S->size ? S->disp : S->size; /* nothing moved: the body size */
 }
 
 int bs__study_compare(bs_study *S) {

@@ -46,12 +46,26 @@ static void study_names(bs_study *S, const char *out) {
   else snprintf(S->out, sizeof S->out, "out/study/%s", S->name);
 }
 
-/* The scene with the user's settings: its body count. */
-static int base_scene(bs_study *S, bs_error *err) {
+/* The quantities: the scene's own when none is given (and scene_qoi), and
+ * the scene's kind of each name (-1: not the scene's). */
+static void scene_quantities(bs_study *S, const bs_scene *sc, int scene_qoi) {
+  for (int q = 0; scene_qoi && S->n_qoi == 0 && q < sc->n_qoi && q < BS_STUDY_MAX_QOI; q++)
+    snprintf(S->qoi[q], BS_MAX_NAME, "%s", sc->qoi[q].name);
+  if (scene_qoi && S->n_qoi == 0) S->n_qoi = sc->n_qoi < BS_STUDY_MAX_QOI ? sc->n_qoi : BS_STUDY_MAX_QOI;
+  for (int q = 0; q < S->n_qoi; q++) {
+    S->q_kind[q] = -1;
+    for (int j = 0; j < sc->n_qoi; j++)
+      if (!strcmp(sc->qoi[j].name, S->qoi[q])) S->q_kind[q] = (int)sc->qoi[j].kind;
+  }
+}
+
+/* The scene with the user's settings: its body count and quantities. */
+static int base_scene(bs_study *S, int scene_qoi, bs_error *err) {
   bs_scene *sc = NULL;
   int st = bs_scene_load(S->scene_path, S->n_user, (const char *const *)S->user_sets, &sc, err);
   if (st) return st;
   S->n_bodies = sc->n_bodies;
+  scene_quantities(S, sc, scene_qoi);
   bs_scene_destroy(&sc);
   if (S->n_bodies > BS_STUDY_MAX_BODIES)
     return bs_error_set(err, BS_EINPUT, "%s: at most %d bodies, got %d", S->scene_path, BS_STUDY_MAX_BODIES,
@@ -94,7 +108,7 @@ int bs_study_create(const bs_study_opts *o, bs_study **out, bs_error *err) {
       if (!strcmp(o->qoi[j], o->qoi[q])) st = bs_error_set(err, BS_EINPUT, "--qoi '%s' is given twice", o->qoi[q]);
     if (!st) snprintf(S->qoi[S->n_qoi++], BS_MAX_NAME, "%s", o->qoi[q]);
   }
-  if (!st) st = base_scene(S, err);
+  if (!st) st = base_scene(S, o->n_qoi == 0 && !o->no_scene_qoi, err);
   if (st) {
     bs_study_destroy(&S);
     return st;

@@ -22,16 +22,19 @@ static void columns(const bs_study *S, const bs_qoi_table *t, int *col) {
   for (int q = 0; q < S->n_qoi; q++) col[q] = bs_qoi_table_column(t, S->qoi[q]);
 }
 
-/* The reference's scale Q of each quantity. */
+/* The reference's scale Q of each quantity (from the origin o: its first
+ * value for a position, else 0) and its last value. */
 static void reference_scales(bs_study *S, const bs_qoi_table *ref, const int *col) {
   for (int q = 0; q < S->n_qoi; q++) {
     double m = 0;
     S->q_ref_ok[q] = col[q] >= 0 && ref->n_rows > 0;
+    S->q_origin[q] = S->q_ref_ok[q] && S->q_kind[q] == BS_QOI_POSITION ? ref->values[col[q]] : 0.0;
     for (int i = 0; S->q_ref_ok[q] && i < ref->n_rows; i++) {
-      double v = fabs(ref->values[(size_t)i * ref->n_qoi + col[q]]);
+      double v = fabs(ref->values[(size_t)i * ref->n_qoi + col[q]] - S->q_origin[q]);
       if (v > m) m = v;
     }
     S->q_ref_scale[q] = m > 0 ? m : 1.0;
+    S->q_ref_last[q] = S->q_ref_ok[q] ? ref->values[(size_t)(ref->n_rows - 1) * ref->n_qoi + col[q]] : NAN;
   }
 }
 
@@ -64,6 +67,12 @@ int bs__study_read_qoi(bs_study *S) {
   int n_bad = 0;
   for (int i = 0; i < S->n_runs; i++)
     for (int q = 0; q < BS_STUDY_MAX_QOI; q++) S->runs[i].q_last[q] = S->runs[i].q_err_last[q] = S->runs[i].q_err_max[q] = NAN;
+  for (int q = 0; q < BS_STUDY_MAX_QOI; q++) {
+    S->q_ref_ok[q] = 0;
+    S->q_ref_scale[q] = 1.0;
+    S->q_origin[q] = 0;
+    S->q_ref_last[q] = NAN;
+  }
   if (S->n_qoi == 0) return 0;
   bs_qoi_table ref = {0}, t;
   bs_error err;

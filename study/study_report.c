@@ -45,7 +45,7 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
     fprintf(f, ",%s", !strcmp(S->knobs[k].key, "method") ? S->knobs[k].path : S->knobs[k].key);
   fprintf(f, ",method,status,exit,failed,failed_steps,frames,s_per_frame,newton_per_step,cg_per_step,peak_mib,"
              "pos_err_max,pos_err_last,vel_err_max,vel_err_last,energy_drift,inverted_max,penetration_max,reference,"
-             "pareto");
+             "pareto,verdict_error,verdict_by");
   for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%s,%s_err_last,%s_err_max", S->qoi[q], S->qoi[q], S->qoi[q]);
   fputc('\n', f);
   for (int i = 0; i < S->n_runs; i++) {
@@ -56,6 +56,8 @@ int bs_study_csv_write(const bs_study *S, bs_error *err) {
             bs_study_run_status(r), r->exit_code, r->exit_code != 0, r->failed_steps, r->n_rows > 0 ? r->n_rows - 1 : 0, r->s_per_frame, r->newton_per_step,
             r->cg_per_step, r->peak_mib, r->pos_max, r->pos_last, r->vel_max, r->vel_last, r->drift, r->inv_max,
             r->pen_max, r->is_ref, r->pareto);
+    fprintf(f, ",%.6g,%s", r->verdict_err,
+            !S->verdict.on_qoi ? "position" : r->verdict_by >= 0 ? S->qoi[r->verdict_by] : "-");
     for (int q = 0; q < S->n_qoi; q++) fprintf(f, ",%.12g,%.6g,%.6g", r->q_last[q], r->q_err_last[q], r->q_err_max[q]);
     fputc('\n', f);
   }
@@ -70,28 +72,28 @@ static void pareto_data(const bs_study *S) {
   char p[BS_STUDY_FILE_PATH];
   FILE *d = open_out(S, "plot_pareto.dat", p);
   if (!d) return;
-  fprintf(d, "# Pareto front (error > 0): s_per_frame pos_err_max\n");
+  fprintf(d, "# Pareto front (error > 0): s_per_frame verdict_error\n");
   int *ord = malloc(sizeof(int) * ((size_t)S->n_runs + 1)), no = 0;
   for (int i = 0; ord && i < S->n_runs; i++)
-    if (S->runs[i].pareto && S->runs[i].pos_max > 0) ord[no++] = i;
+    if (S->runs[i].pareto && S->runs[i].verdict_err > 0) ord[no++] = i;
   for (int i = 1; i < no; i++)
     for (int j = i; j > 0 && S->runs[ord[j]].s_per_frame < S->runs[ord[j - 1]].s_per_frame; j--) {
       int t = ord[j];
       ord[j] = ord[j - 1];
       ord[j - 1] = t;
     }
-  for (int i = 0; i < no; i++) fprintf(d, "%.9g %.9g\n", S->runs[ord[i]].s_per_frame, S->runs[ord[i]].pos_max);
+  for (int i = 0; i < no; i++) fprintf(d, "%.9g %.9g\n", S->runs[ord[i]].s_per_frame, S->runs[ord[i]].verdict_err);
   if (no == 0) fprintf(d, "nan nan\n");
   free(ord);
   fclose(d);
 }
 
-/* The smallest positive finite position error of the runs (1e-6 if none):
+/* The smallest positive finite verdict error of the runs (1e-6 if none):
  * failed and timed-out runs are drawn at half of it. */
 static double error_floor(const bs_study *S) {
   double m = INFINITY;
   for (int i = 0; i < S->n_runs; i++)
-    if (S->runs[i].pos_max > 0 && S->runs[i].pos_max < m) m = S->runs[i].pos_max;
+    if (S->runs[i].verdict_err > 0 && S->runs[i].verdict_err < m) m = S->runs[i].verdict_err;
   return isfinite(m) ? 0.5 * m : 1e-6;
 }
 
@@ -101,21 +103,21 @@ static double plot_cost_of(const bs_study_run *r) {
   return r->wall > 0 && r->frames > 0 ? r->wall / r->frames : NAN;
 }
 
-/* plot_cost.dat: per method the runs with a positive error (cost, error,
+/* plot_cost.dat: per method the runs with a positive verdict error (cost, error,
  * label), then one block of the failed and timed-out runs; the points written. */
 static int cost_data(const bs_study *S, const char **methods, int nm) {
   char p[BS_STUDY_FILE_PATH];
   FILE *d = open_out(S, "plot_cost.dat", p);
   int n = 0;
   for (int m = 0; d && m <= nm; m++) {
-    fprintf(d, m < nm ? "# method %s: s_per_frame pos_err_max setting\n" : "# failed or timeout%s: cost floor\n",
+    fprintf(d, m < nm ? "# method %s: s_per_frame verdict_error setting\n" : "# failed or timeout%s: cost floor\n",
             m < nm ? methods[m] : "");
     for (int i = 0; i < S->n_runs; i++) {
       const bs_study_run *r = &S->runs[i];
       int bad = r->exit_code != 0 || r->timed_out;
-      if (m < nm && !bad && !strcmp(r->method, methods[m]) && r->pos_max > 0 && isfinite(r->pos_max) &&
+      if (m < nm && !bad && !strcmp(r->method, methods[m]) && r->verdict_err > 0 && isfinite(r->verdict_err) &&
           r->s_per_frame > 0)
-        n += fprintf(d, "%.9g %.9g \"%s\"\n", r->s_per_frame, r->pos_max, r->name) > 0;
+        n += fprintf(d, "%.9g %.9g \"%s\"\n", r->s_per_frame, r->verdict_err, r->name) > 0;
       if (m == nm && bad && isfinite(plot_cost_of(r)))
         fprintf(d, "%.9g %.9g \"%s (%s)\"\n", plot_cost_of(r), error_floor(S), r->name, bs_study_run_status(r));
     }
@@ -135,15 +137,31 @@ static void empty_guard(FILE *gp, int n_points, const char *what) {
 
 static void empty_unguard(FILE *gp) { fprintf(gp, "set autoscale xy\nunset label 1\n"); }
 
-/* 1. error against cost, the Pareto front marked, points labelled. */
+/* The cost plot's y label: the verdict's quantity. */
+static const char *verdict_label(const bs_study *S, char *buf, size_t n) {
+  const bs_study_verdict *v = &S->verdict;
+  if (!v->on_qoi) {
+    snprintf(buf, n, "position error: max over frames of RMS |x - x_ref| / %s (1)",
+             S->disp > 1e-12 * S->size ? "what the reference moved" : "body size");
+    return buf;
+  }
+  size_t k = (size_t)snprintf(buf, n, "verdict error:");
+  for (int i = 0; i < v->n_judged && k < n; i++)
+    k += (size_t)snprintf(buf + k, n - k, "%s %s", i ? "," : "", S->qoi[v->judged[i].qoi]);
+  if (k < n) snprintf(buf + k, n - k, " at the last frame (1)");
+  return buf;
+}
+
+/* 1. the verdict's error against cost, the Pareto front marked, points labelled. */
 static void plot_cost(const bs_study *S, const char **methods, int nm, FILE *gp) {
+  char label[512];
   int n = cost_data(S, methods, nm);
   pareto_data(S);
   fprintf(gp, "set output 'error_vs_cost.png'\nset logscale xy\nset xlabel 'cost: solver seconds per frame (s)'\n"
-              "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
-              "set title 'Error against cost (%s; the reference, error 0, is not drawn)'\n",
-          S->name);
-  empty_guard(gp, n, "position error");
+              "set ylabel '%s'\n"
+              "set title 'Error against cost (%s; a run of error 0 is not drawn)'\n",
+          verdict_label(S, label, sizeof label), S->name);
+  empty_guard(gp, n, "error");
   fprintf(gp, "plot ");
   for (int m = 0; m < nm; m++)
     fprintf(gp, "'plot_cost.dat' index %d using 1:2 with points pt 7 ps 1.3 title '%s', "
@@ -223,7 +241,7 @@ static void plot_refine(const bs_study *S, int k, const char **methods, int nm, 
     fprintf(gp, "set output 'error_vs_refine%s%s.png'\nset logscale y\nset key inside top right\nset xtics 1\n"
                 "set xlabel '%s: refinement level (cell size h ~ 2^-level, so log-log in h)'\n",
             k ? "_" : "", k ? S->knobs[k].key : "", S->knobs[k].key);
-  fprintf(gp, "set ylabel 'position error: max over frames of RMS |x - x_ref| / body size (1)'\n"
+  fprintf(gp, "set ylabel 'position error: max over frames of RMS |x - x_ref| / what the reference moved (1)'\n"
               "set title 'Error against %s (other knobs at the reference)'\n",
           is_t ? "time step" : "refinement");
   empty_guard(gp, refine_points(S, k, methods, nm, grp), "position error");

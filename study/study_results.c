@@ -1,6 +1,8 @@
 /* study_results.c — a study's results once its runs have run: each run's
  * costs from its folder (frames.csv, summary.txt), the errors against the
- * reference (study_compare.c) and the Pareto front (bs_study.h). */
+ * reference (study_compare.c), the quantities (study_qoi.c), the verdict
+ * (study_verdict.c) and the Pareto front of cost against the verdict's
+ * error (bs_study.h). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -66,8 +68,8 @@ void bs__study_mark_pareto(bs_study *S) {
   if (cost && error && ok && front) {
     for (int i = 0; i < n; i++) {
       cost[i] = S->runs[i].s_per_frame;
-      error[i] = S->runs[i].pos_max;
-      ok[i] = S->runs[i].exit_code == 0;
+      error[i] = S->runs[i].verdict_err;
+      ok[i] = S->runs[i].exit_code == 0 && !S->runs[i].timed_out;
     }
     bs_study_pareto(n, cost, error, ok, front);
     for (int i = 0; i < n; i++) S->runs[i].pareto = front[i];
@@ -81,6 +83,8 @@ void bs__study_mark_pareto(bs_study *S) {
 int bs_study_evaluate(bs_study *S) {
   bs__study_read_costs(S);
   int n_bad = bs__study_compare(S);
+  n_bad += bs__study_read_qoi(S);
+  bs_study_verdict_make(S, &S->verdict);
   bs__study_mark_pareto(S);
-  return n_bad + bs__study_read_qoi(S);
+  return n_bad;
 }

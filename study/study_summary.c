@@ -1,8 +1,8 @@
 /* study_summary.c — a study's summary text (bs_study.h): the runs that
- * failed or timed out, the cheapest setting within 1%, 0.1%, 0.01% (never
- * the reference itself; quantities judged against their extrapolated value
- * where one exists), the observed orders, and for each quantity of interest
- * its Richardson extrapolation and GCI along each refinement or time knob. */
+ * failed or timed out, each quantity of interest per run with its Richardson
+ * extrapolation and GCI along each refinement or time knob, and the observed
+ * orders. The verdict (the cheapest run within 1%, 0.1%, 0.01%) is not here:
+ * it is S->verdict (study_verdict.c), for the caller to print, once. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,50 +13,6 @@
 #define MAX_METHODS 256
 
 /* ---- the summary ------------------------------------------------------------ */
-
-static const double thr[3] = {1e-2, 1e-3, 1e-4};
-static const char *const thr_name[3] = {"1%", "0.1%", "0.01%"};
-
-/* The cheapest of the runs with ok[i] within each threshold of error[]. */
-static void cheapest_lines(const bs_study *S, const double *cost, const double *error, const int *ok, FILE *f) {
-  for (int t = 0; t < 3; t++) {
-    int best = bs_study_cheapest_within(S->n_runs, cost, error, ok, thr[t]);
-    if (best < 0) fprintf(f, "    %-6s none\n", thr_name[t]);
-    else
-      fprintf(f, "    %-6s %s  (%.4g s/frame, error %.3g%%)\n", thr_name[t], S->runs[best].name,
-              S->runs[best].s_per_frame, 100 * error[best]);
-  }
-}
-
-/* ok[i]: run i of the method finished and is not the reference (whose error
- * against itself is 0 by construction). */
-static void candidates(const bs_study *S, const char *method, int *ok) {
-  for (int i = 0; i < S->n_runs; i++) {
-    const bs_study_run *r = &S->runs[i];
-    ok[i] = !strcmp(r->method, method) && r->exit_code == 0 && !r->timed_out && !r->is_ref;
-  }
-}
-
-/* For each method, the cheapest run within 1%, 0.1% and 0.01% position error. */
-static void summary_cheapest(const bs_study *S, const char **methods, int nm, FILE *f) {
-  int n = S->n_runs;
-  double *cost = malloc(sizeof(double) * ((size_t)n + 1)), *error = malloc(sizeof(double) * ((size_t)n + 1));
-  int *ok = malloc(sizeof(int) * ((size_t)n + 1));
-  for (int i = 0; cost && error && i < n; i++) {
-    cost[i] = S->runs[i].s_per_frame;
-    error[i] = S->runs[i].pos_max;
-  }
-  fprintf(f, "cheapest setting (by s/frame; the reference excluded) within a position error (max over frames, "
-             "/ body size, against the reference) of:\n");
-  for (int m = 0; cost && error && ok && m < nm; m++) {
-    fprintf(f, "  method %s\n", methods[m]);
-    candidates(S, methods[m], ok);
-    cheapest_lines(S, cost, error, ok, f);
-  }
-  free(cost);
-  free(error);
-  free(ok);
-}
 
 /* The orders of knob k for one method: against the reference, and from successive levels. */
 static void summary_order(const bs_study *S, int k, const char *method, FILE *f) {
@@ -91,7 +47,8 @@ static void summary_not_ok(const bs_study *S, FILE *f) {
 
 /* Each run's value of each quantity and its error against the reference. */
 static void summary_qoi_runs(const bs_study *S, FILE *f) {
-  fprintf(f, "quantities of interest at the last frame (error: |q - q_ref| / max |q_ref| over frames):\n");
+  fprintf(f, "quantities of interest at the last frame (error against the reference: |q - q_ref| / max over its "
+             "frames of |q_ref - o|, o its first value for a position, else 0):\n");
   for (int i = 0; i < S->n_runs; i++) {
     const bs_study_run *r = &S->runs[i];
     fprintf(f, "  %-40s %-7s", r->name, bs_study_run_status(r));
@@ -100,9 +57,8 @@ static void summary_qoi_runs(const bs_study *S, FILE *f) {
   }
 }
 
-/* The GCI of quantity q along knob k for method; *ext gets the extrapolated
- * value when the convergence is monotone. */
-static void summary_gci(const bs_study *S, int k, const char *method, int q, FILE *f, double *ext) {
+/* The GCI of quantity q along knob k for method. */
+static void summary_gci(const bs_study *S, int k, const char *method, int q, FILE *f) {
   bs_gci g;
   int used[3], skipped;
   bs_gci_status st = bs__study_qoi_gci(S, k, method, q, &g, used, &skipped);
@@ -119,7 +75,6 @@ static void summary_gci(const bs_study *S, int k, const char *method, int q, FIL
     fprintf(f, "    %s convergence: no order, extrapolation or GCI fitted\n", bs_gci_status_name(st));
     return;
   }
-  *ext = g.extrapolated;
   fprintf(f, "    observed order p = %.4g, Richardson extrapolated %.9g, GCI_fine = %.3g%%, GCI_coarse = %.3g%%, "
              "asymptotic ratio %.4g (%s)%s\n",
           g.p, g.extrapolated, 100 * g.gci_fine, 100 * g.gci_coarse, g.asymptotic,
@@ -127,40 +82,13 @@ static void summary_gci(const bs_study *S, int k, const char *method, int q, FIL
           skipped ? " [failed or timed-out levels skipped]" : "");
 }
 
-/* The cheapest run within each threshold of quantity q: errors against ext
- * (the extrapolated value) when finite, else against the reference. */
-static void summary_qoi_cheapest(const bs_study *S, const char *method, int q, double ext, FILE *f, double *cost,
-                                 double *error, int *ok) {
-  for (int i = 0; i < S->n_runs; i++) {
-    cost[i] = S->runs[i].s_per_frame;
-    error[i] = isfinite(ext) ? fabs(S->runs[i].q_last[q] - ext) / (ext != 0 ? fabs(ext) : 1.0)
-                             : S->runs[i].q_err_last[q];
-  }
-  candidates(S, method, ok);
-  fprintf(f, "  cheapest %s within (method %s, against the %s):\n", S->qoi[q], method,
-          isfinite(ext) ? "extrapolated value" : "reference");
-  cheapest_lines(S, cost, error, ok, f);
-}
-
+/* Each quantity per run, and its GCI along each refinement or time knob. */
 static void summary_qoi(const bs_study *S, const char **methods, int nm, FILE *f) {
   summary_qoi_runs(S, f);
-  int n = S->n_runs;
-  double *cost = malloc(sizeof(double) * ((size_t)n + 1)), *error = malloc(sizeof(double) * ((size_t)n + 1));
-  int *ok = malloc(sizeof(int) * ((size_t)n + 1));
-  for (int q = 0; cost && error && ok && q < S->n_qoi; q++)
-    for (int m = 0; m < nm; m++) {
-      double ext = NAN;
+  for (int q = 0; q < S->n_qoi; q++)
+    for (int m = 0; m < nm; m++)
       for (int k = 0; k < S->n_knobs; k++)
-        if (S->knobs[k].kind == BS_KNOB_REFINE || bs_study_knob_is_time(&S->knobs[k])) {
-          double e = NAN;
-          summary_gci(S, k, methods[m], q, f, &e);
-          if (!isfinite(ext)) ext = e;
-        }
-      summary_qoi_cheapest(S, methods[m], q, ext, f, cost, error, ok);
-    }
-  free(cost);
-  free(error);
-  free(ok);
+        if (S->knobs[k].kind == BS_KNOB_REFINE || bs_study_knob_is_time(&S->knobs[k])) summary_gci(S, k, methods[m], q, f);
 }
 
 void bs_study_summary_write(const bs_study *S, FILE *f) {
@@ -174,10 +102,14 @@ void bs_study_summary_write(const bs_study *S, FILE *f) {
   char ref_desc[sizeof "the run in " + BS_MAX_PATH];
   if (S->ref_dir[0]) snprintf(ref_desc, sizeof ref_desc, "the run in %s", S->ref_dir);
   else snprintf(ref_desc, sizeof ref_desc, "%s", S->ref >= 0 ? S->runs[S->ref].name : "?");
-  fprintf(f, "\nstudy %s: %d runs (%d failed, %d timed out), body size %.4g m; reference: %s\n", S->name, S->n_runs,
-          n_failed, n_timeout, S->size, ref_desc);
+  fprintf(f, "\nstudy %s: %d runs (%d failed, %d timed out); reference: %s\n", S->name, S->n_runs, n_failed,
+          n_timeout, ref_desc);
+  if (S->disp > 1e-12 * S->size)
+    fprintf(f, "position error: RMS |x - x_ref| over what the reference moved (RMS displacement from its first "
+               "frame, max over frames: %.4g m; body size %.4g m)\n", S->disp, S->size);
+  else
+    fprintf(f, "position error: RMS |x - x_ref| over the body size %.4g m (the reference did not move)\n", S->size);
   summary_not_ok(S, f);
-  summary_cheapest(S, methods, nm, f);
   if (S->n_qoi) summary_qoi(S, methods, nm, f);
   int any_t = 0, any_s = 0;
   for (int k = 0; k < S->n_knobs; k++) {

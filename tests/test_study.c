@@ -85,8 +85,8 @@ Test(study, two_by_two_resumable_with_plots) {
   int rc = study(dir, "--vary steps_per_frame=1,2 --vary tolerance=1e-2,1e-4", &out);
   cr_assert_eq(rc, 0, "study exited %d:\n%s", rc, out);
   cr_expect(strstr(out, "4 runs, 4 to do") != NULL, "%s", out);
-  cr_expect(strstr(out, "method optimization") != NULL, "the summary should name the method:\n%s", out);
-  cr_expect(strstr(out, "1%") && strstr(out, "0.1%") && strstr(out, "0.01%"), "%s", out);
+  cr_expect(strstr(out, "verdict: judged on the position error") != NULL, "the verdict names its quantity:\n%s", out);
+  cr_expect(strstr(out, "within 1%") && strstr(out, "within 0.1%") && strstr(out, "within 0.01%"), "%s", out);
   free(out);
 
   static table t;
@@ -140,8 +140,11 @@ Test(study, summary_names_each_method_and_failed_runs_are_recorded) {
   int rc = study(dir, "--vary method=newton,optimization --vary solver.max_iterations=1,500 --set time.frames=2 "
                       "--set solver.tolerance=1e-9 --jobs 2", &out);
   cr_assert_eq(rc, 0, "a failed run must not stop the study (exit %d):\n%s", rc, out);
-  cr_expect(strstr(out, "method optimization") != NULL, "%s", out);
-  cr_expect(strstr(out, "method newton") != NULL, "%s", out);
+  /* one ranking across the method knob: both methods' runs in it, one verdict */
+  cr_expect(strstr(out, "method=optimization,solver.max_iterations=500") != NULL, "%s", out);
+  cr_expect(strstr(out, "method=newton,solver.max_iterations=500") != NULL, "%s", out);
+  const char *v = strstr(out, "verdict: ");
+  cr_expect(v && !strstr(v + 1, "verdict: "), "one verdict:\n%s", out);
   free(out);
   static table t;
   memset(&t, 0, sizeof t);
