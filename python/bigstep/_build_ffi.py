@@ -102,6 +102,7 @@ typedef struct bs_bsr {
 int32_t bs_bsr_slot(const bs_bsr *A, int32_t i, int32_t j);
 int bs_fem_matrix(const bs_fem *fem, bs_bsr **out, bs_error *err);
 void bs_bsr_destroy(bs_bsr **A);
+void bs_bsr_mul(const bs_bsr *A, const uint8_t *mask, const double *x, double *y);
 typedef struct bs_step_data { double dt; double time; double load; ...; } bs_step_data;
 typedef struct bs_term { const char *name; int dynamic_only, expensive, quadratic, external; ...; } bs_term;
 
