@@ -71,8 +71,10 @@ class PythonTerm:
         (it holds the other terms' gradients);
       * ``hessian(x, H)``: ADD d2E/dx2 into H (a :class:`BlockMatrix`:
         ``H.add_diagonal(vertices, blocks)``, ``H.add(i, j, blocks)``).
-    Raise an exception to report an error: the step ends, and the exception
-    is raised from the call that stepped. To say that x is outside the term's
+    Raise an exception to report an error: the call is then reported to the
+    minimizer as "not evaluable" (the step goes on as it does for such a
+    point), and once the stepping call (step, advance_frame, run, statics)
+    is over the exception is raised from it. To say that x is outside the term's
     domain (the line search then shrinks the step) return ``None`` from value
     or gradient.
 
@@ -114,12 +116,15 @@ class FunctionTerm(PythonTerm):
         self.name, self.dynamic_only, self.quadratic, self.external = name, dynamic_only, quadratic, external
 
     def value(self, x):
+        """Calls the value callable."""
         return self._v(x)
 
     def gradient(self, x, g):
+        """Calls the gradient callable (it adds into g)."""
         return self._g(x, g)
 
     def hessian(self, x, H):
+        """Calls the hessian callable (it adds into H)."""
         return self._h(x, H)
 
 
