@@ -559,9 +559,10 @@ class Simulation:
                 out = {k: a for k, a in out.items() if k in names}
             return out
 
-    def qoi(self) -> Dict[str, float]:
+    def qoi(self, as_array: bool = False) -> Union[Dict[str, float], np.ndarray]:
         """The scene's quantities of interest at the current state
-        (bs_qoi_eval), {name: value} in the scene's order (m, m/s, N or J)."""
+        (bs_qoi_eval), {name: value} in the scene's order (m, m/s, N or J),
+        or with `as_array` a float64 array in the order of scene.qoi_names."""
         with self._guard() as s:
             o = self._owner
             err = new_error()
@@ -572,6 +573,8 @@ class Simulation:
             names = self.scene.qoi_names
             vals = ffi.new("double[]", max(1, len(names)))
             check(lib.bs_qoi_eval(o.qoi[0], s, vals, err), err)
+            if as_array:
+                return np.array([vals[i] for i in range(len(names))], dtype=np.float64)
             return {nm: float(vals[i]) for i, nm in enumerate(names)}
 
     def step_stats(self, as_dict: bool = False) -> Union[np.ndarray, Dict[str, np.ndarray]]:
