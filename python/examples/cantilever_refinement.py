@@ -26,6 +26,7 @@ import bigstep  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENE = os.path.join(HERE, "..", "..", "data", "scenes", "beam_sag.json")
 OUT = sys.argv[1] if len(sys.argv) > 1 else os.path.join("out", "python_cantilever")
+LEVELS = int(os.environ.get("LEVELS", "4"))  # refinement levels (the tests run 3)
 os.makedirs(OUT, exist_ok=True)
 
 # Step 1: the scene. A file, with overrides as `bigstep run --set` takes them
@@ -51,7 +52,7 @@ with bigstep.Simulation(scene) as sim:
 # folder, and the study compares them with the finest and fits the GCI of
 # the tip deflection (Richardson extrapolation, Roache's safety factor 1.25).
 # A coarser base mesh than the scene's keeps the example quick.
-result = bigstep.study(SCENE, vary={"refine": [0, 1, 2, 3]}, qoi=["tip_y"],
+result = bigstep.study(SCENE, vary={"refine": list(range(LEVELS))}, qoi=["tip_y"],
                        sets={"bodies.0.box.cells": [10, 1, 1], "output.vtu_every": 0},
                        out=os.path.join(OUT, "study"),
                        progress=lambda i, n, d: print("  run %d/%d %s" % (i, n, d["run"])))
