@@ -11,6 +11,7 @@ a Python loop over vertices costs about 1 microsecond per vertex per call.
 For production, write the term in C (examples/02_spring)."""
 from __future__ import annotations
 
+import weakref
 from typing import Callable, Optional
 
 import numpy as np
@@ -34,6 +35,8 @@ class BlockMatrix:
         """H[i_k, j_k] += blocks[k] (blocks: (m, 3, 3), row-major: block
         (i, j)'s entry (a, b) is d2E / dx_i,a dx_j,b). A pair (i, j) that
         shares no tet is not in the pattern: InputError."""
+        if self._H is None:
+            raise InputError("BlockMatrix: used after the hessian() call that received it")
         i = np.ascontiguousarray(i, dtype=np.int32).ravel()
         j = np.ascontiguousarray(j, dtype=np.int32).ravel()
         B = np.ascontiguousarray(blocks, dtype=np.float64).reshape(-1, 3, 3)
@@ -92,6 +95,7 @@ class PythonTerm:
     external: bool = False
     _exc: Optional[BaseException] = None
     _n: int = 0
+    _owner_ref = None
 
     def value(self, x: np.ndarray) -> Optional[float]:
         """The energy at x (J)."""
@@ -128,10 +132,16 @@ class FunctionTerm(PythonTerm):
         return self._h(x, H)
 
 
-def _ro(ptr, n):
-    a = np.frombuffer(ffi.buffer(ptr, 24 * n), dtype=np.float64).reshape(n, 3)
-    a.flags.writeable = False
-    return a
+def _arr(term, ptr, readonly=True):
+    """An (n, 3) view of a vector the integrator hands the term. The view
+    keeps the simulation's memory alive (a reference to its owner, as
+    Simulation.x does), so one kept past the call never reads freed memory
+    (it shows whatever the integrator put there later)."""
+    from ._sim import _view
+    owner = term._owner_ref() if term._owner_ref is not None else None
+    if owner is None:  # not in a simulation (check_term on plain arrays does not come here)
+        raise RuntimeError("the term's simulation is gone")
+    return _view(owner, ptr, (term._n, 3), "<f8", readonly)
 
 
 def _fail(term, e):
@@ -144,7 +154,7 @@ def _fail(term, e):
 def bspy_py_value(py, t, x, E):
     term = ffi.from_handle(py)
     try:
-        e = term.value(_ro(x, term._n))
+        e = term.value(_arr(term, x))
         if e is None:
             return lib.BS_TERM_NOT_EVALUABLE
         E[0] = float(e)
@@ -157,9 +167,7 @@ def bspy_py_value(py, t, x, E):
 def bspy_py_gradient(py, t, x, E, g):
     term = ffi.from_handle(py)
     try:
-        n = term._n
-        gv = np.frombuffer(ffi.buffer(g, 24 * n), dtype=np.float64).reshape(n, 3)
-        e = term.gradient(_ro(x, n), gv)
+        e = term.gradient(_arr(term, x), _arr(term, g, readonly=False))
         if e is None:
             return lib.BS_TERM_NOT_EVALUABLE
         E[0] = float(e)
@@ -171,11 +179,14 @@ def bspy_py_gradient(py, t, x, E, g):
 @ffi.def_extern()
 def bspy_py_hessian(py, t, x, H):
     term = ffi.from_handle(py)
+    Hm = BlockMatrix(H, term._n)
     try:
-        term.hessian(_ro(x, term._n), BlockMatrix(H, term._n))
+        term.hessian(_arr(term, x), Hm)
         return lib.BS_TERM_OK
     except BaseException as exc:
         return _fail(term, exc)
+    finally:
+        Hm._H = None  # valid during the call only
 
 
 def _register_term(owner, s, term, n):
@@ -185,6 +196,7 @@ def _register_term(owner, s, term, n):
         raise InputError("add_term: this term is already in a simulation")
     term._n = n
     term._exc = None
+    term._owner_ref = weakref.ref(owner)
     h = ffi.new_handle(term)
     owner.terms.append((term, h))  # before the C term exists: it calls through h
     err = new_error()

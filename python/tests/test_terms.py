@@ -171,3 +171,29 @@ def test_term_errors_are_raised():
     sim.advance_frame()
     with pytest.raises(bigstep.InputError, match="before the first step"):
         sim.add_term(Spring([0], sim.x0, 1.0, [0, 0, 0]))
+
+
+def test_kept_callback_arrays_stay_safe():
+    """Arrays and matrices a term keeps past its call: the arrays keep the
+    simulation's memory alive, the matrix refuses further use."""
+    kept = {}
+
+    class Keeper(Spring):
+        def gradient(self, x, g):
+            kept["x"], kept["g"] = x, g
+            return super().gradient(x, g)
+
+        def hessian(self, x, H):
+            kept["H"] = H
+            super().hessian(x, H)
+
+    sim = bigstep.Simulation(cube_scene())
+    sim.add_term(Keeper([0, 1], sim.x0, 10.0, [0, 0, 0]))
+    sim.advance_frame()
+    sim.close()
+    del sim
+    import gc
+    gc.collect()
+    assert np.isfinite(kept["x"]).all() and kept["g"].shape == kept["x"].shape
+    with pytest.raises(bigstep.InputError, match="after the hessian"):
+        kept["H"].add_diagonal([0], 1.0)
