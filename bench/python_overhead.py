@@ -135,6 +135,9 @@ def main():
     lines += ["", "a Python energy term (cube_stretch on a 2^3-cell cube, 240 frames, a term that adds nothing)",
               "without %.3f s, with %.3f s, %d calls: %.1f us per call into Python"
               % (best[0], best[1], calls, 1e6 * (best[1] - best[0]) / max(calls, 1))]
+    end = os.getloadavg()[0]
+    lines += ["", "1-min load at the end %.2f%s" % (end, " (above 3: other work ran meanwhile; the figures are "
+                                                     "disturbed)" if end > 3 else "")]
     _write(a.out, lines)
 
 
