@@ -241,6 +241,7 @@ int bspy_run_sim(bs_sim *s, bspy_run *r, int resume, bs_run_totals *T, int catch
 int bspy_finish(bspy_run *r, const bs_sim *s, const bs_run_totals *T, int stopped, double wall, bs_error *err);
 double bspy_folder_wall(bspy_run *r);
 int bspy_step(bs_sim *s, int k, bs_error *err);
+int bspy_step_sig(bs_sim *s, int k, int catch_sigint, int *got_sigint, bs_error *err);
 void bspy_frame_end(bs_sim *s, bs_frame_stats *fs);
 int bspy_add_term(bs_sim *s, const char *name, void *py, int dynamic_only, int quadratic, int external,
                   bs_error *err);

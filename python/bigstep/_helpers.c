@@ -123,6 +123,31 @@ int bspy_step(bs_sim *s, int k, bs_error *err) {
   return 0;
 }
 
+/* bspy_step with SIGINT caught for its duration (catch_sigint): *got_sigint
+ * says whether one came, for the caller to raise KeyboardInterrupt once its
+ * bookkeeping is done (the step itself is completed, not undone). */
+int bspy_step_sig(bs_sim *s, int k, int catch_sigint, int *got_sigint, bs_error *err) {
+  struct sigaction sa, old;
+  int installed = 0;
+  volatile sig_atomic_t flag = 0;
+  if (catch_sigint) {
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = bspy_on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART;
+    bspy_flag = &flag;
+    if (sigaction(SIGINT, &sa, &old) == 0) installed = 1;
+    else bspy_flag = NULL;
+  }
+  int st = bspy_step(s, k, err);
+  if (installed) {
+    sigaction(SIGINT, &old, NULL);
+    bspy_flag = NULL;
+  }
+  *got_sigint = flag != 0;
+  return st;
+}
+
 void bspy_frame_end(bs_sim *s, bs_frame_stats *fs) {
   const bs_scene *sc = s->scene;
   const int f = s->frame + 1;

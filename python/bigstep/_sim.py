@@ -335,16 +335,20 @@ class Simulation:
             self._report0(s)
             err = new_error()
             k = self._substep
-            st = lib.bspy_step(s, k, err)
+            got = ffi.new("int *")
+            st = lib.bspy_step_sig(s, k, int(_catch_sigint()), got, err)
+            if st == 0:
+                rec = _step_record(s.steps[k])
+                self._substep += 1
+                if self._substep == self.scene.steps_per_frame:
+                    self._substep = 0
+                    lib.bspy_frame_end(s, self._fs)
+                    lib.bs_run_totals_add(self._totals, self._fs)
+                    self._write_frame(s)
             self._check_terms()
             check(st, err)
-            rec = _step_record(s.steps[k])
-            self._substep += 1
-            if self._substep == self.scene.steps_per_frame:
-                self._substep = 0
-                lib.bspy_frame_end(s, self._fs)
-                lib.bs_run_totals_add(self._totals, self._fs)
-                self._write_frame(s)
+            if got[0]:  # Ctrl-C during the step: it was completed, then stop here
+                raise KeyboardInterrupt("bigstep: stopped after step %d of frame %d" % (k + 1, s.frame + 1))
             return rec
 
     def advance_frame(self) -> Dict[str, Any]:
@@ -421,8 +425,7 @@ class Simulation:
             r.py = handle
         else:
             r.py = ffi.NULL
-        catch = (threading.current_thread() is threading.main_thread()
-                 and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, signal.SIG_DFL, None))
+        catch = _catch_sigint()
         err = new_error()
         self._cb_thread = threading.get_ident()
         try:
@@ -681,6 +684,13 @@ class Simulation:
             return "<bigstep.Simulation (closed)>"
         return "<bigstep.Simulation %s: %d vertices, frame %d, t = %g s>" % (self.scene.path, self._n, self.frame,
                                                                            self.time)
+
+
+def _catch_sigint() -> bool:
+    """Whether a C call should catch SIGINT (to stop cleanly and raise
+    KeyboardInterrupt): in the main thread, when Python handles SIGINT."""
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) not in (signal.SIG_IGN, signal.SIG_DFL, None))
 
 
 def _step_record(rec) -> Dict[str, Any]:
