@@ -3,9 +3,8 @@ validated by the library (bs_scene_parse / bs_scene_load)."""
 from __future__ import annotations
 
 import json
-import math
 import os
-from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 from ._bigstep import ffi, lib
 from ._errors import SceneError, check, new_error

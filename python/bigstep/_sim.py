@@ -10,7 +10,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Union
 import numpy as np
 
 from ._bigstep import ffi, lib
-from ._errors import BusyError, ClosedError, Error, InputError, SceneError, check, new_error
+from ._errors import BusyError, ClosedError, InputError, SceneError, check, new_error
 from ._mesh import Mesh
 from ._scene import Scene, SceneSource, Sets, as_scene
 from ._terms import BlockMatrix as _BlockMatrix, PythonTerm, _register_term

@@ -39,10 +39,7 @@ def cli():
 @pytest.fixture(scope="session")
 def prefix():
     p = os.environ.get("BIGSTEP_PREFIX")
-    if not p:
-        import bigstep._bigstep as m
-        # the package was built with an rpath to PREFIX/lib; without the
-        # variable use the system's install
+    if not p:  # the system's install (setup.sh's)
         p = "/usr/local"
     return p
 

@@ -1,7 +1,6 @@
 """Bad input raises a Python exception with the library's message, never a
 crash: a few hundred malformed scenes, wrong arguments, a closed simulation."""
 import copy
-import json
 import math
 import random
 
@@ -65,10 +64,6 @@ def test_malformed_scenes_raise_never_crash():
     n_err = n_ok = n_run = 0
     for i in range(400):
         d = _mutate(base, rng)
-        try:
-            text = json.dumps(d)
-        except ValueError:
-            continue
         try:
             sc = bigstep.Scene(d)
         except bigstep.SceneError as e:
