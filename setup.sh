@@ -22,7 +22,8 @@ JOBS=${JOBS:-$(nproc)}
 pkgs=(build-essential cmake pkg-config libgmsh-dev gmsh libmetis-dev libsuitesparse-dev
       libcgal-dev libcjson-dev libcriterion-dev libopenblas0-pthread libopenblas-dev
       gnuplot-nox libhypre-dev libopenmpi-dev libexpat1-dev zlib1g-dev
-      petsc-dev openmpi-bin)
+      petsc-dev openmpi-bin
+      python3-dev python3-numpy python3-cffi python3-pytest python3-matplotlib python3-meshio)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -81,6 +82,16 @@ fi
 
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" ${CMAKE_ARGS:-} >/dev/null
 cmake --build "$BUILD_DIR" -j "$JOBS"
+
+# The library into /usr/local (libbigstep.so, headers, pkg-config) and the
+# Python package bigstep built against it (python/build.py, cffi API mode)
+# into /usr/local/lib/python3.X/dist-packages, for Debian's /usr/bin/python3
+# (not a pyenv python3 on the PATH). Not for the sanitizer build.
+if [ "$mode" != sanitize ]; then
+  cmake --install "$BUILD_DIR" --prefix /usr/local >/dev/null
+  ldconfig
+  /usr/bin/python3 python/build.py --prefix /usr/local --build-dir "$BUILD_DIR/python/setup-cffi" --quiet
+fi
 
 case "$mode" in
   build) ;;
