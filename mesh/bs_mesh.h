@@ -126,6 +126,12 @@ typedef struct bs_mesh_read_opts {
                     mesher and Gmsh's optimisers) or
                     BS_SURFACE_GMSH (Gmsh reparametrises and remeshes the
                     surface; kept for comparison)                       */
+  double time_budget; /* seconds of wall time bs_mesh_read may spend
+                    making a mesh (> 0), checked between its stages and
+                    inside the CGAL loops that allow it (alpha wrap,
+                    tetrahedral remeshing); past it the read stops with
+                    BS_EINPUT "... the meshing time budget of B s ... was
+                    exceeded ..." naming the stage. <= 0: no budget     */
 } bs_mesh_read_opts;
 
 #define BS_MESH_MIN_DIHEDRAL 10.0

@@ -864,7 +864,24 @@ int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, con
   return rc;
 }
 
-int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+/* A Gmsh mesh under the gate lifted by CGAL's tetrahedral remeshing
+ * (bs__mesh_lift at size, <= 0: the mean edge length; its groups kept);
+ * BS_OK when the lift passes the gate, else BS_EINPUT with the gate's
+ * first message (the budget's when spent). */
+static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs_error *err) {
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc = bs__mesh_lift(path, m, size, gate, &e2);
+  if (rc) {
+    if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
+    return rc;
+  }
+  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return BS_EINPUT;
+  bs_error_clear(err);
+  return BS_OK;
+}
+
+static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
   if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
@@ -892,6 +909,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (ext_is(file_ext(path), script) && (rc = bs__geo_check(path, err))) return rc;
 
   bs_mesh *m = NULL;
+  if (kind != IN_MESH && (rc = bs__budget_check(path, "meshing the volume", err))) goto out;
   if (kind == IN_SOUP && size > 0 && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
     rc = bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err);
     goto refine;
@@ -920,6 +938,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
   if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
+  if (rc == BS_EINPUT && m && gate > 0) rc = lift_gmsh(path, &m, size, gate, err);
 
 refine:
   if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
@@ -929,6 +948,13 @@ out:
   bs_shim_free(tris);
   if (rc) bs_mesh_destroy(&m);
   else *out = m;
+  return rc;
+}
+
+int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  bs__budget_begin(opts);
+  const int rc = read_mesh(path, opts, out, err);
+  bs__budget_end();
   return rc;
 }
 

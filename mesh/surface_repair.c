@@ -1,10 +1,45 @@
 /* surface_repair.c — a surface file read and made clean for volume meshing
- * (bs_surface_prepare): bs_shim_read_surface, then bs_shim_repair_surface,
- * with the file's name in front of every message. */
+ * (bs_surface_prepare): bs_shim_read_surface, then bs_shim_repair_surface;
+ * a surface the repair refuses for another reason than being open (a hole
+ * it cannot triangulate, self-intersections it cannot remove, a non-manifold
+ * result, a soup of overlapping facets) is replaced by its alpha wrap at the
+ * requested size (bs__surface_wrap; without a size, diagonal /
+ * BS_WRAP_DEFAULT_CELLS), held to the wrap's volume check. The file's name
+ * is in front of every message; when the wrap is refused too, the repair's
+ * message is kept and the wrap's reason appended. */
 #include <stdint.h>
+#include <stdio.h>
 
 #include "bs_mesh.h"
 #include "bs_shim.h"
+#include "mesh_internal.h"
+
+/* The repair refused the soup: its alpha wrap instead, unless the surface is
+ * open and was refused as such (wrapping would seal what was not asked to
+ * be), or the budget is spent. */
+static int wrap_instead(const char *path, const double *x, int64_t nx, const int32_t *t, int64_t ntri,
+                        const bs_mesh_read_opts *opts, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
+                        bs_surface_report *rep, bs_error *err) {
+  if (rep->open_refused || bs__budget_exceeded(err)) return err ? err->code : BS_EINPUT;
+  const double h = opts && opts->size > 0 ? opts->size : bs__wrap_default_size(x, nx);
+  bs_error e2;
+  bs_error_clear(&e2);
+  const int rc = bs__surface_wrap(path, x, nx, t, ntri, h, 1, pts, np, tris, nt, rep, &e2);
+  if (!rc) {
+    bs_error_clear(err);
+    return BS_OK;
+  }
+  if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) {
+    if (err) *err = e2;
+    return rc;
+  }
+  if (err) {
+    char first[BS_ERROR_MSG];
+    snprintf(first, sizeof first, "%s", err->msg);
+    bs_error_set(err, BS_EINPUT, "%s; its alpha wrap was refused too: %.400s", first, e2.msg);
+  }
+  return BS_EINPUT;
+}
 
 int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
                        const bs_mesh_read_opts *opts, bs_surface_report *rep, bs_error *err) {
@@ -17,10 +52,13 @@ int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tr
   int64_t nx = 0, ntri = 0;
   int rc = bs_shim_read_surface(path, &x, &nx, &t, &ntri, err);
   if (rc) return rc;
+  bs_surface_report local;
+  if (!rep) rep = &local;
   bs_surface_repair_opts o = {.close_holes = opts ? opts->close_holes : 0, .max_hole = opts ? opts->max_hole : 0};
   rc = bs_shim_repair_surface(x, nx, t, ntri, &o, pts, np, tris, nt, rep, err);
+  if (rc) bs_error_prefix(err, "%s", path);
+  if (rc == BS_EINPUT) rc = wrap_instead(path, x, nx, t, ntri, opts, pts, np, tris, nt, rep, err);
   bs_shim_free(x);
   bs_shim_free(t);
-  if (rc) bs_error_prefix(err, "%s", path);
   return rc;
 }
