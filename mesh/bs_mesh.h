@@ -80,6 +80,9 @@ typedef struct bs_mesh {
                           they split the body into pieces there, unless
                           merged (bs_mesh_read_opts.merge_coincident)    */
   int coincident_merged; /* 1: those nodes were merged into one vertex   */
+  double auto_size;    /* bs_mesh_read of a closed surface given no size
+                          (opts->size <= 0): the element size it chose
+                          (bs_surface_auto_size); 0 otherwise            */
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */
@@ -157,8 +160,8 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
 /* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep
  * meshed through Gmsh; closed surfaces (.stl .off .obj .ply, read by the
  * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
- * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
- * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
+ * kept, optimised: surface_mesh.c), with size <= 0 at the size
+ * bs_surface_auto_size chooses (reported in m->auto_size). Meshes bigstep makes are held to opts->min_dihedral. Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
  * type and count. opts may be NULL (defaults).
  *
@@ -193,6 +196,17 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
  *     bs_shim_free(x); bs_shim_free(t); */
 int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
                        const bs_mesh_read_opts *opts, struct bs_surface_report *rep, bs_error *err);
+
+/* The element size bigstep chooses for a closed surface given none: the
+ * bounding-box diagonal / BS_SURFACE_AUTO_CELLS[k] for attempt k (0, 1; a
+ * mesh refused at the first, e.g. by the gate, is made again at the finer
+ * second), never under the size whose 6 V / h^3 tets exceed the machine
+ * (bs_mesh_max_tets). Thin parts get their own local size inside Mesh_3
+ * (two elements across them: bs_shim_mesh3_opts.thickness_elements), which
+ * is the local feature size's share of the rule. 0 for an empty soup. */
+#define BS_SURFACE_AUTO_ATTEMPTS 2
+double bs_surface_auto_size(const double *pts, int64_t np, const int32_t *tris, int64_t nt, int attempt,
+                            const bs_mesh_read_opts *opts);
 
 /* The security rule for Gmsh scripts: a .geo file (with what it includes or
  * merges, and FILE.opt beside it) that runs a program (SystemCall,

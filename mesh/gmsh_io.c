@@ -21,8 +21,12 @@
  * A closed surface is meshed into a volume: with opts->size > 0 by CGAL's
  * Mesh_3 (surface_mesh.c; Gmsh is not involved) unless opts->surface_mesher
  * asks for Gmsh, which classifies it into patches (40 degree feature angle),
- * reparametrizes and remeshes them at that size; with size <= 0 Gmsh keeps
- * its triangles as the boundary of the volume mesh.
+ * reparametrizes and remeshes them at that size (with size <= 0 Gmsh keeps
+ * its triangles as the boundary of the volume mesh); with size <= 0 (and
+ * not the Gmsh mesher) at the size bigstep chooses (bs_surface_auto_size).
+ * Every input but .msh has a time budget (opts->time_budget, mesh_budget.c)
+ * and, when Gmsh's or Mesh_3's mesh misses the gate, is lifted by CGAL's
+ * tetrahedral remeshing (tet_lift.c).
  * Meshes made here (not a .msh) are optimised by Gmsh towards the quality
  * gate (gmsh_optimize.c; a CAD assembly at its own size still under it is
  * meshed again with smaller elements, cad_assembly.c) and then held to it
@@ -781,6 +785,7 @@ static int refine_read(const char *path, int refine, bs_mesh **m, bs_error *err)
     }
     fine->n_coincident = (*m)->n_coincident;
     fine->coincident_merged = (*m)->coincident_merged;
+    fine->auto_size = (*m)->auto_size;
     bs_mesh_destroy(m);
     *m = fine;
   }
@@ -910,8 +915,9 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
 
   bs_mesh *m = NULL;
   if (kind != IN_MESH && (rc = bs__budget_check(path, "meshing the volume", err))) goto out;
-  if (kind == IN_SOUP && size > 0 && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
-    rc = bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err);
+  if (kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
+    rc = size > 0 ? bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err)
+                  : bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
     goto refine;
   }
   if ((rc = gmsh_begin(path, err))) goto out;

@@ -229,6 +229,12 @@ int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, con
                   double h, double gate, int allow_boundary, struct bs_shim_tet_remesh_out *out, bs_error *err);
 int bs__mesh_lift(const char *path, bs_mesh **m, double h, double gate, bs_error *err);
 
+/* surface_mesh.c: bs__mesh_closed_surface at the size bigstep chooses
+ * (bs_surface_auto_size, attempt 0 then 1 when refused); (*out)->auto_size
+ * is the size used. Errors: the first attempt's, prefixed with the size. */
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -382,6 +382,41 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   return mesh_wrap(path, pts, np, tris, nt, h, diag, opts, out, err);
 }
 
+static const double auto_cells[BS_SURFACE_AUTO_ATTEMPTS] = {40.0, 60.0};
+
+double bs_surface_auto_size(const double *pts, int64_t np, const int32_t *tris, int64_t nt, int attempt,
+                            const bs_mesh_read_opts *opts) {
+  if (np <= 0 || nt <= 0 || attempt < 0 || attempt >= BS_SURFACE_AUTO_ATTEMPTS) return 0.0;
+  double lo[3], hi[3];
+  bs_bbox(np, pts, lo, hi);
+  const double h = bs_bbox_diagonal(lo, hi) / auto_cells[attempt];
+  const double v = fabs(bs__soup_volume(pts, tris, nt)), cap = bs_mesh_max_tets(opts);
+  return v > 0 ? fmax(h, cbrt(6.0 * v / cap)) : h;
+}
+
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  bs_mesh_read_opts o = {0};
+  if (opts) o = *opts;
+  int rc = BS_EINPUT;
+  bs_error first;
+  bs_error_clear(&first);
+  for (int k = 0; k < BS_SURFACE_AUTO_ATTEMPTS; k++) {
+    o.size = bs_surface_auto_size(pts, np, tris, nt, k, opts);
+    rc = bs__mesh_closed_surface(path, pts, np, tris, nt, &o, out, err);
+    if (!rc) {
+      (*out)->auto_size = o.size;
+      return BS_OK;
+    }
+    if (k == 0) first = *err;
+    if (rc != BS_EINPUT || bs__budget_exceeded(err)) return rc;
+  }
+  *err = first;
+  bs_error_prefix(err, "no size given, chosen %g (diagonal / %g)", bs_surface_auto_size(pts, np, tris, nt, 0, opts),
+                  auto_cells[0]);
+  return rc;
+}
+
 static const struct {
   const char *name;
   int value;

@@ -1,0 +1,143 @@
+/* The quality back end and the limits of issue 44: CGAL's tetrahedral
+ * remeshing (bs_shim_tet_remesh, bs__tets_lift) on a zero-volume tet and on
+ * a thin slab with a long thin wall, the meshing time budget (a named
+ * error, not a hang), and the size chosen for a surface given none (the
+ * armadillo scan, when data/meshes has it). */
+#define _GNU_SOURCE
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bs_mesh.h"
+#include "bs_shim.h"
+#include "mesh_internal.h"
+
+/* An octahedron (a square at z = 0, apexes at z = +-1) as two pyramids whose
+ * bases are split along different diagonals, made conforming by the flat
+ * tet of the four square corners: 4 tets and 1 of zero volume. */
+static const double octa_x[6 * 3] = {1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+static const int32_t octa_t[5 * 4] = {0, 1, 2, 4, 0, 2, 3, 4, 1, 2, 3, 5, 1, 3, 0, 5, 0, 1, 2, 3};
+
+Test(mesh_lift, zero_volume_tet_is_remeshed_not_an_error) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_expect_eq(bs_mesh_create(6, octa_x, 5, octa_t, 0, NULL, &m, &err), BS_EINPUT, "the flat tet is refused raw");
+  bs_mesh_destroy(&m);
+  bs_error_clear(&err);
+  cr_assert_eq(bs__mesh_default_groups("octahedron", 6, octa_x, 5, octa_t, &m, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_log_info("octahedron: %d tets, min dihedral %.2f, volume %.9g", m->n_tets, q.dihedral_min, bs_mesh_volume(m));
+  cr_expect_eq(q.n_inverted, 0);
+  cr_expect_float_eq(bs_mesh_volume(m), 4.0 / 3.0, 1e-9);
+  cr_expect_gt(q.dihedral_min, 1.0);
+  bs_mesh_destroy(&m);
+}
+
+/* ---- a thin slab with a long thin wall ------------------------------------ */
+
+static void box_tris(FILE *f, int base, const double lo[3], const double hi[3]) {
+  (void)lo, (void)hi;
+  static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int k = 0; k < 6; k++)
+    fprintf(f, "3 %d %d %d\n3 %d %d %d\n", base + q[k][0], base + q[k][1], base + q[k][2], base + q[k][0],
+            base + q[k][2], base + q[k][3]);
+}
+
+/* The slab [0, 1] x [0, 1] x [0, 0.1] and the wall [0.49, 0.51] x [0, 1] x
+ * [0.05, 0.6] as two overlapping boxes (the repair makes their union):
+ * volume 0.1 + 0.02 x 0.5 = 0.11. */
+static void write_slab_wall(const char *path) {
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  const double box[2][2][3] = {{{0, 0, 0}, {1, 1, 0.1}}, {{0.49, 0, 0.05}, {0.51, 1, 0.6}}};
+  fprintf(f, "OFF\n16 24 0\n");
+  for (int b = 0; b < 2; b++)
+    for (int i = 0; i < 8; i++)
+      fprintf(f, "%.17g %.17g %.17g\n", box[b][i & 1][0], box[b][(i >> 1) & 1][1], box[b][(i >> 2) & 1][2]);
+  for (int b = 0; b < 2; b++) box_tris(f, 8 * b, box[b][0], box[b][1]);
+  fclose(f);
+}
+
+Test(mesh_lift, thin_slab_with_a_long_thin_wall) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_slab.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  bs_surface_report rep = {0};
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.05, .report = &rep};
+  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  const double v = bs_mesh_volume(m);
+  cr_log_info("slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11 (%+.2f%%), wrapped %d, "
+              "%.1f s",
+              m->n_tets, q.dihedral_min, v, 100 * (v - 0.11) / 0.11, rep.wrapped, bs_seconds() - t0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
+  cr_expect_leq(fabs(v - 0.11), 0.04 * 0.11, "volume %g", v);
+  bs_mesh_destroy(&m);
+  unlink(path);
+}
+
+/* ---- the time budget ------------------------------------------------------- */
+
+Test(mesh_lift, time_budget_gives_the_named_error) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_budget.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.02, .time_budget = 1e-6};
+  cr_expect_eq(bs_mesh_read(path, &o, &m, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget of 1e-06 s") != NULL, "%s", err.msg);
+  cr_log_info("budget 1e-6 s: stopped after %.3f s: %s", bs_seconds() - t0, err.msg);
+  cr_expect_null(m);
+  unlink(path);
+}
+
+/* Inside the wrap's loop: a deadline already past stops it by name. */
+Test(mesh_lift, time_budget_inside_the_alpha_wrap) {
+  static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+  static const int32_t t[12 * 3] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                    2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_wrap_opts o = {.size = 0.01, .deadline = bs_seconds() - 1.0};
+  bs_shim_wrap_out w;
+  cr_expect_eq(bs_shim_alpha_wrap("cube", x, 8, t, 12, &o, &w, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget was exceeded during the alpha wrap") != NULL, "%s", err.msg);
+  cr_expect_null(w.points);
+}
+
+/* ---- no size given ---------------------------------------------------------- */
+
+Test(mesh_lift, no_size_on_a_scan_passes_the_gate) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/data/meshes/armadillo.off", BS_SOURCE_DIR);
+  if (access(path, R_OK)) cr_skip_test("%s missing (bash setup.sh build extracts it)", path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){0}, &m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_log_info("armadillo without a size: size chosen %g, %d tets, min dihedral %.2f, %.1f s", m->auto_size, m->n_tets,
+              q.dihedral_min, bs_seconds() - t0);
+  cr_expect_gt(m->auto_size, 0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
