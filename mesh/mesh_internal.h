@@ -197,13 +197,19 @@ int bs__budget_exceeded(const bs_error *err);
 /* surface_wrap.c: the soup (x, nx; t, nt: any triangles) replaced by its
  * alpha wrap at element size h (bs_shim_alpha_wrap, the rule of bs_shim.h),
  * held to the volume check when the input is closed once oriented:
- * |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in. *pts, *tris
+ * |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in; and, for an
+ * input the repair refused as open (open = 1), to the solid check: V_wrap
+ * >= BS_WRAP_SOLID x 2 offset area (else the ball went in through a hole
+ * wider than 2 alpha and the wrap is only a shell around the surface; when
+ * its openings are all narrower, a soup of facets with gaps, the wrap is
+ * the solid they bound). *pts, *tris
  * allocated by the shim (bs_shim_free). rep (may be NULL) gets wrapped =
  * how (1 or 2), the wrap's alpha, offset, volume change and seconds, and
  * points_out, tris_out, volume. Errors name path: the shim's, the budget,
  * BS_EINPUT for a wrap that fails the volume check (the change and the bound). */
+#define BS_WRAP_SOLID 10.0
 int bs__surface_wrap(const char *path, const double *x, int64_t nx, const int32_t *t, int64_t nt, double h, int how,
-                     double **pts, int64_t *np, int32_t **tris, int64_t *ntri, struct bs_surface_report *rep,
+                     int open, double **pts, int64_t *np, int32_t **tris, int64_t *ntri, struct bs_surface_report *rep,
                      bs_error *err);
 
 /* surface_wrap.c: the element size for a surface without one: diagonal /

@@ -351,7 +351,7 @@ static int mesh_wrap(const char *path, const double *pts, int64_t np, const int3
   int64_t nwp = 0, nwt = 0;
   bs_error e2;
   bs_error_clear(&e2);
-  int rc = bs__surface_wrap(path, pts, np, tris, nt, h, 2, &wp, &nwp, &wt, &nwt, opts ? opts->report : NULL, &e2);
+  int rc = bs__surface_wrap(path, pts, np, tris, nt, h, 2, 0, &wp, &nwp, &wt, &nwt, opts ? opts->report : NULL, &e2);
   if (!rc) {
     volume = fabs(bs__soup_volume(wp, wt, nwt));
     rc = mesh_with_meshers(path, wp, nwp, wt, nwt, h, diag, volume, opts, out, &e2);

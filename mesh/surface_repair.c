@@ -1,10 +1,11 @@
 /* surface_repair.c — a surface file read and made clean for volume meshing
  * (bs_surface_prepare): bs_shim_read_surface, then bs_shim_repair_surface;
- * a surface the repair refuses for another reason than being open (a hole
- * it cannot triangulate, self-intersections it cannot remove, a non-manifold
- * result, a soup of overlapping facets) is replaced by its alpha wrap at the
- * requested size (bs__surface_wrap; without a size, diagonal /
- * BS_WRAP_DEFAULT_CELLS), held to the wrap's volume check. The file's name
+ * a surface the repair refuses (a hole it cannot triangulate,
+ * self-intersections it cannot remove, a non-manifold result, a soup of
+ * overlapping facets; an open one only when the wrap is solid, see
+ * wrap_instead) is replaced by its alpha wrap at the requested size
+ * (bs__surface_wrap; without a size, diagonal / BS_WRAP_DEFAULT_CELLS), held
+ * to the wrap's volume check. The file's name
  * is in front of every message; when the wrap is refused too, the repair's
  * message is kept and the wrap's reason appended. */
 #include <stdint.h>
@@ -14,17 +15,20 @@
 #include "bs_shim.h"
 #include "mesh_internal.h"
 
-/* The repair refused the soup: its alpha wrap instead, unless the surface is
- * open and was refused as such (wrapping would seal what was not asked to
- * be), or the budget is spent. */
+/* The repair refused the soup: its alpha wrap instead, unless the budget is
+ * spent. A soup refused as open is wrapped too, but its wrap is kept only
+ * when it is solid (bs__surface_wrap's solid check: its openings were gaps
+ * narrower than the element size, as between the facets of a polygon
+ * soup); a real hole lets the wrap in and the open surface stays refused
+ * (holes are closed only on request). */
 static int wrap_instead(const char *path, const double *x, int64_t nx, const int32_t *t, int64_t ntri,
                         const bs_mesh_read_opts *opts, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
                         bs_surface_report *rep, bs_error *err) {
-  if (rep->open_refused || bs__budget_exceeded(err)) return err ? err->code : BS_EINPUT;
+  if (bs__budget_exceeded(err)) return err ? err->code : BS_EINPUT;
   const double h = opts && opts->size > 0 ? opts->size : bs__wrap_default_size(x, nx);
   bs_error e2;
   bs_error_clear(&e2);
-  const int rc = bs__surface_wrap(path, x, nx, t, ntri, h, 1, pts, np, tris, nt, rep, &e2);
+  const int rc = bs__surface_wrap(path, x, nx, t, ntri, h, 1, rep->open_refused, pts, np, tris, nt, rep, &e2);
   if (!rc) {
     bs_error_clear(err);
     return BS_OK;

@@ -14,8 +14,15 @@ double bs__wrap_default_size(const double *x, int64_t nx) {
   return bs_bbox_diagonal(lo, hi) / BS_WRAP_DEFAULT_CELLS;
 }
 
-/* The volume check of a wrap of a closed input (see mesh_internal.h). */
-static int volume_check(const char *path, const bs_shim_wrap_out *w, bs_error *err) {
+/* The volume check of a wrap (see mesh_internal.h): of an input refused as
+ * open, the solid check; of a closed one, the volume against its own. */
+static int volume_check(const char *path, const bs_shim_wrap_out *w, int open, bs_error *err) {
+  const double shell = 2.0 * w->offset * w->area_in;
+  if (open && !(w->volume >= BS_WRAP_SOLID * shell))
+    return bs_error_set(err, BS_EINPUT,
+                        "%s: its alpha wrap (alpha %g) encloses %.4g, a shell around the surface (under %g x the "
+                        "shell's %.4g): its holes are wider than 2 alpha",
+                        path, w->alpha, w->volume, BS_WRAP_SOLID, shell);
   if (!w->input_closed || !(w->volume_in > 0)) return BS_OK;
   const double bound = 2.0 * w->offset * w->area_in + BS_WRAP_VOLUME_TOL * w->volume_in;
   const double change = w->volume - w->volume_in;
@@ -29,7 +36,7 @@ static int volume_check(const char *path, const bs_shim_wrap_out *w, bs_error *e
 }
 
 int bs__surface_wrap(const char *path, const double *x, int64_t nx, const int32_t *t, int64_t nt, double h, int how,
-                     double **pts, int64_t *np, int32_t **tris, int64_t *ntri, bs_surface_report *rep,
+                     int open, double **pts, int64_t *np, int32_t **tris, int64_t *ntri, bs_surface_report *rep,
                      bs_error *err) {
   *pts = NULL, *tris = NULL, *np = *ntri = 0;
   int rc = bs__budget_check(path, "the alpha wrap", err);
@@ -37,7 +44,7 @@ int bs__surface_wrap(const char *path, const double *x, int64_t nx, const int32_
   bs_shim_wrap_opts o = {.size = h, .deadline = bs__budget_deadline()};
   bs_shim_wrap_out w;
   rc = bs_shim_alpha_wrap(path, x, nx, t, nt, &o, &w, err);
-  if (!rc && (rc = volume_check(path, &w, err))) {
+  if (!rc && (rc = volume_check(path, &w, open, err))) {
     bs_shim_free(w.points);
     bs_shim_free(w.tris);
   }

@@ -448,15 +448,17 @@ int bs_shim_remesh_surface(const char *name, const double *points, int64_t n_poi
  *
  * The rule for a target element size h: alpha = BS_WRAP_ALPHA h (a ball of
  * radius alpha carves the space from outside: cavities, gaps and holes
- * narrower than about 2 alpha are closed, which at element size h cannot be
- * meshed apart anyway; the wrap's triangles are about alpha long) and
- * offset = BS_WRAP_OFFSET h (the wrap lies at that distance outside the
- * input). The volume grows by about offset x area(input) (the offset's
- * share: 6 h / 100 of a unit cube at h), plus the gaps closed; callers
- * accept a wrap when |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in
- * (the volume check).
+ * narrower than about 2 alpha = h are closed, which at element size h
+ * cannot be meshed apart anyway; the wrap's triangles are about alpha long)
+ * and offset = BS_WRAP_OFFSET h (the wrap lies at that distance outside
+ * the input). The volume grows by about offset x area(input) (the offset's
+ * share: 6 h / 100 of a unit cube at h), plus the concave corners and gaps
+ * the ball cannot enter (about (1 - pi/4) alpha^2 per unit length of a
+ * right-angled concave edge); callers accept a wrap when
+ * |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in (the volume
+ * check).
  * ========================================================================== */
-#define BS_WRAP_ALPHA 1.0
+#define BS_WRAP_ALPHA 0.5
 #define BS_WRAP_OFFSET 0.01
 #define BS_WRAP_VOLUME_TOL 0.02
 

@@ -107,7 +107,50 @@ double tr_min_dihedral(const Tr &tr, double *volume) {
   return worst;
 }
 
-// The tets from C into tr (subdomain sub[t], 1 without), each positively oriented.
+// The facet of cell c opposite vertex i, in CGAL's order
+// (Triangulation_utils_3::vertex_triple_index): two cells sharing a facet
+// induce opposite orientations on it when both are positively oriented.
+std::array<int, 3> facet(const std::array<int, 5> &c, int i) {
+  static const int T[4][3] = {{1, 3, 2}, {0, 2, 3}, {0, 3, 1}, {0, 1, 2}};
+  return {c[T[i][0]], c[T[i][1]], c[T[i][2]]};
+}
+
+bool same_turn(const std::array<int, 3> &a, const std::array<int, 3> &b) {
+  for (int r = 0; r < 3; r++)
+    if (a[0] == b[r] && a[1] == b[(r + 1) % 3] && a[2] == b[(r + 2) % 3]) return true;
+  return false;
+}
+
+// Flat cells (flat[k]) have no geometric orientation: each gets the
+// combinatorial one its oriented neighbours ask for (the facet they share
+// seen the other way round), flat neighbours of flat cells in turn.
+void orient_flat(std::vector<std::array<int, 5>> &cells, std::vector<char> &flat) {
+  std::map<std::array<int, 3>, std::vector<std::pair<std::size_t, int>>> faces;
+  for (std::size_t k = 0; k < cells.size(); k++)
+    for (int i = 0; i < 4; i++) {
+      std::array<int, 3> f = facet(cells[k], i);
+      std::sort(f.begin(), f.end());
+      faces[f].push_back({k, i});
+    }
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t k = 0; k < cells.size(); k++) {
+      for (int i = 0; flat[k] && i < 4; i++) {
+        std::array<int, 3> f = facet(cells[k], i), key = f;
+        std::sort(key.begin(), key.end());
+        for (const auto &n : faces[key]) {
+          if (n.first == k || flat[n.first]) continue;
+          if (same_turn(f, facet(cells[n.first], n.second))) std::swap(cells[k][0], cells[k][1]);
+          flat[k] = 0, changed = true;
+          break;
+        }
+      }
+    }
+  }
+}
+
+// The tets from C into tr (subdomain sub[t], 1 without), each positively
+// oriented (flat ones as their neighbours ask: orient_flat).
 int build(const char *name, const double *x, int64_t nv, const int32_t *tets, int64_t nt, const int32_t *sub, Tr &tr,
           bs_error *err) {
   if (!x || !tets || nv < 4 || nt < 1)
@@ -125,6 +168,8 @@ int build(const char *name, const double *x, int64_t nv, const int32_t *tets, in
     pts.emplace_back(p[0], p[1], p[2]);
   }
   std::vector<std::array<int, 5>> cells;
+  std::vector<char> flat((std::size_t)nt, 0);
+  bool any_flat = false;
   cells.reserve((std::size_t)nt);
   for (int64_t t = 0; t < nt; t++) {
     std::array<int, 5> c = {tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3], sub ? sub[t] : 1};
@@ -134,9 +179,12 @@ int build(const char *name, const double *x, int64_t nv, const int32_t *tets, in
       if (c[k] < 0 || c[k] >= nv)
         return bs_error_set(err, BS_EINPUT, "%s: tet %lld refers to vertex %d of %lld", name, (long long)t, c[k],
                             (long long)nv);
-    if (CGAL::orientation(pts[c[0]], pts[c[1]], pts[c[2]], pts[c[3]]) == CGAL::NEGATIVE) std::swap(c[0], c[1]);
+    const CGAL::Orientation turn = CGAL::orientation(pts[c[0]], pts[c[1]], pts[c[2]], pts[c[3]]);
+    if (turn == CGAL::NEGATIVE) std::swap(c[0], c[1]);
+    if (turn == CGAL::ZERO) flat[(std::size_t)t] = 1, any_flat = true;
     cells.push_back(c);
   }
+  if (any_flat) orient_flat(cells, flat);
   std::map<std::array<int, 3>, Tr::Cell::Surface_patch_index> border;
   std::vector<Vh> handles;
   if (!CGAL::build_triangulation<Tr, false>(tr, pts, cells, border, handles, false))

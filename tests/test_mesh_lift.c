@@ -28,6 +28,12 @@ Test(mesh_lift, zero_volume_tet_is_remeshed_not_an_error) {
   cr_expect_eq(bs_mesh_create(6, octa_x, 5, octa_t, 0, NULL, &m, &err), BS_EINPUT, "the flat tet is refused raw");
   bs_mesh_destroy(&m);
   bs_error_clear(&err);
+  bs_shim_tet_remesh_out r;
+  cr_assert_eq(bs__tets_lift("octahedron", 6, octa_x, 5, octa_t, NULL, 0.0, BS_MESH_MIN_DIHEDRAL, 1, &r, &err), BS_OK,
+               "%s", err.msg);
+  cr_log_info("lift: %lld tets, dihedral %.2f -> %.2f in %d rounds", (long long)r.n_tets, r.dihedral_in, r.dihedral,
+              r.rounds);
+  bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
   cr_assert_eq(bs__mesh_default_groups("octahedron", 6, octa_x, 5, octa_t, &m, &err), BS_OK, "%s", err.msg);
   cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
   bs_mesh_quality q;
@@ -85,6 +91,38 @@ Test(mesh_lift, thin_slab_with_a_long_thin_wall) {
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
   cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
   cr_expect_leq(fabs(v - 0.11), 0.04 * 0.11, "volume %g", v);
+  bs_mesh_destroy(&m);
+  unlink(path);
+}
+
+/* The same part as CAD (OpenCASCADE boxes fused in a .geo) through Gmsh at
+ * a size larger than the wall's thickness: Gmsh's mesh and optimisers, then
+ * the tetrahedral remeshing when still under the gate; the CAD surface
+ * groups are kept. */
+Test(mesh_lift, thin_wall_cad_through_gmsh) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_wall.geo", (int)getpid());
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  fprintf(f, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 0.1};\nBox(2) = {0.49, 0, 0.1, 0.02, 1, 0.5};\n"
+             "BooleanUnion{ Volume{1}; Delete; }{ Volume{2}; Delete; }\n");
+  fclose(f);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05}, &m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  const double v = bs_mesh_volume(m);
+  cr_log_info("CAD slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11, %d groups, %.1f s",
+              m->n_tets, q.dihedral_min, v, m->n_groups, bs_seconds() - t0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_leq(fabs(v - 0.11), 1e-6, "volume %.9g", v);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  int surfaces = 0;
+  for (int g = 0; g < m->n_groups; g++) surfaces += m->groups[g].dim == 2;
+  cr_expect_geq(surfaces, 10, "%d surface groups", surfaces);
   bs_mesh_destroy(&m);
   unlink(path);
 }
