@@ -18,6 +18,11 @@
 // turn by more than feature_angle) so that they are split or collapsed
 // only along their chains and never flipped.
 //
+// CGAL 5.5's remesher prints "Resolution reached" on std::cout
+// unconditionally (tetrahedral_adaptive_remeshing_impl.h:284): std::cout's
+// buffer is swapped for a null one while it runs (Quiet_cout; process-wide,
+// restored on every exit).
+//
 // A deadline (bs_seconds() time) is checked in the remesher's visitor every
 // 256 splits or flips, and between rounds: past it, BS_EINPUT naming the
 // budget. Deterministic; sequential. Every extern "C" entry catches every
@@ -34,6 +39,8 @@
 #include <cstdint>
 #include <cstdlib>
 #include <exception>
+#include <iostream>
+#include <sstream>
 #include <map>
 #include <new>
 #include <set>
@@ -78,6 +85,14 @@ struct Constrained_edges {
     if (b) m.edges->insert(ordered(k));
     else m.edges->erase(ordered(k));
   }
+};
+
+// std::cout silenced for the lifetime of the object.
+struct Quiet_cout {
+  std::streambuf *saved;
+  std::ostringstream sink;
+  Quiet_cout() : saved(std::cout.rdbuf(sink.rdbuf())) {}
+  ~Quiet_cout() { std::cout.rdbuf(saved); }
 };
 
 bool in_domain(const Tr &tr, Ch c) { return !tr.is_infinite(c) && c->subdomain_index() != 0; }
@@ -254,6 +269,7 @@ void rounds(Tr &tr, const bs_shim_tet_remesh_opts *o, Tr &best, bs_shim_tet_reme
   Deadline_visitor vis;
   vis.deadline = o->deadline;
   const int n = o->iterations > 0 ? o->iterations : 8;
+  Quiet_cout quiet;
   best = tr;
   for (int it = 0; it < n && out->dihedral < o->target_dihedral; it++) {
     if (o->deadline > 0 && bs_seconds() > o->deadline) throw budget_exceeded();
