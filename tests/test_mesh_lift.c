@@ -45,6 +45,38 @@ Test(mesh_lift, zero_volume_tet_is_remeshed_not_an_error) {
   bs_mesh_destroy(&m);
 }
 
+/* A box of 3 x 3 x 3 cells whose inner vertex (1, 1, 1) is pushed down to
+ * z = 0.08, almost onto the bottom face: flat tets, far under the gate. The lift (boundary kept) passes the gate
+ * with the same volume and the box's groups. */
+Test(mesh_lift, slivers_lifted_groups_kept) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs_mesh_create_box((double[3]){0, 0, 0}, (double[3]){3, 3, 3}, 3, 3, 3, &m, &err), BS_OK, "%s",
+               err.msg);
+  for (int32_t v = 0; v < m->n_vertices; v++) {
+    double *p = m->x + 3 * v;
+    if (p[0] == 1 && p[1] == 1 && p[2] == 1) p[2] = 0.08;
+  }
+  bs_mesh_quality q0, q1;
+  bs_mesh_quality_compute(m, NULL, &q0);
+  cr_assert_eq(q0.n_inverted, 0, "the moved vertex stays inside its star");
+  const int32_t xmin0 = bs_mesh_group(m, "xmin")->n_elems;
+  double t0 = bs_seconds();
+  cr_assert_eq(bs__mesh_lift("box", &m, 1.0, BS_MESH_MIN_DIHEDRAL, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality_compute(m, NULL, &q1);
+  cr_log_info("box with slivers: min dihedral %.2f -> %.2f, %d tets, %.2f s", q0.dihedral_min, q1.dihedral_min,
+              m->n_tets, bs_seconds() - t0);
+  cr_expect_lt(q0.dihedral_min, 5.0);
+  cr_expect_geq(q1.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_float_eq(bs_mesh_volume(m), 27.0, 1e-9);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_assert_not_null(bs_mesh_group(m, "xmin"));
+  cr_expect_eq(bs_mesh_group(m, "xmin")->n_elems, xmin0, "the boundary triangles are kept");
+  cr_expect_eq(bs_mesh_group(m, "body")->n_elems, m->n_tets);
+  bs_mesh_destroy(&m);
+}
+
 /* ---- a thin slab with a long thin wall ------------------------------------ */
 
 static void box_tris(FILE *f, int base, const double lo[3], const double hi[3]) {
