@@ -186,6 +186,9 @@ static double bs__gate_degrees(double min_dihedral) {
 /* What the surface path chose or replaced: the size, the alpha wrap. */
 static void print_wrap_and_size(const bs_mesh *m, const bs_surface_report *r) {
   if (m->auto_size > 0) printf("size chosen %.6g m (no --size given)\n", m->auto_size);
+  if (r->lifted)
+    printf("tetrahedral remeshing (%d run%s, %.2f s): smallest dihedral angle %.2f -> %.2f degrees\n", r->lifted,
+           r->lifted == 1 ? "" : "s", r->lift_seconds, r->lift_dihedral_in, r->lift_dihedral);
   if (r->wrapped)
     printf("alpha wrap (%s): alpha %.4g m, offset %.4g m, volume change %+.3f%%, %.2f s\n",
            r->wrapped == 1 ? "the repair could not make the surface clean" : "the meshes of the surface were refused",
@@ -312,6 +315,10 @@ static int mesh_json(const bs_mesh *m, const char *path, const bs_surface_report
     printf("  \"wrap\": {\"how\": %d, \"alpha\": %.6g, \"offset\": %.6g, \"volume_change\": %.6g, \"seconds\": %.3f},\n",
            r->wrapped, r->wrap_alpha, r->wrap_offset, r->wrap_volume_change, r->wrap_seconds);
   else printf("  \"wrap\": null,\n");
+  if (r && r->lifted)
+    printf("  \"tet_remesh\": {\"runs\": %d, \"dihedral_before\": %.6g, \"dihedral_after\": %.6g, \"seconds\": %.3f},\n",
+           r->lifted, r->lift_dihedral_in, r->lift_dihedral, r->lift_seconds);
+  else printf("  \"tet_remesh\": null,\n");
   int rc = json_surface(m, path, err);
   if (!rc) rc = bs_mesh_check(m, err);
   printf("  \"check\": %s,\n  \"seconds\": %.3f\n}\n", rc ? "false" : "true", t_load);

@@ -2,7 +2,9 @@
  * (bs_mesh_read_opts.time_budget): a deadline per thread, set when a read
  * begins and checked between the meshing stages (bs__budget_check) and, as a
  * bs_seconds() time, inside the long CGAL loops that take one (the alpha
- * wrap's facets, the tetrahedral remesher's iterations). */
+ * wrap's facets, the tetrahedral remesher's iterations); and the read's
+ * report (opts->report), for the stages that record into it from below the
+ * calls that carry opts (the tetrahedral remeshing). */
 #include <math.h>
 #include <string.h>
 
@@ -10,14 +12,21 @@
 
 static _Thread_local double deadline_;
 static _Thread_local double budget_;
+static _Thread_local struct bs_surface_report *report_;
 
 void bs__budget_begin(const bs_mesh_read_opts *opts) {
+  report_ = opts ? opts->report : NULL;
   const double b = opts ? opts->time_budget : 0.0;
   budget_ = b > 0 && isfinite(b) ? b : 0.0;
   deadline_ = budget_ > 0 ? bs_seconds() + budget_ : 0.0;
 }
 
-void bs__budget_end(void) { deadline_ = budget_ = 0.0; }
+void bs__budget_end(void) {
+  deadline_ = budget_ = 0.0;
+  report_ = NULL;
+}
+
+struct bs_surface_report *bs__read_report(void) { return report_; }
 
 double bs__budget_deadline(void) { return deadline_; }
 

@@ -193,6 +193,9 @@ void bs__budget_end(void);
 double bs__budget_deadline(void);
 int bs__budget_check(const char *path, const char *stage, bs_error *err);
 int bs__budget_exceeded(const bs_error *err);
+/* The report of this thread's bs_mesh_read (opts->report; NULL: none or no
+ * read running). */
+struct bs_surface_report *bs__read_report(void);
 
 /* surface_wrap.c: the soup (x, nx; t, nt: any triangles) replaced by its
  * alpha wrap at element size h (bs_shim_alpha_wrap, the rule of bs_shim.h),

@@ -62,6 +62,17 @@ static int lift_once(const char *path, int32_t nv, const double *x, int32_t nt, 
   return rc;
 }
 
+/* The lift r into the read's report (bs__read_report), when rc is BS_OK. */
+static int record(const bs_shim_tet_remesh_out *r, int rc) {
+  bs_surface_report *rep = bs__read_report();
+  if (rc || !rep) return rc;
+  rep->lifted++;
+  rep->lift_dihedral_in = r->dihedral_in;
+  rep->lift_dihedral = r->dihedral;
+  rep->lift_seconds += r->seconds;
+  return rc;
+}
+
 int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets, const int32_t *sub,
                   double h, double gate, int allow_boundary, bs_shim_tet_remesh_out *out, bs_error *err) {
   memset(out, 0, sizeof *out);
@@ -70,7 +81,7 @@ int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, con
   if (!(h > 0)) h = mean_edge(x, nt, tets);
   const double target = gate > 0 ? gate : BS_MESH_MIN_DIHEDRAL;
   rc = lift_once(path, nv, x, nt, tets, sub, h, target, BS_SHIM_TET_PROTECT_BOUNDARY, out, err);
-  if (rc || out->dihedral >= target || !allow_boundary) return rc;
+  if (rc || out->dihedral >= target || !allow_boundary) return record(out, rc);
   bs_shim_tet_remesh_out second;
   bs_error e2;
   bs_error_clear(&e2);
@@ -80,15 +91,17 @@ int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, con
       *err = e2;
       return e2.code;
     }
-    return BS_OK; /* the first, boundary kept, stands */
+    return record(out, BS_OK); /* the first, boundary kept, stands */
   }
+  second.seconds += out->seconds;
   if (second.dihedral > out->dihedral) {
     free_out(out);
     *out = second;
   } else {
+    out->seconds = second.seconds;
     free_out(&second);
   }
-  return BS_OK;
+  return record(out, BS_OK);
 }
 
 /* The groups of m for the lifted mesh r: 3-D groups from the subdomains

@@ -259,6 +259,11 @@ typedef struct bs_surface_report {
   double wrap_alpha, wrap_offset;/* the wrap's parameters (bs_shim_alpha_wrap)    */
   double wrap_volume_change;     /* (V_wrap - V_in) / V_in, V_in the input's volume */
   double wrap_seconds;           /* the wrap's wall time                          */
+  int lifted;                    /* tetrahedral remeshing runs (mesh/tet_lift.c) on
+                                    meshes under the gate or with flat tets      */
+  double lift_dihedral_in;       /* the last one's smallest dihedral angle before */
+  double lift_dihedral;          /* ... and after (degrees)                        */
+  double lift_seconds;           /* their wall time in all                         */
 } bs_surface_report;
 
 /* Repairs the surface (points, n_points; tris, n_tris: see Data above) into

@@ -118,8 +118,9 @@ Test(mesh_lift, thin_slab_with_a_long_thin_wall) {
   bs_mesh_quality_compute(m, NULL, &q);
   const double v = bs_mesh_volume(m);
   cr_log_info("slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11 (%+.2f%%), wrapped %d, "
-              "%.1f s",
-              m->n_tets, q.dihedral_min, v, 100 * (v - 0.11) / 0.11, rep.wrapped, bs_seconds() - t0);
+              "tet remeshing %d (%.2f -> %.2f), %.1f s",
+              m->n_tets, q.dihedral_min, v, 100 * (v - 0.11) / 0.11, rep.wrapped, rep.lifted, rep.lift_dihedral_in,
+              rep.lift_dihedral, bs_seconds() - t0);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
   cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
   cr_expect_leq(fabs(v - 0.11), 0.04 * 0.11, "volume %g", v);
@@ -143,12 +144,16 @@ Test(mesh_lift, thin_wall_cad_through_gmsh) {
   bs_error_clear(&err);
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
-  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05}, &m, &err), BS_OK, "%s", err.msg);
+  bs_surface_report rep = {0};
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05, .report = &rep}, &m, &err), BS_OK, "%s",
+               err.msg);
   bs_mesh_quality q;
   bs_mesh_quality_compute(m, NULL, &q);
   const double v = bs_mesh_volume(m);
-  cr_log_info("CAD slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11, %d groups, %.1f s",
-              m->n_tets, q.dihedral_min, v, m->n_groups, bs_seconds() - t0);
+  cr_log_info("CAD slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11, %d groups, tet "
+              "remeshing %d (%.2f -> %.2f), %.1f s",
+              m->n_tets, q.dihedral_min, v, m->n_groups, rep.lifted, rep.lift_dihedral_in, rep.lift_dihedral,
+              bs_seconds() - t0);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
   cr_expect_leq(fabs(v - 0.11), 1e-6, "volume %.9g", v);
   cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
@@ -201,11 +206,14 @@ Test(mesh_lift, no_size_on_a_scan_passes_the_gate) {
   bs_error_clear(&err);
   bs_mesh *m = NULL;
   double t0 = bs_seconds();
-  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){0}, &m, &err), BS_OK, "%s", err.msg);
+  bs_surface_report rep = {0};
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.report = &rep}, &m, &err), BS_OK, "%s", err.msg);
   bs_mesh_quality q;
   bs_mesh_quality_compute(m, NULL, &q);
-  cr_log_info("armadillo without a size: size chosen %g, %d tets, min dihedral %.2f, %.1f s", m->auto_size, m->n_tets,
-              q.dihedral_min, bs_seconds() - t0);
+  cr_log_info("armadillo without a size: size chosen %g, %d tets, min dihedral %.2f, tet remeshing %d (%.2f -> "
+              "%.2f), %.1f s",
+              m->auto_size, m->n_tets, q.dihedral_min, rep.lifted, rep.lift_dihedral_in, rep.lift_dihedral,
+              bs_seconds() - t0);
   cr_expect_gt(m->auto_size, 0);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
   cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);

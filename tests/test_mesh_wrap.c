@@ -124,9 +124,9 @@ static bs_mesh *check_mesh(const char *path, bs_mesh_read_opts o, double volume,
   bs_mesh_quality_compute(m, NULL, &q);
   const double v = bs_mesh_volume(m);
   cr_log_info("%s at h %g: %d tets, min dihedral %.2f, volume %.6g vs %.6g (%+.3f%%), wrapped %d (volume change "
-              "%+.3f%%), %.2f s",
+              "%+.3f%%), tet remeshing %d (%.2f -> %.2f), %.2f s",
               path, o.size, m->n_tets, q.dihedral_min, v, volume, 100 * (v - volume) / volume, rep.wrapped,
-              100 * rep.wrap_volume_change, bs_seconds() - t0);
+              100 * rep.wrap_volume_change, rep.lifted, rep.lift_dihedral_in, rep.lift_dihedral, bs_seconds() - t0);
   cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL, "min dihedral %g", q.dihedral_min);
   cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
   cr_expect_leq(fabs(v - volume), vol_tol * volume, "volume %g vs %g", v, volume);
