@@ -5,7 +5,7 @@
 #define _GNU_SOURCE
 
 #include <criterion/criterion.h>
-#include <cjson/cJSON.h>
+#include <cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
