@@ -881,7 +881,7 @@ static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs
     if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
     return rc;
   }
-  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return BS_EINPUT;
+  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return bs__lift_note(*m, err);
   bs_error_clear(err);
   return BS_OK;
 }

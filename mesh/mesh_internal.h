@@ -237,6 +237,9 @@ struct bs_shim_tet_remesh_out;
 int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets, const int32_t *sub,
                   double h, double gate, int allow_boundary, struct bs_shim_tet_remesh_out *out, bs_error *err);
 int bs__mesh_lift(const char *path, bs_mesh **m, double h, double gate, bs_error *err);
+/* tet_lift.c: appends "; CGAL's tetrahedral remeshing of it reached D
+ * degrees" (m's smallest angle) to the gate's message in err; BS_EINPUT. */
+int bs__lift_note(const bs_mesh *m, bs_error *err);
 
 /* surface_mesh.c: bs__mesh_closed_surface at the size bigstep chooses
  * (bs_surface_auto_size, attempt 0 then 1 when refused); (*out)->auto_size

@@ -63,7 +63,8 @@ static bs_shim_mesh3_opts mesh3_opts(double h, double diag, const bs_mesh_read_o
                           .perturb = 1,
                           .exude = 1,
                           .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
-                          .max_rounds = 3};
+                          .max_rounds = 3,
+                          .deadline = bs__budget_deadline()};
   if (h > BS_MESH3_SCAN_FINE * diag) {
     o.scan_facet_distance = fmax(h / 25.0, BS_MESH3_SCAN_FINE * diag / 10.0);
     o.scan_facet_angle = 30;
@@ -229,7 +230,7 @@ static int lift_mesh3(const char *path, bs_mesh **m, double h, const bs_mesh_rea
     if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
     return rc;
   }
-  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return BS_EINPUT;
+  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return bs__lift_note(*m, err);
   bs_error_clear(err);
   return BS_OK;
 }

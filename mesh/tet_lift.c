@@ -12,6 +12,7 @@
  * BS_LIFT_VOLUME_TOL V0. The target edge length is the mesh size h when
  * known, else the mean edge length of the tets. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -185,4 +186,16 @@ int bs__mesh_lift(const char *path, bs_mesh **m, double h, double gate, bs_error
   bs_mesh_destroy(m);
   *m = b;
   return BS_OK;
+}
+
+int bs__lift_note(const bs_mesh *m, bs_error *err) {
+  if (!err) return BS_EINPUT;
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  const size_t n = strlen(err->msg);
+  if (n + 96 < sizeof err->msg)
+    snprintf(err->msg + n, sizeof err->msg - n, "; CGAL's tetrahedral remeshing of it reached %.3g degrees",
+             q.dihedral_min);
+  err->code = BS_EINPUT;
+  return BS_EINPUT;
 }
