@@ -18,7 +18,7 @@ static const char *mesh_help =
     "\n"
     "FILE/IN: a mesh (.msh v2/v4), a geometry Gmsh meshes (.geo, .step/.stp, .brep),\n"
     "         a closed surface (.stl, .off, .obj, .ply: meshed by CGAL at --size H,\n"
-    "         on its own triangles by Gmsh without), or a structured box\n"
+    "         at a size chosen from its bounding box without), or a structured box\n"
     "         'box:NX[xNYxNZ][:LX[xLYxLZ]]'.\n"
     "OUT:     .msh (Gmsh 4.1, with groups) or .vtu (ParaView).\n"
     "  --size H       target mesh size in metres for geometry inputs (a closed\n"
@@ -47,7 +47,10 @@ static const char *mesh_help =
     "  --max-hole F   largest hole closed: diameter <= F x the bounding-box\n"
     "                 diagonal (default 0.2)\n"
     "A surface is repaired before it is meshed (duplicates, zero-area triangles,\n"
-    "self-intersections); what was done is printed.\n";
+    "self-intersections); one the repair cannot make clean (non-manifold parts,\n"
+    "overlapping facets, a polygon soup) is replaced by its alpha wrap at H; a mesh\n"
+    "under the gate is remeshed by CGAL's tetrahedral remeshing, its boundary kept.\n"
+    "What was done is printed.\n";
 
 static int parse_order(const char *s, bs_order *o) {
   if (strcmp(s, "metis") == 0) *o = BS_ORDER_METIS;

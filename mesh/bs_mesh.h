@@ -161,7 +161,14 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * meshed through Gmsh; closed surfaces (.stl .off .obj .ply, read by the
  * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
  * kept, optimised: surface_mesh.c), with size <= 0 at the size
- * bs_surface_auto_size chooses (reported in m->auto_size). Meshes bigstep makes are held to opts->min_dihedral. Only
+ * bs_surface_auto_size chooses (reported in m->auto_size). Meshes bigstep
+ * makes are held to opts->min_dihedral; one under it (Gmsh's or Mesh_3's),
+ * or with a tet of zero volume, is first lifted by CGAL's tetrahedral
+ * remeshing, its boundary and groups kept (mesh/tet_lift.c). A surface the
+ * repair cannot make clean, or whose meshes are all refused, is replaced by
+ * its alpha wrap at the size (mesh/surface_wrap.c, the rule in bs_shim.h),
+ * held to the wrap's volume check; what was done goes to *opts->report.
+ * opts->time_budget bounds the whole (mesh/mesh_budget.c). Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
  * type and count. opts may be NULL (defaults).
  *
@@ -174,7 +181,7 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * naming it) and every element's nodes (defined). Coincident nodes under
  * distinct tags are counted in m->n_coincident (a warning for the caller to
  * print) and merged when opts->merge_coincident. A surface (.off, .obj,
- * .ply) is repaired first (bs_surface_prepare; what was done goes to
+ * .ply, .stl) is repaired first (bs_surface_prepare; what was done goes to
  * *opts->report). A CAD file (STEP, IGES, BREP) of several solids is
  * fragmented into a conformal model, one 3-D group per part named after the
  * part (mesh/cad_assembly.c), surface groups "surface_<tag>". */
@@ -185,11 +192,15 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
  * removed, holes closed when opts->close_holes and no larger than
  * opts->max_hole, self-intersections removed, oriented outward). *pts (3 per
  * point) and *tris (3 per triangle) are allocated by the shim: free them with
- * bs_shim_free. opts (may be NULL: no hole closed) supplies close_holes and
- * max_hole only; rep (may be NULL) gets the counts. Errors name the file:
- * BS_EIO (unreadable), BS_EINPUT (a malformed file, or a surface the repair
- * refuses: open, or self-intersections it cannot remove; the message says
- * how many, where and how large), BS_ENOMEM, BS_EINTERNAL. Example:
+ * bs_shim_free. A surface the repair refuses is replaced by its alpha wrap
+ * at opts->size (<= 0: bs_surface_auto_size's first) when it passes its volume
+ * check (an open one only when the wrap is solid: surface_repair.c);
+ * rep->wrapped says so. opts (may be NULL: no hole closed) supplies
+ * close_holes, max_hole and size only; rep (may be NULL) gets the counts.
+ * Errors name the file: BS_EIO (unreadable), BS_EINPUT (a malformed file,
+ * or a surface the repair and the wrap refuse: open, or self-intersections
+ * it cannot remove; the message says how many, where and how large, and
+ * why the wrap was refused), BS_ENOMEM, BS_EINTERNAL. Example:
  *     double *x; int32_t *t; int64_t np, nt; bs_surface_report r;
  *     bs_mesh_read_opts o = {.close_holes = 1};
  *     if (bs_surface_prepare("scan.off", &x, &np, &t, &nt, &o, &r, &err)) ...

@@ -215,11 +215,6 @@ int bs__surface_wrap(const char *path, const double *x, int64_t nx, const int32_
                      int open, double **pts, int64_t *np, int32_t **tris, int64_t *ntri, struct bs_surface_report *rep,
                      bs_error *err);
 
-/* surface_wrap.c: the element size for a surface without one: diagonal /
- * BS_WRAP_DEFAULT_CELLS. */
-#define BS_WRAP_DEFAULT_CELLS 40.0
-double bs__wrap_default_size(const double *x, int64_t nx);
-
 /* tet_lift.c: the quality back end (CGAL's tetrahedral remeshing, the rule
  * in tet_lift.c's comment). bs__tets_lift: the raw tets (any orientation,
  * zero-volume ones allowed; sub: subdomain >= 1 per tet or NULL) remeshed

@@ -4,7 +4,7 @@
  * self-intersections it cannot remove, a non-manifold result, a soup of
  * overlapping facets; an open one only when the wrap is solid, see
  * wrap_instead) is replaced by its alpha wrap at the requested size
- * (bs__surface_wrap; without a size, diagonal / BS_WRAP_DEFAULT_CELLS), held
+ * (bs__surface_wrap; without a size, bs_surface_auto_size's first), held
  * to the wrap's volume check. The file's name
  * is in front of every message; when the wrap is refused too, the repair's
  * message is kept and the wrap's reason appended. */
@@ -25,7 +25,7 @@ static int wrap_instead(const char *path, const double *x, int64_t nx, const int
                         const bs_mesh_read_opts *opts, double **pts, int64_t *np, int32_t **tris, int64_t *nt,
                         bs_surface_report *rep, bs_error *err) {
   if (bs__budget_exceeded(err)) return err ? err->code : BS_EINPUT;
-  const double h = opts && opts->size > 0 ? opts->size : bs__wrap_default_size(x, nx);
+  const double h = opts && opts->size > 0 ? opts->size : bs_surface_auto_size(x, nx, t, ntri, 0, opts);
   bs_error e2;
   bs_error_clear(&e2);
   const int rc = bs__surface_wrap(path, x, nx, t, ntri, h, 1, rep->open_refused, pts, np, tris, nt, rep, &e2);

@@ -8,12 +8,6 @@
 #include "bs_shim.h"
 #include "mesh_internal.h"
 
-double bs__wrap_default_size(const double *x, int64_t nx) {
-  double lo[3], hi[3];
-  bs_bbox(nx, x, lo, hi);
-  return bs_bbox_diagonal(lo, hi) / BS_WRAP_DEFAULT_CELLS;
-}
-
 /* The volume check of a wrap (see mesh_internal.h): of an input refused as
  * open, the solid check; of a closed one, the volume against its own. */
 static int volume_check(const char *path, const bs_shim_wrap_out *w, int open, bs_error *err) {

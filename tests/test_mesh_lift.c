@@ -182,6 +182,26 @@ Test(mesh_lift, time_budget_gives_the_named_error) {
   unlink(path);
 }
 
+/* A budget that runs out while the volume is meshed (Mesh_3's refinement,
+ * then its optimisers, which get the time left): the read ends with the
+ * budget's error, whichever stage it ran out in. */
+Test(mesh_lift, time_budget_during_meshing) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_budget2.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.03, .time_budget = 0.3};
+  const int rc = bs_mesh_read(path, &o, &m, &err);
+  cr_log_info("budget 0.3 s at h 0.03: rc %d after %.2f s: %s", rc, bs_seconds() - t0, err.msg);
+  cr_expect_eq(rc, BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget") != NULL, "%s", err.msg);
+  cr_expect_null(m);
+  unlink(path);
+}
+
 /* Inside the wrap's loop: a deadline already past stops it by name. */
 Test(mesh_lift, time_budget_inside_the_alpha_wrap) {
   static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
