@@ -161,7 +161,9 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * meshed through Gmsh; closed surfaces (.stl .off .obj .ply, read by the
  * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
  * kept, optimised: surface_mesh.c), with size <= 0 at the size
- * bs_surface_auto_size chooses (reported in m->auto_size). Meshes bigstep
+ * bs_surface_auto_size chooses (reported in m->auto_size; with no gate
+ * either, opts->min_dihedral < 0, Gmsh meshes inside the surface's own
+ * triangles, which it keeps as they are). Meshes bigstep
  * makes are held to opts->min_dihedral; one under it (Gmsh's or Mesh_3's),
  * or with a tet of zero volume, is first lifted by CGAL's tetrahedral
  * remeshing, its boundary and groups kept (mesh/tet_lift.c). A surface the

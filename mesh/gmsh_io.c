@@ -22,8 +22,9 @@
  * Mesh_3 (surface_mesh.c; Gmsh is not involved) unless opts->surface_mesher
  * asks for Gmsh, which classifies it into patches (40 degree feature angle),
  * reparametrizes and remeshes them at that size (with size <= 0 Gmsh keeps
- * its triangles as the boundary of the volume mesh); with size <= 0 (and
- * not the Gmsh mesher) at the size bigstep chooses (bs_surface_auto_size).
+ * its triangles as the boundary of the volume mesh, as it does for a
+ * surface given no size and no gate); with size <= 0 and a gate (and not the
+ * Gmsh mesher) at the size bigstep chooses (bs_surface_auto_size).
  * Every input but .msh has a time budget (opts->time_budget, mesh_budget.c)
  * and, when Gmsh's or Mesh_3's mesh misses the gate, is lifted by CGAL's
  * tetrahedral remeshing (tet_lift.c).
@@ -915,7 +916,8 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
 
   bs_mesh *m = NULL;
   if (kind != IN_MESH && (rc = bs__budget_check(path, "meshing the volume", err))) goto out;
-  if (kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
+  /* A surface with no size and no gate keeps its own triangles (Gmsh below). */
+  if (kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH) && (size > 0 || bs__mesh_gate(opts) > 0)) {
     rc = size > 0 ? bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err)
                   : bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
     goto refine;

@@ -165,6 +165,11 @@ int wrap(const char *name, const double *x, int64_t np, const int32_t *t, int64_
   std::vector<Tri> tris;
   int rc = copy_soup(name, x, np, t, nt, pts, tris, err);
   if (rc) return rc;
+  std::size_t solid = 0;
+  for (const Tri &f : tris) solid += !CGAL::collinear(pts[f[0]], pts[f[1]], pts[f[2]]);
+  if (solid == 0)
+    return bs_error_set(err, BS_EINPUT, "%s: nothing to wrap: all its %lld triangles are degenerate", name,
+                        (long long)nt);
   out->alpha = o->alpha > 0 ? o->alpha : BS_WRAP_ALPHA * o->size;
   out->offset = o->offset > 0 ? o->offset : BS_WRAP_OFFSET * o->size;
   soup_measures(pts, tris, &out->volume_in, &out->area_in, &out->input_closed);

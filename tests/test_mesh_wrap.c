@@ -229,3 +229,15 @@ Test(mesh_wrap, open_surface_still_refused) {
   bs_mesh_destroy(&m);
   unlink(path);
 }
+
+/* A soup of collinear triangles has nothing to wrap: a refusal, not a
+ * crash inside CGAL. */
+Test(mesh_wrap, degenerate_soup_refused) {
+  static const double x[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+  static const int32_t t[6] = {0, 1, 1, 0, 1, 2};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_wrap_out w;
+  cr_expect_eq(bs_shim_alpha_wrap("line", x, 3, t, 2, &(bs_shim_wrap_opts){.size = 0.1}, &w, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "degenerate") != NULL, "%s", err.msg);
+}
