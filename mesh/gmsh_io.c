@@ -962,6 +962,7 @@ out:
 int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   bs__budget_begin(opts);
   const int rc = read_mesh(path, opts, out, err);
+  if (rc) bs__budget_note(err);
   bs__budget_end();
   return rc;
 }

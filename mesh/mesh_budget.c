@@ -6,6 +6,7 @@
  * report (opts->report), for the stages that record into it from below the
  * calls that carry opts (the tetrahedral remeshing). */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "mesh_internal.h"
@@ -39,4 +40,11 @@ int bs__budget_check(const char *path, const char *stage, bs_error *err) {
 
 int bs__budget_exceeded(const bs_error *err) {
   return err && err->code == BS_EINPUT && (strstr(err->msg, "time budget") != NULL);
+}
+
+void bs__budget_note(bs_error *err) {
+  if (!bs__budget_exceeded(err) || strstr(err->msg, "time budget of") || !(budget_ > 0)) return;
+  const size_t n = strlen(err->msg);
+  snprintf(err->msg + n, sizeof err->msg - n,
+           " (the budget: %g s, bs_mesh_read_opts.time_budget, bigstep mesh --time-budget)", budget_);
 }

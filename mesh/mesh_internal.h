@@ -193,6 +193,9 @@ void bs__budget_end(void);
 double bs__budget_deadline(void);
 int bs__budget_check(const char *path, const char *stage, bs_error *err);
 int bs__budget_exceeded(const bs_error *err);
+/* Appends the budget's value and where it is set to a budget refusal that
+ * came from the shim (which knows only the deadline). */
+void bs__budget_note(bs_error *err);
 /* The report of this thread's bs_mesh_read (opts->report; NULL: none or no
  * read running). */
 struct bs_surface_report *bs__read_report(void);
