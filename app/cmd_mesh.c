@@ -1,7 +1,9 @@
 /* bigstep mesh info|refine|reorder|convert */
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
+#include <strings.h>
 
 #include "app.h"
 #include "bs_shim.h"
@@ -9,17 +11,24 @@
 static const char *mesh_help =
     "usage: bigstep mesh info FILE [--size H] [--min-dihedral DEG] [--refine N] [--reorder metis|rcm]\n"
     "                         [--merge-coincident] [--close-holes] [--max-hole F]\n"
-    "                         [--mesher auto|cgal|remesh]\n"
+    "                         [--mesher auto|cgal|remesh] [--time-budget S] [--json]\n"
     "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
     "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
     "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
     "\n"
     "FILE/IN: a mesh (.msh v2/v4), a geometry Gmsh meshes (.geo, .step/.stp, .brep),\n"
     "         a closed surface (.stl, .off, .obj, .ply: meshed by CGAL at --size H,\n"
-    "         on its own triangles by Gmsh without), or a structured box\n"
+    "         at a size chosen from its bounding box without; with neither size\n"
+    "         nor gate, by Gmsh on its own triangles), or a structured box\n"
     "         'box:NX[xNYxNZ][:LX[xLYxLZ]]'.\n"
     "OUT:     .msh (Gmsh 4.1, with groups) or .vtu (ParaView).\n"
-    "  --size H       target mesh size in metres for geometry inputs\n"
+    "  --size H       target mesh size in metres for geometry inputs (a closed\n"
+    "                 surface given none gets one chosen from its bounding box,\n"
+    "                 printed as 'size chosen')\n"
+    "  --time-budget S  stop meshing after S seconds with an error naming the\n"
+    "                 budget (default: none)\n"
+    "  --json         info: print the report as one JSON object (quality, gate,\n"
+    "                 and for a surface its volume change and Hausdorff distance)\n"
     "  --min-dihedral DEG  quality gate for the meshes bigstep makes (not .msh):\n"
     "                 optimise until every tet's smallest dihedral angle is at\n"
     "                 least DEG degrees, else fail naming the worst region\n"
@@ -39,7 +48,10 @@ static const char *mesh_help =
     "  --max-hole F   largest hole closed: diameter <= F x the bounding-box\n"
     "                 diagonal (default 0.2)\n"
     "A surface is repaired before it is meshed (duplicates, zero-area triangles,\n"
-    "self-intersections); what was done is printed.\n";
+    "self-intersections); one the repair cannot make clean (non-manifold parts,\n"
+    "overlapping facets, a polygon soup) is replaced by its alpha wrap at H; a mesh\n"
+    "under the gate is remeshed by CGAL's tetrahedral remeshing, its boundary kept.\n"
+    "What was done is printed.\n";
 
 static int parse_order(const char *s, bs_order *o) {
   if (strcmp(s, "metis") == 0) *o = BS_ORDER_METIS;
@@ -91,7 +103,8 @@ typedef struct mesh_args {
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
   double size, min_dihedral; /* min_dihedral: < 0 none, 0 default */
-  int refine, levels, have_order, merge, close_holes, mesher; /* mesher: BS_SURFACE_* */
+  double time_budget;        /* seconds, 0: none */
+  int refine, levels, have_order, merge, close_holes, mesher, json; /* mesher: BS_SURFACE_* */
   double max_hole;
   bs_order order;
 } mesh_args;
@@ -106,6 +119,9 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
     if (bs_parse_double(val, &a->min_dihedral) || !(a->min_dihedral >= 0 && a->min_dihedral < 70.5))
       return bs_app_usage_error("mesh", "--min-dihedral must be a number of degrees in [0, 70.5), got '%s'", val);
     if (a->min_dihedral == 0) a->min_dihedral = -1; /* no gate */
+  } else if (!strcmp(flag, "--time-budget")) {
+    if (bs_parse_double(val, &a->time_budget) || !(a->time_budget > 0))
+      return bs_app_usage_error("mesh", "--time-budget must be a positive number of seconds, got '%s'", val);
   } else if (!strcmp(flag, "--mesher")) {
     if (bs_mesh_parse_mesher(val, &a->mesher))
       return bs_app_usage_error("mesh", "--mesher must be auto, cgal or remesh, got '%s'", val);
@@ -147,6 +163,8 @@ static int parse_args(int argc, char **argv, mesh_args *a) {
       a->merge = 1;
     } else if (strcmp(arg, "--close-holes") == 0) {
       a->close_holes = 1;
+    } else if (strcmp(arg, "--json") == 0 && !strcmp(sub, "info")) {
+      a->json = 1;
     } else if (strncmp(arg, "--", 2) == 0) {
       char fbuf[64];
       const char *flag, *val;
@@ -162,6 +180,23 @@ static int parse_args(int argc, char **argv, mesh_args *a) {
   if (a->npos < 1 + a->need_out)
     return bs_app_usage_error("mesh", a->need_out ? "'mesh %s' needs IN and OUT" : "'mesh %s' needs FILE", sub);
   return 0;
+}
+
+/* The gate in degrees for --min-dihedral's value (< 0 none, 0 default). */
+static double bs__gate_degrees(double min_dihedral) {
+  return min_dihedral < 0 ? 0.0 : (min_dihedral > 0 ? min_dihedral : BS_MESH_MIN_DIHEDRAL);
+}
+
+/* What the surface path chose or replaced: the size, the alpha wrap. */
+static void print_wrap_and_size(const bs_mesh *m, const bs_surface_report *r) {
+  if (m->auto_size > 0) printf("size chosen %.6g m (no --size given)\n", m->auto_size);
+  if (r->lifted)
+    printf("tetrahedral remeshing (%d run%s, %.2f s): smallest dihedral angle %.2f -> %.2f degrees\n", r->lifted,
+           r->lifted == 1 ? "" : "s", r->lift_seconds, r->lift_dihedral_in, r->lift_dihedral);
+  if (r->wrapped)
+    printf("alpha wrap (%s): alpha %.4g m, offset %.4g m, volume change %+.3f%%, %.2f s\n",
+           r->wrapped == 1 ? "the repair could not make the surface clean" : "the meshes of the surface were refused",
+           r->wrap_alpha, r->wrap_offset, 100 * r->wrap_volume_change, r->wrap_seconds);
 }
 
 /* mesh info: optional reordering, the report and bs_mesh_check. */
@@ -210,6 +245,90 @@ static int mesh_write(bs_mesh *m, const mesh_args *a, bs_error *err) {
   return 0;
 }
 
+/* ---- mesh info --json ----------------------------------------------------- */
+
+/* s as a JSON string (quotes, backslashes and control characters escaped). */
+static void json_string(const char *s) {
+  putchar('"');
+  for (; *s; s++) {
+    unsigned char c = (unsigned char)*s;
+    if (c == '"' || c == '\\') printf("\\%c", c);
+    else if (c < 0x20) printf("\\u%04x", c);
+    else putchar(c);
+  }
+  putchar('"');
+}
+
+static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
+  double v = 0;
+  for (int64_t f = 0; f < nt; f++) {
+    const double *a = p + 3 * t[3 * f], *b = p + 3 * t[3 * f + 1], *c = p + 3 * t[3 * f + 2];
+    v += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  return fabs(v) / 6.0;
+}
+
+/* The input surface of path (when it is one the shim reads) against m's
+ * boundary: "surface": {volume_in, volume_change, hausdorff, ...} or null.
+ * The Hausdorff distance is two-sided and sampled every diagonal / 400 (it
+ * underestimates by at most about half of that). */
+static int json_surface(const bs_mesh *m, const char *path, bs_error *err) {
+  const char *dot = strrchr(path, '.');
+  static const char *const exts[] = {".off", ".stl", ".obj", ".ply"};
+  int surface = 0;
+  for (size_t k = 0; dot && k < 4; k++) surface |= !strcasecmp(dot, exts[k]);
+  if (!surface) return printf("  \"surface\": null,\n"), 0;
+  double *x = NULL, d1 = 0, d2 = 0, lo[3], hi[3];
+  int32_t *t = NULL;
+  int64_t np = 0, nt = 0;
+  int rc = bs_shim_read_surface(path, &x, &np, &t, &nt, err);
+  if (!rc) {
+    bs_bbox(np, x, lo, hi);
+    const double diag = bs_bbox_diagonal(lo, hi), spacing = diag / 400.0, v0 = soup_volume(x, t, nt);
+    rc = bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, x, np, t, nt, spacing, &d1, NULL, err);
+    if (!rc) rc = bs_shim_surface_distance(x, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, spacing, &d2, NULL, err);
+    const double v = bs_mesh_volume(m), d = d1 > d2 ? d1 : d2;
+    if (!rc)
+      printf("  \"surface\": {\"volume_in\": %.10g, \"volume_change\": %.6g, \"hausdorff\": %.6g, "
+             "\"hausdorff_over_diagonal\": %.6g, \"diagonal\": %.10g, \"sample_spacing\": %.6g},\n",
+             v0, v0 > 0 ? (v - v0) / v0 : 0.0, d, diag > 0 ? d / diag : 0.0, diag, spacing);
+  }
+  bs_shim_free(x);
+  bs_shim_free(t);
+  return rc;
+}
+
+/* mesh info --json: one JSON object on stdout. */
+static int mesh_json(const bs_mesh *m, const char *path, const bs_surface_report *r, double gate, double t_load,
+                     bs_error *err) {
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  printf("{\n  \"file\": ");
+  json_string(path);
+  printf(",\n  \"vertices\": %d, \"tets\": %d, \"boundary_faces\": %d,\n", m->n_vertices, m->n_tets, m->n_faces);
+  printf("  \"volume\": %.10g, \"boundary_volume\": %.10g,\n", bs_mesh_volume(m), bs_mesh_boundary_volume(m));
+  printf("  \"quality\": {\"dihedral_min\": %.6g, \"dihedral_max\": %.6g, \"radius_ratio_min\": %.6g, "
+         "\"radius_ratio_mean\": %.6g, \"volume_min\": %.6g, \"volume_max\": %.6g, \"inverted\": %d, "
+         "\"degenerate\": %d, \"slivers\": %d},\n",
+         q.dihedral_min, q.dihedral_max, q.radius_ratio_min, q.radius_ratio_mean, q.vol_min, q.vol_max,
+         q.n_inverted, q.n_degenerate, q.n_sliver);
+  printf("  \"gate\": %g, \"gate_passed\": %s,\n", gate, gate <= 0 || q.dihedral_min >= gate ? "true" : "false");
+  if (m->auto_size > 0) printf("  \"size_chosen\": %.6g,\n", m->auto_size);
+  else printf("  \"size_chosen\": null,\n");
+  if (r && r->wrapped)
+    printf("  \"wrap\": {\"how\": %d, \"alpha\": %.6g, \"offset\": %.6g, \"volume_change\": %.6g, \"seconds\": %.3f},\n",
+           r->wrapped, r->wrap_alpha, r->wrap_offset, r->wrap_volume_change, r->wrap_seconds);
+  else printf("  \"wrap\": null,\n");
+  if (r && r->lifted)
+    printf("  \"tet_remesh\": {\"runs\": %d, \"dihedral_before\": %.6g, \"dihedral_after\": %.6g, \"seconds\": %.3f},\n",
+           r->lifted, r->lift_dihedral_in, r->lift_dihedral, r->lift_seconds);
+  else printf("  \"tet_remesh\": null,\n");
+  int rc = json_surface(m, path, err);
+  if (!rc) rc = bs_mesh_check(m, err);
+  printf("  \"check\": %s,\n  \"seconds\": %.3f\n}\n", rc ? "false" : "true", t_load);
+  return rc;
+}
+
 int bs_cmd_mesh(int argc, char **argv) {
   /* argv[0] = "mesh" */
   mesh_args a;
@@ -222,14 +341,22 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_surface_report rep = {0};
   bs_mesh_read_opts o = {.size = a.size, .refine = !strcmp(a.sub, "refine") ? a.levels : a.refine,
                          .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
-                         .min_dihedral = a.min_dihedral, .report = &rep, .surface_mesher = a.mesher};
+                         .min_dihedral = a.min_dihedral, .report = &rep, .surface_mesher = a.mesher,
+                         .time_budget = a.time_budget};
   if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
-    if (rep.tris_out > 0) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then meshing failed */
+    if (rep.tris_out > 0 && !a.json) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then meshing failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);
     return BS_EXIT_FAIL;
   }
-  bs_app_print_surface_report(a.pos[0], &rep);
   double t_load = bs_seconds() - t0;
+  if (a.json) {
+    rc = mesh_json(m, a.pos[0], &rep, bs__gate_degrees(a.min_dihedral), t_load, &err);
+    bs_mesh_destroy(&m);
+    if (rc) fprintf(stderr, "bigstep mesh: %s\n", err.msg);
+    return rc ? BS_EXIT_FAIL : 0;
+  }
+  bs_app_print_surface_report(a.pos[0], &rep);
+  print_wrap_and_size(m, &rep);
   rc = !strcmp(a.sub, "info") ? mesh_info(m, &a, t_load, &err) : mesh_write(m, &a, &err);
   bs_mesh_destroy(&m);
   return rc;

@@ -80,6 +80,9 @@ typedef struct bs_mesh {
                           they split the body into pieces there, unless
                           merged (bs_mesh_read_opts.merge_coincident)    */
   int coincident_merged; /* 1: those nodes were merged into one vertex   */
+  double auto_size;    /* bs_mesh_read of a closed surface given no size
+                          (opts->size <= 0): the element size it chose
+                          (bs_surface_auto_size); 0 otherwise            */
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */
@@ -126,6 +129,12 @@ typedef struct bs_mesh_read_opts {
                     mesher and Gmsh's optimisers) or
                     BS_SURFACE_GMSH (Gmsh reparametrises and remeshes the
                     surface; kept for comparison)                       */
+  double time_budget; /* seconds of wall time bs_mesh_read may spend
+                    making a mesh (> 0), checked between its stages and
+                    inside the CGAL loops that allow it (alpha wrap,
+                    tetrahedral remeshing); past it the read stops with
+                    BS_EINPUT "... the meshing time budget of B s ... was
+                    exceeded ..." naming the stage. <= 0: no budget     */
 } bs_mesh_read_opts;
 
 #define BS_MESH_MIN_DIHEDRAL 10.0
@@ -151,8 +160,17 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
 /* Reads FILE: .msh (v2/v4, ASCII/binary) as is; .geo, .step/.stp, .brep
  * meshed through Gmsh; closed surfaces (.stl .off .obj .ply, read by the
  * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
- * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
- * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
+ * kept, optimised: surface_mesh.c), with size <= 0 at the size
+ * bs_surface_auto_size chooses (reported in m->auto_size; with no gate
+ * either, opts->min_dihedral < 0, Gmsh meshes inside the surface's own
+ * triangles, which it keeps as they are). Meshes bigstep
+ * makes are held to opts->min_dihedral; one under it (Gmsh's or Mesh_3's),
+ * or with a tet of zero volume, is first lifted by CGAL's tetrahedral
+ * remeshing, its boundary and groups kept (mesh/tet_lift.c). A surface the
+ * repair cannot make clean, or whose meshes are all refused, is replaced by
+ * its alpha wrap at the size (mesh/surface_wrap.c, the rule in bs_shim.h),
+ * held to the wrap's volume check; what was done goes to *opts->report.
+ * opts->time_budget bounds the whole (mesh/mesh_budget.c). Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
  * type and count. opts may be NULL (defaults).
  *
@@ -165,7 +183,7 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * naming it) and every element's nodes (defined). Coincident nodes under
  * distinct tags are counted in m->n_coincident (a warning for the caller to
  * print) and merged when opts->merge_coincident. A surface (.off, .obj,
- * .ply) is repaired first (bs_surface_prepare; what was done goes to
+ * .ply, .stl) is repaired first (bs_surface_prepare; what was done goes to
  * *opts->report). A CAD file (STEP, IGES, BREP) of several solids is
  * fragmented into a conformal model, one 3-D group per part named after the
  * part (mesh/cad_assembly.c), surface groups "surface_<tag>". */
@@ -176,11 +194,15 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
  * removed, holes closed when opts->close_holes and no larger than
  * opts->max_hole, self-intersections removed, oriented outward). *pts (3 per
  * point) and *tris (3 per triangle) are allocated by the shim: free them with
- * bs_surface_free. opts (may be NULL: no hole closed) supplies close_holes and
- * max_hole only; rep (may be NULL) gets the counts. Errors name the file:
- * BS_EIO (unreadable), BS_EINPUT (a malformed file, or a surface the repair
- * refuses: open, or self-intersections it cannot remove; the message says
- * how many, where and how large), BS_ENOMEM, BS_EINTERNAL. Example:
+ * bs_surface_free. A surface the repair refuses is replaced by its alpha wrap
+ * at opts->size (<= 0: bs_surface_auto_size's first) when it passes its volume
+ * check (an open one only when the wrap is solid: surface_repair.c);
+ * rep->wrapped says so. opts (may be NULL: no hole closed) supplies
+ * close_holes, max_hole and size only; rep (may be NULL) gets the counts.
+ * Errors name the file: BS_EIO (unreadable), BS_EINPUT (a malformed file,
+ * or a surface the repair and the wrap refuse: open, or self-intersections
+ * it cannot remove; the message says how many, where and how large, and
+ * why the wrap was refused), BS_ENOMEM, BS_EINTERNAL. Example:
  *     double *x; int32_t *t; int64_t np, nt; bs_surface_report r;
  *     bs_mesh_read_opts o = {.close_holes = 1};
  *     if (bs_surface_prepare("scan.off", &x, &np, &t, &nt, &o, &r, &err)) ...
@@ -190,6 +212,17 @@ int bs_surface_prepare(const char *path, double **pts, int64_t *np, int32_t **tr
 
 /* Frees an array bs_surface_prepare returned (NULL accepted). */
 void bs_surface_free(void *p);
+
+/* The element size bigstep chooses for a closed surface given none: the
+ * bounding-box diagonal / BS_SURFACE_AUTO_CELLS[k] for attempt k (0, 1; a
+ * mesh refused at the first, e.g. by the gate, is made again at the finer
+ * second), never under the size whose 6 V / h^3 tets exceed the machine
+ * (bs_mesh_max_tets). Thin parts get their own local size inside Mesh_3
+ * (two elements across them: bs_shim_mesh3_opts.thickness_elements), which
+ * is the local feature size's share of the rule. 0 for an empty soup. */
+#define BS_SURFACE_AUTO_ATTEMPTS 2
+double bs_surface_auto_size(const double *pts, int64_t np, const int32_t *tris, int64_t nt, int attempt,
+                            const bs_mesh_read_opts *opts);
 
 /* The security rule for Gmsh scripts: a .geo file (with what it includes or
  * merges, and FILE.opt beside it) that runs a program (SystemCall,

@@ -21,8 +21,13 @@
  * A closed surface is meshed into a volume: with opts->size > 0 by CGAL's
  * Mesh_3 (surface_mesh.c; Gmsh is not involved) unless opts->surface_mesher
  * asks for Gmsh, which classifies it into patches (40 degree feature angle),
- * reparametrizes and remeshes them at that size; with size <= 0 Gmsh keeps
- * its triangles as the boundary of the volume mesh.
+ * reparametrizes and remeshes them at that size (with size <= 0 Gmsh keeps
+ * its triangles as the boundary of the volume mesh, as it does for a
+ * surface given no size and no gate); with size <= 0 and a gate (and not the
+ * Gmsh mesher) at the size bigstep chooses (bs_surface_auto_size).
+ * Every input but .msh has a time budget (opts->time_budget, mesh_budget.c)
+ * and, when Gmsh's or Mesh_3's mesh misses the gate, is lifted by CGAL's
+ * tetrahedral remeshing (tet_lift.c).
  * Meshes made here (not a .msh) are optimised by Gmsh towards the quality
  * gate (gmsh_optimize.c; a CAD assembly at its own size still under it is
  * meshed again with smaller elements, cad_assembly.c) and then held to it
@@ -781,6 +786,7 @@ static int refine_read(const char *path, int refine, bs_mesh **m, bs_error *err)
     }
     fine->n_coincident = (*m)->n_coincident;
     fine->coincident_merged = (*m)->coincident_merged;
+    fine->auto_size = (*m)->auto_size;
     bs_mesh_destroy(m);
     *m = fine;
   }
@@ -864,7 +870,24 @@ int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, con
   return rc;
 }
 
-int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+/* A Gmsh mesh under the gate lifted by CGAL's tetrahedral remeshing
+ * (bs__mesh_lift at size, <= 0: the mean edge length; its groups kept);
+ * BS_OK when the lift passes the gate, else BS_EINPUT with the gate's
+ * first message (the budget's when spent). */
+static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs_error *err) {
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc = bs__mesh_lift(path, m, size, gate, &e2);
+  if (rc) {
+    if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
+    return rc;
+  }
+  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return bs__lift_note(*m, err);
+  bs_error_clear(err);
+  return BS_OK;
+}
+
+static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
   if (opts && opts->report) memset(opts->report, 0, sizeof *opts->report);
@@ -892,8 +915,11 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (ext_is(file_ext(path), script) && (rc = bs__geo_check(path, err))) return rc;
 
   bs_mesh *m = NULL;
-  if (kind == IN_SOUP && size > 0 && !(opts && opts->surface_mesher == BS_SURFACE_GMSH)) {
-    rc = bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err);
+  if (kind != IN_MESH && (rc = bs__budget_check(path, "meshing the volume", err))) goto out;
+  /* A surface with no size and no gate keeps its own triangles (Gmsh below). */
+  if (kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH) && (size > 0 || bs__mesh_gate(opts) > 0)) {
+    rc = size > 0 ? bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err)
+                  : bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
     goto refine;
   }
   if ((rc = gmsh_begin(path, err))) goto out;
@@ -920,6 +946,7 @@ int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out,
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
   if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
+  if (rc == BS_EINPUT && m && gate > 0) rc = lift_gmsh(path, &m, size, gate, err);
 
 refine:
   if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
@@ -929,6 +956,14 @@ out:
   bs_shim_free(tris);
   if (rc) bs_mesh_destroy(&m);
   else *out = m;
+  return rc;
+}
+
+int bs_mesh_read(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  bs__budget_begin(opts);
+  const int rc = read_mesh(path, opts, out, err);
+  if (rc) bs__budget_note(err);
+  bs__budget_end();
   return rc;
 }
 

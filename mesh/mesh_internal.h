@@ -180,6 +180,71 @@ int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, b
  * when > 0, BS_MESH_MIN_DIHEDRAL when 0, none when < 0. */
 double bs__mesh_gate(const bs_mesh_read_opts *opts);
 
+/* mesh_budget.c: the meshing time budget (bs_mesh_read_opts.time_budget)
+ * of this thread's bs_mesh_read. bs__budget_begin starts it (none when
+ * opts->time_budget <= 0), bs__budget_end clears it. bs__budget_deadline:
+ * the bs_seconds() time it ends (0: none), for the shim's loops.
+ * bs__budget_check: BS_OK, or BS_EINPUT "<path>: the meshing time budget of
+ * B s (...) was exceeded before <stage>" once past it. bs__budget_exceeded:
+ * whether err holds such a message (a budget refusal, from here or from the
+ * shim, which no fallback may retry). */
+void bs__budget_begin(const bs_mesh_read_opts *opts);
+void bs__budget_end(void);
+double bs__budget_deadline(void);
+int bs__budget_check(const char *path, const char *stage, bs_error *err);
+int bs__budget_exceeded(const bs_error *err);
+/* Appends the budget's value and where it is set to a budget refusal that
+ * came from the shim (which knows only the deadline). */
+void bs__budget_note(bs_error *err);
+/* The report of this thread's bs_mesh_read (opts->report; NULL: none or no
+ * read running). */
+struct bs_surface_report *bs__read_report(void);
+
+/* surface_wrap.c: the soup (x, nx; t, nt: any triangles) replaced by its
+ * alpha wrap at element size h (bs_shim_alpha_wrap, the rule of bs_shim.h),
+ * held to the volume check when the input is closed once oriented:
+ * |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in; and, for an
+ * input the repair refused as open (open = 1), to the solid check: V_wrap
+ * >= BS_WRAP_SOLID x 2 offset area (else the ball went in through a hole
+ * wider than 2 alpha and the wrap is only a shell around the surface; when
+ * its openings are all narrower, a soup of facets with gaps, the wrap is
+ * the solid they bound). *pts, *tris
+ * allocated by the shim (bs_shim_free). rep (may be NULL) gets wrapped =
+ * how (1 or 2), the wrap's alpha, offset, volume change and seconds, and
+ * points_out, tris_out, volume. Errors name path: the shim's, the budget,
+ * BS_EINPUT for a wrap that fails the volume check (the change and the bound). */
+#define BS_WRAP_SOLID 10.0
+int bs__surface_wrap(const char *path, const double *x, int64_t nx, const int32_t *t, int64_t nt, double h, int how,
+                     int open, double **pts, int64_t *np, int32_t **tris, int64_t *ntri, struct bs_surface_report *rep,
+                     bs_error *err);
+
+/* tet_lift.c: the quality back end (CGAL's tetrahedral remeshing, the rule
+ * in tet_lift.c's comment). bs__tets_lift: the raw tets (any orientation,
+ * zero-volume ones allowed; sub: subdomain >= 1 per tet or NULL) remeshed
+ * at h (<= 0: their mean edge length) towards gate, boundary kept, then
+ * (allow_boundary) with the boundary remeshed and sharp edges constrained
+ * when still under it; *out (free its arrays with bs_shim_free) holds the
+ * best, which may still be under the gate (the caller holds it to the
+ * gate). bs__mesh_lift: *m replaced by its lift (the boundary remeshed only
+ * when its groups are the default "body" and "surface_1"; other groups are
+ * kept: 3-D ones by material, lower ones by position). Errors name path:
+ * the shim's, the budget, the volume check (BS_EINPUT). */
+#define BS_LIFT_VOLUME_TOL 0.005
+#define BS_LIFT_ROUNDS 8
+struct bs_shim_tet_remesh_out;
+int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets, const int32_t *sub,
+                  double h, double gate, int allow_boundary, struct bs_shim_tet_remesh_out *out, bs_error *err);
+int bs__mesh_lift(const char *path, bs_mesh **m, double h, double gate, bs_error *err);
+/* tet_lift.c: appends "; CGAL's tetrahedral remeshing of it reached D
+ * degrees" (m's smallest angle) to the gate's message in err; BS_EINPUT. */
+int bs__lift_note(const bs_mesh *m, bs_error *err);
+
+/* surface_mesh.c: bs__mesh_closed_surface at the size bigstep chooses
+ * (bs_surface_auto_size, attempt 0 then 1 when refused); (*out)->auto_size
+ * is the size used. Errors: the first attempt's, prefixed with the size. */
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -63,7 +63,8 @@ static bs_shim_mesh3_opts mesh3_opts(double h, double diag, const bs_mesh_read_o
                           .perturb = 1,
                           .exude = 1,
                           .target_dihedral = fmin(fmax(gate, BS_MESH_MIN_DIHEDRAL), BS_MESH3_MAX_TARGET),
-                          .max_rounds = 3};
+                          .max_rounds = 3,
+                          .deadline = bs__budget_deadline()};
   if (h > BS_MESH3_SCAN_FINE * diag) {
     o.scan_facet_distance = fmax(h / 25.0, BS_MESH3_SCAN_FINE * diag / 10.0);
     o.scan_facet_angle = 30;
@@ -108,10 +109,27 @@ static int check_size(const char *path, const double *pts, int64_t np, const int
   return bs__check_mesh_size(*volume, h, opts, path, err);
 }
 
+/* The mesh of the raw tets, or, when one has zero volume, of their lift
+ * (bs__tets_lift towards the default gate): a degenerate tet is remeshed,
+ * never an error. */
+static int create_or_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets,
+                          bs_mesh **out, bs_error *err) {
+  int rc = bs_mesh_create(nv, x, nt, tets, 0, NULL, out, err);
+  if (rc != BS_EINPUT || !strstr(err->msg, "zero volume")) return rc;
+  bs_shim_tet_remesh_out r;
+  bs_error e2;
+  bs_error_clear(&e2);
+  if (bs__tets_lift(path, nv, x, nt, tets, NULL, 0.0, BS_MESH_MIN_DIHEDRAL, 1, &r, &e2)) return rc;
+  if (r.n_vertices <= INT32_MAX && r.n_tets <= INT32_MAX)
+    rc = bs_mesh_create((int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, 0, NULL, out, err);
+  bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
+  return rc;
+}
+
 int bs__mesh_default_groups(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets,
                             bs_mesh **out, bs_error *err) {
   bs_mesh *m0 = NULL;
-  int rc = bs_mesh_create(nv, x, nt, tets, 0, NULL, &m0, err);
+  int rc = create_or_lift(path, nv, x, nt, tets, &m0, err);
   if (rc) {
     bs_error_prefix(err, "%s", path);
     return rc;
@@ -199,6 +217,24 @@ static int hxt_inside_mesh3(const char *path, bs_mesh **m, const bs_mesh_read_op
   return BS_OK;
 }
 
+/* A Mesh_3 mesh under the gate lifted by CGAL's tetrahedral remeshing
+ * (bs__mesh_lift at h); BS_OK when the lift passes the gate, else
+ * BS_EINPUT with *err keeping the gate's message (the budget's when spent),
+ * *m the lift when it is better. */
+static int lift_mesh3(const char *path, bs_mesh **m, double h, const bs_mesh_read_opts *opts, bs_error *err) {
+  bs_error e2;
+  bs_error_clear(&e2);
+  const double gate = bs__mesh_gate(opts);
+  int rc = bs__mesh_lift(path, m, h, gate, &e2);
+  if (rc) {
+    if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
+    return rc;
+  }
+  if (bs_mesh_dihedral_gate(*m, gate, path, &e2)) return bs__lift_note(*m, err);
+  bs_error_clear(err);
+  return BS_OK;
+}
+
 /* One Mesh_3 mesh at o: the shim's mesh with the default groups, checked
  * manifold, held to the gate, meshed again inside its boundary when under
  * it (hxt_inside_mesh3). *scan: whether the shim meshed it as a scan (no
@@ -215,8 +251,10 @@ static int mesh3_once(const char *path, const double *pts, int64_t np, const int
   bs_shim_free(r.x);
   bs_shim_free(r.tets);
   if (!rc) rc = manifold_like(path, *out, pts, np, tris, nt, o->size, err);
-  if (!rc && (rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err)) == BS_EINPUT)
-    rc = hxt_inside_mesh3(path, out, opts, err);
+  if (!rc && (rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err)) == BS_EINPUT) {
+    rc = lift_mesh3(path, out, o->size, opts, err);
+    if (rc == BS_EINPUT && !bs__budget_exceeded(err)) rc = hxt_inside_mesh3(path, out, opts, err);
+  }
   if (rc) bs_mesh_destroy(out);
   return rc;
 }
@@ -272,6 +310,64 @@ static int mesh3_path(const char *path, const double *pts, int64_t np, const int
   return rc;
 }
 
+/* The meshers of opts->surface_mesher on the soup, whose size h has been
+ * checked (see the file comment for the auto order). */
+static int mesh_with_meshers(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                             double h, double diag, double volume, const bs_mesh_read_opts *opts, bs_mesh **out,
+                             bs_error *err) {
+  const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
+  if (mesher == BS_SURFACE_REMESH) return bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
+  if (mesher != BS_SURFACE_AUTO) return mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
+  /* auto: the likelier path first, the other when it refuses */
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc;
+  if (6.0 * volume / (h * h * h) > BS_REMESH_AUTO_TETS) {
+    if ((rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) != BS_EINPUT ||
+        bs__budget_exceeded(&e2)) {
+      if (rc) *err = e2;
+      return rc;
+    }
+    return mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
+  }
+  rc = mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
+  if (rc != BS_EINPUT || bs__budget_exceeded(err)) return rc;
+  if ((rc = bs__budget_check(path, "the remesh path", &e2)) ||
+      bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) {
+    if (rc) *err = e2;
+    return rc ? rc : BS_EINPUT;
+  }
+  bs_error_clear(err);
+  return BS_OK;
+}
+
+/* Every mesher refused the clean surface (a boundary that is not a closed
+ * 2-manifold where parts touch, the gate on thin walls, a surface that
+ * folds once remeshed): its alpha wrap at h meshed instead
+ * (bs__surface_wrap, how 2). On refusal the first message stays. */
+static int mesh_wrap(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
+                     double diag, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  double *wp = NULL, volume = 0;
+  int32_t *wt = NULL;
+  int64_t nwp = 0, nwt = 0;
+  bs_error e2;
+  bs_error_clear(&e2);
+  int rc = bs__surface_wrap(path, pts, np, tris, nt, h, 2, 0, &wp, &nwp, &wt, &nwt, opts ? opts->report : NULL, &e2);
+  if (!rc) {
+    volume = fabs(bs__soup_volume(wp, wt, nwt));
+    rc = mesh_with_meshers(path, wp, nwp, wt, nwt, h, diag, volume, opts, out, &e2);
+  }
+  bs_shim_free(wp);
+  bs_shim_free(wt);
+  if (!rc) {
+    bs_error_clear(err);
+    return BS_OK;
+  }
+  if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
+  if (opts && opts->report) opts->report->wrapped = 0;
+  return rc;
+}
+
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   *out = NULL;
@@ -282,23 +378,44 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   double diag = 0, volume = 0;
   int rc = check_size(path, pts, np, tris, nt, h, opts, &diag, &volume, err);
   if (rc) return rc;
-  const int mesher = opts ? opts->surface_mesher : BS_SURFACE_AUTO;
-  if (mesher == BS_SURFACE_REMESH) return bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, err);
-  if (mesher != BS_SURFACE_AUTO) return mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
-  /* auto: the likelier path first, the other when it refuses */
-  bs_error e2;
-  bs_error_clear(&e2);
-  if (6.0 * volume / (h * h * h) > BS_REMESH_AUTO_TETS) {
-    if ((rc = bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) != BS_EINPUT) {
-      if (rc) *err = e2;
-      return rc;
+  rc = mesh_with_meshers(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
+  if (rc != BS_EINPUT || bs__budget_exceeded(err)) return rc;
+  return mesh_wrap(path, pts, np, tris, nt, h, diag, opts, out, err);
+}
+
+static const double auto_cells[BS_SURFACE_AUTO_ATTEMPTS] = {40.0, 60.0};
+
+double bs_surface_auto_size(const double *pts, int64_t np, const int32_t *tris, int64_t nt, int attempt,
+                            const bs_mesh_read_opts *opts) {
+  if (np <= 0 || nt <= 0 || attempt < 0 || attempt >= BS_SURFACE_AUTO_ATTEMPTS) return 0.0;
+  double lo[3], hi[3];
+  bs_bbox(np, pts, lo, hi);
+  const double h = bs_bbox_diagonal(lo, hi) / auto_cells[attempt];
+  const double v = fabs(bs__soup_volume(pts, tris, nt)), cap = bs_mesh_max_tets(opts);
+  return v > 0 ? fmax(h, cbrt(6.0 * v / cap)) : h;
+}
+
+int bs__mesh_surface_auto(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                          const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
+  bs_mesh_read_opts o = {0};
+  if (opts) o = *opts;
+  int rc = BS_EINPUT;
+  bs_error first;
+  bs_error_clear(&first);
+  for (int k = 0; k < BS_SURFACE_AUTO_ATTEMPTS; k++) {
+    o.size = bs_surface_auto_size(pts, np, tris, nt, k, opts);
+    rc = bs__mesh_closed_surface(path, pts, np, tris, nt, &o, out, err);
+    if (!rc) {
+      (*out)->auto_size = o.size;
+      return BS_OK;
     }
-    return mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
+    if (k == 0) first = *err;
+    if (rc != BS_EINPUT || bs__budget_exceeded(err)) return rc;
   }
-  rc = mesh3_path(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
-  if (rc != BS_EINPUT || bs__mesh_remeshed_surface(path, pts, np, tris, nt, opts, out, &e2)) return rc;
-  bs_error_clear(err);
-  return BS_OK;
+  *err = first;
+  bs_error_prefix(err, "no size given, chosen %g (diagonal / %g)", bs_surface_auto_size(pts, np, tris, nt, 0, opts),
+                  auto_cells[0]);
+  return rc;
 }
 
 static const struct {

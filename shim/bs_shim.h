@@ -250,6 +250,20 @@ typedef struct bs_surface_report {
   double volume_before;          /* enclosed (signed) before step 4, 0 if open   */
   double volume;                 /* enclosed by the clean surface (> 0)          */
   double bbox_diagonal;          /* of the input points                          */
+  int open_refused;              /* 1: refused as an open surface (holes not closed on
+                                    request, or larger than max_hole)           */
+  /* Filled by bigstep's callers (mesh/surface_wrap.c), not by the repair:    */
+  int wrapped;                   /* 1: the repair could not make the surface clean and
+                                    its alpha wrap replaced it; 2: the meshes of the
+                                    clean surface were refused and its wrap was meshed */
+  double wrap_alpha, wrap_offset;/* the wrap's parameters (bs_shim_alpha_wrap)    */
+  double wrap_volume_change;     /* (V_wrap - V_in) / V_in, V_in the input's volume */
+  double wrap_seconds;           /* the wrap's wall time                          */
+  int lifted;                    /* tetrahedral remeshing runs (mesh/tet_lift.c) on
+                                    meshes under the gate or with flat tets      */
+  double lift_dihedral_in;       /* the last one's smallest dihedral angle before */
+  double lift_dihedral;          /* ... and after (degrees)                        */
+  double lift_seconds;           /* their wall time in all                         */
 } bs_surface_report;
 
 /* Repairs the surface (points, n_points; tris, n_tris: see Data above) into
@@ -317,6 +331,11 @@ typedef struct bs_shim_mesh3_opts {
   double size_gradation;      /* the local size grows at most this much per unit length
                                  away from thin parts; <= 0: 0.5                         */
   double min_size;            /* the local size's floor; <= 0: h / 8                     */
+  double deadline;            /* > 0: a bs_seconds() time: the optimisers get the time left
+                                 as their time_limit, and past it after refinement or the
+                                 optimisers the mesh is refused (BS_EINPUT "the meshing time
+                                 budget was exceeded during Mesh_3"); <= 0: none. Mesh_3's
+                                 refinement itself cannot be stopped (CGAL 5.5)           */
 } bs_shim_mesh3_opts;
 
 typedef struct bs_shim_mesh3_out {
@@ -429,6 +448,143 @@ typedef struct bs_shim_remesh_out {
  *     ...; bs_shim_free(r.points); bs_shim_free(r.tris); } */
 int bs_shim_remesh_surface(const char *name, const double *points, int64_t n_points, const int32_t *tris,
                            int64_t n_tris, const bs_shim_remesh_opts *opts, bs_shim_remesh_out *out, bs_error *err);
+
+/* ==========================================================================
+ * Alpha wrapping (shim_wrap.cpp): any triangle soup (non-manifold edges,
+ * overlapping or nearly overlapping facets, small holes, several touching
+ * parts) made into a closed, 2-manifold, self-intersection-free, outward
+ * surface by construction (CGAL::alpha_wrap_3, CGAL 5.5), and the audit of
+ * a surface with CGAL's Polygon_mesh_processing.
+ *
+ * The rule for a target element size h: alpha = BS_WRAP_ALPHA h (a ball of
+ * radius alpha carves the space from outside: cavities, gaps and holes
+ * narrower than about 2 alpha = h are closed, which at element size h
+ * cannot be meshed apart anyway; the wrap's triangles are about alpha long)
+ * and offset = BS_WRAP_OFFSET h (the wrap lies at that distance outside
+ * the input). The volume grows by about offset x area(input) (the offset's
+ * share: 6 h / 100 of a unit cube at h), plus the concave corners and gaps
+ * the ball cannot enter (about (1 - pi/4) alpha^2 per unit length of a
+ * right-angled concave edge); callers accept a wrap when
+ * |V_wrap - V_in| <= 2 offset area + BS_WRAP_VOLUME_TOL V_in (the volume
+ * check).
+ * ========================================================================== */
+#define BS_WRAP_ALPHA 0.5
+#define BS_WRAP_OFFSET 0.01
+#define BS_WRAP_VOLUME_TOL 0.02
+
+typedef struct bs_shim_wrap_opts {
+  double size;     /* target element size h (> 0), in the points' units            */
+  double alpha;    /* > 0: this alpha instead of BS_WRAP_ALPHA h                     */
+  double offset;   /* > 0: this offset instead of BS_WRAP_OFFSET h                   */
+  double deadline; /* > 0: a bs_seconds() time past which the wrap stops (BS_EINPUT
+                      naming the budget); <= 0: none                                */
+} bs_shim_wrap_opts;
+
+typedef struct bs_shim_wrap_out {
+  double *points;  /* 3 * n_points (free with bs_shim_free)                          */
+  int64_t n_points;
+  int32_t *tris;   /* 3 * n_tris, outward, closed 2-manifold (bs_shim_free)          */
+  int64_t n_tris;
+  double alpha, offset; /* as used                                                   */
+  double volume_in;/* |volume| enclosed by the input once consistently oriented
+                      (exact for a closed orientable input, an estimate otherwise) */
+  int input_closed;/* 1: the input, once oriented, is closed (every edge in exactly two
+                      triangles): volume_in is its enclosed volume                   */
+  double area_in;  /* the input's area                                               */
+  double volume;   /* enclosed by the wrap (> 0)                                     */
+  double seconds;  /* the wrap's wall time                                           */
+} bs_shim_wrap_out;
+
+/* Wraps the soup (points, tris: any triangles; degenerate ones are ignored)
+ * at opts (see the rule above) and audits the result (closed, 2-manifold,
+ * no self-intersection: else BS_EINTERNAL). `name` starts every message.
+ * Deterministic and sequential. Errors: BS_EINPUT (empty, an index out of
+ * range, size <= 0, the deadline passed: "the meshing time budget was
+ * exceeded during the alpha wrap"), BS_ENUMERIC (a non-finite point),
+ * BS_ENOMEM, BS_EINTERNAL. On error *out is zeroed except alpha and offset.
+ * Example:
+ *   bs_shim_wrap_opts o = {.size = 0.01};
+ *   bs_shim_wrap_out w;
+ *   if (!bs_shim_alpha_wrap("part.stl", x, nx, t, nt, &o, &w, &err)) {
+ *     ...; bs_shim_free(w.points); bs_shim_free(w.tris); } */
+int bs_shim_alpha_wrap(const char *name, const double *points, int64_t n_points, const int32_t *tris,
+                       int64_t n_tris, const bs_shim_wrap_opts *opts, bs_shim_wrap_out *out, bs_error *err);
+
+typedef struct bs_shim_surface_audit_out {
+  int manifold;            /* an orientable 2-manifold (edges in at most 2 triangles,
+                              vertices with one fan: is_polygon_soup_a_polygon_mesh) */
+  int closed;              /* manifold and no border edge                           */
+  int self_intersecting;   /* manifold and PMP::does_self_intersect                  */
+  int64_t border_edges;    /* manifold: edges in one triangle only                   */
+  int64_t components;      /* manifold: connected components                         */
+  double volume;           /* closed: the enclosed signed volume (PMP::volume)       */
+} bs_shim_surface_audit_out;
+
+/* Audits the soup with CGAL's Polygon_mesh_processing (fields above; those
+ * that need a manifold are 0 when it is not). Errors: BS_EINPUT (empty, an
+ * index out of range), BS_ENUMERIC, BS_ENOMEM, BS_EINTERNAL. */
+int bs_shim_surface_audit(const double *points, int64_t n_points, const int32_t *tris, int64_t n_tris,
+                          bs_shim_surface_audit_out *out, bs_error *err);
+
+/* ==========================================================================
+ * Tetrahedral remeshing (shim_tet_remesh.cpp): a tet mesh that misses the
+ * quality gate (slivers, flat or zero-volume tets) lifted by CGAL's
+ * tetrahedral_isotropic_remeshing (CGAL 5.5: edge splits, collapses, flips,
+ * smoothing) at a target edge length, its boundary kept.
+ * ========================================================================== */
+
+enum {
+  BS_SHIM_TET_PROTECT_BOUNDARY = 0, /* every boundary triangle kept as it is              */
+  BS_SHIM_TET_PROTECT_FEATURES = 1  /* the boundary remeshed too (topology kept, vertices
+                                       re-projected onto it), its sharp edges constrained  */
+};
+
+typedef struct bs_shim_tet_remesh_opts {
+  double size;            /* target edge length (> 0), in the points' units            */
+  int protect;            /* BS_SHIM_TET_PROTECT_*                                      */
+  double feature_angle;   /* FEATURES: boundary edges whose faces' normals differ by more
+                             than this (degrees) are sharp; <= 0: 60                     */
+  double target_dihedral; /* degrees: stop once every tet's smallest dihedral angle is at
+                             least this                                                 */
+  int iterations;         /* at most this many remeshing rounds; <= 0: 8                */
+  double deadline;        /* > 0: a bs_seconds() time past which it stops (BS_EINPUT
+                             naming the budget); <= 0: none                             */
+} bs_shim_tet_remesh_opts;
+
+typedef struct bs_shim_tet_remesh_out {
+  double *x;              /* 3 * n_vertices (free with bs_shim_free)                    */
+  int64_t n_vertices;
+  int32_t *tets;          /* 4 * n_tets, CGAL::orientation > 0 (bs_shim_free)           */
+  int64_t n_tets;
+  int32_t *subdomain;     /* n_tets: each tet's subdomain (as given; bs_shim_free)      */
+  double dihedral_in;     /* smallest dihedral angle (degrees) of the input             */
+  double dihedral;        /* ... of the output (the best round)                         */
+  double volume_in, volume; /* total tet volume before and after                        */
+  int rounds;             /* remeshing rounds run                                       */
+  double seconds;         /* wall time of the rounds                                    */
+} bs_shim_tet_remesh_out;
+
+/* Remeshes the tets (4 int32_t 0-based vertex indices each, any orientation,
+ * zero-volume ones allowed) of the vertices x (3 doubles each), each in the
+ * subdomain subdomain[t] >= 1 (NULL: all 1; the faces between subdomains are
+ * kept as boundaries are, and every output tet gets its subdomain) with
+ * CGAL::tetrahedral_isotropic_remeshing at opts->size, one iteration per
+ * round, until the smallest dihedral angle reaches opts->target_dihedral or
+ * opts->iterations rounds have run; the round with the largest smallest
+ * angle is returned (the input itself when none improves it). Deterministic;
+ * sequential. `name` starts every message. Errors: BS_EINPUT (empty, an
+ * index out of range, size <= 0, tets that are not a valid triangulation: a
+ * face in three tets, a pinched boundary; the deadline passed: "the meshing
+ * time budget was exceeded during the tetrahedral remeshing"), BS_ENUMERIC,
+ * BS_ENOMEM, BS_EINTERNAL. On error *out is zeroed.
+ * Example:
+ *   bs_shim_tet_remesh_opts o = {.size = h, .target_dihedral = 10};
+ *   bs_shim_tet_remesh_out r;
+ *   if (!bs_shim_tet_remesh("part", x, nv, tets, nt, &o, &r, &err)) {
+ *     ...; bs_shim_free(r.x); bs_shim_free(r.tets); } */
+int bs_shim_tet_remesh(const char *name, const double *x, int64_t n_vertices, const int32_t *tets, int64_t n_tets,
+                       const int32_t *subdomain, const bs_shim_tet_remesh_opts *opts, bs_shim_tet_remesh_out *out,
+                       bs_error *err);
 
 #ifdef __cplusplus
 }

@@ -63,13 +63,24 @@ double min_dihedral(const C3t3 &c3t3) { return CGAL::to_double(CGAL::Mesh_3::min
 // perturbation, then rounds of exudation (CGAL's order; exuding first was
 // measured worse on the fandisk, 7.9 against 10.1 degrees), each while the
 // smallest angle is below the target and improves.
+struct budget_exceeded {};
+
+// The time left before o.deadline as an optimiser's time_limit (0: no
+// limit); throws budget_exceeded once it has passed.
+double time_left(const bs_shim_mesh3_opts &o) {
+  if (!(o.deadline > 0)) return 0;
+  const double left = o.deadline - bs_seconds();
+  if (left <= 0) throw budget_exceeded();
+  return left;
+}
+
 void optimise(C3t3 &c3t3, const Domain &domain, const bs_shim_mesh3_opts &o, double *achieved) {
   namespace P = CGAL::parameters;
   const int iters = o.smooth_iterations > 0 ? o.smooth_iterations : 0;
   if (o.smoother == BS_SHIM_SMOOTH_ODT && iters > 0)
-    CGAL::odt_optimize_mesh_3(c3t3, domain, P::max_iteration_number = iters, P::time_limit = 0);
+    CGAL::odt_optimize_mesh_3(c3t3, domain, P::max_iteration_number = iters, P::time_limit = time_left(o));
   else if (o.smoother == BS_SHIM_SMOOTH_LLOYD && iters > 0)
-    CGAL::lloyd_optimize_mesh_3(c3t3, domain, P::max_iteration_number = iters, P::time_limit = 0);
+    CGAL::lloyd_optimize_mesh_3(c3t3, domain, P::max_iteration_number = iters, P::time_limit = time_left(o));
   const double target = o.target_dihedral > 0 ? o.target_dihedral : 0.0;
   double best = min_dihedral(c3t3);
   const int rounds = o.max_rounds > 0 ? o.max_rounds : 1;
@@ -81,8 +92,8 @@ void optimise(C3t3 &c3t3, const Domain &domain, const bs_shim_mesh3_opts &o, dou
   for (int pass = 0; pass < 2; pass++) {
     if (!(pass == 0 ? o.perturb : o.exude)) continue;
     for (int r = 0; r < rounds && (r == 0 || best < target); r++) {
-      if (pass == 0) CGAL::perturb_mesh_3(c3t3, domain, P::sliver_bound = target, P::time_limit = 0);
-      else CGAL::exude_mesh_3(c3t3, P::sliver_bound = target, P::time_limit = 0);
+      if (pass == 0) CGAL::perturb_mesh_3(c3t3, domain, P::sliver_bound = target, P::time_limit = time_left(o));
+      else CGAL::exude_mesh_3(c3t3, P::sliver_bound = target, P::time_limit = time_left(o));
       const double now = min_dihedral(c3t3);
       const bool progress = now > best + 1e-3;
       best = now;
@@ -336,6 +347,7 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
   C3t3 c3t3 = refine(sm, domain, cad, o, out);
   out->refined_dihedral = min_dihedral(c3t3);
   optimise(c3t3, domain, o, &out->dihedral);
+  time_left(o);
   /* a one-piece closed surface encloses no void: every cavity is Mesh_3's */
   const std::size_t cavity_cells = surface_components(sm) == 1 ? SIZE_MAX : BS_SHIM_MESH3_FILL_CELLS;
   out->n_filled = fill_pinches(c3t3, BS_SHIM_MESH3_FILL_CELLS, cavity_cells);
@@ -353,6 +365,8 @@ extern "C" int bs_shim_mesh_surface(const char *name, const double *points, int6
   *out = bs_shim_mesh3_out{};
   try {
     return mesh_surface(name, points, n_points, tris, n_tris, *opts, out, err);
+  } catch (const budget_exceeded &) {
+    return bs_error_set(err, BS_EINPUT, "%s: the meshing time budget was exceeded during Mesh_3", name);
   } catch (const std::bad_alloc &) {
     return bs_error_set(err, BS_ENOMEM, "%s: out of memory while CGAL meshed the volume", name);
   } catch (const std::exception &e) {

@@ -181,7 +181,10 @@ int close_holes(Mesh &m, const bs_surface_repair_opts *o, bs_surface_report *r, 
   double frac = o && o->max_hole > 0 ? o->max_hole : BS_SURFACE_MAX_HOLE_DEFAULT;
   double limit = frac * r->bbox_diagonal;
   int close = o && o->close_holes;
-  if (!close || big.diameter > limit) return refuse_open(loops, big, limit, r->bbox_diagonal, close, err);
+  if (!close || big.diameter > limit) {
+    r->open_refused = 1;
+    return refuse_open(loops, big, limit, r->bbox_diagonal, close, err);
+  }
   for (const Loop &l : loops) {
     std::vector<Face> added;
     std::vector<Mesh::Vertex_index> verts;

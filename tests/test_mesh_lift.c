@@ -1,0 +1,241 @@
+/* The quality back end and the limits of issue 44: CGAL's tetrahedral
+ * remeshing (bs_shim_tet_remesh, bs__tets_lift) on a zero-volume tet and on
+ * a thin slab with a long thin wall, the meshing time budget (a named
+ * error, not a hang), and the size chosen for a surface given none (the
+ * armadillo scan, when data/meshes has it). */
+#define _GNU_SOURCE
+
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bs_mesh.h"
+#include "bs_shim.h"
+#include "mesh_internal.h"
+
+/* An octahedron (a square at z = 0, apexes at z = +-1) as two pyramids whose
+ * bases are split along different diagonals, made conforming by the flat
+ * tet of the four square corners: 4 tets and 1 of zero volume. */
+static const double octa_x[6 * 3] = {1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+static const int32_t octa_t[5 * 4] = {0, 1, 2, 4, 0, 2, 3, 4, 1, 2, 3, 5, 1, 3, 0, 5, 0, 1, 2, 3};
+
+Test(mesh_lift, zero_volume_tet_is_remeshed_not_an_error) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_expect_eq(bs_mesh_create(6, octa_x, 5, octa_t, 0, NULL, &m, &err), BS_EINPUT, "the flat tet is refused raw");
+  bs_mesh_destroy(&m);
+  bs_error_clear(&err);
+  bs_shim_tet_remesh_out r;
+  cr_assert_eq(bs__tets_lift("octahedron", 6, octa_x, 5, octa_t, NULL, 0.0, BS_MESH_MIN_DIHEDRAL, 1, &r, &err), BS_OK,
+               "%s", err.msg);
+  cr_log_info("lift: %lld tets, dihedral %.2f -> %.2f in %d rounds", (long long)r.n_tets, r.dihedral_in, r.dihedral,
+              r.rounds);
+  bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
+  cr_assert_eq(bs__mesh_default_groups("octahedron", 6, octa_x, 5, octa_t, &m, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_log_info("octahedron: %d tets, min dihedral %.2f, volume %.9g", m->n_tets, q.dihedral_min, bs_mesh_volume(m));
+  cr_expect_eq(q.n_inverted, 0);
+  cr_expect_float_eq(bs_mesh_volume(m), 4.0 / 3.0, 1e-9);
+  cr_expect_gt(q.dihedral_min, 1.0);
+  bs_mesh_destroy(&m);
+}
+
+/* A box of 3 x 3 x 3 cells whose inner vertex (1, 1, 1) is pushed down to
+ * z = 0.08, almost onto the bottom face: flat tets, far under the gate. The lift (boundary kept) passes the gate
+ * with the same volume and the box's groups. */
+Test(mesh_lift, slivers_lifted_groups_kept) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs_mesh_create_box((double[3]){0, 0, 0}, (double[3]){3, 3, 3}, 3, 3, 3, &m, &err), BS_OK, "%s",
+               err.msg);
+  for (int32_t v = 0; v < m->n_vertices; v++) {
+    double *p = m->x + 3 * v;
+    if (p[0] == 1 && p[1] == 1 && p[2] == 1) p[2] = 0.08;
+  }
+  bs_mesh_quality q0, q1;
+  bs_mesh_quality_compute(m, NULL, &q0);
+  cr_assert_eq(q0.n_inverted, 0, "the moved vertex stays inside its star");
+  const int32_t xmin0 = bs_mesh_group(m, "xmin")->n_elems;
+  double t0 = bs_seconds();
+  cr_assert_eq(bs__mesh_lift("box", &m, 1.0, BS_MESH_MIN_DIHEDRAL, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality_compute(m, NULL, &q1);
+  cr_log_info("box with slivers: min dihedral %.2f -> %.2f, %d tets, %.2f s", q0.dihedral_min, q1.dihedral_min,
+              m->n_tets, bs_seconds() - t0);
+  cr_expect_lt(q0.dihedral_min, 5.0);
+  cr_expect_geq(q1.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_float_eq(bs_mesh_volume(m), 27.0, 1e-9);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_assert_not_null(bs_mesh_group(m, "xmin"));
+  cr_expect_eq(bs_mesh_group(m, "xmin")->n_elems, xmin0, "the boundary triangles are kept");
+  cr_expect_eq(bs_mesh_group(m, "body")->n_elems, m->n_tets);
+  bs_mesh_destroy(&m);
+}
+
+/* ---- a thin slab with a long thin wall ------------------------------------ */
+
+static void box_tris(FILE *f, int base, const double lo[3], const double hi[3]) {
+  (void)lo, (void)hi;
+  static const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (int k = 0; k < 6; k++)
+    fprintf(f, "3 %d %d %d\n3 %d %d %d\n", base + q[k][0], base + q[k][1], base + q[k][2], base + q[k][0],
+            base + q[k][2], base + q[k][3]);
+}
+
+/* The slab [0, 1] x [0, 1] x [0, 0.1] and the wall [0.49, 0.51] x [0, 1] x
+ * [0.05, 0.6] as two overlapping boxes (the repair makes their union):
+ * volume 0.1 + 0.02 x 0.5 = 0.11. */
+static void write_slab_wall(const char *path) {
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  const double box[2][2][3] = {{{0, 0, 0}, {1, 1, 0.1}}, {{0.49, 0, 0.05}, {0.51, 1, 0.6}}};
+  fprintf(f, "OFF\n16 24 0\n");
+  for (int b = 0; b < 2; b++)
+    for (int i = 0; i < 8; i++)
+      fprintf(f, "%.17g %.17g %.17g\n", box[b][i & 1][0], box[b][(i >> 1) & 1][1], box[b][(i >> 2) & 1][2]);
+  for (int b = 0; b < 2; b++) box_tris(f, 8 * b, box[b][0], box[b][1]);
+  fclose(f);
+}
+
+Test(mesh_lift, thin_slab_with_a_long_thin_wall) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_slab.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  bs_surface_report rep = {0};
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.05, .report = &rep};
+  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  const double v = bs_mesh_volume(m);
+  cr_log_info("slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11 (%+.2f%%), wrapped %d, "
+              "tet remeshing %d (%.2f -> %.2f), %.1f s",
+              m->n_tets, q.dihedral_min, v, 100 * (v - 0.11) / 0.11, rep.wrapped, rep.lifted, rep.lift_dihedral_in,
+              rep.lift_dihedral, bs_seconds() - t0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_eq(bs__boundary_manifold(m, path, 0, &err), BS_OK, "%s", err.msg);
+  cr_expect_leq(fabs(v - 0.11), 0.04 * 0.11, "volume %g", v);
+  bs_mesh_destroy(&m);
+  unlink(path);
+}
+
+/* The same part as CAD (OpenCASCADE boxes fused in a .geo) through Gmsh at
+ * a size larger than the wall's thickness: Gmsh's mesh and optimisers, then
+ * the tetrahedral remeshing when still under the gate; the CAD surface
+ * groups are kept. */
+Test(mesh_lift, thin_wall_cad_through_gmsh) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_wall.geo", (int)getpid());
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  fprintf(f, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 0.1};\nBox(2) = {0.49, 0, 0.1, 0.02, 1, 0.5};\n"
+             "BooleanUnion{ Volume{1}; Delete; }{ Volume{2}; Delete; }\n");
+  fclose(f);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_surface_report rep = {0};
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05, .report = &rep}, &m, &err), BS_OK, "%s",
+               err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  const double v = bs_mesh_volume(m);
+  cr_log_info("CAD slab with wall at h 0.05: %d tets, min dihedral %.2f, volume %.6g vs 0.11, %d groups, tet "
+              "remeshing %d (%.2f -> %.2f), %.1f s",
+              m->n_tets, q.dihedral_min, v, m->n_groups, rep.lifted, rep.lift_dihedral_in, rep.lift_dihedral,
+              bs_seconds() - t0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_leq(fabs(v - 0.11), 1e-6, "volume %.9g", v);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  int surfaces = 0;
+  for (int g = 0; g < m->n_groups; g++) surfaces += m->groups[g].dim == 2;
+  cr_expect_geq(surfaces, 10, "%d surface groups", surfaces);
+  bs_mesh_destroy(&m);
+  unlink(path);
+}
+
+/* ---- the time budget ------------------------------------------------------- */
+
+Test(mesh_lift, time_budget_gives_the_named_error) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_budget.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.02, .time_budget = 1e-6};
+  cr_expect_eq(bs_mesh_read(path, &o, &m, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget of 1e-06 s") != NULL, "%s", err.msg);
+  cr_log_info("budget 1e-6 s: stopped after %.3f s: %s", bs_seconds() - t0, err.msg);
+  cr_expect_null(m);
+  unlink(path);
+}
+
+/* A budget that runs out while the volume is meshed (Mesh_3's refinement,
+ * then its optimisers, which get the time left): the read ends with the
+ * budget's error, whichever stage it ran out in. */
+Test(mesh_lift, time_budget_during_meshing) {
+  char path[96];
+  snprintf(path, sizeof path, "/tmp/bs_test_lift_%d_budget2.off", (int)getpid());
+  write_slab_wall(path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_mesh_read_opts o = {.size = 0.03, .time_budget = 0.3};
+  const int rc = bs_mesh_read(path, &o, &m, &err);
+  cr_log_info("budget 0.3 s at h 0.03: rc %d after %.2f s: %s", rc, bs_seconds() - t0, err.msg);
+  cr_expect_eq(rc, BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget") && strstr(err.msg, "0.3 s"), "%s", err.msg);
+  cr_expect_null(m);
+  unlink(path);
+}
+
+/* Inside the wrap's loop: a deadline already past stops it by name. */
+Test(mesh_lift, time_budget_inside_the_alpha_wrap) {
+  static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+  static const int32_t t[12 * 3] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                    2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_wrap_opts o = {.size = 0.01, .deadline = bs_seconds() - 1.0};
+  bs_shim_wrap_out w;
+  cr_expect_eq(bs_shim_alpha_wrap("cube", x, 8, t, 12, &o, &w, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget was exceeded during the alpha wrap") != NULL, "%s", err.msg);
+  cr_expect_null(w.points);
+}
+
+/* ---- no size given ---------------------------------------------------------- */
+
+Test(mesh_lift, no_size_on_a_scan_passes_the_gate) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/data/meshes/armadillo.off", BS_SOURCE_DIR);
+  if (access(path, R_OK)) cr_skip_test("%s missing (bash setup.sh build extracts it)", path);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  double t0 = bs_seconds();
+  bs_surface_report rep = {0};
+  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.report = &rep}, &m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality q;
+  bs_mesh_quality_compute(m, NULL, &q);
+  cr_log_info("armadillo without a size: size chosen %g, %d tets, min dihedral %.2f, tet remeshing %d (%.2f -> "
+              "%.2f), %.1f s",
+              m->auto_size, m->n_tets, q.dihedral_min, rep.lifted, rep.lift_dihedral_in, rep.lift_dihedral,
+              bs_seconds() - t0);
+  cr_expect_gt(m->auto_size, 0);
+  cr_expect_geq(q.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
