@@ -1,11 +1,11 @@
-/* doutput.c — a petsc-backend run's output folder: rank 0 writes frames.csv,
- * scene.json, the PVTU and PVD files and summary.txt; every rank writes its
- * VTU piece (bs_doutput.h). */
+/* doutput.c — a petsc-backend run's output folder: rank 0 writes the files
+ * every backend writes through runfolder/ (bs_runfolder_open_run: the lock,
+ * run.txt, scene.json, frames.csv, stats.csv, frames.pvd, summary.txt) and
+ * the PVTU files; every rank writes its VTU piece (bs_doutput.h). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "bs_dist.h"
 #include "bs_doutput.h"
@@ -14,10 +14,7 @@
 
 struct bs_dout {
   char dir[BS_MAX_PATH];
-  FILE *frames;          /* rank 0 */
-  int n_vtu, cap_vtu;
-  double *times;
-  char **names;          /* the PVTU files of frames.pvd */
+  bs_runfolder *rf;      /* rank 0: the run folder's shared files */
   double *vm;            /* work: 3 per local-mesh vertex */
   int32_t *rank_cells;   /* per owned cell: this rank */
 };
@@ -38,25 +35,13 @@ static int agree(int rc, bs_error *err) {
   return root ? root : worst;
 }
 
-static int open_root(bs_dout *o, const bs_dsim *d, int replace, bs_error *err) {
-  int rc = bs_mkdir_p(o->dir, err);
-  char p[BS_MAX_PATH + 32];
-  snprintf(p, sizeof p, "%s/frames.csv", o->dir);
-  if (!rc && !replace && access(p, F_OK) == 0)
-    rc = bs_error_set(err, BS_EINPUT, "%s: the folder holds an earlier run (frames.csv); use --replace", o->dir);
-  if (!rc && !(o->frames = fopen(p, "w")))
-    rc = bs_error_set(err, BS_EIO, "%s: cannot open for writing: %s", p, strerror(errno));
-  if (!rc && (fprintf(o->frames, "%s\n", BS_FRAMES_CSV_HEADER) < 0 || fflush(o->frames)))
-    rc = bs_error_set(err, BS_EIO, "%s: write failed: %s", p, strerror(errno));
-  snprintf(p, sizeof p, "%s/scene.json", o->dir);
-  if (!rc) rc = bs_scene_write_json_file(d->scene, p, err);
-  return rc;
-}
-
-int bs_dout_open(const bs_dsim *d, const char *dir, int replace, bs_dout **out, bs_error *err) {
+int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opts, bs_dout **out,
+                 bs_error *err) {
   *out = NULL;
+  int rc = bs_dsim_check_output(d->scene, 0, err); /* the same on every rank */
+  if (rc) return rc;
   bs_dout *o = bs_calloc(1, sizeof *o, "output", err);
-  int rc = o ? BS_OK : BS_ENOMEM;
+  rc = o ? BS_OK : BS_ENOMEM;
   if (o) {
     snprintf(o->dir, sizeof o->dir, "%s", dir);
     o->vm = bs_calloc(3 * (size_t)d->mesh->local->n_vertices + 3, sizeof *o->vm, "output vectors", err);
@@ -64,7 +49,8 @@ int bs_dout_open(const bs_dsim *d, const char *dir, int replace, bs_dout **out, 
     if (!o->vm || !o->rank_cells) rc = BS_ENOMEM;
     for (int32_t t = 0; !rc && t < d->mesh->local->n_tets; t++) o->rank_cells[t] = bs_dist_rank();
   }
-  if (!rc && bs_dist_rank() == 0) rc = open_root(o, d, replace, err);
+  const bs_runfolder_run run = {.scene = d->scene, .dofs = bs_dsim_dofs(d), .obstacles = d->obstacles != NULL};
+  if (!rc && bs_dist_rank() == 0) rc = bs_runfolder_open_run(dir, &run, opts, &o->rf, err);
   rc = agree(rc, err);
   if (rc) bs_dout_destroy(&o);
   *out = o;
@@ -74,9 +60,8 @@ int bs_dout_open(const bs_dsim *d, const char *dir, int replace, bs_dout **out, 
 void bs_dout_destroy(bs_dout **op) {
   if (!op || !*op) return;
   bs_dout *o = *op;
-  if (o->frames) fclose(o->frames);
-  for (int i = 0; i < o->n_vtu; i++) free(o->names[i]);
-  free(o->names), free(o->times), free(o->vm), free(o->rank_cells);
+  bs_runfolder_destroy(&o->rf);
+  free(o->vm), free(o->rank_cells);
   free(o);
   *op = NULL;
 }
@@ -100,69 +85,58 @@ int bs_dsim_measure(bs_dsim *d, bs_sim_measures *m, bs_error *err) {
   return rc;
 }
 
-/* This rank's piece of frame f. */
+/* This rank's piece of frame f, through NAME.tmp renamed over it. */
 static int write_piece(bs_dout *o, bs_dsim *d, int f, bs_error *err) {
-  char p[BS_MAX_PATH + 64];
+  char p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   snprintf(p, sizeof p, "%s/frame_%05d_p%04d.vtu", o->dir, f, bs_dist_rank());
+  bs_tmp_path(tmp, sizeof tmp, p);
   bs_dfem_mesh_vector(d->df, d->x, d->xm);
   bs_dfem_mesh_vector(d->df, d->v, o->vm);
   bs_vtu_data rank = {"rank", BS_VTU_INT32, 1, o->rank_cells};
-  bs_vtu_fields fl = {.x = d->xm, .velocity = o->vm, .n_cell_data = 1, .cell_data = &rank, .compress = 0};
-  return bs_mesh_write_vtu(d->mesh->local, &fl, p, err);
+  bs_vtu_fields fl = {.x = d->xm, .velocity = o->vm, .n_cell_data = 1, .cell_data = &rank,
+                      .compress = d->scene->out_compress};
+  int rc = bs_mesh_write_vtu(d->mesh->local, &fl, tmp, err);
+  return rc ? rc : bs_tmp_commit(tmp, p, err);
 }
 
-/* Rank 0: frame f's PVTU over every rank's piece, and frames.pvd again. */
+/* Rank 0: frame f's PVTU over every rank's piece (through NAME.tmp), listed
+ * in frames.pvd (bs_runfolder_add_frame_file). */
 static int write_pvtu(bs_dout *o, int f, double time, bs_error *err) {
   static const bs_pvtu_array pa[] = {{"displacement", BS_VTU_FLOAT64, 3}, {"velocity", BS_VTU_FLOAT64, 3}};
   static const bs_pvtu_array ca[] = {{"material", BS_VTU_INT32, 1}, {"detF", BS_VTU_FLOAT64, 1},
                                      {"inverted", BS_VTU_UINT8, 1}, {"rank", BS_VTU_INT32, 1}};
   int n = bs_dist_size(), rc = BS_OK;
-  char **pieces = calloc((size_t)n, sizeof *pieces), name[64], p[BS_MAX_PATH + 64];
+  char **pieces = calloc((size_t)n, sizeof *pieces), name[64], p[BS_MAX_PATH + 64], tmp[BS_MAX_PATH + 72];
   for (int r = 0; pieces && r < n && !rc; r++)
     if (!(pieces[r] = malloc(64))) rc = BS_ENOMEM;
     else snprintf(pieces[r], 64, "frame_%05d_p%04d.vtu", f, r);
-  if (!pieces) rc = BS_ENOMEM;
+  if (!pieces || rc) rc = bs_error_set(err, BS_ENOMEM, "out of memory writing frame %d", f);
   snprintf(name, sizeof name, "frame_%05d.pvtu", f);
   snprintf(p, sizeof p, "%s/%s", o->dir, name);
-  if (!rc) rc = bs_pvtu_write(p, 2, pa, 4, ca, n, (const char *const *)pieces, err);
+  bs_tmp_path(tmp, sizeof tmp, p);
+  if (!rc) rc = bs_pvtu_write(tmp, 2, pa, 4, ca, n, (const char *const *)pieces, err);
   for (int r = 0; pieces && r < n; r++) free(pieces[r]);
   free(pieces);
-  if (!rc && o->n_vtu == o->cap_vtu) {
-    int cap = o->cap_vtu ? 2 * o->cap_vtu : 16;
-    double *t = realloc(o->times, (size_t)cap * sizeof *t);
-    char **nm = t ? realloc(o->names, (size_t)cap * sizeof *nm) : NULL;
-    if (t) o->times = t;
-    if (nm) o->names = nm, o->cap_vtu = cap;
-    else rc = bs_error_set(err, BS_ENOMEM, "out of memory listing the frames");
-  }
-  if (!rc && !(o->names[o->n_vtu] = malloc(strlen(name) + 1))) rc = BS_ENOMEM;
-  if (rc) return rc == BS_ENOMEM ? bs_error_set(err, rc, "out of memory writing %s", name) : rc;
-  strcpy(o->names[o->n_vtu], name);
-  o->times[o->n_vtu++] = time;
-  snprintf(p, sizeof p, "%s/frames.pvd", o->dir);
-  return bs_pvd_write(p, o->n_vtu, o->times, (const char *const *)o->names, err);
+  if (!rc) rc = bs_tmp_commit(tmp, p, err);
+  return rc ? rc : bs_runfolder_add_frame_file(o->rf, name, time, err);
 }
 
 int bs_dout_frame(bs_dout *o, bs_dsim *d, const bs_frame_stats *fs, bs_error *err) {
   bs_sim_measures m;
   int rc = bs_dsim_measure(d, &m, err);
   if (rc) return rc;
-  if (bs_dist_rank() == 0) {
-    char row[512];
-    bs_frames_csv_row(row, sizeof row, d->time, fs, &m);
-    if (fputs(row, o->frames) < 0 || fflush(o->frames))
-      rc = bs_error_set(err, BS_EIO, "%s/frames.csv: write failed: %s", o->dir, strerror(errno));
-  }
-  const int every = d->scene->vtu_every;
+  const int root = bs_dist_rank() == 0, every = d->scene->vtu_every;
   const int vtu = every > 0 && (fs->frame % every == 0 || d->scene->mode == BS_MODE_STATIC);
+  if (root) rc = bs_runfolder_rows(o->rf, d->time, fs, &m, err);
   if (!rc && vtu) rc = write_piece(o, d, fs->frame, err);
-  if ((rc = agree(rc, err)) || !vtu) return rc;
-  if (bs_dist_rank() == 0) rc = write_pvtu(o, fs->frame, d->time, err);
+  if ((rc = agree(rc, err))) return rc;
+  if (root && vtu) rc = write_pvtu(o, fs->frame, d->time, err);
+  if (root && !rc) rc = bs_runfolder_frame_done(o->rf, fs, d->frame, &m, err);
   return agree(rc, err);
 }
 
 int bs_dout_finish(bs_dout *o, const char *summary, bs_error *err) {
   int rc = BS_OK;
-  if (bs_dist_rank() == 0) rc = bs_outfile_replace_text(o->dir, "summary.txt", summary, err);
+  if (bs_dist_rank() == 0) rc = bs_runfolder_finish(o->rf, summary, err);
   return agree(rc, err);
 }
