@@ -120,8 +120,9 @@ int bs_app_run_petsc(const char *path, const bs_scene *sc, const bs_app_petsc_ar
   }
   double t0 = bs_seconds();
   bs_dsim *d = NULL;
-  /* what the backend does not write into the folder, refused before the run */
-  int rc = a->resume || sc->out_dir[0] ? bs_dsim_check_output(sc, a->resume, &err) : BS_OK;
+  /* what the backend does not run, then what it does not write into the folder: refused before the run */
+  int rc = bs_dsim_check(sc, &err);
+  if (!rc && (a->resume || sc->out_dir[0])) rc = bs_dsim_check_output(sc, a->resume, &err);
   if (!rc) rc = bs_dsim_create(sc, &d, &err);
   bs_run_totals T;
   memset(&T, 0, sizeof T);
