@@ -7,15 +7,16 @@
  * 0) over one VTU piece per rank (frame_NNNNN_pRRRR.vtu: the rank's owned
  * cells, with displacement, velocity, material, detF and inverted
  * (BS_DSIM_FIELDS) and a cell array "rank"), each written to NAME.tmp and
- * renamed, collected in frames.pvd. ParaView opens frames.pvd as one data set
- * (the vertices shared by two ranks appear in both pieces).
+ * renamed, collected in frames.pvd; beside each, the obstacles' files
+ * (bs_obstacle_output.h, rank 0, as a serial run's). ParaView opens
+ * frames.pvd as one data set (the vertices shared by two ranks appear in
+ * both pieces).
  *
  * Frames written: every frame's rows; a PVTU at frame 0 and every
  * output.vtu_every frames (every frame of a static run), as bs_runfolder.
  * What the backend does not write (state.bin, checkpoints, qoi.csv, fields
  * outside BS_DSIM_FIELDS) is refused by bs_dsim_check_output (bs_dout_open
- * calls it), never skipped. Not written (yet): the obstacles' VTU files
- * (bs_obstacle_output.h).
+ * calls it), never skipped.
  *
  * Collective. Status: BS_EIO naming the file, BS_EINPUT (a folder in use or
  * with an earlier run, or what bs_dsim_check_output refuses), BS_ENOMEM; the

@@ -3,18 +3,21 @@
  * run.txt, scene.json, frames.csv, stats.csv, frames.pvd, summary.txt) and
  * the PVTU files; every rank writes its VTU piece (bs_doutput.h). */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "bs_dist.h"
 #include "bs_doutput.h"
+#include "bs_obstacle_output.h"
 #include "bs_runfolder.h"
 #include "outfile.h"
 
 struct bs_dout {
   char dir[BS_MAX_PATH];
   bs_runfolder *rf;      /* rank 0: the run folder's shared files */
+  bs_obstacle_output *obstacles; /* rank 0, with VTU frames: the obstacles' files */
   double *vm;            /* work: 3 per local-mesh vertex */
   int32_t *rank_cells;   /* per owned cell: this rank */
 };
@@ -35,6 +38,19 @@ static int agree(int rc, bs_error *err) {
   return root ? root : worst;
 }
 
+/* Rank 0's writer of the obstacles' files beside the VTU frames, over the
+ * rest box of every rank's vertices (collective). */
+static int open_obstacles(bs_dout *o, const bs_dsim *d, bs_error *err) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int32_t v = 0; v < d->mesh->n_vertices; v++)
+    for (int k = 0; k < 3; k++)
+      lo[k] = fmin(lo[k], d->mesh->x[3 * v + k]), hi[k] = fmax(hi[k], d->mesh->x[3 * v + k]);
+  MPI_Allreduce(MPI_IN_PLACE, lo, 3, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, hi, 3, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  if (bs_dist_rank() != 0 || d->scene->vtu_every <= 0) return BS_OK;
+  return bs_obstacle_output_create_for(o->dir, d->obstacles, lo, hi, d->scene->out_compress, &o->obstacles, err);
+}
+
 int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opts, bs_dout **out,
                  bs_error *err) {
   *out = NULL;
@@ -51,7 +67,7 @@ int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opt
   }
   const bs_runfolder_run run = {.scene = d->scene, .dofs = bs_dsim_dofs(d), .obstacles = d->obstacles != NULL};
   if (!rc && bs_dist_rank() == 0) rc = bs_runfolder_open_run(dir, &run, opts, &o->rf, err);
-  rc = agree(rc, err);
+  if ((rc = agree(rc, err)) == BS_OK) rc = agree(open_obstacles(o, d, err), err);
   if (rc) bs_dout_destroy(&o);
   *out = o;
   return rc;
@@ -60,6 +76,7 @@ int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opt
 void bs_dout_destroy(bs_dout **op) {
   if (!op || !*op) return;
   bs_dout *o = *op;
+  bs_obstacle_output_destroy(&o->obstacles);
   bs_runfolder_destroy(&o->rf);
   free(o->vm), free(o->rank_cells);
   free(o);
@@ -118,6 +135,7 @@ static int write_pvtu(bs_dout *o, int f, double time, bs_error *err) {
   for (int r = 0; pieces && r < n; r++) free(pieces[r]);
   free(pieces);
   if (!rc) rc = bs_tmp_commit(tmp, p, err);
+  if (!rc) rc = bs_obstacle_output_frame_at(o->obstacles, time, f, err);
   return rc ? rc : bs_runfolder_add_frame_file(o->rf, name, time, err);
 }
 
