@@ -2,7 +2,9 @@
  * folder of bs_runfolder.h, whose files every backend writes alike written
  * once, by runfolder/ on rank 0 (bs_runfolder_open_run: the lock, the check
  * of the folder, run.txt, scene.json, frames.csv with the measures over the
- * ranks, stats.csv, frames.pvd, summary.txt), and the backend's own: the
+ * ranks, stats.csv, frames.pvd, summary.txt; bs_runfolder_state: state.bin,
+ * the state gathered to rank 0 in the serial vertex order), and the
+ * backend's own: the
  * frames for ParaView as one PVTU per written frame (frame_NNNNN.pvtu, rank
  * 0) over one VTU piece per rank (frame_NNNNN_pRRRR.vtu: the rank's owned
  * cells, with displacement, velocity, material, detF and inverted
@@ -14,9 +16,9 @@
  *
  * Frames written: every frame's rows; a PVTU at frame 0 and every
  * output.vtu_every frames (every frame of a static run), as bs_runfolder.
- * What the backend does not write (state.bin, checkpoints, qoi.csv, fields
- * outside BS_DSIM_FIELDS) is refused by bs_dsim_check_output (bs_dout_open
- * calls it), never skipped.
+ * What the backend does not write (checkpoints, qoi.csv, state.bin but of a
+ * box mesh, fields outside BS_DSIM_FIELDS) is refused by
+ * bs_dsim_check_output (bs_dout_open calls it), never skipped.
  *
  * Collective. Status: BS_EIO naming the file, BS_EINPUT (a folder in use or
  * with an earlier run, or what bs_dsim_check_output refuses), BS_ENOMEM; the

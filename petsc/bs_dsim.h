@@ -87,9 +87,10 @@ int bs_dsim_check(const bs_scene *sc, bs_error *err);
  * files every backend writes are runfolder/'s, bs_runfolder_open_run; its
  * own are bs_doutput.h's): 0, or BS_EINPUT naming the key of sc (or
  * "--resume" when resume, the run to continue a stopped one) and why:
- * --resume, output.states (state.bin), output.checkpoint_every > 0 in a
- * dynamic scene (checkpoint.bin), output.fields other than the default that
- * asks for a field outside BS_DSIM_FIELDS; qoi.csv is refused with the scene
+ * --resume, output.states (state.bin) but with a box mesh without refine or
+ * reorder (whose serial vertex order is known), output.checkpoint_every > 0
+ * in a dynamic scene (checkpoint.bin), output.fields other than the default
+ * that asks for a field outside BS_DSIM_FIELDS; qoi.csv is refused with the scene
  * (bs_dsim_check: qoi). bs_dout_open calls it; a caller that refuses early
  * (bigstep run) may too. Not collective. */
 int bs_dsim_check_output(const bs_scene *sc, int resume, bs_error *err);

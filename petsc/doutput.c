@@ -18,6 +18,7 @@ struct bs_dout {
   char dir[BS_MAX_PATH];
   bs_runfolder *rf;      /* rank 0: the run folder's shared files */
   bs_obstacle_output *obstacles; /* rank 0, with VTU frames: the obstacles' files */
+  double *xg, *vg;       /* rank 0, with output.states: the state in the source mesh's order */
   double *vm;            /* work: 3 per local-mesh vertex */
   int32_t *rank_cells;   /* per owned cell: this rank */
 };
@@ -51,6 +52,61 @@ static int open_obstacles(bs_dout *o, const bs_dsim *d, bs_error *err) {
   return bs_obstacle_output_create_for(o->dir, d->obstacles, lo, hi, d->scene->out_compress, &o->obstacles, err);
 }
 
+/* Rank 0: state.bin and the arrays its records are gathered into. */
+static int open_state(bs_dout *o, const bs_dsim *d, bs_error *err) {
+  const int64_t n = d->mesh->n_global_vertices;
+  if (n > INT32_MAX / 7) return bs_error_set(err, BS_EINPUT, "state.bin: %lld vertices are too many", (long long)n);
+  if (bs_dist_rank() != 0) return BS_OK;
+  o->xg = bs_calloc(3 * (size_t)n + 3, sizeof *o->xg, "the gathered positions", err);
+  o->vg = bs_calloc(3 * (size_t)n + 3, sizeof *o->vg, "the gathered velocities", err);
+  if (!o->xg || !o->vg) return BS_ENOMEM;
+  return bs_runfolder_state_open(o->rf, (int32_t)n, err);
+}
+
+/* Rank 0: the records of every rank's owned vertices (7 doubles each: the
+ * source mesh's index, x, v) into xg, vg; every vertex exactly once. */
+static int unpack_state(bs_dout *o, const bs_dsim *d, const double *rec, int n, bs_error *err) {
+  const int64_t N = d->mesh->n_global_vertices;
+  int64_t got = 0;
+  for (int i = 0; i < n; i++, rec += 7) {
+    int64_t id = (int64_t)rec[0];
+    if (id < 0 || id >= N)
+      return bs_error_set(err, BS_EINTERNAL, "state.bin: a vertex without its source index (%lld)", (long long)id);
+    memcpy(o->xg + 3 * id, rec + 1, 3 * sizeof(double));
+    memcpy(o->vg + 3 * id, rec + 4, 3 * sizeof(double));
+    got++;
+  }
+  if (got != N) return bs_error_set(err, BS_EINTERNAL, "state.bin: %lld owned vertices of %lld", (long long)got, (long long)N);
+  return BS_OK;
+}
+
+/* The frame's state.bin record: the owned vertices gathered to rank 0 in
+ * the source mesh's order (the serial run's: bs_dsim_check_output). */
+static int write_state(bs_dout *o, const bs_dsim *d, bs_error *err) {
+  const bs_dmesh *m = d->mesh;
+  const int root = bs_dist_rank() == 0, size = bs_dist_size();
+  int n = 0, rc = BS_OK;
+  double *mine = bs_calloc(7 * (size_t)m->n_owned + 1, sizeof *mine, "state records", err);
+  int *counts = root ? bs_calloc((size_t)size, 2 * sizeof *counts, "state counts", err) : NULL;
+  double *all = root ? bs_calloc(7 * (size_t)m->n_global_vertices + 1, sizeof *all, "state records", err) : NULL;
+  if (!mine || (root && (!counts || !all))) rc = BS_ENOMEM;
+  for (int32_t v = 0; !rc && v < m->n_vertices; v++) {
+    if (!m->owned[v]) continue;
+    mine[7 * n] = (double)m->orig_id[v];
+    memcpy(mine + 7 * n + 1, d->x + 3 * (size_t)v, 3 * sizeof(double));
+    memcpy(mine + 7 * n + 4, d->v + 3 * (size_t)v, 3 * sizeof(double));
+    n++;
+  }
+  int len = 7 * n;
+  if (!(rc = agree(rc, err))) MPI_Gather(&len, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  for (int r = 1; !rc && root && r < size; r++) counts[size + r] = counts[size + r - 1] + counts[r - 1];
+  if (!rc) MPI_Gatherv(mine, len, MPI_DOUBLE, all, counts, counts ? counts + size : NULL, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  if (!rc && root) rc = unpack_state(o, d, all, (counts[2 * size - 1] + counts[size - 1]) / 7, err);
+  if (!rc && root) rc = bs_runfolder_state(o->rf, d->time, o->xg, o->vg, err);
+  free(mine), free(counts), free(all);
+  return agree(rc, err); /* every rank gets here */
+}
+
 int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opts, bs_dout **out,
                  bs_error *err) {
   *out = NULL;
@@ -68,6 +124,7 @@ int bs_dout_open(const bs_dsim *d, const char *dir, const bs_runfolder_opts *opt
   const bs_runfolder_run run = {.scene = d->scene, .dofs = bs_dsim_dofs(d), .obstacles = d->obstacles != NULL};
   if (!rc && bs_dist_rank() == 0) rc = bs_runfolder_open_run(dir, &run, opts, &o->rf, err);
   if ((rc = agree(rc, err)) == BS_OK) rc = agree(open_obstacles(o, d, err), err);
+  if (!rc && d->scene->states) rc = agree(open_state(o, d, err), err);
   if (rc) bs_dout_destroy(&o);
   *out = o;
   return rc;
@@ -78,7 +135,7 @@ void bs_dout_destroy(bs_dout **op) {
   bs_dout *o = *op;
   bs_obstacle_output_destroy(&o->obstacles);
   bs_runfolder_destroy(&o->rf);
-  free(o->vm), free(o->rank_cells);
+  free(o->vm), free(o->rank_cells), free(o->xg), free(o->vg);
   free(o);
   *op = NULL;
 }
@@ -146,6 +203,7 @@ int bs_dout_frame(bs_dout *o, bs_dsim *d, const bs_frame_stats *fs, bs_error *er
   const int root = bs_dist_rank() == 0, every = d->scene->vtu_every;
   const int vtu = every > 0 && (fs->frame % every == 0 || d->scene->mode == BS_MODE_STATIC);
   if (root) rc = bs_runfolder_rows(o->rf, d->time, fs, &m, err);
+  if (!(rc = agree(rc, err)) && d->scene->states) rc = write_state(o, d, err);
   if (!rc && vtu) rc = write_piece(o, d, fs->frame, err);
   if ((rc = agree(rc, err))) return rc;
   if (root && vtu) rc = write_pvtu(o, fs->frame, d->time, err);

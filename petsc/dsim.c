@@ -76,7 +76,11 @@ int bs_dsim_check_output(const bs_scene *sc, int resume, bs_error *err) {
     return refuse(sc, err, "--resume",
                   "no checkpoint is written to continue from (run the scene again with --replace, or on the serial "
                   "backend)");
-  if (sc->states) return refuse(sc, err, "output.states", "state.bin is not written (set false)");
+  const bs_scene_body *b = &sc->bodies[0];
+  if (sc->states && sc->n_bodies >= 1 && (strcmp(b->mesh, "box") != 0 || b->refine > 0 || b->reorder != BS_ORDER_NONE))
+    return refuse(sc, err, "output.states",
+                  "state.bin is written in the serial vertex order, known for a box mesh without refine or reorder only "
+                  "(set false)");
   if (sc->mode == BS_MODE_DYNAMIC && sc->checkpoint_every > 0)
     return refuse(sc, err, "output.checkpoint_every",
                   "checkpoints (checkpoint.bin, for bigstep run --resume) are not written (set 0)");

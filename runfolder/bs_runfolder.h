@@ -163,6 +163,13 @@ int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *
 int bs_runfolder_rows(bs_runfolder *rf, double time, const bs_frame_stats *fs, const bs_sim_measures *m,
                       bs_error *err);
 
+/* state.bin (output.states) of a backend that is not bs_sim: opened with its
+ * header for n_vertices (after bs_runfolder_open_run); bs_runfolder_state
+ * appends a frame's record (x, v: 3 n_vertices each, in the serial run's
+ * vertex order), flushed; nothing (0) while state.bin is not open. */
+int bs_runfolder_state_open(bs_runfolder *rf, int32_t n_vertices, bs_error *err);
+int bs_runfolder_state(bs_runfolder *rf, double time, const double *x, const double *v, bs_error *err);
+
 /* A frame file (name: in the folder, e.g. "frame_00006.vtu") of the state at
  * time t, complete on disk: listed in frames.pvd, which is rewritten. */
 int bs_runfolder_add_frame_file(bs_runfolder *rf, const char *name, double t, bs_error *err);

@@ -48,9 +48,15 @@ int bs__runfolder_rows_open(bs_runfolder *rf, int append, bs_error *err) {
 /* state.bin (output.states), new with its header or, append, at its end. */
 static int open_state(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
   if (!s->scene->states) return 0;
+  rf->n_state = s->mesh->n_vertices;
   if (append) return bs_outfile_open(&rf->state, rf->dir, "state.bin", "ab", err);
+  return bs_runfolder_state_open(rf, s->mesh->n_vertices, err);
+}
+
+int bs_runfolder_state_open(bs_runfolder *rf, int32_t n_vertices, bs_error *err) {
+  rf->n_state = n_vertices;
   int st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "wb", err);
-  return st ? st : write_state_header(&rf->state, s->mesh->n_vertices, err);
+  return st ? st : write_state_header(&rf->state, n_vertices, err);
 }
 
 /* qoi.csv (new with its header, or append) and the quantities resolved on s (bs_qoi.h). */
@@ -171,12 +177,13 @@ int bs_runfolder_rows(bs_runfolder *rf, double time, const bs_frame_stats *fs, c
   return bs_outfile_flush(&rf->frames, err);
 }
 
-static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
-  size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  bs_outfile_write(f, &s->time, sizeof(double), 1);
-  bs_outfile_write(f, s->x, sizeof(double), n3);
-  bs_outfile_write(f, s->v, sizeof(double), n3);
-  return bs_outfile_flush(f, err);
+int bs_runfolder_state(bs_runfolder *rf, double time, const double *x, const double *v, bs_error *err) {
+  if (!rf->state.f) return 0;
+  size_t n3 = 3 * (size_t)rf->n_state;
+  bs_outfile_write(&rf->state, &time, sizeof(double), 1);
+  bs_outfile_write(&rf->state, x, sizeof(double), n3);
+  bs_outfile_write(&rf->state, v, sizeof(double), n3);
+  return bs_outfile_flush(&rf->state, err);
 }
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
@@ -246,7 +253,7 @@ int bs_runfolder_frame_done(bs_runfolder *rf, const bs_frame_stats *fs, int fram
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err) {
   int st = bs_runfolder_rows(rf, s->time, fs, m, err);
-  if (!st && rf->state.f) st = write_state(&rf->state, s, err);
+  if (!st) st = bs_runfolder_state(rf, s->time, s->x, s->v, err);
   if (!st && rf->qoi_csv.f) st = write_qoi_row(rf, s, fs->frame, err);
   const int every = s->scene->vtu_every;
   if (!st && every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))

@@ -14,6 +14,7 @@ struct bs_runfolder {
   char dir[BS_MAX_PATH];
   bs_runfolder_run run;            /* the scene (borrowed), dofs, obstacles: the summary's */
   bs_outfile frames, stats, state; /* open when .f is not NULL */
+  int32_t n_state;                 /* state.bin's vertices                 */
   int n_vtu, cap_vtu;              /* the VTU frames of frames.pvd */
   char **vtu_names;
   double *vtu_times;
