@@ -1,8 +1,8 @@
 /* doutput.c — a petsc-backend run's output folder: rank 0 writes the files
  * every backend writes through runfolder/ (bs_runfolder_open_run: the lock,
- * run.txt, scene.json, frames.csv, stats.csv, frames.pvd, summary.txt) and
- * the PVTU files; every rank writes its VTU piece (bs_doutput.h). */
-#include <errno.h>
+ * run.txt, scene.json, frames.csv, stats.csv, frames.pvd, summary.txt;
+ * state.bin of the gathered state; the obstacles' files) and the PVTU files;
+ * every rank writes its VTU piece (bs_doutput.h). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -76,7 +76,8 @@ static int unpack_state(bs_dout *o, const bs_dsim *d, const double *rec, int n, 
     memcpy(o->vg + 3 * id, rec + 4, 3 * sizeof(double));
     got++;
   }
-  if (got != N) return bs_error_set(err, BS_EINTERNAL, "state.bin: %lld owned vertices of %lld", (long long)got, (long long)N);
+  if (got != N)
+    return bs_error_set(err, BS_EINTERNAL, "state.bin: %lld owned vertices of %lld", (long long)got, (long long)N);
   return BS_OK;
 }
 
@@ -100,7 +101,8 @@ static int write_state(bs_dout *o, const bs_dsim *d, bs_error *err) {
   int len = 7 * n;
   if (!(rc = agree(rc, err))) MPI_Gather(&len, 1, MPI_INT, counts, 1, MPI_INT, 0, MPI_COMM_WORLD);
   for (int r = 1; !rc && root && r < size; r++) counts[size + r] = counts[size + r - 1] + counts[r - 1];
-  if (!rc) MPI_Gatherv(mine, len, MPI_DOUBLE, all, counts, counts ? counts + size : NULL, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  if (!rc)
+    MPI_Gatherv(mine, len, MPI_DOUBLE, all, counts, counts ? counts + size : NULL, MPI_DOUBLE, 0, MPI_COMM_WORLD);
   if (!rc && root) rc = unpack_state(o, d, all, (counts[2 * size - 1] + counts[size - 1]) / 7, err);
   if (!rc && root) rc = bs_runfolder_state(o->rf, d->time, o->xg, o->vg, err);
   free(mine), free(counts), free(all);

@@ -76,8 +76,9 @@ int bs_dsim_check_output(const bs_scene *sc, int resume, bs_error *err) {
     return refuse(sc, err, "--resume",
                   "no checkpoint is written to continue from (run the scene again with --replace, or on the serial "
                   "backend)");
-  const bs_scene_body *b = &sc->bodies[0];
-  if (sc->states && sc->n_bodies >= 1 && (strcmp(b->mesh, "box") != 0 || b->refine > 0 || b->reorder != BS_ORDER_NONE))
+  const bs_scene_body *b = sc->n_bodies >= 1 ? &sc->bodies[0] : NULL;
+  const int known_order = b && !strcmp(b->mesh, "box") && b->refine == 0 && b->reorder == BS_ORDER_NONE;
+  if (sc->states && !known_order)
     return refuse(sc, err, "output.states",
                   "state.bin is written in the serial vertex order, known for a box mesh without refine or reorder only "
                   "(set false)");
