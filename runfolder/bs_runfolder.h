@@ -112,12 +112,14 @@ int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts 
                       bs_error *err);
 
 /* The files of a run folder that every backend writes alike: bs_runfolder_open
- * less bs_sim's own outputs (state.bin, qoi.csv, the VTU frames and the
- * obstacles): the lock, the check of the folder, run.txt, scene.json,
+ * less what it makes from a bs_sim (state.bin, qoi.csv, the VTU frames, the
+ * obstacles' files): the lock, the check of the folder, run.txt, scene.json,
  * frames.csv and stats.csv (output.stats). A backend that is not bs_sim (the
- * petsc backend, bs_doutput.h) writes through it: after each frame
- * bs_runfolder_rows, its own frame files listed by bs_runfolder_add_frame_file,
- * then bs_runfolder_frame_done; at the end bs_runfolder_finish. */
+ * petsc backend, bs_doutput.h) writes through it: state.bin opened with
+ * bs_runfolder_state_open; after each frame bs_runfolder_rows,
+ * bs_runfolder_state, its own frame files (and the obstacles',
+ * bs_obstacle_output_create_for) listed by bs_runfolder_add_frame_file, then
+ * bs_runfolder_frame_done; at the end bs_runfolder_finish. */
 int bs_runfolder_open_run(const char *dir, const bs_runfolder_run *run, const bs_runfolder_opts *opts,
                           bs_runfolder **out, bs_error *err);
 
