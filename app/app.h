@@ -79,8 +79,14 @@ int bs_app_stop_status(int sig);
 
 int bs_cmd_mesh(int argc, char **argv);
 int bs_cmd_run(int argc, char **argv);
-/* bigstep run on the petsc backend (cmd_run_petsc.c): the exit status. */
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace);
+/* bigstep run on the petsc backend (cmd_run_petsc.c): the exit status. The
+ * options: --quiet, --replace, --resume (refused: bs_dsim_check_output), the
+ * command line (run.txt). */
+typedef struct bs_app_petsc_args {
+  int quiet, replace, resume;
+  const char *command;
+} bs_app_petsc_args;
+int bs_app_run_petsc(const char *path, const bs_scene *sc, const bs_app_petsc_args *a);
 int bs_cmd_study(int argc, char **argv);
 int bs_cmd_check(int argc, char **argv);
 int bs_cmd_levelset(int argc, char **argv);

@@ -43,7 +43,9 @@ static const char *run_help =
     "  --backend B           serial | petsc (solver.backend); petsc runs the scene\n"
     "                        distributed: mpirun -np N bigstep run SCENE --backend petsc\n"
     "                        (a stop request stops every rank at the same Newton\n"
-    "                        iteration; no checkpoint is written, --resume is refused)\n"
+    "                        iteration; no checkpoint is written: into an output\n"
+    "                        folder it needs output.checkpoint_every 0, and --resume\n"
+    "                        is refused)\n"
     "\n"
     "Exit status: 0 every step converged; 1 a step did not converge, or an error\n"
     "(bad scene, a file that cannot be written, a folder in use or holding an\n"
@@ -287,12 +289,9 @@ int bs_cmd_run(int argc, char **argv) {
   bs_sim *s = NULL;
   int st = bs_scene_load(a.scene, a.sets.n, (const char *const *)a.sets.v, &sc, &err);
   if (!st && a.trace) sc->solver.trace = stderr;
-  if (!st && sc->backend == BS_BACKEND_PETSC && a.resume) {
-    fprintf(stderr, "bigstep run: %s: --resume: the petsc backend writes no checkpoint to continue from; run the "
-                    "scene again (--replace) or on the serial backend\n", a.scene);
-    rc = BS_EXIT_FAIL;
-  } else if (!st && sc->backend == BS_BACKEND_PETSC) {
-    rc = bs_app_run_petsc(a.scene, sc, a.quiet, a.replace);
+  if (!st && sc->backend == BS_BACKEND_PETSC) {
+    const bs_app_petsc_args pa = {.quiet = a.quiet, .replace = a.replace, .resume = a.resume, .command = a.command};
+    rc = bs_app_run_petsc(a.scene, sc, &pa);
   } else if (!st && mpi_ranks() > 1) {
     fprintf(stderr, "bigstep run: %s: solver.backend is \"serial\" but mpirun started %d ranks (each would run the "
                     "whole scene): set solver.backend to \"petsc\" (--set solver.backend=petsc) or run one process\n",

@@ -12,7 +12,8 @@
 
 #ifndef BS_HAVE_PETSC
 
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
+int bs_app_run_petsc(const char *path, const bs_scene *sc, const bs_app_petsc_args *a) {
+  (void)sc, (void)a;
   fprintf(stderr, "bigstep run: %s: solver.backend: this bigstep was built without PETSc (BS_PETSC=OFF); "
                   "use \"serial\" or rebuild with petsc-dev installed\n", path);
   return BS_EXIT_FAIL;
@@ -81,20 +82,16 @@ static int run_frames(bs_dsim *d, bs_dout *out, int quiet, bs_run_totals *T, int
   return rc;
 }
 
-/* The serial run's summary, from the distributed run (stopped: marked
- * interrupted, over the frames done): printed by rank 0, and written into the
- * folder (out may be NULL). */
+/* The serial run's summary (bs_summary_make_run), from the distributed run
+ * (stopped: marked interrupted, over the frames done): printed by rank 0, and
+ * written into the folder (out may be NULL). */
 static int print_summary(bs_dsim *d, bs_dout *out, const bs_run_totals *T, double wall, int stopped, bs_error *err) {
-  bs_summary u;
-  bs_summary_init(d->scene, d->frame, bs_dsim_dofs(d), T, wall, &u);
-  if (stopped) u.partial = BS_SUMMARY_INTERRUPTED, u.no_resume = 1;
-  u.inverted = d->steps[0].inverted;
-  u.self_intersections = -1; /* not computed on this backend */
-  u.obstacles = d->obstacles != NULL;
-  int64_t pen = 0;
-  int rc = u.obstacles ? bs_dsim_penetration(d, &pen, &u.max_depth, err) : BS_OK;
+  bs_sim_measures m;
+  int rc = bs_dsim_measure(d, &m, err);
   if (rc) return rc;
-  u.penetrating = (int32_t)pen;
+  bs_summary u;
+  bs_summary_make_run(d->scene, d->frame, bs_dsim_dofs(d), d->obstacles != NULL, T, wall, &m, &u);
+  if (stopped) u.partial = BS_SUMMARY_INTERRUPTED, u.no_resume = 1;
   MPI_Allreduce(MPI_IN_PLACE, &u.peak_mib, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   char text[2048];
   bs_summary_format(&u, text, sizeof text);
@@ -114,7 +111,7 @@ static int stop_status(const bs_dsim *d) {
   return bs_app_stop_status(sig);
 }
 
-int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replace) {
+int bs_app_run_petsc(const char *path, const bs_scene *sc, const bs_app_petsc_args *a) {
   bs_error err;
   bs_error_clear(&err);
   if (bs_dist_init(NULL, NULL, &err)) {
@@ -123,12 +120,17 @@ int bs_app_run_petsc(const char *path, const bs_scene *sc, int quiet, int replac
   }
   double t0 = bs_seconds();
   bs_dsim *d = NULL;
-  int rc = bs_dsim_create(sc, &d, &err);
+  /* what the backend does not run, then what it does not write into the folder: refused before the run */
+  int rc = bs_dsim_check(sc, &err);
+  if (!rc && (a->resume || sc->out_dir[0])) rc = bs_dsim_check_output(sc, a->resume, &err);
+  if (!rc) rc = bs_dsim_create(sc, &d, &err);
   bs_run_totals T;
   memset(&T, 0, sizeof T);
+  const int quiet = a->quiet;
   if (!rc && !quiet && bs_dist_rank() == 0) print_header(path, d);
   bs_dout *out = NULL;
-  if (!rc && sc->out_dir[0]) rc = bs_dout_open(d, sc->out_dir, replace, &out, &err);
+  const bs_runfolder_opts fo = {.replace = a->replace, .command_line = a->command};
+  if (!rc && sc->out_dir[0]) rc = bs_dout_open(d, sc->out_dir, &fo, &out, &err);
   bs_app_install_stop_handlers(); /* a stop request stops every rank at the same Newton iteration */
   if (!rc) rc = bs_dsim_set_stop(d, &bs_app_stop_signal, &err);
   int stopped = 0;

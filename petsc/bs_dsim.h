@@ -41,6 +41,7 @@
 #include "bs_frame_loop.h"
 #include "bs_sim.h"
 #include "bs_dstep.h"
+#include "bs_field_names.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -75,6 +76,24 @@ typedef struct bs_dsim {
 /* 0, or BS_EINPUT naming the first key of sc the backend does not run. Not
  * collective (the same answer on every rank). */
 int bs_dsim_check(const bs_scene *sc, bs_error *err);
+
+/* The fields of the backend's VTU pieces (bs_doutput.h): with output.fields
+ * at its default, these of it are written (the serial run writes them all). */
+#define BS_DSIM_FIELDS                                                                                      \
+  (BS_FIELD_BIT(BS_FIELD_DISPLACEMENT) | BS_FIELD_BIT(BS_FIELD_VELOCITY) | BS_FIELD_BIT(BS_FIELD_MATERIAL) | \
+   BS_FIELD_BIT(BS_FIELD_DETF) | BS_FIELD_BIT(BS_FIELD_INVERTED))
+
+/* The one list of what the backend does not write into a run folder (the
+ * files every backend writes are runfolder/'s, bs_runfolder_open_run; its
+ * own are bs_doutput.h's): 0, or BS_EINPUT naming the key of sc (or
+ * "--resume" when resume, the run to continue a stopped one) and why:
+ * --resume, output.states (state.bin) but with a box mesh without refine or
+ * reorder (whose serial vertex order is known), output.checkpoint_every > 0
+ * in a dynamic scene (checkpoint.bin), output.fields other than the default
+ * that asks for a field outside BS_DSIM_FIELDS; qoi.csv is refused with the scene
+ * (bs_dsim_check: qoi). bs_dout_open calls it; a caller that refuses early
+ * (bigstep run) may too. Not collective. */
+int bs_dsim_check_output(const bs_scene *sc, int resume, bs_error *err);
 
 int bs_dsim_create(const bs_scene *sc, bs_dsim **out, bs_error *err);
 void bs_dsim_destroy(bs_dsim **s);

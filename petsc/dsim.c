@@ -71,6 +71,26 @@ int bs_dsim_check(const bs_scene *sc, bs_error *err) {
   return check_body(sc, &sc->bodies[0], err);
 }
 
+int bs_dsim_check_output(const bs_scene *sc, int resume, bs_error *err) {
+  if (resume)
+    return refuse(sc, err, "--resume",
+                  "no checkpoint is written to continue from (run the scene again with --replace, or on the serial "
+                  "backend)");
+  const bs_scene_body *b = sc->n_bodies >= 1 ? &sc->bodies[0] : NULL;
+  const int known_order = b && !strcmp(b->mesh, "box") && b->refine == 0 && b->reorder == BS_ORDER_NONE;
+  if (sc->states && !known_order)
+    return refuse(sc, err, "output.states",
+                  "state.bin is written in the serial vertex order, known for a box mesh without refine or reorder only "
+                  "(set false)");
+  if (sc->mode == BS_MODE_DYNAMIC && sc->checkpoint_every > 0)
+    return refuse(sc, err, "output.checkpoint_every",
+                  "checkpoints (checkpoint.bin, for bigstep run --resume) are not written (set 0)");
+  if (sc->vtu_every > 0 && sc->out_fields != BS_FIELDS_DEFAULT && (sc->out_fields & ~BS_DSIM_FIELDS))
+    return refuse(sc, err, "output.fields",
+                  "the VTU pieces hold displacement, velocity, material, detF and inverted only");
+  return BS_OK;
+}
+
 /* Material i's 3-D group tag (-1: the body's default, every other cell). */
 static int material_tags(const bs_dsim *s, const bs_scene_body *b, bs_material *mats, int *tags, bs_error *err) {
   for (int i = 0; i < b->n_materials; i++) {

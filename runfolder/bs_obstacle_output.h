@@ -46,8 +46,16 @@ typedef struct bs_obstacle_output bs_obstacle_output;
 
 int bs_obstacle_output_create(const char *dir, const bs_sim *s, bs_obstacle_output **out, bs_error *err);
 
+/* The same for any backend: the obstacles obs (NULL or none: *out NULL, 0;
+ * borrowed), the bodies' rest bounding box lo, hi over every vertex (a
+ * plane's patch), output.compress. */
+int bs_obstacle_output_create_for(const char *dir, const bs_obstacles *obs, const double lo[3], const double hi[3],
+                                  int compress, bs_obstacle_output **out, bs_error *err);
+
 /* Writes every obstacle at s->time (the files of frame `frame`) and the PVDs. */
 int bs_obstacle_output_frame(bs_obstacle_output *o, const bs_sim *s, int frame, bs_error *err);
+/* The same at time t (s). */
+int bs_obstacle_output_frame_at(bs_obstacle_output *o, double t, int frame, bs_error *err);
 
 /* For a run continued after frame `frame` (bigstep run --resume): records
  * frame's files, which the earlier run wrote, at time t without writing them

@@ -19,8 +19,10 @@
  *                by bs_runfolder_finish with the caller's text;
  *   frame_NNNNN.vtu and frames.pvd  the frames for ParaView (mesh/ writes
  *                the VTU and PVD files); frames.pvd is rewritten after every
- *                VTU frame; obstacle_K[_NNNNN].vtu|vti and obstacles_K.pvd
- *                the obstacles (bs_obstacle_output.h);
+ *                VTU frame; a distributed run's frames are frame_NNNNN.pvtu
+ *                over pieces frame_NNNNN_pRRRR.vtu (bs_doutput.h);
+ *                obstacle_K[_NNNNN].vtu|vti and obstacles_K.pvd the
+ *                obstacles (bs_obstacle_output.h);
  *   scene.json   the resolved scene (bs_scene_write_json: every key, the
  *                defaults filled in, absolute paths), which loads again;
  *   run.txt      the run's record: "version: bigstep X.Y.Z", "command: ...",
@@ -87,11 +89,19 @@ int bs_frames_csv_row(char *buf, size_t n, double time, const bs_frame_stats *fs
 /* ---- writing ------------------------------------------------------------ */
 
 typedef struct bs_runfolder bs_runfolder;
+typedef struct bs_summary bs_summary;
 
 typedef struct bs_runfolder_opts {
   int replace;              /* 1: remove an earlier run's files; 0: refuse the folder */
   const char *command_line; /* for run.txt; NULL: "(library call)"                  */
 } bs_runfolder_opts;
+
+/* What the folder's shared files need of a run, whatever its backend. */
+typedef struct bs_runfolder_run {
+  const bs_scene *scene; /* borrowed: outlives the writer                       */
+  long dofs;             /* the summary's                                       */
+  int obstacles;         /* the run has obstacles: the summary's penetration    */
+} bs_runfolder_run;
 
 /* Makes dir (and its parents), takes its lock, checks it (see the top),
  * writes run.txt and scene.json and opens frames.csv, stats.csv (scene
@@ -100,6 +110,18 @@ typedef struct bs_runfolder_opts {
  * run, or a negative output.checkpoint_every. */
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
                       bs_error *err);
+
+/* The files of a run folder that every backend writes alike: bs_runfolder_open
+ * less what it makes from a bs_sim (state.bin, qoi.csv, the VTU frames, the
+ * obstacles' files): the lock, the check of the folder, run.txt, scene.json,
+ * frames.csv and stats.csv (output.stats). A backend that is not bs_sim (the
+ * petsc backend, bs_doutput.h) writes through it: state.bin opened with
+ * bs_runfolder_state_open; after each frame bs_runfolder_rows,
+ * bs_runfolder_state, its own frame files (and the obstacles',
+ * bs_obstacle_output_create_for) listed by bs_runfolder_add_frame_file, then
+ * bs_runfolder_frame_done; at the end bs_runfolder_finish. */
+int bs_runfolder_open_run(const char *dir, const bs_runfolder_run *run, const bs_runfolder_opts *opts,
+                          bs_runfolder **out, bs_error *err);
 
 /* bs_runfolder_open with opts NULL (an earlier run is refused). */
 int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err);
@@ -138,6 +160,33 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err);
 
+/* A frame's rows: stats.csv's (fs's steps; when open) and frames.csv's (the
+ * state at time with the measures m), flushed. */
+int bs_runfolder_rows(bs_runfolder *rf, double time, const bs_frame_stats *fs, const bs_sim_measures *m,
+                      bs_error *err);
+
+/* state.bin (output.states) of a backend that is not bs_sim: opened with its
+ * header for n_vertices (after bs_runfolder_open_run); bs_runfolder_state
+ * appends a frame's record (x, v: 3 n_vertices each, in the serial run's
+ * vertex order), flushed; nothing (0) while state.bin is not open. */
+int bs_runfolder_state_open(bs_runfolder *rf, int32_t n_vertices, bs_error *err);
+int bs_runfolder_state(bs_runfolder *rf, double time, const double *x, const double *v, bs_error *err);
+
+/* A frame file (name: in the folder, e.g. "frame_00006.vtu") of the state at
+ * time t, complete on disk: listed in frames.pvd, which is rewritten. */
+int bs_runfolder_add_frame_file(bs_runfolder *rf, const char *name, double t, bs_error *err);
+
+/* After a frame's other files: fs added to the writer's totals and summary.txt
+ * of the frames so far (frames done: as bs_summary_init's; m: the state's
+ * measures), marked partial. */
+int bs_runfolder_frame_done(bs_runfolder *rf, const bs_frame_stats *fs, int frames, const bs_sim_measures *m,
+                            bs_error *err);
+
+/* The summary of the run written so far (bs_summary_make_run with the run's
+ * scene, dofs and obstacles and the writer's wall seconds). */
+void bs_runfolder_summary(const bs_runfolder *rf, int frames, const bs_run_totals *T, const bs_sim_measures *m,
+                          bs_summary *out);
+
 /* Writes checkpoint.bin of s now (as after a frame when output.checkpoint_every
  * says so): for a run stopped on request. A static scene: nothing, 0. */
 int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err);
@@ -173,7 +222,7 @@ void bs_runfolder_destroy(bs_runfolder **rf);
  * request, e.g. Ctrl-C: bigstep run --resume continues it). */
 typedef enum { BS_SUMMARY_COMPLETE = 0, BS_SUMMARY_RUNNING, BS_SUMMARY_INTERRUPTED } bs_summary_state;
 
-typedef struct bs_summary {
+struct bs_summary {
   char method[32];
   bs_summary_state partial;  /* not complete: a last line "partial: N of M frames (...)" */
   int no_resume;             /* interrupted, by a run that cannot be continued (petsc)  */
@@ -191,7 +240,7 @@ typedef struct bs_summary {
   double max_depth;
   bs_run_totals totals;      /* the solver health counts                        */
   double peak_mib;           /* peak resident memory (MiB)                      */
-} bs_summary;
+};
 
 /* Fills a summary from the run so far: totals, wall seconds, the sim's
  * current state (measured here: bs_sim_measure with intersections); partial
@@ -206,6 +255,11 @@ void bs_summary_make(const bs_sim *s, const bs_run_totals *T, double wall_second
  * of this process. The state's figures (inverted, ...) are left 0. */
 void bs_summary_init(const bs_scene *sc, int frames, long dofs, const bs_run_totals *T, double wall_seconds,
                      bs_summary *out);
+
+/* bs_summary_init with the state's figures from its measures m (obstacles:
+ * the penetration figures apply), for any backend. */
+void bs_summary_make_run(const bs_scene *sc, int frames, long dofs, int obstacles, const bs_run_totals *T,
+                         double wall_seconds, const bs_sim_measures *m, bs_summary *out);
 
 /* The same with the current state's measures given. */
 void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall_seconds, const bs_sim_measures *m,

@@ -54,8 +54,15 @@ static int grid_values(obs_out *o, bs_error *err) {
 }
 
 int bs_obstacle_output_create(const char *dir, const bs_sim *s, bs_obstacle_output **out, bs_error *err) {
+  double lo[3], hi[3];
+  bs_bbox(s->mesh->n_vertices, s->x0, lo, hi);
+  return bs_obstacle_output_create_for(dir, s->obstacles, lo, hi, s->scene->out_compress, out, err);
+}
+
+int bs_obstacle_output_create_for(const char *dir, const bs_obstacles *obs, const double lo[3], const double hi[3],
+                                  int compress, bs_obstacle_output **out, bs_error *err) {
   *out = NULL;
-  const int n = bs_obstacles_count(s->obstacles);
+  const int n = obs ? bs_obstacles_count(obs) : 0;
   if (n == 0) return 0;
   bs_obstacle_output *w = calloc(1, sizeof *w);
   if (w) w->o = calloc((size_t)n, sizeof *w->o);
@@ -64,13 +71,14 @@ int bs_obstacle_output_create(const char *dir, const bs_sim *s, bs_obstacle_outp
     return bs_error_set(err, BS_ENOMEM, "out of memory");
   }
   snprintf(w->dir, sizeof w->dir, "%s", dir);
-  bs_bbox(s->mesh->n_vertices, s->x0, w->lo, w->hi);
-  w->compress = s->scene->out_compress;
+  memcpy(w->lo, lo, sizeof w->lo);
+  memcpy(w->hi, hi, sizeof w->hi);
+  w->compress = compress;
   w->n = n;
   int st = 0;
   for (int k = 0; k < n && !st; k++) {
     obs_out *o = &w->o[k];
-    o->ls = bs_obstacles_levelset(s->obstacles, k);
+    o->ls = bs_obstacles_levelset(obs, k);
     o->grid = !bs_levelset_is_analytic(o->ls);
     o->moving = bs_levelset_motion(o->ls) != BS_LS_STATIC;
     if (o->grid) st = grid_values(o, err);
@@ -157,9 +165,13 @@ static int obstacle_frame(bs_obstacle_output *w, int k, int frame, double t, int
 }
 
 int bs_obstacle_output_frame(bs_obstacle_output *w, const bs_sim *s, int frame, bs_error *err) {
+  return bs_obstacle_output_frame_at(w, s->time, frame, err);
+}
+
+int bs_obstacle_output_frame_at(bs_obstacle_output *w, double t, int frame, bs_error *err) {
   if (!w) return 0;
   int st = 0;
-  for (int k = 0; k < w->n && !st; k++) st = obstacle_frame(w, k, frame, s->time, 1, err);
+  for (int k = 0; k < w->n && !st; k++) st = obstacle_frame(w, k, frame, t, 1, err);
   return st;
 }
 

@@ -25,15 +25,14 @@ int bs_runfolder_create(const char *dir, const bs_sim *s, bs_runfolder **out, bs
   return bs_runfolder_open(dir, s, NULL, out, err);
 }
 
-/* The appended files, new (with their headers) or, append, opened at their end. */
-static int open_files(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
-  const bs_scene *sc = s->scene;
+/* frames.csv and stats.csv (output.stats), new with their headers or, append,
+ * opened at their end. */
+int bs__runfolder_rows_open(bs_runfolder *rf, int append, bs_error *err) {
+  const bs_scene *sc = rf->run.scene;
   int st = 0;
   if (append) {
     if (sc->stats_csv) st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "ab", err);
-    if (!st) st = bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "ab", err);
-    if (!st && sc->states) st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "ab", err);
-    return st;
+    return st ? st : bs_outfile_open(&rf->frames, rf->dir, "frames.csv", "ab", err);
   }
   if (sc->stats_csv && !(st = bs_outfile_open(&rf->stats, rf->dir, "stats.csv", "w", err))) {
     bs_outfile_printf(&rf->stats, "%s\n", BS_STATS_CSV_HEADER);
@@ -43,9 +42,21 @@ static int open_files(bs_runfolder *rf, const bs_sim *s, int append, bs_error *e
     bs_outfile_printf(&rf->frames, "%s\n", BS_FRAMES_CSV_HEADER);
     st = bs_outfile_flush(&rf->frames, err);
   }
-  if (!st && sc->states && !(st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "wb", err)))
-    st = write_state_header(&rf->state, s->mesh->n_vertices, err);
   return st;
+}
+
+/* state.bin (output.states), new with its header or, append, at its end. */
+static int open_state(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
+  if (!s->scene->states) return 0;
+  rf->n_state = s->mesh->n_vertices;
+  if (append) return bs_outfile_open(&rf->state, rf->dir, "state.bin", "ab", err);
+  return bs_runfolder_state_open(rf, s->mesh->n_vertices, err);
+}
+
+int bs_runfolder_state_open(bs_runfolder *rf, int32_t n_vertices, bs_error *err) {
+  rf->n_state = n_vertices;
+  int st = bs_outfile_open(&rf->state, rf->dir, "state.bin", "wb", err);
+  return st ? st : write_state_header(&rf->state, n_vertices, err);
 }
 
 /* qoi.csv (new with its header, or append) and the quantities resolved on s (bs_qoi.h). */
@@ -71,21 +82,27 @@ static int write_qoi_row(bs_runfolder *rf, const bs_sim *s, int frame, bs_error 
   return bs_outfile_flush(&rf->qoi_csv, err);
 }
 
-int bs__runfolder_begin(const char *dir, const bs_sim *s, bs_runfolder **out, bs_error *err) {
+bs_runfolder_run bs__runfolder_run_of(const bs_sim *s) {
+  const bs_runfolder_run run = {.scene = s->scene, .dofs = bs_sim_dofs(s), .obstacles = s->obstacles != NULL};
+  return run;
+}
+
+int bs__runfolder_begin(const char *dir, const bs_runfolder_run *run, bs_runfolder **out, bs_error *err) {
   *out = NULL;
   if (strlen(dir) >= BS_MAX_PATH) return bs_error_set(err, BS_EINPUT, "output folder name too long: '%s'", dir);
   bs_runfolder *rf = calloc(1, sizeof *rf);
   if (!rf) return bs_error_set(err, BS_ENOMEM, "out of memory");
   rf->lock_fd = -1;
+  rf->run = *run;
   snprintf(rf->dir, sizeof rf->dir, "%s", dir);
   rf->t_open = bs_seconds();
   char *id = NULL;
-  int st = bs__scene_identity(s->scene, &id, err);
+  int st = bs__scene_identity(run->scene, &id, err);
   if (!st) rf->scene_hash = bs_fnv1a(BS_FNV_SEED, id, strlen(id));
   free(id);
-  if (!st && s->scene->checkpoint_every < 0)
+  if (!st && run->scene->checkpoint_every < 0)
     st = bs_error_set(err, BS_EINPUT, "output.checkpoint_every: must be an integer in [0, 1000000], got %d",
-                      s->scene->checkpoint_every);
+                      run->scene->checkpoint_every);
   if (!st) st = bs_mkdir_p(dir, err);
   if (!st) st = bs_runfolder_lock(dir, &rf->lock_fd, err);
   if (st) bs_runfolder_destroy(&rf);
@@ -94,27 +111,35 @@ int bs__runfolder_begin(const char *dir, const bs_sim *s, bs_runfolder **out, bs
 }
 
 int bs__runfolder_outputs(bs_runfolder *rf, const bs_sim *s, int append, bs_error *err) {
-  int st = open_files(rf, s, append, err);
+  int st = open_state(rf, s, append, err);
   if (!st && s->scene->vtu_every > 0) st = bs_fields_create(s, s->scene->out_fields, &rf->fields, err);
   if (!st && s->scene->vtu_every > 0) st = bs_obstacle_output_create(rf->dir, s, &rf->obstacles, err);
   if (!st && s->scene->n_qoi > 0) st = open_qoi(rf, s, append, err);
   return st;
 }
 
-int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
-                      bs_error *err) {
+int bs_runfolder_open_run(const char *dir, const bs_runfolder_run *run, const bs_runfolder_opts *o,
+                          bs_runfolder **out, bs_error *err) {
   const bs_runfolder_opts none = {0};
   if (!o) o = &none;
   bs_runfolder *rf = NULL;
-  int st = bs__runfolder_begin(dir, s, &rf, err);
+  int st = bs__runfolder_begin(dir, run, &rf, err);
   if (!st) st = bs_runfolder_prepare(dir, o->replace, NULL, err);
   if (!st) st = bs_runfolder_write_record(dir, o->command_line, err);
   char p[BS_MAX_PATH + 16];
   snprintf(p, sizeof p, "%s/scene.json", dir);
-  if (!st) st = bs_scene_write_json_file(s->scene, p, err);
-  if (!st) st = bs__runfolder_outputs(rf, s, 0, err);
+  if (!st) st = bs_scene_write_json_file(run->scene, p, err);
+  if (!st) st = bs__runfolder_rows_open(rf, 0, err);
   if (st) bs_runfolder_destroy(&rf);
   *out = rf;
+  return st;
+}
+
+int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *o, bs_runfolder **out,
+                      bs_error *err) {
+  const bs_runfolder_run run = bs__runfolder_run_of(s);
+  int st = bs_runfolder_open_run(dir, &run, o, out, err);
+  if (!st && (st = bs__runfolder_outputs(*out, s, 0, err))) bs_runfolder_destroy(out);
   return st;
 }
 
@@ -142,20 +167,23 @@ int bs_frames_csv_row(char *buf, size_t n, double time, const bs_frame_stats *fs
                   m->kappa, m->obstacle_min_distance);
 }
 
-static int write_frame_row(bs_outfile *f, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
-                           bs_error *err) {
+int bs_runfolder_rows(bs_runfolder *rf, double time, const bs_frame_stats *fs, const bs_sim_measures *m,
+                      bs_error *err) {
+  int st = rf->stats.f ? write_stats_rows(&rf->stats, fs, err) : 0;
+  if (st) return st;
   char row[512];
-  bs_frames_csv_row(row, sizeof row, s->time, fs, m);
-  bs_outfile_printf(f, "%s", row);
-  return bs_outfile_flush(f, err);
+  bs_frames_csv_row(row, sizeof row, time, fs, m);
+  bs_outfile_printf(&rf->frames, "%s", row);
+  return bs_outfile_flush(&rf->frames, err);
 }
 
-static int write_state(bs_outfile *f, const bs_sim *s, bs_error *err) {
-  size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  bs_outfile_write(f, &s->time, sizeof(double), 1);
-  bs_outfile_write(f, s->x, sizeof(double), n3);
-  bs_outfile_write(f, s->v, sizeof(double), n3);
-  return bs_outfile_flush(f, err);
+int bs_runfolder_state(bs_runfolder *rf, double time, const double *x, const double *v, bs_error *err) {
+  if (!rf->state.f) return 0;
+  size_t n3 = 3 * (size_t)rf->n_state;
+  bs_outfile_write(&rf->state, &time, sizeof(double), 1);
+  bs_outfile_write(&rf->state, x, sizeof(double), n3);
+  bs_outfile_write(&rf->state, v, sizeof(double), n3);
+  return bs_outfile_flush(&rf->state, err);
 }
 
 /* frames.pvd of the frames written so far, through a temporary file renamed
@@ -191,7 +219,11 @@ static int write_vtu(bs_runfolder *rf, const bs_sim *s, int frame, bs_error *err
   int st = bs_fields_write_vtu(rf->fields, s, tmp, err);
   if (!st) st = bs_tmp_commit(tmp, path, err);
   if (!st) st = bs_obstacle_output_frame(rf->obstacles, s, frame, err);
-  if (!st) st = bs__runfolder_add_vtu(rf, name, s->time, err);
+  return st ? st : bs_runfolder_add_frame_file(rf, name, s->time, err);
+}
+
+int bs_runfolder_add_frame_file(bs_runfolder *rf, const char *name, double t, bs_error *err) {
+  int st = bs__runfolder_add_vtu(rf, name, t, err);
   return st ? st : bs__runfolder_write_pvd(rf, err);
 }
 
@@ -201,11 +233,18 @@ int bs_runfolder_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_
   return bs_runfolder_write(ctx, s, fs, &m, err);
 }
 
-/* summary.txt of the frames so far, marked partial (bs_runfolder.h). */
-static int write_partial_summary(bs_runfolder *rf, const bs_sim *s, const bs_sim_measures *m, bs_error *err) {
+void bs_runfolder_summary(const bs_runfolder *rf, int frames, const bs_run_totals *T, const bs_sim_measures *m,
+                          bs_summary *out) {
+  const bs_runfolder_run *r = &rf->run;
+  bs_summary_make_run(r->scene, frames, r->dofs, r->obstacles, T, bs_runfolder_wall(rf), m, out);
+}
+
+int bs_runfolder_frame_done(bs_runfolder *rf, const bs_frame_stats *fs, int frames, const bs_sim_measures *m,
+                            bs_error *err) {
+  bs_run_totals_add(&rf->totals, fs);
   bs_summary u;
   char text[2048];
-  bs_summary_make_measured(s, &rf->totals, bs_runfolder_wall(rf), m, &u);
+  bs_runfolder_summary(rf, frames, &rf->totals, m, &u);
   u.partial = BS_SUMMARY_RUNNING;
   bs_summary_format(&u, text, sizeof text);
   return bs_outfile_replace_text(rf->dir, "summary.txt", text, err);
@@ -213,15 +252,14 @@ static int write_partial_summary(bs_runfolder *rf, const bs_sim *s, const bs_sim
 
 int bs_runfolder_write(bs_runfolder *rf, const bs_sim *s, const bs_frame_stats *fs, const bs_sim_measures *m,
                        bs_error *err) {
-  int st = rf->stats.f ? write_stats_rows(&rf->stats, fs, err) : 0;
-  if (!st) st = write_frame_row(&rf->frames, s, fs, m, err);
-  if (!st && rf->state.f) st = write_state(&rf->state, s, err);
+  int st = bs_runfolder_rows(rf, s->time, fs, m, err);
+  if (!st) st = bs_runfolder_state(rf, s->time, s->x, s->v, err);
   if (!st && rf->qoi_csv.f) st = write_qoi_row(rf, s, fs->frame, err);
   const int every = s->scene->vtu_every;
   if (!st && every > 0 && (fs->frame % every == 0 || s->scene->mode == BS_MODE_STATIC))
     st = write_vtu(rf, s, fs->frame, err);
-  bs_run_totals_add(&rf->totals, fs);
-  if (!st) st = write_partial_summary(rf, s, m, err);
+  if (st) bs_run_totals_add(&rf->totals, fs);
+  else st = bs_runfolder_frame_done(rf, fs, s->frame, m, err);
   const int ck = s->scene->checkpoint_every;
   if (!st && ck > 0 && s->scene->mode == BS_MODE_DYNAMIC && (fs->frame % ck == 0 || fs->frame == s->scene->frames))
     st = bs_runfolder_checkpoint(rf, s, err);

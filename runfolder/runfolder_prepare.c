@@ -31,7 +31,7 @@ int bs_runfolder_is_run_file(const char *name) {
   }
   for (int i = 0; fixed[i]; i++)
     if (!strcmp(name, fixed[i])) return 1;
-  if (!strncmp(name, "frame_", 6) && has_suffix(name, ".vtu")) return 1;
+  if (!strncmp(name, "frame_", 6) && (has_suffix(name, ".vtu") || has_suffix(name, ".pvtu"))) return 1;
   if (!strncmp(name, "obstacle", 8))
     return has_suffix(name, ".vtu") || has_suffix(name, ".pvd") || has_suffix(name, ".vti") ||
            has_suffix(name, ".vtm");

@@ -171,6 +171,7 @@ static int cut_back(bs_runfolder *rf, const bs_sim *s, int K, bs_error *err) {
   if (!st && sc->n_qoi > 0) st = cut_rows(rf->dir, "qoi.csv", K, K + 1L, err);
   if (!st && sc->states) st = cut_state(rf->dir, s, K, err);
   if (!st) st = remove_later(rf->dir, K, err);
+  if (!st) st = bs__runfolder_rows_open(rf, 1, err);
   if (!st) st = bs__runfolder_outputs(rf, s, 1, err);
   if (!st) st = restore_collections(rf, s, K, err);
   return st;
@@ -181,7 +182,8 @@ int bs_runfolder_resume(const char *dir, bs_sim *s, const bs_runfolder_opts *o, 
   *out = NULL;
   bs_runfolder *rf = NULL;
   bs_checkpoint ck = {0};
-  int st = bs__runfolder_begin(dir, s, &rf, err);
+  const bs_runfolder_run run = bs__runfolder_run_of(s);
+  int st = bs__runfolder_begin(dir, &run, &rf, err);
   if (!st) st = resumable(dir, s->scene, err);
   if (!st) st = bs_checkpoint_read(dir, s, rf->scene_hash, &ck, err);
   if (!st) st = bs_sim_restore(s, ck.frame, ck.x, ck.v, err);

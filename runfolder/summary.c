@@ -30,15 +30,20 @@ void bs_summary_init(const bs_scene *sc, int frames, long dofs, const bs_run_tot
   out->peak_mib = bs_peak_rss() / 1048576.0;
 }
 
+void bs_summary_make_run(const bs_scene *sc, int frames, long dofs, int obstacles, const bs_run_totals *T,
+                         double wall, const bs_sim_measures *m, bs_summary *out) {
+  bs_summary_init(sc, frames, dofs, T, wall, out);
+  out->inverted = m->inverted;
+  out->self_intersections = m->self_intersections;
+  out->obstacles = obstacles;
+  out->penetrating = m->penetrating;
+  out->max_depth = m->max_depth;
+}
+
 void bs_summary_make_measured(const bs_sim *s, const bs_run_totals *T, double wall, const bs_sim_measures *m,
                               bs_summary *out) {
   /* statics: frame 1 once solved, 0 before (or stopped in its solve) */
-  bs_summary_init(s->scene, s->frame, bs_sim_dofs(s), T, wall, out);
-  out->inverted = m->inverted;
-  out->self_intersections = m->self_intersections;
-  out->obstacles = s->obstacles != NULL;
-  out->penetrating = m->penetrating;
-  out->max_depth = m->max_depth;
+  bs_summary_make_run(s->scene, s->frame, bs_sim_dofs(s), s->obstacles != NULL, T, wall, m, out);
 }
 
 int bs_summary_format(const bs_summary *u, char *buf, size_t n) {
