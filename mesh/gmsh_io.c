@@ -916,10 +916,12 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
 
   bs_mesh *m = NULL;
   if (kind != IN_MESH && (rc = bs__budget_check(path, "meshing the volume", err))) goto out;
-  /* A surface with no size and no gate keeps its own triangles (Gmsh below). */
-  if (kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH) && (size > 0 || bs__mesh_gate(opts) > 0)) {
-    rc = size > 0 ? bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err)
-                  : bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
+  /* A surface at a size: CGAL's paths. With no size it keeps its own
+   * triangles (Gmsh below) when that mesh passes the gate, else it is meshed
+   * at a size chosen from it (bs__mesh_surface_auto, after the Gmsh path). */
+  const int cgal_soup = kind == IN_SOUP && !(opts && opts->surface_mesher == BS_SURFACE_GMSH);
+  if (cgal_soup && size > 0) {
+    rc = bs__mesh_closed_surface(path, pts, np, tris, ntri, opts, &m, err);
     goto refine;
   }
   if ((rc = gmsh_begin(path, err))) goto out;
@@ -947,6 +949,10 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
   gmsh_end();
   if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
   if (rc == BS_EINPUT && m && gate > 0) rc = lift_gmsh(path, &m, size, gate, err);
+  if (rc == BS_EINPUT && cgal_soup && gate > 0 && !bs__budget_exceeded(err)) {
+    bs_mesh_destroy(&m);
+    rc = bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
+  }
 
 refine:
   if (!rc && refine > 0) rc = bs__check_refined_count(m->n_tets, refine, opts, path, err);
