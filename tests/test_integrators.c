@@ -5,8 +5,9 @@
  * Euler converges with order 1, BDF2 and Newmark with order 2; Newmark keeps
  * the energy of the linear problem over 100 periods; a step's history
  * restored into a fresh integrator continues bit for bit; `bigstep run`
- * stopped by SIGINT and resumed with bdf2 and newmark ends with the run's
- * state.bin and frames.csv; an unknown integrator is refused by key. */
+ * stopped by SIGINT and resumed with bdf2 and newmark (and backward Euler
+ * from a checkpoint of version 3) ends with the run's state.bin and
+ * frames.csv; an unknown integrator is refused by key. */
 #define _GNU_SOURCE
 #include <criterion/criterion.h>
 #include <criterion/logging.h>
@@ -328,6 +329,34 @@ static char *frames_without_seconds(const char *dir) {
   return out;
 }
 
+/* checkpoint.bin of version 4 rewritten as version 3 (bs_runfolder.h): the
+ * integrator's 32-byte block after the previous-step block dropped (backward
+ * Euler has no history vectors), the version and the checksum made again. */
+#define CK_HEAD3 (48 + 12 * 8 + 2 * 8 + 2 * 4 + 256 + 16 + 24)
+static void make_version3(const char *dir) {
+  char p[512];
+  snprintf(p, sizeof p, "%s/checkpoint.bin", dir);
+  FILE *f = fopen(p, "rb");
+  cr_assert_not_null(f);
+  unsigned char *b = malloc(1 << 20);
+  size_t n = fread(b, 1, 1 << 20, f);
+  fclose(f);
+  uint32_t version;
+  memcpy(&version, b + 4, 4);
+  cr_assert_eq(version, 4u);
+  memmove(b + CK_HEAD3, b + CK_HEAD3 + 32, n - CK_HEAD3 - 32);
+  n -= 32;
+  version = 3;
+  memcpy(b + 4, &version, 4);
+  const uint64_t h = bs_fnv1a(BS_FNV_SEED, b, n - 8);
+  memcpy(b + n - 8, &h, 8);
+  f = fopen(p, "wb");
+  cr_assert_not_null(f);
+  cr_assert_eq(fwrite(b, 1, n, f), n);
+  fclose(f);
+  free(b);
+}
+
 static void resume_repeats(const char *integrator) {
   char *out = NULL, ref[160], dir[160], set[64], args[128], cmd[600];
   snprintf(set, sizeof set, "solver.integrator=%s", integrator);
@@ -353,6 +382,7 @@ static void resume_repeats(const char *integrator) {
     cr_log_warn("%s: the run ended before it could be stopped", integrator);
   }
   cr_log_info("%s: stopped after %d frames.csv lines", integrator, bs_frames_csv_lines(dir));
+  if (!strcmp(integrator, "backward_euler")) make_version3(dir);
   snprintf(args, sizeof args, "--set %s --resume", set);
   cr_assert_eq(run(dir, args, &out), 0, "%s", out);
   free(out);
@@ -363,7 +393,8 @@ static void resume_repeats(const char *integrator) {
   free(a);
   free(b);
   snprintf(cmd, sizeof cmd, "grep -q '\"integrator\": \"%s\"' %s/scene.json", integrator, ref);
-  cr_expect_eq(system(cmd), 0, "the resolved scene names the integrator");
+  const int be = !strcmp(integrator, "backward_euler");
+  cr_expect_eq(system(cmd) == 0, !be, "the resolved scene names the integrator unless it is the default");
 }
 
 Test(integrators_cli, bdf2_stopped_and_resumed_repeats_the_run, .init = cli_setup, .fini = cli_teardown) {
@@ -372,6 +403,12 @@ Test(integrators_cli, bdf2_stopped_and_resumed_repeats_the_run, .init = cli_setu
 
 Test(integrators_cli, newmark_stopped_and_resumed_repeats_the_run, .init = cli_setup, .fini = cli_teardown) {
   resume_repeats("newmark");
+}
+
+/* A checkpoint of the version before the integrators (3) still resumes a
+ * backward Euler run bit for bit. */
+Test(integrators_cli, backward_euler_resumes_from_a_version_3_checkpoint, .init = cli_setup, .fini = cli_teardown) {
+  resume_repeats("backward_euler");
 }
 
 Test(integrators_cli, an_unknown_integrator_is_refused_by_key, .init = cli_setup, .fini = cli_teardown) {
