@@ -201,7 +201,9 @@ int bs_integrator_count_inverted(bs_integrator *I, const double *x, int64_t *n, 
 /* *any = 1 when flag is nonzero on some process of the backend (collective). */
 int bs_integrator_any(bs_integrator *I, int flag, int *any, bs_error *err);
 
-/* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
+/* One step of size dt from time t of the time integrator (opts.integrator;
+ * top of this header: its history is read when (x, v) is the state the last
+ * step left, and updated): x, v in/out (3 per vertex).
  * Returns 0 when the step ran (st->failed says whether it converged), a
  * negative code on errors (NaN in the state: refused before the solve;
  * BS_ENUMERIC naming the term when one is not evaluable, bs_terms.h, at xⁿ,
