@@ -58,6 +58,7 @@ static void scene_features(const bs_scene *sc, bs_step_features *f) {
   f->linear = sc->solver.min.linear;
   f->globalization = sc->solver.min.globalization;
   f->amg_at_rest = sc->solver.amg_at_rest;
+  f->integrator = sc->solver.integrator;
 }
 
 int bs_dsim_check(const bs_scene *sc, bs_error *err) {

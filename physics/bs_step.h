@@ -1,7 +1,9 @@
-/* bs_step.h — the backward Euler step (and statics) handed to the minimizer.
+/* bs_step.h — the time step (backward Euler, BDF2, Newmark) and statics
+ * handed to the minimizer.
  *
  * One step from (xⁿ, vⁿ) at tⁿ to tⁿ⁺¹ = tⁿ + Δt (paper, sections 2 and 3.1):
- *  1. step data: x̂ = xⁿ + Δt vⁿ; each term's begin_step (lagged damping);
+ *  1. step data: x̂ = xⁿ + Δt vⁿ (x̃ and c of the integrator, below); each
+ *     term's begin_step (lagged damping);
  *  2. scripted (constrained) vertices placed at their positions at tⁿ⁺¹;
  *  3. the paper's two initial guesses, xⁿ + Δt vⁿ and xⁿ + Δt vⁿ + Δt² M⁻¹ f(xⁿ),
  *     with opts.guess_xn a third, xⁿ, keeping the one with the smallest E (the
@@ -14,7 +16,44 @@
  *     the obstacle by what friction took from vⁿ, and this one does not;
  *  4. the solve: the optimization integrator (bs_minimize), or the Newton
  *     baseline (bs_newton, to convergence or k steps);
- *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt, then the post-solve hooks (friction).
+ *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt (the integrator's update, below), then the
+ *     post-solve hooks (friction).
+ *
+ * Time integrators (opts.integrator, the scene's solver.integrator): each
+ * step minimizes one incremental potential
+ *     E(x) = 1/(2 c Δt²) ‖x − x̃‖²_M + Φ(x),
+ * Φ every term but inertia (bs_terms.h: the inertia term reads c from
+ * bs_step_data.c and x̃ from its x_hat), with the integrator's c and x̃ (its
+ * stationarity condition is M (x − x̃) / (c Δt²) = f(x)):
+ *  - backward Euler (BS_INTEGRATOR_BACKWARD_EULER, the default): c = 1,
+ *    x̃ = xⁿ + Δt vⁿ; vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt. First order.
+ *  - BDF2 (BS_INTEGRATOR_BDF2): xⁿ⁺¹ = 4/3 xⁿ − 1/3 xⁿ⁻¹ + 2/3 Δt vⁿ⁺¹ and
+ *    vⁿ⁺¹ = 4/3 vⁿ − 1/3 vⁿ⁻¹ + 2/3 Δt aⁿ⁺¹ with M aⁿ⁺¹ = f(xⁿ⁺¹); putting
+ *    the second in the first, xⁿ⁺¹ = x̃ + 4/9 Δt² aⁿ⁺¹, so
+ *        c = 4/9,  x̃ = 4/3 xⁿ − 1/3 xⁿ⁻¹ + 2/3 Δt (4/3 vⁿ − 1/3 vⁿ⁻¹)
+ *    (the BDF incremental potential of IPC and PolyFEM: x̃ = Σ αᵢ x + β Δt
+ *    Σ αᵢ v, c = β², α = (4/3, −1/3), β = 2/3); after the solve
+ *    vⁿ⁺¹ = (3 xⁿ⁺¹ − 4 xⁿ + xⁿ⁻¹)/(2Δt) (equal to the velocity form above
+ *    for any vⁿ, vⁿ⁻¹). The step carries (xⁿ⁻¹, vⁿ⁻¹) in its history
+ *    (bs_step_history below); a step without one (the first, after
+ *    statics, from a state the last step did not leave, or with another Δt)
+ *    is a backward Euler step, whose local error O(Δt²) keeps the order 2.
+ *  - Newmark, average acceleration (BS_INTEGRATOR_NEWMARK, β = 1/4,
+ *    γ = 1/2): c = β = 1/4, x̃ = xⁿ + Δt vⁿ + Δt² (1/2 − β) aⁿ; after the
+ *    solve aⁿ⁺¹ = (xⁿ⁺¹ − x̃)/(β Δt²) (so M aⁿ⁺¹ = f(xⁿ⁺¹)),
+ *    vⁿ⁺¹ = vⁿ + Δt ((1 − γ) aⁿ + γ aⁿ⁺¹). The history carries aⁿ; without
+ *    one, M aⁿ = f(xⁿ) (lumped M; 0 on scripted and fixed vertices and
+ *    vertices without mass). Second order; on a linear problem it conserves
+ *    the energy (the trapezoidal rule).
+ * What the other parts of a step become with c and x̃: the guesses are x̃
+ * (BS_GUESS_XHAT) and x̃ + c Δt² M⁻¹ f(xⁿ) (explicit); xⁿ and the previous
+ * step as above. The lagged damping and the drag keep their form
+ * 1/(2Δt) (x − xⁿ)ᵀ D (x − xⁿ): a force −D (xⁿ⁺¹ − xⁿ)/Δt, first order in
+ * Δt under every integrator (the integrators' order 2 is that of undamped
+ * problems). Friction (post-solve hooks that change v) acts on vⁿ⁺¹ as an
+ * impulse, which the next x̃ carries. Postprocess collisions, which move x
+ * after the solve, are refused with bdf2 and newmark (bs_step_refuse).
+ *
  * Statics minimizes Φ alone (terms marked dynamic_only are left out), under
  * the same constraints, optionally in load steps (gravity scaled by i/L).
  *
@@ -39,6 +78,18 @@ extern "C" {
 #endif
 
 typedef enum { BS_METHOD_OPTIMIZATION = 0, BS_METHOD_NEWTON, BS_METHOD_NEWTON_K } bs_method;
+
+/* The time integrator (top of this header; the scene's solver.integrator). */
+typedef enum {
+  BS_INTEGRATOR_BACKWARD_EULER = 0,
+  BS_INTEGRATOR_BDF2 = 1,
+  BS_INTEGRATOR_NEWMARK = 2
+} bs_time_integrator;
+
+/* "backward_euler", "bdf2", "newmark"; parse: BS_EINPUT naming the unknown
+ * name and the known ones; name: "?" outside the enum. */
+int bs_time_integrator_parse(const char *name, bs_time_integrator *out, bs_error *err);
+const char *bs_time_integrator_name(bs_time_integrator k);
 
 int bs_method_parse(const char *name, bs_method *out, bs_error *err); /* optimization|newton|newton_k */
 const char *bs_method_name(bs_method m);
@@ -88,6 +139,9 @@ typedef struct bs_integrator_opts {
      method (the Newton baseline keeps the exact Hessian), and switches the
      self-collision term's model on for BS_PENALTY_SECANT_ALL. */
   bs_penalty_hessian penalty_secant;
+  /* The time integrator (top of this header), default
+     BS_INTEGRATOR_BACKWARD_EULER. */
+  bs_time_integrator integrator;
 } bs_integrator_opts;
 
 void bs_integrator_opts_default(bs_integrator_opts *o);
@@ -147,7 +201,9 @@ int bs_integrator_count_inverted(bs_integrator *I, const double *x, int64_t *n, 
 /* *any = 1 when flag is nonzero on some process of the backend (collective). */
 int bs_integrator_any(bs_integrator *I, int flag, int *any, bs_error *err);
 
-/* One backward Euler step of size dt from time t: x, v in/out (3 per vertex).
+/* One step of size dt from time t of the time integrator (opts.integrator;
+ * top of this header: its history is read when (x, v) is the state the last
+ * step left, and updated): x, v in/out (3 per vertex).
  * Returns 0 when the step ran (st->failed says whether it converged), a
  * negative code on errors (NaN in the state: refused before the solve;
  * BS_ENUMERIC naming the term when one is not evaluable, bs_terms.h, at xⁿ,
@@ -207,6 +263,24 @@ typedef struct bs_previous_step {
 } bs_previous_step;
 void bs_integrator_get_previous(const bs_integrator *I, bs_previous_step *p);
 void bs_integrator_set_previous(bs_integrator *I, const bs_previous_step *p);
+
+/* The time integrator's history (top of this header), for checkpoints and
+ * for undoing a stopped frame: have = 0 when there is none (no step yet,
+ * after statics, backward Euler); dt and mark those of the step that left
+ * it (mark: of the (x, v) it left; the history is used only from that
+ * state, and BDF2's only with the same Δt). h: bs_integrator_history_doubles
+ * doubles (the caller's; get copies into it when not NULL, set copies from
+ * it): BDF2 xⁿ⁻¹ then vⁿ⁻¹ (3n each), Newmark aⁿ (3n), backward Euler none.
+ * set keeps have only with h and dt > 0. */
+typedef struct bs_step_history {
+  int have;
+  double dt;
+  uint64_t mark;
+  double *h;
+} bs_step_history;
+size_t bs_integrator_history_doubles(const bs_integrator *I);
+void bs_integrator_get_history(const bs_integrator *I, bs_step_history *hs);
+void bs_integrator_set_history(bs_integrator *I, const bs_step_history *hs);
 
 /* The stop flag of the integrator's solves (bs_minimizer_set_stop; NULL:
  * none): a step whose solve it stops ends with reason BS_MIN_STOPPED and

@@ -67,6 +67,7 @@ typedef struct bs_step_features {
   bs_globalization globalization;
   int amg_at_rest;          /* with linear amg                                        */
   int trace;                /* 1: opts.trace                                          */
+  int integrator;           /* bs_time_integrator (bs_step.h)                         */
 } bs_step_features;
 
 /* THE list of what a backend of capabilities caps (BS_STEP_CAN_*) does not
@@ -74,7 +75,11 @@ typedef struct bs_step_features {
  * KEY the scene key of the first feature of f refused (self_collision,
  * obstacles.N.collision, obstacles.N.friction, solver.method, solver.linear,
  * solver.globalization, solver.amg_matrix, output trace). where and name
- * are the caller's (the scene's path, the backend's name). */
+ * are the caller's (the scene's path, the backend's name).
+ * Also what no backend runs with a time integrator (caps or not): "WHERE:
+ * obstacles.N.collision: ... with solver.integrator NAME" for postprocess
+ * collisions with bdf2 or newmark (they move x after the solve, which the
+ * integrator's history and acceleration do not follow). */
 int bs_step_refuse(const bs_step_features *f, unsigned caps, const char *where, const char *name, bs_error *err);
 
 typedef struct bs_step_backend {
@@ -116,7 +121,9 @@ typedef struct bs_step_backend {
   int (*count_inverted)(void *ctx, const double *x, int64_t *n, bs_error *err);
   /* Before a solve: the linear solver's options set in *mo and its
      preconditioner made ready: pdt the dt of the solve (0: statics), the n
-     active terms, mask, amg_at_rest (bs_integrator_opts). */
+     active terms, mask, amg_at_rest (bs_integrator_opts). pdt is
+     sqrt(c) Δt with the integrator's c (bs_step.h): it changes with the
+     inertia M/(c Δt²), e.g. on BDF2's first step. */
   int (*prepare_solve)(void *ctx, bs_minimizer *min, bs_minimize_opts *mo, double pdt, int n,
                        bs_term *const *terms, const uint8_t *mask, int amg_at_rest, bs_error *err);
   /* May be NULL: the AMG matrix of bs_objective.precond_matrix, added into P

@@ -29,7 +29,8 @@
  * given at creation, which the integrator owns and updates each step.
  *
  * The terms of this module (paper sections 2.1, 4.1, 4.2):
- *   inertia     1/(2Δt²) (x − x̂)ᵀ M (x − x̂)
+ *   inertia     1/(2cΔt²) (x − x̂)ᵀ M (x − x̂) (c: step->c, 1 for backward
+ *               Euler; x̂ the integrator's x̃, bs_step.h)
  *   gravity     −Σ m_v gᵀ x_v
  *   elasticity  Σ_tets V Ψ(F), one model and parameter set per material group
  *   damping     1/(2Δt) (x − xⁿ)ᵀ D (x − xⁿ), D = Σ_tets k_material H_tet⁺(xⁿ),
@@ -55,10 +56,14 @@ extern "C" {
 /* What the integrator sets before each solve. */
 typedef struct bs_step_data {
   double dt;           /* time step (s); 0 in a static solve                   */
-  const double *x_hat; /* xⁿ + Δt vⁿ                                           */
+  const double *x_hat; /* x̃: xⁿ + Δt vⁿ (backward Euler; bs_step.h for others) */
   const double *x_n;   /* positions at the start of the step                    */
   double time;         /* tⁿ⁺¹                                                  */
   double load;         /* load factor on external loads (gravity); 1 normally  */
+  /* The integrator's c (bs_step.h): inertia is 1/(2 c Δt²) ‖x − x_hat‖²_M,
+     x_hat the integrator's x̃. 0 (step data made without it) reads as 1,
+     backward Euler's. */
+  double c;
 } bs_step_data;
 
 typedef struct bs_term bs_term;

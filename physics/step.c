@@ -1,4 +1,5 @@
-/* step.c — backward Euler as a minimization (paper sections 2, 3.1), statics. */
+/* step.c — a time step as a minimization (paper sections 2, 3.1; backward
+ * Euler, BDF2, Newmark: bs_step.h), statics. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,9 @@ struct bs_integrator {
   int has_hessian_g;      /* a term offers hessian_g and opts.penalty_secant */
   int has_max_step;       /* a term offers max_step (barrier contact: CCD) */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
+  bs_step_history hist;   /* the integrator's history (hist.h: n_hist, owned) */
+  size_t n_hist;          /* bs_integrator_history_doubles                    */
+  double c;               /* the step's c (bs_step.h): 1, 4/9 or 1/4          */
   int cb_rc;              /* the first backend error inside a callback */
   bs_error cb_err;
 };
@@ -58,6 +62,19 @@ int bs_method_parse(const char *name, bs_method *out, bs_error *err) {
 }
 
 const char *bs_method_name(bs_method m) { return (unsigned)m < 3 ? method_names[m] : "?"; }
+
+static const char *integrator_names[] = {"backward_euler", "bdf2", "newmark"};
+
+int bs_time_integrator_parse(const char *name, bs_time_integrator *out, bs_error *err) {
+  for (int i = 0; i < 3; i++)
+    if (strcmp(name, integrator_names[i]) == 0) {
+      *out = (bs_time_integrator)i;
+      return 0;
+    }
+  return bs_error_set(err, BS_EINPUT, "unknown time integrator '%s' (backward_euler, bdf2, newmark)", name);
+}
+
+const char *bs_time_integrator_name(bs_time_integrator k) { return (unsigned)k < 3 ? integrator_names[k] : "?"; }
 
 static const char *guess_names[] = {"x_hat", "explicit", "x_n", "previous"};
 
@@ -89,6 +106,7 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->grad);
   free(I->gh);
   free(I->prev.d);
+  free(I->hist.h);
   if (I->B.destroy) I->B.destroy(I->B.ctx);
   free(I);
   *pI = NULL;
@@ -135,6 +153,7 @@ static void features(const bs_integrator *I, bs_step_features *f) {
   f->globalization = I->opts.min.globalization;
   f->amg_at_rest = I->opts.amg_at_rest;
   f->trace = I->opts.trace != NULL;
+  f->integrator = I->opts.integrator;
 }
 
 static int alloc_all(bs_integrator *I, int n_terms, bs_error *err) {
@@ -145,8 +164,10 @@ static int alloc_all(bs_integrator *I, int n_terms, bs_error *err) {
   I->x_n = calloc(1, b), I->x_hat = calloc(1, b), I->g1 = malloc(b), I->g2 = malloc(b);
   I->grad = malloc(b), I->gh = malloc(b);
   I->prev.d = calloc(n3 ? n3 : 1, sizeof(double));
+  I->n_hist = I->opts.integrator == BS_INTEGRATOR_BDF2 ? 2 * n3 : I->opts.integrator == BS_INTEGRATOR_NEWMARK ? n3 : 0;
+  I->hist.h = calloc(I->n_hist ? I->n_hist : 1, sizeof(double));
   if (!I->terms || !I->lists || !I->mask || !I->x_n || !I->x_hat || !I->g1 || !I->g2 || !I->grad || !I->gh ||
-      !I->prev.d)
+      !I->prev.d || !I->hist.h)
     return bs_error_set(err, BS_ENOMEM, "out of memory creating the integrator (%d vertices)", (int)I->nv);
   return 0;
 }
@@ -177,7 +198,13 @@ int bs_integrator_create_on(const bs_step_backend *B, bs_step_data *step, int n_
   I->nv = B->n_vertices;
   I->n_terms = n_terms;
   I->step = step;
-  int rc = alloc_all(I, n_terms, err);
+  if (opts) I->opts = *opts;
+  else bs_integrator_opts_default(&I->opts);
+  I->c = 1.0;
+  int rc = (unsigned)I->opts.integrator > BS_INTEGRATOR_NEWMARK
+               ? bs_error_set(err, BS_EINPUT, "integrator: unknown time integrator %d (bs_time_integrator)",
+                              I->opts.integrator)
+               : alloc_all(I, n_terms, err);
   if (rc) {
     bs_integrator_destroy(&I);
     return rc;
@@ -194,8 +221,6 @@ int bs_integrator_create_on(const bs_step_backend *B, bs_step_data *step, int n_
   else memset(I->mask, 1, (size_t)I->nv);
   I->script = script;
   I->script_ctx = script_ctx;
-  if (opts) I->opts = *opts;
-  else bs_integrator_opts_default(&I->opts);
   I->has_hessian_g = I->has_hessian_g && I->opts.penalty_secant;
   bs_step_features f;
   features(I, &f);
@@ -203,6 +228,7 @@ int bs_integrator_create_on(const bs_step_backend *B, bs_step_data *step, int n_
   B->publish(B->ctx, step, I->x_n, I->x_hat);
   step->load = 1.0;
   step->dt = 0;
+  step->c = 1.0;
   if (!rc) rc = make_minimizer(I, err);
   if (rc) {
     bs_integrator_destroy(&I);
@@ -464,6 +490,18 @@ void bs_integrator_set_previous(bs_integrator *I, const bs_previous_step *p) {
   I->prev.have = p->have && p->d && p->dt > 0, I->prev.dt = p->dt, I->prev.mark = p->mark;
   if (I->prev.have) memcpy(I->prev.d, p->d, sizeof(double) * n3);
 }
+size_t bs_integrator_history_doubles(const bs_integrator *I) { return I->n_hist; }
+
+void bs_integrator_get_history(const bs_integrator *I, bs_step_history *hs) {
+  hs->have = I->hist.have, hs->dt = I->hist.dt, hs->mark = I->hist.mark;
+  if (hs->h && I->n_hist) memcpy(hs->h, I->hist.h, sizeof(double) * I->n_hist);
+}
+
+void bs_integrator_set_history(bs_integrator *I, const bs_step_history *hs) {
+  I->hist.have = I->n_hist && hs->have && hs->h && hs->dt > 0, I->hist.dt = hs->dt, I->hist.mark = hs->mark;
+  if (I->hist.have) memcpy(I->hist.h, hs->h, sizeof(double) * I->n_hist);
+}
+
 void bs_integrator_set_stop(bs_integrator *I, volatile sig_atomic_t *stop) { bs_minimizer_set_stop(I->min, stop); }
 
 double bs_integrator_energy(bs_integrator *I, const double *x) {
@@ -523,7 +561,7 @@ static int solve_opts(bs_integrator *I, int naive, bs_minimize_opts *mo, bs_erro
     mo->forcing_ew = bs_step_forcing(BS_FORCING_ADAPTIVE, inv);
   }
   const term_list *l = &I->act[I->static_mode][TERMS_ALL];
-  const double pdt = I->static_mode ? 0.0 : I->step->dt;
+  const double pdt = I->static_mode ? 0.0 : I->step->dt * sqrt(I->c); /* sqrt(1) dt = dt */
   if (!rc) rc = I->B.prepare_solve(I->B.ctx, I->min, mo, pdt, l->n, l->t, I->mask, I->opts.amg_at_rest, err);
   if (I->B.vecops) mo->linear = BS_LIN_CG; /* their solve replaces the linear solver */
   return rc ? rc : bs_minimizer_set_opts(I->min, mo, err);
@@ -631,15 +669,86 @@ static double paper_guesses(bs_integrator *I, double t, double dt, double *x, in
   return offer_candidate(I, t + dt, Eb, BS_GUESS_XN, x, naive, st);
 }
 
-/* Step 1: the step data, x̂ and the terms' begin_step. */
-static int begin_step(bs_integrator *I, double t, double dt, const double *x, const double *v, bs_error *err) {
+/* Whether the step from (xⁿ = I->x_n, v) of size dt has its integrator's
+ * history (bs_step.h): the one the last step left at this state (BDF2: at
+ * this dt too). */
+static int history_usable(const bs_integrator *I, double dt, const double *v) {
+  if (I->opts.integrator == BS_INTEGRATOR_BACKWARD_EULER || !I->hist.have) return 0;
+  if (I->opts.integrator == BS_INTEGRATOR_BDF2 && I->hist.dt != dt) return 0;
+  return I->hist.mark == state_mark(I->x_n, v, 3 * (size_t)I->nv);
+}
+
+/* The step's c and x̃ (bs_step.h) into I->c, I->x_hat from xⁿ = I->x_n, v
+ * and, with use, the history (Newmark without one: aⁿ = 0 here, set by
+ * newmark_start). BDF2 without history: backward Euler's. */
+static void predict(bs_integrator *I, double dt, const double *v, int use) {
+  const size_t n3 = 3 * (size_t)I->nv;
+  const double *x = I->x_n, *h = I->hist.h;
+  if (I->opts.integrator == BS_INTEGRATOR_NEWMARK) {
+    I->c = 0.25; /* beta */
+    if (!use) memset(I->hist.h, 0, sizeof(double) * n3);
+    for (size_t i = 0; i < n3; i++) I->x_hat[i] = x[i] + dt * v[i] + dt * dt * 0.25 * h[i]; /* (1/2 - beta) */
+  } else if (I->opts.integrator == BS_INTEGRATOR_BDF2 && use) {
+    I->c = 4.0 / 9.0;
+    const double w = 2.0 * dt / 9.0;
+    for (size_t i = 0; i < n3; i++) I->x_hat[i] = (4.0 * x[i] - h[i]) / 3.0 + w * (4.0 * v[i] - h[n3 + i]);
+  } else {
+    I->c = 1.0;
+    for (size_t i = 0; i < n3; i++) I->x_hat[i] = x[i] + dt * v[i];
+  }
+  I->step->c = I->c;
+}
+
+/* Newmark without history: M aⁿ = f(xⁿ) = −I->grad (lumped M; 0 on scripted
+ * and fixed vertices and those without mass) into the history, x̃ again. */
+static void newmark_start(bs_integrator *I, double dt, const double *v) {
+  const size_t nv = (size_t)I->nv;
+  double *a = I->hist.h;
+  for (size_t vtx = 0; vtx < nv; vtx++) {
+    const double m = I->B.mass[vtx], s = I->mask[vtx] && m > 0 ? -1.0 / m : 0.0;
+    for (int k = 0; k < 3; k++) a[3 * vtx + k] = s * I->grad[3 * vtx + k];
+  }
+  predict(I, dt, v, 1);
+  I->B.publish(I->B.ctx, I->step, I->x_n, I->x_hat);
+}
+
+/* Step 5's vⁿ⁺¹ from the solve's x (bs_step.h), and the history it leaves
+ * (its mark is set after the post-solve hooks). use: the step had its
+ * history (history_usable). */
+static void update_velocity(bs_integrator *I, double dt, const double *x, double *v, int use) {
+  const size_t n3 = 3 * (size_t)I->nv;
+  const double *xn = I->x_n;
+  double *h = I->hist.h;
+  if (I->opts.integrator == BS_INTEGRATOR_NEWMARK) {
+    const double ib = 1.0 / (0.25 * dt * dt); /* 1/(beta dt^2), gamma = 1/2 */
+    for (size_t i = 0; i < n3; i++) {
+      const double a1 = (x[i] - I->x_hat[i]) * ib;
+      v[i] += dt * (0.5 * h[i] + 0.5 * a1);
+      h[i] = a1;
+    }
+  } else if (I->opts.integrator == BS_INTEGRATOR_BDF2) {
+    for (size_t i = 0; i < n3; i++) {
+      const double v1 = use ? (3.0 * x[i] - 4.0 * xn[i] + h[i]) / (2.0 * dt) : (x[i] - xn[i]) / dt;
+      h[i] = xn[i], h[n3 + i] = v[i];
+      v[i] = v1;
+    }
+  } else {
+    for (size_t i = 0; i < n3; i++) v[i] = (x[i] - xn[i]) / dt;
+  }
+}
+
+/* Step 1: the step data, x̃ and c (predict), the terms' begin_step; *use:
+ * whether the step has its integrator's history. */
+static int begin_step(bs_integrator *I, double t, double dt, const double *x, const double *v, int *use,
+                      bs_error *err) {
   const size_t n3 = 3 * (size_t)I->nv;
   I->static_mode = 0;
   I->step->dt = dt;
   I->step->time = t + dt;
   I->step->load = 1.0;
   memcpy(I->x_n, x, sizeof(double) * n3);
-  for (size_t i = 0; i < n3; i++) I->x_hat[i] = x[i] + dt * v[i];
+  *use = history_usable(I, dt, v);
+  predict(I, dt, v, *use);
   I->B.publish(I->B.ctx, I->step, I->x_n, I->x_hat);
   int rc = 0;
   for (int i = 0; i < I->n_terms && !rc; i++)
@@ -653,7 +762,7 @@ static int make_guesses(bs_integrator *I, double t1, double dt, bs_error *err) {
   const size_t nv = (size_t)I->nv, n3 = 3 * nv;
   memcpy(I->g1, I->x_hat, sizeof(double) * n3);
   for (size_t vtx = 0; vtx < nv; vtx++) {
-    double c = I->B.mass[vtx] > 0 ? dt * dt / I->B.mass[vtx] : 0;
+    double c = I->B.mass[vtx] > 0 ? I->c * dt * dt / I->B.mass[vtx] : 0; /* c = 1: dt * dt / m exactly */
     for (int k = 0; k < 3; k++) I->g2[3 * vtx + k] = I->x_hat[3 * vtx + k] - c * I->grad[3 * vtx + k];
   }
   if (I->script) {
@@ -701,9 +810,12 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   if (!(dt > 0) || !isfinite(dt)) return bs_error_set(err, BS_EINPUT, "time step must be positive and finite, got %g", dt);
   int rc;
   if ((rc = check_finite(I, x, "position", err)) || (rc = check_finite(I, v, "velocity", err))) return rc;
-  if ((rc = begin_step(I, t, dt, x, v, err))) return rc;
+  int use = 0;
+  if ((rc = begin_step(I, t, dt, x, v, &use, err))) return rc;
   /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
-  if ((rc = potential_gradient(I, err)) || (rc = make_guesses(I, t + dt, dt, err))) return rc;
+  if ((rc = potential_gradient(I, err))) return rc;
+  if (I->opts.integrator == BS_INTEGRATOR_NEWMARK && !use) newmark_start(I, dt, v);
+  if ((rc = make_guesses(I, t + dt, dt, err))) return rc;
   int naive = 1;
   I->cb_rc = 0;
   const double Eb = paper_guesses(I, t, dt, x, &naive, st);
@@ -713,8 +825,9 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     return I->cb_rc;
   }
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
-  for (size_t i = 0; i < n3; i++) v[i] = (x[i] - I->x_n[i]) / dt;
+  update_velocity(I, dt, x, v, use);
   if (I->hooks.post_solve && (rc = post_solve(I, dt, x, v, st, err))) return rc;
+  if (I->n_hist) I->hist.have = 1, I->hist.dt = dt, I->hist.mark = state_mark(x, v, n3);
   st->seconds = bs_seconds() - t0;
   return 0;
 }
@@ -728,6 +841,7 @@ int bs_integrator_static(bs_integrator *I, double t, int load_steps, double *x, 
   if (load_steps < 1) return bs_error_set(err, BS_EINPUT, "load_steps must be >= 1, got %d", load_steps);
   I->static_mode = 1;
   I->prev.have = 0;
+  I->hist.have = 0;
   I->step->dt = 0;
   I->step->time = t;
   memcpy(I->x_n, x, sizeof(double) * n3);

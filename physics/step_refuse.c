@@ -5,7 +5,18 @@
 #include "bs_step.h"
 #include "bs_step_backend.h"
 
+/* What no backend runs with a second-order integrator (bs_step.h). */
+static int refuse_integrator(const bs_step_features *f, const char *where, bs_error *err) {
+  if (f->integrator == BS_INTEGRATOR_BACKWARD_EULER || f->postprocess_obstacle < 0) return 0;
+  return bs_error_set(err, BS_EINPUT,
+                      "%s: obstacles.%d.collision: postprocess collisions move x after the solve, which the history "
+                      "of solver.integrator %s does not follow (use penalty or constraint)",
+                      where, f->postprocess_obstacle, bs_time_integrator_name((bs_time_integrator)f->integrator));
+}
+
 int bs_step_refuse(const bs_step_features *f, unsigned caps, const char *where, const char *name, bs_error *err) {
+  int rc = refuse_integrator(f, where, err);
+  if (rc) return rc;
   char key[64] = "";
   const char *why = NULL;
   if (f->self_collision && !(caps & BS_STEP_CAN_SELF_COLLISION))

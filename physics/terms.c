@@ -78,19 +78,22 @@ static double mass_quadratic(const bs_fem *fem, double c, const double *x, const
 }
 
 /* ---- inertia ---------------------------------------------------------- */
+/* 1/(c Δt²), c the integrator's (bs_step_data.c; 0 reads as 1): for c = 1
+ * the product c Δt Δt is Δt Δt exactly, so backward Euler is unchanged. */
+static double inertia_weight(const bs_step_data *s) {
+  const double c = s->c > 0 ? s->c : 1.0, dt = s->dt;
+  return 1.0 / (c * dt * dt);
+}
 static int inertia_value(const bs_term *t, const double *x, double *E) {
-  double dt = t->step->dt;
-  *E = mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, NULL);
+  *E = mass_quadratic(t->fem, inertia_weight(t->step), x, t->step->x_hat, NULL);
   return BS_TERM_OK;
 }
 static int inertia_gradient(const bs_term *t, const double *x, double *E, double *g) {
-  double dt = t->step->dt;
-  *E = mass_quadratic(t->fem, 1.0 / (dt * dt), x, t->step->x_hat, g);
+  *E = mass_quadratic(t->fem, inertia_weight(t->step), x, t->step->x_hat, g);
   return BS_TERM_OK;
 }
 static int inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
-  double dt = t->step->dt;
-  add_mass_diagonal(t->fem, 1.0 / (dt * dt), H);
+  add_mass_diagonal(t->fem, inertia_weight(t->step), H);
   return BS_TERM_OK;
 }
 static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL, NULL, NULL, NULL};

@@ -291,20 +291,28 @@ int bs_summary_read(const char *dir, bs_summary *out, bs_error *err);
  *   (seconds, max_grad), 2 int32 (first failed frame and step), the first
  *   failure's reason (256 bytes); the minimizer's carry (bs_min_carry: int64
  *   full, double eta); the previous-step guess's state (bs_previous_step:
- *   int64 have, double dt, uint64 mark);
+ *   int64 have, double dt, uint64 mark); the time integrator's history
+ *   (bs_step_history: int64 solver.integrator, int64 have, double dt,
+ *   uint64 mark; since version 4);
  *   x (3n doubles), v (3n doubles), the previous step's displacement d (3n
- *   doubles, zeros when have is 0); a uint64 FNV-1a of every byte before.
+ *   doubles, zeros when have is 0), the integrator's history h
+ *   (bs_integrator_history_doubles: 6n BDF2 xⁿ⁻¹ and vⁿ⁻¹, 3n Newmark aⁿ,
+ *   none for backward Euler; zeros when have is 0; since version 4); a
+ *   uint64 FNV-1a of every byte before. Version 3 (without the history's
+ *   fields) is still read: a backward Euler run continues from it as from
+ *   version 4.
  * x, v, d and the time are everything the next step reads: the lagged Rayleigh
  * damping, the initial guesses and x̂ are made from xⁿ, vⁿ; scripted
  * vertices and obstacles move as functions of time; the obstacles' active
  * sets start empty every step; the self-collision caches (the last detection,
  * search hints) only spare work, and the minimizer starts every solve afresh
  * but for its carry (cg_forcing adaptive), which the checkpoint holds; with
- * friction the previous-step guess (bs_step.h) starts from d.
+ * friction the previous-step guess (bs_step.h) starts from d; BDF2 and
+ * Newmark from their history.
  * One exception: solver.linear "amg" with solver.amg_matrix "current" builds
  * its preconditioner at an earlier iterate, which no checkpoint holds:
  * bs_runfolder_resume refuses such a scene. */
-#define BS_CHECKPOINT_VERSION 3
+#define BS_CHECKPOINT_VERSION 4
 
 typedef struct bs_checkpoint {
   int frame;
@@ -312,6 +320,8 @@ typedef struct bs_checkpoint {
   bs_run_totals totals;
   bs_min_carry carry;        /* the minimizer's state between solves (bs_minimize.h) */
   bs_previous_step prev;     /* the previous-step guess's (prev.d: 3n, in x's allocation) */
+  bs_step_history hist;      /* the integrator's (hist.h in x's allocation; have 0 from version 3) */
+  int version;               /* of the file: 3 or BS_CHECKPOINT_VERSION */
   double *x, *v;             /* 3n each (one allocation, freed by bs_checkpoint_free) */
 } bs_checkpoint;
 

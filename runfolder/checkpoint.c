@@ -16,7 +16,9 @@
 #define CK_TOTALS (CK_LONGS * 8 + 2 * 8 + 2 * 4 + 256)
 #define CK_CARRY 16 /* the minimizer's carry: int64 full, double eta */
 #define CK_PREV 24  /* the previous-step guess: int64 have, double dt, uint64 mark */
-#define CK_HEAD (CK_HEADER + CK_TOTALS + CK_CARRY + CK_PREV)
+#define CK_HEAD3 (CK_HEADER + CK_TOTALS + CK_CARRY + CK_PREV) /* version 3 */
+#define CK_HIST 32 /* the integrator's history: int64 integrator, int64 have, double dt, uint64 mark */
+#define CK_HEAD (CK_HEAD3 + CK_HIST)
 
 int bs__scene_identity(const bs_scene *sc, char **text, bs_error *err) {
   bs_scene *c = malloc(sizeof *c);
@@ -97,10 +99,23 @@ int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T
   memcpy(q, &have, 8);
   memcpy(q + 8, &p.dt, 8);
   memcpy(q + 16, &p.mark, 8);
+  const size_t nh = bs_integrator_history_doubles(s->integrator);
+  bs_step_history hs = {0, 0, 0, calloc(nh ? nh : 1, sizeof(double))};
+  if (!hs.h) {
+    free(p.d);
+    return bs_error_set(err, BS_ENOMEM, "out of memory (checkpoint)");
+  }
+  bs_integrator_get_history(s->integrator, &hs);
+  if (!hs.have) memset(hs.h, 0, sizeof(double) * nh);
+  const int64_t hv[2] = {s->scene->solver.integrator, hs.have};
+  memcpy(q + CK_PREV, hv, 16);
+  memcpy(q + CK_PREV + 16, &hs.dt, 8);
+  memcpy(q + CK_PREV + 24, &hs.mark, 8);
   uint64_t h = bs_fnv1a(BS_FNV_SEED, head, sizeof head);
   h = bs_fnv1a(h, s->x, sizeof(double) * n3);
   h = bs_fnv1a(h, s->v, sizeof(double) * n3);
   h = bs_fnv1a(h, p.d, sizeof(double) * n3);
+  h = bs_fnv1a(h, hs.h, sizeof(double) * nh);
   bs_outfile o;
   int st = bs_outfile_open_replace(&o, dir, "checkpoint.bin", err);
   if (!st) {
@@ -108,10 +123,12 @@ int bs_checkpoint_write(const char *dir, const bs_sim *s, const bs_run_totals *T
     bs_outfile_write(&o, s->x, sizeof(double), n3);
     bs_outfile_write(&o, s->v, sizeof(double), n3);
     bs_outfile_write(&o, p.d, sizeof(double), n3);
+    bs_outfile_write(&o, hs.h, sizeof(double), nh);
     bs_outfile_write(&o, &h, 8, 1);
     st = bs_outfile_close(&o, err);
   }
   free(p.d);
+  free(hs.h);
   return st;
 }
 
@@ -141,7 +158,7 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
                         bs_checkpoint *ck, bs_error *err) {
   if (n < 4 || memcmp(b, CK_MAGIC, 4))
     return bs_error_set(err, BS_EINPUT, "'%s' is not a bigstep checkpoint (no BSCK magic)", p);
-  if (n < CK_HEAD + 8)
+  if (n < CK_HEAD3 + 8)
     return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, shorter than a checkpoint's header: truncated", p, n);
   uint32_t version;
   int32_t i3[2];
@@ -152,13 +169,15 @@ static int check_header(const char *p, const unsigned char *b, size_t n, const b
   memcpy(&hash, b + 24, 8);
   memcpy(&ck->wall_seconds, b + 32, 8);
   ck->frame = i3[1];
-  if (version != BS_CHECKPOINT_VERSION)
-    return bs_error_set(err, BS_EINPUT, "'%s': checkpoint version %u; this bigstep reads version %d", p, version,
-                        BS_CHECKPOINT_VERSION);
+  if (version != BS_CHECKPOINT_VERSION && version != 3)
+    return bs_error_set(err, BS_EINPUT, "'%s': checkpoint version %u; this bigstep reads versions 3 and %d", p,
+                        version, BS_CHECKPOINT_VERSION);
+  ck->version = (int)version;
   if (i3[0] != s->mesh->n_vertices)
     return bs_error_set(err, BS_EINPUT, "'%s' holds %d vertices, the scene's mesh %d: a checkpoint of another scene", p,
                         i3[0], s->mesh->n_vertices);
-  const size_t want = CK_HEAD + 72 * (size_t)i3[0] + 8;
+  const size_t nh = version == 3 ? 0 : bs_integrator_history_doubles(s->integrator);
+  const size_t want = (version == 3 ? CK_HEAD3 : CK_HEAD) + 72 * (size_t)i3[0] + 8 * nh + 8;
   if (n != want)
     return bs_error_set(err, BS_EINPUT, "'%s' is %zu bytes, a checkpoint of %d vertices %zu: truncated or damaged", p,
                         n, i3[0], want);
@@ -186,6 +205,56 @@ static int read_previous(const char *p, const unsigned char *q, bs_previous_step
   return 0;
 }
 
+/* The integrator's history at q (CK_HIST bytes) into hist (its h already
+ * read): 0 or BS_EINPUT when it is another integrator's or out of range. */
+static int read_history(const char *p, const unsigned char *q, const bs_sim *s, bs_step_history *hist,
+                        bs_error *err) {
+  int64_t hv[2];
+  memcpy(hv, q, 16);
+  memcpy(&hist->dt, q + 16, 8);
+  memcpy(&hist->mark, q + 24, 8);
+  hist->have = (int)hv[1];
+  const int want = s->scene->solver.integrator;
+  if (hv[0] != want)
+    return bs_error_set(err, BS_EINPUT, "'%s': a checkpoint of solver.integrator %s, the scene's is %s", p,
+                        bs_time_integrator_name((bs_time_integrator)hv[0]),
+                        bs_time_integrator_name((bs_time_integrator)want));
+  if (!(hv[1] == 0 || hv[1] == 1) || (hv[1] && !(hist->dt > 0 && isfinite(hist->dt))))
+    return bs_error_set(err, BS_EINPUT,
+                        "'%s': the integrator's history (%lld, dt %g) is out of range: a damaged checkpoint", p,
+                        (long long)hv[1], hist->dt);
+  return 0;
+}
+
+/* The body of a checkpoint (after its header checks and checksum) into ck. */
+static int read_body(const char *p, const unsigned char *b, const bs_sim *s, bs_checkpoint *ck, bs_error *err) {
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  const size_t nh = ck->version == 3 ? 0 : bs_integrator_history_doubles(s->integrator);
+  if (!(ck->x = malloc(sizeof(double) * (3 * n3 + nh + 1)))) return bs_error_set(err, BS_ENOMEM, "out of memory");
+  unpack_totals(b + CK_HEADER, &ck->totals);
+  int64_t full;
+  memcpy(&full, b + CK_HEADER + CK_TOTALS, 8);
+  memcpy(&ck->carry.eta, b + CK_HEADER + CK_TOTALS + 8, 8);
+  ck->carry.full = (int)full;
+  int st = 0;
+  if (!(full == 0 || full == 1) || !(ck->carry.eta >= 0 && ck->carry.eta <= 0.5))
+    st = bs_error_set(err, BS_EINPUT, "'%s': the solver state (%lld, %g) is out of range: a damaged checkpoint", p,
+                      (long long)full, ck->carry.eta);
+  ck->v = ck->x + n3;
+  ck->prev.d = ck->x + 2 * n3;
+  ck->hist.h = ck->x + 3 * n3;
+  const size_t head = ck->version == 3 ? CK_HEAD3 : CK_HEAD;
+  memcpy(ck->x, b + head, sizeof(double) * (3 * n3 + nh));
+  if (!st) st = read_previous(p, b + CK_HEADER + CK_TOTALS + CK_CARRY, &ck->prev, err);
+  if (!st && ck->version != 3) st = read_history(p, b + CK_HEAD3, s, &ck->hist, err);
+  static const char *what[4] = {"position", "velocity", "previous step's displacement", "integrator's history"};
+  for (size_t i = 0; i < 3 * n3 + nh && !st; i++)
+    if (!isfinite(ck->x[i]))
+      st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p, what[i < 3 * n3 ? i / n3 : 3],
+                        ((i < 3 * n3 ? i : i - 3 * n3) % n3) / 3);
+  return st;
+}
+
 int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs_checkpoint *ck, bs_error *err) {
   memset(ck, 0, sizeof *ck);
   char p[BS_MAX_PATH + 32];
@@ -199,26 +268,7 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
   if (!st) memcpy(&h, b + n - 8, 8);
   if (!st && h != bs_fnv1a(BS_FNV_SEED, b, n - 8))
     st = bs_error_set(err, BS_EINPUT, "'%s': the checksum does not match: a damaged checkpoint", p);
-  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
-  if (!st && !(ck->x = malloc(sizeof(double) * (3 * n3 + 1)))) st = bs_error_set(err, BS_ENOMEM, "out of memory");
-  if (!st) {
-    unpack_totals(b + CK_HEADER, &ck->totals);
-    int64_t full;
-    memcpy(&full, b + CK_HEADER + CK_TOTALS, 8);
-    memcpy(&ck->carry.eta, b + CK_HEADER + CK_TOTALS + 8, 8);
-    ck->carry.full = (int)full;
-    if (!(full == 0 || full == 1) || !(ck->carry.eta >= 0 && ck->carry.eta <= 0.5))
-      st = bs_error_set(err, BS_EINPUT, "'%s': the solver state (%lld, %g) is out of range: a damaged checkpoint", p,
-                        (long long)full, ck->carry.eta);
-    ck->v = ck->x + n3;
-    ck->prev.d = ck->x + 2 * n3;
-    memcpy(ck->x, b + CK_HEAD, sizeof(double) * 3 * n3);
-    if (!st) st = read_previous(p, b + CK_HEADER + CK_TOTALS + CK_CARRY, &ck->prev, err);
-    static const char *what[3] = {"position", "velocity", "previous step's displacement"};
-    for (size_t i = 0; i < 3 * n3 && !st; i++)
-      if (!isfinite(ck->x[i]))
-        st = bs_error_set(err, BS_EINPUT, "'%s': the %s of vertex %zu is not finite", p, what[i / n3], (i % n3) / 3);
-  }
+  if (!st) st = read_body(p, b, s, ck, err);
   free(b);
   if (st) bs_checkpoint_free(ck);
   return st;
@@ -226,5 +276,5 @@ int bs_checkpoint_read(const char *dir, const bs_sim *s, uint64_t scene_hash, bs
 
 void bs_checkpoint_free(bs_checkpoint *ck) {
   free(ck->x);
-  ck->x = ck->v = ck->prev.d = NULL;
+  ck->x = ck->v = ck->prev.d = ck->hist.h = NULL;
 }

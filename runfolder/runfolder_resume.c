@@ -189,6 +189,7 @@ int bs_runfolder_resume(const char *dir, bs_sim *s, const bs_runfolder_opts *o, 
   if (!st) st = bs_sim_restore(s, ck.frame, ck.x, ck.v, err);
   if (!st) bs_integrator_set_carry(s->integrator, &ck.carry);
   if (!st) bs_integrator_set_previous(s->integrator, &ck.prev);
+  if (!st) bs_integrator_set_history(s->integrator, &ck.hist);
   if (!st) st = cut_back(rf, s, ck.frame, err);
   if (!st) st = record_resume(dir, o ? o->command_line : NULL, ck.frame, err);
   if (!st) {

@@ -130,6 +130,8 @@ static int check_solver(const bs_scene *s, bs_error *err) {
     return bad(s, err, "solver.globalization: trust_region needs solver.linear cg, pcg or amg (Steihaug's CG), got %s",
                bs_lin_kind_name(m->linear));
   if (s->load_steps < 1) return bad(s, err, "solver.load_steps: must be an integer in [1, 100000], got %d", s->load_steps);
+  if ((unsigned)s->solver.integrator > BS_INTEGRATOR_NEWMARK)
+    return bad(s, err, "solver.integrator: must be backward_euler, bdf2 or newmark, got %d", s->solver.integrator);
   return 0;
 }
 

@@ -56,6 +56,9 @@ const bs_schema_key bs__schema_keys[] = {
     /* ---- solver ---- */
     {"solver", "method", STR, .choices = CHOICES("optimization", "newton", "newton_k"), .def = "\"optimization\"",
      SC(solver.method), .doc = "optimization (the paper's integrator), newton (the baseline), newton_k (k Newton steps)"},
+    {"solver", "integrator", STR, .choices = CHOICES("backward_euler", "bdf2", "newmark"), SC(solver.integrator),
+     .doc = "time integrator: backward_euler (the paper's, first order; the default), bdf2 or newmark (average "
+            "acceleration, beta 1/4, gamma 1/2), each second order (written only when not the default)"},
     {"solver", "linear", STR, .choices = CHOICES("cg", "pcg", "amg", "cholmod"), .def = "\"cg\"",
      SC(solver.min.linear), VALUES(BS_LIN_CG, BS_LIN_PCG, BS_LIN_AMG, BS_LIN_CHOLMOD), .doc = "linear solver of the Newton steps"},
     {"solver", "tolerance", NUM, .range = "(0, )", .def = "0.001", SC(solver.min.tol), .doc = "tau on ||grad E|| (N)"},

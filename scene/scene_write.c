@@ -172,10 +172,15 @@ static void qoi_hand(writer *w, cJSON *o, const char *key, const void *base) {
   if (!strcmp(key, "at") && q->has_at) vec3(w, o, "at", q->at);
 }
 
-/* cg_sigma: "auto" with its scale, or a number. */
+/* cg_sigma: "auto" with its scale, or a number; integrator when not
+ * backward Euler (so that the resolved scene, and the scene hash of
+ * checkpoints, of a scene without it stay as they were). */
 static void solver_hand(writer *w, cJSON *o, const char *key, const void *base) {
-  const bs_minimize_opts *m = &((const bs_scene *)base)->solver.min;
-  if (!strcmp(key, "cg_sigma")) {
+  const bs_integrator_opts *so = &((const bs_scene *)base)->solver;
+  const bs_minimize_opts *m = &so->min;
+  if (!strcmp(key, "integrator") && so->integrator != BS_INTEGRATOR_BACKWARD_EULER) {
+    str(w, o, "integrator", bs_time_integrator_name((bs_time_integrator)so->integrator));
+  } else if (!strcmp(key, "cg_sigma")) {
     if (m->sigma_auto) str(w, o, "cg_sigma", "auto");
     else num(w, o, "cg_sigma", m->sigma);
   } else if (!strcmp(key, "cg_sigma_scale") && m->sigma_auto) {

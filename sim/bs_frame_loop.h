@@ -8,7 +8,8 @@
  * (k + 1) dt, and the frame at exactly f/fps. A stop request (*stop, read
  * over the backend's processes before every step: bs_integrator_any) undoes
  * the frame from the snapshot (x, v, time, frame, the minimizer's carry and
- * the previous-step guess, bit for bit) and returns BS_SIM_STOPPED.
+ * the previous-step guess, the time integrator's history, bit for bit) and
+ * returns BS_SIM_STOPPED.
  *
  * Ownership: the loop borrows everything it points at; a snapshot owns xv
  * (bs_frame_snap_alloc, bs_frame_snap_free). Collective on the backend's
@@ -33,11 +34,13 @@ typedef struct bs_frame_loop {
 } bs_frame_loop;
 
 typedef struct bs_frame_snap {
-  double *xv; /* 9 per vertex: x, v and the previous step's displacement */
+  double *xv; /* 9 per vertex: x, v and the previous step's displacement,
+                 then the integrator's history (bs_integrator_history_doubles) */
   double time;
   int frame;
   bs_min_carry carry;
   bs_previous_step prev;
+  bs_step_history hist; /* hist.h points into xv */
 } bs_frame_snap;
 
 int bs_frame_snap_alloc(const bs_frame_loop *L, bs_frame_snap *sn, bs_error *err);

@@ -9,7 +9,7 @@
 int bs_frame_snap_alloc(const bs_frame_loop *L, bs_frame_snap *sn, bs_error *err) {
   memset(sn, 0, sizeof *sn);
   const size_t n = (size_t)bs_integrator_vertices(L->integ);
-  sn->xv = bs_calloc(9 * n + 9, sizeof(double), "the frame snapshot", err);
+  sn->xv = bs_calloc(9 * n + 9 + bs_integrator_history_doubles(L->integ), sizeof(double), "the frame snapshot", err);
   return sn->xv ? 0 : BS_ENOMEM;
 }
 
@@ -27,6 +27,8 @@ void bs_frame_snap_take(const bs_frame_loop *L, bs_frame_snap *sn) {
   bs_integrator_get_carry(L->integ, &sn->carry);
   sn->prev.d = sn->xv + 2 * n3;
   bs_integrator_get_previous(L->integ, &sn->prev);
+  sn->hist.h = sn->xv + 3 * n3;
+  bs_integrator_get_history(L->integ, &sn->hist);
 }
 
 int bs_frame_snap_undo(const bs_frame_loop *L, const bs_frame_snap *sn) {
@@ -37,6 +39,7 @@ int bs_frame_snap_undo(const bs_frame_loop *L, const bs_frame_snap *sn) {
   *L->frame = sn->frame;
   bs_integrator_set_carry(L->integ, &sn->carry);
   bs_integrator_set_previous(L->integ, &sn->prev);
+  bs_integrator_set_history(L->integ, &sn->hist);
   return BS_SIM_STOPPED;
 }
 

@@ -10,6 +10,7 @@
 #include "bs_penalty.h"
 #include "bs_selfcollide.h"
 #include "bs_shim.h"
+#include "bs_step_backend.h"
 #include "sim_internal.h"
 
 void bs_sim_destroy(bs_sim **ps) {
@@ -80,10 +81,29 @@ static int make_terms(bs_sim *s, bs_error *err) {
   return bs__sim_make_friction(s, err);
 }
 
+/* What the scene asks of the serial integrator that bs_step_refuse may
+ * refuse with any backend (postprocess collisions with solver.integrator
+ * bdf2 or newmark). */
+static int refuse_scene(const bs_scene *sc, bs_error *err) {
+  bs_step_features f;
+  memset(&f, 0, sizeof f);
+  f.postprocess_obstacle = f.friction_obstacle = -1;
+  for (int i = sc->n_obstacles - 1; i >= 0; i--)
+    if (sc->obstacles[i].collision == BS_COLLIDE_POSTPROCESS) f.postprocess_obstacle = i;
+  f.method = sc->solver.method;
+  f.linear = sc->solver.min.linear;
+  f.globalization = sc->solver.min.globalization;
+  f.amg_at_rest = sc->solver.amg_at_rest;
+  f.integrator = sc->solver.integrator;
+  return bs_step_refuse(&f, BS_STEP_CAN_ALL, sc->path, "serial", err);
+}
+
 /* The integrator over the current terms, with the hooks. */
 static int make_integrator(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
   bs_integrator_destroy(&s->integrator);
+  int rc = refuse_scene(sc, err);
+  if (rc) return rc;
   bs_integrator_opts io = sc->solver;
   io.guess_xn = sc->self_collision && sc->solver.method == BS_METHOD_OPTIMIZATION; /* bs_step.h */
   io.penalty_secant = sc->solver.method == BS_METHOD_OPTIMIZATION ? sc->solver.penalty_secant : BS_PENALTY_EXACT;

@@ -50,6 +50,7 @@ static void setup(fixture *f, int nx, bs_model model) {
   f->step.x_hat = f->x_hat;
   f->step.x_n = f->x_n;
   f->step.load = 1;
+  f->step.c = 1; /* backward Euler's inertia (bs_step_data.c) */
 }
 
 static void teardown(fixture *f) {
