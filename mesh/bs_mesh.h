@@ -80,6 +80,18 @@ typedef struct bs_mesh {
                           they split the body into pieces there, unless
                           merged (bs_mesh_read_opts.merge_coincident)    */
   int coincident_merged; /* 1: those nodes were merged into one vertex   */
+
+  /* Quadratic tets (bodies[].element tet10; bs_tet10_mesh, bs_tet10.h made
+   * them). NULL for a linear mesh. Else 10 * n_tets node indices per tet in
+   * VTK order (bs_tet10.h), nodes 0..3 the tet's vertices tets[4t..4t+3];
+   * the vertices 0..n_corners-1 are the corners (the vertices tets use) and
+   * n_corners..n_vertices-1 the midside nodes, which no entry of tets, faces,
+   * edges or v2t names; every group's vertices include the midside nodes of
+   * its elements' edges. bs_mesh_finalize, bs_mesh_refine and
+   * bs_mesh_permute / bs_mesh_reorder work on linear meshes only (BS_EINPUT
+   * for a quadratic one). */
+  int32_t *tets10;
+  int32_t n_corners;   /* a quadratic mesh's corner count (0 when linear) */
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */

@@ -200,6 +200,7 @@ static int permute_commit(bs_mesh *m, double **x, int32_t **tets, int32_t **mat,
 
 int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
   if (!m || !perm) return bs_error_set(err, BS_EINPUT, "permute: %s is NULL", m ? "perm" : "mesh");
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "permute: the mesh is quadratic (tet10): renumber its linear mesh");
   const int32_t nv = m->n_vertices, nt = m->n_tets;
   int rc = BS_OK;
   int32_t *iperm = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: inverse permutation", err);
@@ -371,6 +372,7 @@ static int order_rcm(const bs_mesh *m, const int32_t *ptr, const int32_t *adj, i
 
 int bs_mesh_reorder(bs_mesh *m, bs_order order, int32_t *perm, bs_error *err) {
   if (!m) return bs_error_set(err, BS_EINPUT, "reorder: mesh is NULL");
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "reorder: the mesh is quadratic (tet10): reorder its linear mesh");
   if (order != BS_ORDER_NONE && order != BS_ORDER_METIS && order != BS_ORDER_RCM)
     return bs_error_set(err, BS_EINPUT, "reorder: unknown order %d (expected none, metis or rcm)", (int)order);
   const int32_t n = m->n_vertices;

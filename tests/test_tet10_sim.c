@@ -1,0 +1,285 @@
+/* test_tet10_sim.c — quadratic tetrahedra (bodies[].element tet10) through
+ * the whole pipeline: the quadratic mesh and its groups, the fem over tet10
+ * (mass, load, gradient and Hessian against differences), the cantilever of
+ * data/scenes/beam_sag.json against beam theory and against tet4, a patch
+ * test, the VTU output, and the inputs refused by name. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bs_fem.h"
+#include "bs_mesh.h"
+#include "bs_qoi.h"
+#include "bs_scene.h"
+#include "bs_sim.h"
+#include "bs_tet10.h"
+#include "bs_terms.h"
+#include "sim_util.h"
+
+#define BEAM BS_SOURCE_DIR "/data/scenes/beam_sag.json"
+
+/* ---- the quadratic mesh ---- */
+
+Test(tet10_mesh, box_nodes_and_groups) {
+  bs_mesh *m = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  const double lo[3] = {0, 0, 0}, hi[3] = {1, 0.1, 0.1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 20, 2, 2, &m, &err), 0, "%s", err.msg);
+  const int32_t nc = m->n_vertices;
+  cr_assert_eq(bs_tet10_mesh(m, &err), 0, "%s", err.msg);
+  cr_expect_eq(m->n_corners, nc);
+  /* a 20x2x2 Kuhn box: the quadratic nodes are the vertices of the 40x4x4 grid plus the face diagonals' and
+     cell diagonals' midpoints; count them through the edges instead: n_vertices = corners + unique edges */
+  cr_expect_gt(m->n_vertices, nc);
+  for (int32_t t = 0; t < m->n_tets; t++)
+    for (int k = 0; k < 6; k++) {
+      const int32_t a = m->tets10[10 * t + bs_tet10_edges[k][0]], b = m->tets10[10 * t + bs_tet10_edges[k][1]];
+      const int32_t n = m->tets10[10 * t + 4 + k];
+      cr_assert(n >= nc && n < m->n_vertices);
+      cr_assert_eq(bs_tet10_edge_node(m, a, b), n);
+      for (int i = 0; i < 3; i++) cr_assert_eq(m->x[3 * n + i], 0.5 * (m->x[3 * a + i] + m->x[3 * b + i]));
+    }
+  /* the face group xmin: its 3x3 vertices and the 5x5 - 9 = 16 midside nodes of its triangles */
+  const bs_group *g = bs_mesh_group(m, "xmin");
+  cr_assert(g);
+  cr_expect_eq(g->n_vertices, 25, "xmin holds %d nodes", g->n_vertices);
+  for (int32_t k = 0; k < g->n_vertices; k++) {
+    cr_expect_eq(m->x[3 * g->vertices[k]], 0.0, "node %d of xmin is off the face", g->vertices[k]);
+    if (k) cr_expect_gt(g->vertices[k], g->vertices[k - 1], "xmin not sorted");
+  }
+  /* quadratic meshes are refused by the linear-mesh operations, by name */
+  bs_mesh *f = NULL;
+  cr_expect_eq(bs_mesh_refine(m, &f, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "quadratic"), "%s", err.msg);
+  cr_expect_eq(bs_tet10_mesh(m, &err), BS_EINPUT);
+  bs_mesh *c = NULL;
+  cr_assert_eq(bs_mesh_copy(m, &c, &err), 0, "%s", err.msg);
+  cr_expect_eq(memcmp(c->tets10, m->tets10, sizeof(int32_t) * 10 * (size_t)m->n_tets), 0);
+  bs_mesh_destroy(&c);
+  bs_mesh_destroy(&m);
+}
+
+/* ---- the fem over tet10 ---- */
+
+typedef struct fem_fixture {
+  bs_mesh *mesh;
+  bs_fem *fem;
+  bs_material mat;
+} fem_fixture;
+
+static void fem_make(fem_fixture *f, int model) {
+  bs_error err;
+  bs_error_clear(&err);
+  const double lo[3] = {0, 0, 0}, hi[3] = {0.3, 0.2, 0.1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 2, 2, 1, &f->mesh, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_tet10_mesh(f->mesh, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_material_init(model, 1e6, 0.3, 1000, &f->mat, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_create(f->mesh, 1, &f->mat, NULL, &f->fem, &err), 0, "%s", err.msg);
+}
+
+static void fem_free(fem_fixture *f) {
+  bs_fem_destroy(&f->fem);
+  bs_mesh_destroy(&f->mesh);
+}
+
+Test(tet10_fem, mass_load_pattern) {
+  fem_fixture f;
+  fem_make(&f, BS_MODEL_FIXED_COROTATED);
+  const bs_fem *fem = f.fem;
+  const double V = 0.3 * 0.2 * 0.1, rho = 1000;
+  cr_expect_eq(fem->order, 2);
+  double M = 0, L = 0, vol = 0;
+  for (int32_t v = 0; v < fem->n_vertices; v++) {
+    cr_expect_gt(fem->mass[v], 0, "HRZ mass of node %d is %g", v, fem->mass[v]);
+    M += fem->mass[v];
+    L += fem->load[v];
+  }
+  for (int32_t t = 0; t < fem->n_tets; t++) vol += fem->volume[t];
+  cr_expect_float_eq(M, rho * V, 1e-12 * rho * V);
+  cr_expect_float_eq(L, rho * V, 1e-12 * rho * V);
+  cr_expect_float_eq(vol, V, 1e-12 * V);
+  cr_expect_float_eq(fem->total_mass, rho * V, 1e-12 * rho * V);
+  /* every node pair of a tet has its block; straight tets: the 4-point rule */
+  for (int32_t t = 0; t < fem->n_tets; t++) {
+    cr_expect_eq(fem->q_ptr[t + 1] - fem->q_ptr[t], 4);
+    for (int a = 0; a < 10; a++)
+      for (int b = 0; b < 10; b++)
+        cr_assert_eq(bs_bsr_slot(fem->pattern, f.mesh->tets10[10 * t + a], f.mesh->tets10[10 * t + b]),
+                     fem->slots[100 * t + 10 * a + b]);
+  }
+  fem_free(&f);
+}
+
+/* A smooth non-affine configuration of the rest nodes. */
+static void deform(const bs_mesh *m, double *x) {
+  for (int32_t v = 0; v < m->n_vertices; v++) {
+    const double *X = m->x + 3 * v;
+    x[3 * v] = X[0] + 0.05 * X[1] * X[1] + 0.02 * sin(7 * X[2]);
+    x[3 * v + 1] = X[1] - 0.1 * X[0] * X[2] + 0.01;
+    x[3 * v + 2] = 1.05 * X[2] + 0.03 * X[0] * X[1];
+  }
+}
+
+Test(tet10_fem, gradient_and_hessian_against_differences) {
+  fem_fixture f;
+  fem_make(&f, BS_MODEL_NEO_HOOKEAN);
+  const int32_t n = f.fem->n_vertices;
+  const size_t n3 = 3 * (size_t)n;
+  double *x = malloc(sizeof(double) * n3), *g = calloc(n3, sizeof(double)), *gp = calloc(n3, sizeof(double)),
+         *gm = calloc(n3, sizeof(double)), *d = malloc(sizeof(double) * n3), *Hd = malloc(sizeof(double) * n3);
+  deform(f.mesh, x);
+  const double E = bs_fem_elastic_gradient(f.fem, x, g);
+  cr_expect_float_eq(E, bs_fem_elastic_energy(f.fem, x), 1e-12 * fabs(E));
+  srand(7);
+  for (size_t i = 0; i < n3; i++) d[i] = (double)rand() / RAND_MAX - 0.5;
+  const double h = 1e-6;
+  for (size_t i = 0; i < n3; i++) x[i] += h * d[i];
+  const double Ep = bs_fem_elastic_gradient(f.fem, x, gp);
+  for (size_t i = 0; i < n3; i++) x[i] -= 2 * h * d[i];
+  const double Em = bs_fem_elastic_gradient(f.fem, x, gm);
+  for (size_t i = 0; i < n3; i++) x[i] += h * d[i];
+  double gd = 0;
+  for (size_t i = 0; i < n3; i++) gd += g[i] * d[i];
+  cr_expect_float_eq((Ep - Em) / (2 * h), gd, 1e-6 * fabs(gd) + 1e-9, "dE.d %g vs %g", (Ep - Em) / (2 * h), gd);
+  bs_bsr *H = NULL;
+  bs_error err;
+  cr_assert_eq(bs_fem_matrix(f.fem, &H, &err), 0, "%s", err.msg);
+  bs_fem_elastic_hessian(f.fem, x, BS_PSD_NONE, 1.0, H);
+  bs_bsr_mul(H, NULL, d, Hd);
+  double num = 0, den = 0;
+  for (size_t i = 0; i < n3; i++) {
+    const double fd = (gp[i] - gm[i]) / (2 * h);
+    num += (fd - Hd[i]) * (fd - Hd[i]);
+    den += Hd[i] * Hd[i];
+  }
+  cr_expect_lt(sqrt(num / den), 1e-6, "|H d - dg| / |H d| = %g", sqrt(num / den));
+  /* a rigid motion has no energy and no force */
+  for (int32_t v = 0; v < n; v++) {
+    const double *X = f.mesh->x + 3 * v;
+    x[3 * v] = 0.8 * X[0] - 0.6 * X[1] + 1;
+    x[3 * v + 1] = 0.6 * X[0] + 0.8 * X[1] - 2;
+    x[3 * v + 2] = X[2] + 0.5;
+  }
+  memset(g, 0, sizeof(double) * n3);
+  cr_expect_lt(fabs(bs_fem_elastic_gradient(f.fem, x, g)), 1e-12);
+  for (size_t i = 0; i < n3; i++) cr_expect_lt(fabs(g[i]), 1e-7, "rigid motion: g[%zu] = %g", i, g[i]);
+  double mn = 0;
+  cr_expect_eq(bs_fem_count_inverted(f.fem, x, &mn), 0);
+  cr_expect_float_eq(mn, 1.0, 1e-12);
+  bs_bsr_destroy(&H);
+  free(x), free(g), free(gp), free(gm), free(d), free(Hd);
+  fem_free(&f);
+}
+
+/* ---- the cantilever of beam_sag.json ---- */
+
+/* Tip deflection of the scene's cantilever by beam theory: Euler-Bernoulli
+ * q L^4 / (8 E I), and Timoshenko's shear part q L^2 / (2 k G A) with
+ * Cowper's k = 10 (1 + nu) / (12 + 11 nu) for a rectangle; q = rho |g| A. */
+static void beam_theory(const bs_scene *sc, double *eb, double *timo) {
+  const bs_scene_body *b = &sc->bodies[0];
+  const double L = b->box_size[0], h = b->box_size[1], w = b->box_size[2];
+  const double E = b->materials[0].youngs, nu = b->materials[0].poisson, rho = b->materials[0].density;
+  const double A = h * w, I = w * h * h * h / 12, q = rho * fabs(sc->gravity[1]) * A;
+  const double G = E / (2 * (1 + nu)), k = 10 * (1 + nu) / (12 + 11 * nu);
+  *eb = q * L * L * L * L / (8 * E * I);
+  *timo = *eb + q * L * L / (2 * k * G * A);
+}
+
+/* The static tip deflection (-tip_y, the scene's first QoI) with the overrides. */
+static double beam_tip(const char *sets, bs_scene **keep_scene, int32_t *n_nodes) {
+  sim_rec rec;
+  bs_run_totals T;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_run_scene(BEAM, sets, NULL, &rec, &T, 1, &sc);
+  cr_assert_eq(rec.failed, 0, "%s: %s", sets, rec.reason);
+  bs_qoi *q = NULL;
+  bs_error err;
+  double v[4];
+  cr_assert_eq(bs_qoi_create(s, &q, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_qoi_eval(q, s, v, &err), 0, "%s", err.msg);
+  cr_expect_float_eq(v[1], 98.0, 1e-6, "clamp reaction %g, the beam's weight 98 N", v[1]);
+  if (n_nodes) *n_nodes = s->mesh->n_vertices;
+  bs_qoi_destroy(&q);
+  bs_sim_destroy(&s);
+  if (keep_scene) *keep_scene = sc;
+  else bs_scene_destroy(&sc);
+  return -v[0];
+}
+
+Test(tet10_sim, beam_sag_matches_beam_theory_and_beats_tet4) {
+  bs_scene *sc = NULL;
+  int32_t n10 = 0;
+  const double d10 = beam_tip("bodies.0.element=tet10 output.vtu_every=0", &sc, &n10);
+  const double d4 = beam_tip("output.vtu_every=0", NULL, NULL);
+  double eb, timo;
+  beam_theory(sc, &eb, &timo);
+  bs_scene_destroy(&sc);
+  const double e10 = (d10 - eb) / eb, e4 = (d4 - eb) / eb;
+  cr_log_info("beam_sag tip: tet10 %.6g m (%d nodes), tet4 %.6g m; Euler-Bernoulli %.6g, Timoshenko %.6g: "
+              "tet10 %+.2f%% / %+.2f%%, tet4 %+.1f%% / %+.1f%%",
+              d10, n10, d4, eb, timo, 100 * e10, 100 * (d10 - timo) / timo, 100 * e4, 100 * (d4 - timo) / timo);
+  cr_expect_lt(fabs(e10), 0.01, "tet10 tip %g vs Euler-Bernoulli %g: %+.2f%%", d10, eb, 100 * e10);
+  cr_expect_lt(fabs(d10 - timo) / timo, 0.02, "tet10 tip %g vs Timoshenko %g", d10, timo);
+  cr_expect_gt(fabs(e4), 20 * fabs(e10), "tet4 error %g not far above tet10's %g", e4, e10);
+}
+
+/* ---- patch test ---- */
+
+static const char *const patch_scene =
+    "{\"time\": {\"fps\": 1, \"frames\": 1, \"steps_per_frame\": 1},\n"
+    " \"solver\": {\"method\": \"newton\", \"linear\": \"cholmod\", \"tolerance\": 1e-12, \"mode\": \"static\"},\n"
+    " \"gravity\": [0, 0, 0],\n"
+    " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [3, 2, 2], \"size\": [0.3, 0.2, 0.2]}, \"element\": \"tet10\",\n"
+    "   \"rotate\": [0, 0, 0],\n"
+    "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e6, \"poisson\": 0, \"density\": 1000},\n"
+    "   \"scripted\": [{\"group\": \"xmin\", \"fixed\": true},\n"
+    "                {\"group\": \"xmax\", \"keyframes\": [{\"t\": 0, \"offset\": [0.03, 0, 0]}]}]}]}\n";
+
+Test(tet10_sim, patch_test_affine_stretch) {
+  bs_scene *sc = NULL;
+  bs_sim *s = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  cr_assert_eq(bs_scene_parse(patch_scene, "patch", 0, NULL, &sc, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_frame_stats fs;
+  cr_assert_eq(bs_sim_statics(s, &fs, &err), 0, "%s", err.msg);
+  /* nu = 0: the uniaxial stretch x -> (1 + 0.1) x is the exact solution (no lateral traction) */
+  double worst = 0;
+  int32_t at = -1;
+  for (int32_t v = 0; v < s->mesh->n_vertices; v++) {
+    const double *X = s->x0 + 3 * v, *x = s->x + 3 * v;
+    const double d = fabs(x[0] - 1.1 * X[0]) + fabs(x[1] - X[1]) + fabs(x[2] - X[2]);
+    if (d > worst) worst = d, at = v;
+  }
+  cr_expect_lt(worst, 1e-9, "node %d (of %d, %d corners) is %g off the affine field", at, s->mesh->n_vertices,
+               s->mesh->n_corners, worst);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+/* ---- refused input ---- */
+
+static void expect_refused(const char *sets, const char *needle) {
+  char buf[1024];
+  const char *v[16];
+  int n = sim_split_sets(sets, buf, sizeof buf, v, 16);
+  bs_error err;
+  int st = sim_load_error(BEAM, v, n, &err);
+  cr_expect_neq(st, 0, "[%s] was accepted", sets);
+  cr_expect(strstr(err.msg, needle), "[%s]: '%s' does not say '%s'", sets, err.msg, needle);
+}
+
+Test(tet10_sim, refused_by_name) {
+  expect_refused("bodies.0.element=tet10 self_collision.stiffness=1e5",
+                 "self_collision is not supported with bodies[].element tet10");
+  expect_refused("bodies.0.element=tet10 self_collision.model=barrier",
+                 "self_collision is not supported with bodies[].element tet10");
+  expect_refused("bodies.0.element=tet10 solver.backend=petsc", "tet10 is not supported with solver.backend petsc");
+  expect_refused("bodies.0.element=tet20", "bodies.0.element");
+  expect_refused("bodies.0.element=tet20", "tet20");
+}
