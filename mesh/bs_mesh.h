@@ -369,7 +369,9 @@ typedef struct bs_vtu_fields {
   int compress;                /* 1: zlib (see above)                     */
 } bs_vtu_fields;
 
-/* VTU (XML UnstructuredGrid of VTK_TETRA cells): points at f->x; point data
+/* VTU (XML UnstructuredGrid of VTK_TETRA cells, or of VTK_QUADRATIC_TETRA
+ * cells (type 24, the 10 nodes of m->tets10) for a quadratic mesh, whose
+ * built-in detF is that of the corner tet): points at f->x; point data
  * "displacement" (x - rest: always written, it gives back the rest shape),
  * "velocity" (when given), then f->point_data; cell data "material" (Int32,
  * the mesh's material tags), "detF" (given, or the signed current over rest

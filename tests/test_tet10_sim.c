@@ -3,6 +3,7 @@
  * (mass, load, gradient and Hessian against differences), the cantilever of
  * data/scenes/beam_sag.json against beam theory and against tet4, a patch
  * test, the VTU output, and the inputs refused by name. */
+#define _GNU_SOURCE /* mkdtemp */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -282,4 +283,123 @@ Test(tet10_sim, refused_by_name) {
   expect_refused("bodies.0.element=tet10 solver.backend=petsc", "tet10 is not supported with solver.backend petsc");
   expect_refused("bodies.0.element=tet20", "bodies.0.element");
   expect_refused("bodies.0.element=tet20", "tet20");
+}
+
+/* ---- output ---- */
+
+/* The raw appended array `name` of a VTU file (uncompressed): its bytes into
+ * *data (malloc'ed), its byte count returned; -1 when absent. */
+static long vtu_array(const char *text, size_t len, const char *name, unsigned char **data) {
+  char key[128];
+  snprintf(key, sizeof key, "Name=\"%s\"", name);
+  const char *a = strstr(text, key), *app = strstr(text, "<AppendedData");
+  if (!a || !app) return -1;
+  const char *o = strstr(a, "offset=\"");
+  const char *u = strchr(app, '_');
+  if (!o || !u) return -1;
+  const size_t off = strtoul(o + 8, NULL, 10), base = (size_t)(u + 1 - text);
+  uint64_t n;
+  if (base + off + 8 > len) return -1;
+  memcpy(&n, text + base + off, 8);
+  if (base + off + 8 + n > len) return -1;
+  *data = malloc(n ? n : 1);
+  memcpy(*data, text + base + off + 8, n);
+  return (long)n;
+}
+
+Test(tet10_sim, vtu_quadratic_cells_and_stress) {
+  char dir[] = "/tmp/bs_test_tet10_XXXXXX";
+  cr_assert_not_null(mkdtemp(dir));
+  sim_rec rec;
+  bs_run_totals T;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_run_scene(BEAM, "bodies.0.element=tet10 output.vtu_every=1", dir, &rec, &T, 1, &sc);
+  char path[1200];
+  snprintf(path, sizeof path, "%s/frame_00001.vtu", dir);
+  FILE *fp = fopen(path, "rb");
+  cr_assert(fp, "no %s", path);
+  fseek(fp, 0, SEEK_END);
+  const long len = ftell(fp);
+  fseek(fp, 0, SEEK_SET);
+  char *text = malloc((size_t)len + 1);
+  cr_assert_eq(fread(text, 1, (size_t)len, fp), (size_t)len);
+  text[len] = 0;
+  fclose(fp);
+  const bs_mesh *m = s->mesh;
+  char np[64];
+  snprintf(np, sizeof np, "NumberOfPoints=\"%d\" NumberOfCells=\"%d\"", m->n_vertices, m->n_tets);
+  cr_expect(strstr(text, np), "the VTU lacks %s", np);
+  unsigned char *types = NULL, *conn = NULL, *vm = NULL;
+  cr_assert_eq(vtu_array(text, (size_t)len, "types", &types), m->n_tets);
+  for (int32_t t = 0; t < m->n_tets; t++) cr_assert_eq(types[t], 24, "cell %d has type %d", t, types[t]);
+  cr_assert_eq(vtu_array(text, (size_t)len, "connectivity", &conn), 8L * 10 * m->n_tets);
+  for (int64_t i = 0; i < 10 * (int64_t)m->n_tets; i++) {
+    int64_t c;
+    memcpy(&c, conn + 8 * i, 8);
+    cr_assert_eq(c, m->tets10[i]);
+  }
+  /* von Mises: the bending stress at the root, M c / I = (q L^2 / 2)(h / 2) / I; a root cell's average lies below it */
+  cr_assert_eq(vtu_array(text, (size_t)len, "von_mises", &vm), 8L * m->n_tets);
+  const double q = 1000 * 9.8 * 0.01, I = 0.1 * 1e-3 / 12, smax = q * 0.5 * 0.05 / I;
+  double top = 0;
+  for (int32_t t = 0; t < m->n_tets; t++) {
+    double v;
+    memcpy(&v, vm + 8 * t, 8);
+    cr_assert(isfinite(v) && v >= 0, "cell %d: von Mises %g", t, v);
+    if (v > top) top = v;
+  }
+  cr_log_info("largest cell von Mises %g Pa; beam theory's root bending stress %g Pa", top, smax);
+  cr_expect(top > 0.4 * smax && top < 1.3 * smax, "largest von Mises %g against %g", top, smax);
+  free(types), free(conn), free(vm), free(text);
+  char cmd[256];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+/* ---- dynamics and obstacles ---- */
+
+static const char *const drop_scene =
+    "{\"time\": {\"fps\": 24, \"frames\": 12, \"steps_per_frame\": 1},\n"
+    " \"solver\": {\"method\": \"optimization\", \"linear\": \"cg\", \"tolerance\": 1e-4},\n"
+    " \"gravity\": [0, -9.8, 0],\n"
+    " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [0.2, 0.2, 0.2]}, \"element\": \"tet10\",\n"
+    "   \"translate\": [0, 0.05, 0], \"velocity\": [0, -1, 0],\n"
+    "   \"material\": {\"model\": \"stable_neo_hookean\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}],\n"
+    " \"obstacles\": [{\"shape\": \"plane\", \"normal\": [0, 1, 0], \"offset\": 0, \"collision\": \"%s\"%s}]}\n";
+
+/* A tet10 cube thrown on the ground: every node (corners and midside nodes)
+ * stays above it (constraint: to rounding; penalty: within a small depth). */
+static void drop(const char *collision, const char *extra, double depth) {
+  char text[2048];
+  snprintf(text, sizeof text, drop_scene, collision, extra);
+  bs_scene *sc = NULL;
+  bs_sim *s = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  cr_assert_eq(bs_scene_parse(text, "drop", 0, NULL, &sc, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  sim_rec rec;
+  memset(&rec, 0, sizeof rec);
+  rec.first_clean = -1;
+  bs_run_totals T;
+  cr_assert_eq(bs_sim_run(s, sim_rec_frame, &rec, &T, &err), 0, "%s", err.msg);
+  cr_expect_eq(rec.nonfinite, 0, "%s", rec.nonfinite_msg);
+  cr_expect_eq(rec.max_inverted, 0);
+  double lo = INFINITY, vy = 0, M = 0;
+  for (int32_t v = 0; v < s->mesh->n_vertices; v++) {
+    lo = fmin(lo, s->x[3 * v + 1]);
+    vy += s->fem->mass[v] * s->v[3 * v + 1], M += s->fem->mass[v];
+  }
+  cr_log_info("tet10 drop (%s): lowest node y = %g, mean vy %g m/s after %d frames", collision, lo, vy / M, rec.frames);
+  cr_expect_geq(lo, -depth, "%s: a node is %g below the ground", collision, -lo);
+  cr_expect_lt(fabs(vy / M), 0.5, "%s: the cube did not stop on the ground (vy %g)", collision, vy / M);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
+Test(tet10_sim, dynamic_drop_on_obstacles) {
+  drop("constraint", "", 1e-9);
+  drop("penalty", ", \"stiffness\": 1e7", 5e-3);
 }
