@@ -263,6 +263,10 @@ const bs_group *bs_mesh_group(const bs_mesh *m, const char *name);
 /* The group with this (dim, tag), or NULL. */
 const bs_group *bs_mesh_group_by_tag(const bs_mesh *m, int dim, int tag);
 
+/* The midside node of the edge (a, b) of the quadratic mesh m (a, b
+ * corners), or -1 when m is linear or no tet has that edge. */
+int32_t bs_mesh_edge_node(const bs_mesh *m, int32_t a, int32_t b);
+
 /* Signed volume of tet t at positions x (3 * n_vertices). */
 double bs_mesh_tet_volume(const bs_mesh *m, const double *x, int32_t t);
 
@@ -428,7 +432,10 @@ int bs_pvtu_write(const char *path, int n_point, const bs_pvtu_array *point, int
                   int n_pieces, const char *const *pieces, bs_error *err);
 
 /* .msh (Gmsh format 4.1) through the Gmsh API, with the groups, so results
- * open in Gmsh; x may be NULL (rest). */
+ * open in Gmsh; x may be NULL (rest). A quadratic mesh (m->tets10) is
+ * written with Gmsh's second-order elements: 10-node tets (type 11, Gmsh's
+ * node order: VTK's with nodes 8 and 9 swapped), its groups' 6-node
+ * triangles (type 9) and 3-node lines (type 8). */
 int bs_mesh_write_msh(const bs_mesh *m, const double *x, const char *path, bs_error *err);
 
 #ifdef __cplusplus

@@ -72,6 +72,10 @@ enum { GMSH_LINE = 1, GMSH_TRIANGLE = 2, GMSH_TET = 4, GMSH_POINT = 15 };
 
 /* First-order simplex of dimension d: point, line, triangle, tet. */
 static const int simplex_type[4] = {GMSH_POINT, GMSH_LINE, GMSH_TRIANGLE, GMSH_TET};
+/* Second-order simplex of dimension d (Gmsh's 1-node point, 3-node line,
+ * 6-node triangle, 10-node tet) and its node count. */
+static const int simplex2_type[4] = {GMSH_POINT, 8, 9, 11};
+static const int simplex2_nodes[4] = {1, 3, 6, 10};
 
 /* ---- the Gmsh session --------------------------------------------------- */
 
@@ -1002,6 +1006,7 @@ static void free_classes(tet_classes *c) {
 static int group_elements(const bs_mesh *m, const bs_group *gr, size_t *etag, size_t *enodes, size_t *next_tag,
                           const char *path, bs_error *err) {
   const size_t nn = (size_t)gr->dim + 1, n = (size_t)gr->n_elems;
+  const size_t per = m->tets10 ? (size_t)simplex2_nodes[gr->dim] : nn;
   for (size_t e = 0; e < n; e++) {
     etag[e] = (*next_tag)++;
     for (size_t k = 0; k < nn; k++) {
@@ -1009,10 +1014,37 @@ static int group_elements(const bs_mesh *m, const bs_group *gr, size_t *etag, si
       if (v < 0 || v >= m->n_vertices)
         return bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d) refers to vertex %d of %d", path,
                             gr->name, gr->dim, gr->tag, v, m->n_vertices);
-      enodes[nn * e + k] = (size_t)v + 1;
+      enodes[per * e + k] = (size_t)v + 1;
+    }
+    /* a quadratic mesh: the midside nodes, Gmsh's order (0,1), (1,2), (2,0) */
+    for (size_t k = 0; k + nn < per; k++) {
+      const int32_t a = gr->elems[nn * e + k], b = gr->elems[nn * e + (k + 1) % nn];
+      const int32_t c = bs_mesh_edge_node(m, a, b);
+      if (c < 0)
+        return bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d): no tet has the edge (%d, %d)", path,
+                            gr->name, gr->dim, gr->tag, a, b);
+      enodes[per * e + nn + k] = (size_t)c + 1;
     }
   }
   return 0;
+}
+
+/* The tets of class j as element tags (from *next_tag on) and 1-based node
+ * tags (a quadratic mesh: 10 per tet in Gmsh's order, VTK's with nodes 8 and
+ * 9 swapped); their count. */
+static size_t class_elements(const bs_mesh *m, const tet_classes *c, int32_t j, size_t *etag, size_t *enodes,
+                             size_t *next_tag) {
+  size_t n = 0;
+  for (size_t t = 0; t < (size_t)m->n_tets; t++) {
+    if (c->cls[t] != j) continue;
+    etag[n] = (*next_tag)++;
+    if (m->tets10)
+      for (int k = 0; k < 10; k++) enodes[10 * n + k] = (size_t)m->tets10[10 * t + (k == 8 ? 9 : k == 9 ? 8 : k)] + 1;
+    else
+      for (int k = 0; k < 4; k++) enodes[4 * n + k] = (size_t)m->tets[4 * t + k] + 1;
+    n++;
+  }
+  return n;
 }
 
 static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, const char *path, bs_error *err) {
@@ -1023,7 +1055,8 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
     if (m->groups[g].dim < 3 && (size_t)m->groups[g].n_elems > max_elems) max_elems = (size_t)m->groups[g].n_elems;
   size_t *ntag = malloc((nv + 1) * sizeof *ntag);
   size_t *etag = malloc((max_elems + 1) * sizeof *etag);
-  size_t *enodes = malloc((4 * max_elems + 1) * sizeof *enodes);
+  const int q = m->tets10 != NULL; /* quadratic: Gmsh's second-order elements */
+  size_t *enodes = malloc(((q ? 10 : 4) * max_elems + 1) * sizeof *enodes);
   int *ents = malloc(((size_t)c->n_cls + 1) * sizeof *ents);
   if (!ntag || !etag || !enodes || !ents) {
     rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the Gmsh model", path);
@@ -1042,14 +1075,8 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
   /* Tets, class by class; element tags run over all entities. */
   size_t next_tag = 1;
   for (int32_t j = 0; j < c->n_cls; j++) {
-    size_t n = 0;
-    for (size_t t = 0; t < nt; t++) {
-      if (c->cls[t] != j) continue;
-      etag[n] = next_tag++;
-      for (int k = 0; k < 4; k++) enodes[4 * n + k] = (size_t)m->tets[4 * t + k] + 1;
-      n++;
-    }
-    gmshModelMeshAddElementsByType(j + 1, GMSH_TET, etag, n, enodes, 4 * n, &ierr);
+    const size_t n = class_elements(m, c, j, etag, enodes, &next_tag);
+    gmshModelMeshAddElementsByType(j + 1, q ? simplex2_type[3] : GMSH_TET, etag, n, enodes, (q ? 10 : 4) * n, &ierr);
     if (ierr) {
       rc = gmsh_fail(err, BS_EGMSH, path, "take the tetrahedra");
       goto done;
@@ -1069,10 +1096,11 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
       gmshModelAddPhysicalGroup(3, ents, n, gr->tag, &ierr);
     } else if (pdim >= 0 && pdim < 3) {
       int ent = next_ent[pdim]++;
-      size_t nn = (size_t)pdim + 1, n = (size_t)gr->n_elems;
+      size_t nn = q ? (size_t)simplex2_nodes[pdim] : (size_t)pdim + 1, n = (size_t)gr->n_elems;
       if ((rc = group_elements(m, gr, etag, enodes, &next_tag, path, err))) goto done;
       gmshModelAddDiscreteEntity(pdim, ent, NULL, 0, &ierr);
-      if (!ierr) gmshModelMeshAddElementsByType(ent, simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
+      if (!ierr)
+        gmshModelMeshAddElementsByType(ent, q ? simplex2_type[pdim] : simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
       if (!ierr) gmshModelAddPhysicalGroup(pdim, &ent, 1, gr->tag, &ierr);
     } else {
       rc = bs_error_set(err, BS_EINPUT, "%s: group \"%s\" has dimension %d", path, gr->name, pdim);

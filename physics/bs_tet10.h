@@ -257,10 +257,6 @@ int bs_tet10_from_tet4(int32_t n_vertices, const double *vertices, int32_t n_tet
  * only fit to be destroyed. */
 int bs_tet10_mesh(bs_mesh *m, bs_error *err);
 
-/* The midside node of the edge (a, b) of the quadratic mesh m (a, b
- * corners), or -1 when m is linear or no tet has that edge. */
-int32_t bs_tet10_edge_node(const bs_mesh *m, int32_t a, int32_t b);
-
 #ifdef __cplusplus
 }
 #endif

@@ -6,29 +6,6 @@
 
 #include "bs_tet10.h"
 
-/* The local edge (0..5) joining local vertices i and j, or -1. */
-static int local_edge(int i, int j) {
-  for (int k = 0; k < 6; k++)
-    if ((bs_tet10_edges[k][0] == i && bs_tet10_edges[k][1] == j) ||
-        (bs_tet10_edges[k][0] == j && bs_tet10_edges[k][1] == i))
-      return k;
-  return -1;
-}
-
-int32_t bs_tet10_edge_node(const bs_mesh *m, int32_t a, int32_t b) {
-  if (!m->tets10 || a < 0 || b < 0 || a >= m->n_corners || b >= m->n_corners || a == b) return -1;
-  for (int32_t p = m->v2t_ptr[a]; p < m->v2t_ptr[a + 1]; p++) {
-    const int32_t *t = m->tets10 + 10 * (size_t)m->v2t[p];
-    int ia = -1, ib = -1;
-    for (int c = 0; c < 4; c++) {
-      if (t[c] == a) ia = c;
-      if (t[c] == b) ib = c;
-    }
-    if (ia >= 0 && ib >= 0) return t[4 + local_edge(ia, ib)];
-  }
-  return -1;
-}
-
 /* Marks the midside nodes of group g's element edges in mark (n_vertices). */
 static void mark_group_edges(const bs_mesh *m, const bs_group *g, unsigned char *mark) {
   if (g->dim == 3) {
@@ -41,7 +18,7 @@ static void mark_group_edges(const bs_mesh *m, const bs_group *g, unsigned char 
     const int32_t *v = g->elems + (size_t)e * per;
     for (int i = 0; i < per; i++)
       for (int j = i + 1; j < per; j++) {
-        const int32_t n = bs_tet10_edge_node(m, v[i], v[j]);
+        const int32_t n = bs_mesh_edge_node(m, v[i], v[j]);
         if (n >= 0) mark[n] = 1;
       }
   }

@@ -40,7 +40,7 @@ Test(tet10_mesh, box_nodes_and_groups) {
       const int32_t a = m->tets10[10 * t + bs_tet10_edges[k][0]], b = m->tets10[10 * t + bs_tet10_edges[k][1]];
       const int32_t n = m->tets10[10 * t + 4 + k];
       cr_assert(n >= nc && n < m->n_vertices);
-      cr_assert_eq(bs_tet10_edge_node(m, a, b), n);
+      cr_assert_eq(bs_mesh_edge_node(m, a, b), n);
       for (int i = 0; i < 3; i++) cr_assert_eq(m->x[3 * n + i], 0.5 * (m->x[3 * a + i] + m->x[3 * b + i]));
     }
   /* the face group xmin: its 3x3 vertices and the 5x5 - 9 = 16 midside nodes of its triangles */
@@ -402,4 +402,43 @@ static void drop(const char *collision, const char *extra, double depth) {
 Test(tet10_sim, dynamic_drop_on_obstacles) {
   drop("constraint", "", 1e-9);
   drop("penalty", ", \"stiffness\": 1e7", 5e-3);
+}
+
+/* ---- bigstep mesh --order 2 ---- */
+
+Test(tet10_cli, mesh_convert_order_2_passes_gmsh_check) {
+  char dir[] = "/tmp/bs_test_tet10_msh_XXXXXX", cmd[2048], path[1024];
+  cr_assert_not_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/box2.msh", dir);
+  snprintf(cmd, sizeof cmd, "'%s' mesh convert box:4x2x2:1x0.5x0.5 '%s' --order 2 > '%s/out.txt' 2>&1", BS_BIGSTEP_EXE,
+           path, dir);
+  cr_assert_eq(system(cmd), 0, "%s failed", cmd);
+  FILE *fp = fopen(path, "rb");
+  cr_assert(fp);
+  static char text[1 << 20];
+  const size_t n = fread(text, 1, sizeof text - 1, fp);
+  text[n] = 0;
+  fclose(fp);
+  /* 4x2x2 Kuhn cells: 96 tets on the volume entity, 10 nodes each (Gmsh type 11); 225 nodes; 6-node triangles */
+  cr_expect(strstr(text, "\n3 1 11 96\n"), "no block of 96 10-node tets");
+  cr_expect(strstr(text, "\n7 225 1 225\n"), "not 225 nodes");
+  cr_expect(strstr(text, " 9 8\n") || strstr(text, " 9 16\n"), "no 6-node triangle block");
+  cr_expect_eq(system("'" BS_BIGSTEP_EXE "' mesh convert box:2 /dev/null/x.msh --order 3 > /dev/null 2>&1") == 0, 0,
+               "--order 3 accepted");
+  if (system("command -v gmsh > /dev/null 2>&1") == 0) {
+    snprintf(cmd, sizeof cmd, "gmsh - '%s' -check > '%s/check.txt' 2>&1", path, dir);
+    cr_expect_eq(system(cmd), 0, "gmsh -check failed");
+    snprintf(path, sizeof path, "%s/check.txt", dir);
+    fp = fopen(path, "rb");
+    cr_assert(fp);
+    const size_t k = fread(text, 1, sizeof text - 1, fp);
+    text[k] = 0;
+    fclose(fp);
+    cr_expect(strstr(text, "Done checking mesh coherence"), "gmsh -check: %s", text);
+    cr_expect(!strstr(text, "Error") && !strstr(text, "Warning"), "gmsh -check: %s", text);
+  } else {
+    cr_log_warn("gmsh not on PATH: the file's check by gmsh -check skipped");
+  }
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
 }
