@@ -92,6 +92,17 @@ typedef struct bs_mesh {
    * for a quadratic one). */
   int32_t *tets10;
   int32_t n_corners;   /* a quadratic mesh's corner count (0 when linear) */
+
+  /* bs_mesh_read of a .msh of 10-node tets (Gmsh type 11): the mesh is the
+   * linear mesh of their corners, and these are the file's midside nodes,
+   * one per tet edge (repeated for shared edges): midside_edge[2i],
+   * midside_edge[2i+1] the edge's corners, midside_x[3i..3i+2] the node's
+   * position. bs_tet10_mesh puts them in place of the edge midpoints (then
+   * frees them); bs_mesh_permute renumbers them; a refinement drops them
+   * (its quadratic mesh has straight edges). NULL / 0 otherwise. */
+  int32_t n_midside;
+  int32_t *midside_edge;
+  double *midside_x;
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */
@@ -165,8 +176,10 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * shim) meshed into a volume: at opts->size > 0 by CGAL's Mesh_3 (sharp edges
  * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
  * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
- * 4-node tets are simulated: other 3-D elements are an error naming their
- * type and count. opts may be NULL (defaults).
+ * 4-node tets, or 10-node tets alone (read as their corners' linear mesh and
+ * the midside list above; groups' 6-node triangles and 3-node lines as their
+ * corners), are read: other 3-D elements are an error naming their type and
+ * count. opts may be NULL (defaults).
  *
  * A .msh file is checked before Gmsh parses it (mesh/msh_check.c): its
  * format (2.x or 4.1, ASCII or binary, little-endian, 8-byte doubles), its

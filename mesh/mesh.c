@@ -554,6 +554,8 @@ void bs_mesh_destroy(bs_mesh **mp) {
   free(m->x);
   free(m->tets);
   free(m->tets10);
+  free(m->midside_edge);
+  free(m->midside_x);
   bs__groups_free(m->groups, m->n_groups);
   free(m);
   *mp = NULL;
@@ -665,6 +667,8 @@ int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err) {
   c->groups = NULL;
   c->n_groups = 0;
   c->tets10 = NULL;
+  c->midside_edge = NULL;
+  c->midside_x = NULL;
   size_t nv = (size_t)m->n_vertices, nt = (size_t)m->n_tets, nf = (size_t)m->n_faces;
   int bad = 0;
 #define COPY(field, n, what)                                                                                           \
@@ -675,6 +679,8 @@ int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err) {
   COPY(x, 3 * nv, "mesh vertices")
   COPY(tets, 4 * nt, "mesh tets")
   COPY(tets10, 10 * nt, "quadratic tets")
+  COPY(midside_edge, 2 * (size_t)m->n_midside, "midside edges")
+  COPY(midside_x, 3 * (size_t)m->n_midside, "midside nodes")
   COPY(material, nt, "material ids")
   COPY(faces, 3 * nf, "boundary faces")
   COPY(face_tet, nf, "boundary face tets")

@@ -217,6 +217,7 @@ int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
   if (!rc) rc = permute_tets(m, iperm, count, tip, tets, mat, err);
   for (int g = 0; g < m->n_groups && !rc; g++) rc = permute_group(&m->groups[g], iperm, nv, tip, nt, &gel[g], &gvs[g], err);
   if (!rc) rc = permute_commit(m, &x, &tets, &mat, gel, gvs, err); /* the mesh changes only here */
+  for (int32_t i = 0; !rc && i < 2 * m->n_midside; i++) m->midside_edge[i] = iperm[m->midside_edge[i]];
   for (int g = 0; g < m->n_groups; g++) {
     if (gel) free(gel[g]);
     if (gvs) free(gvs[g]);

@@ -252,7 +252,9 @@ int bs_tet10_from_tet4(int32_t n_vertices, const double *vertices, int32_t n_tet
  * edges of each of its tets; a 2-D group: the 3 edges of each triangle; a
  * 1-D group: each segment; a 0-D group: none), so that a face group holds
  * all 6 nodes of each of its quadratic triangles. faces, edges and v2t keep
- * naming corners only. Errors: BS_EINPUT (NULL, quadratic already, not
+ * naming corners only. A mesh read from a .msh of 10-node tets carries the
+ * file's midside nodes (bs_mesh.midside_x): they take the place of the edge
+ * midpoints (curved edges), and the list is freed. Errors: BS_EINPUT (NULL, quadratic already, not
  * finalized), those of bs_tet10_from_tet4, BS_ENOMEM; after an error m is
  * only fit to be destroyed. */
 int bs_tet10_mesh(bs_mesh *m, bs_error *err);

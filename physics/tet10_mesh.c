@@ -71,5 +71,13 @@ int bs_tet10_mesh(bs_mesh *m, bs_error *err) {
   m->tets10 = t10;
   m->n_corners = m->n_vertices;
   m->n_vertices = nn;
+  /* a .msh of 10-node tets: the file's midside nodes (bs_mesh.midside_x) */
+  for (int32_t i = 0; i < m->n_midside; i++) {
+    const int32_t n = bs_mesh_edge_node(m, m->midside_edge[2 * i], m->midside_edge[2 * i + 1]);
+    if (n >= 0) memcpy(m->x + 3 * (size_t)n, m->midside_x + 3 * (size_t)i, 3 * sizeof(double));
+  }
+  free(m->midside_edge);
+  free(m->midside_x);
+  m->midside_edge = NULL, m->midside_x = NULL, m->n_midside = 0;
   return grow_groups(m, err);
 }

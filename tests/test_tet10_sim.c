@@ -191,11 +191,11 @@ static void beam_theory(const bs_scene *sc, double *eb, double *timo) {
 }
 
 /* The static tip deflection (-tip_y, the scene's first QoI) with the overrides. */
-static double beam_tip(const char *sets, bs_scene **keep_scene, int32_t *n_nodes) {
+static double beam_tip_of(const char *scene, const char *sets, bs_scene **keep_scene, int32_t *n_nodes) {
   sim_rec rec;
   bs_run_totals T;
   bs_scene *sc = NULL;
-  bs_sim *s = sim_run_scene(BEAM, sets, NULL, &rec, &T, 1, &sc);
+  bs_sim *s = sim_run_scene(scene, sets, NULL, &rec, &T, 1, &sc);
   cr_assert_eq(rec.failed, 0, "%s: %s", sets, rec.reason);
   bs_qoi *q = NULL;
   bs_error err;
@@ -209,6 +209,10 @@ static double beam_tip(const char *sets, bs_scene **keep_scene, int32_t *n_nodes
   if (keep_scene) *keep_scene = sc;
   else bs_scene_destroy(&sc);
   return -v[0];
+}
+
+static double beam_tip(const char *sets, bs_scene **keep_scene, int32_t *n_nodes) {
+  return beam_tip_of(BEAM, sets, keep_scene, n_nodes);
 }
 
 Test(tet10_sim, beam_sag_matches_beam_theory_and_beats_tet4) {
@@ -439,6 +443,116 @@ Test(tet10_cli, mesh_convert_order_2_passes_gmsh_check) {
   } else {
     cr_log_warn("gmsh not on PATH: the file's check by gmsh -check skipped");
   }
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
+}
+
+/* ---- reading a .msh of 10-node tets ---- */
+
+Test(tet10_mesh, msh_of_10_node_tets_round_trip_and_curved_edge) {
+  char dir[] = "/tmp/bs_test_tet10_read_XXXXXX", path[512];
+  cr_assert_not_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/q.msh", dir);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL, *r = NULL;
+  const double lo[3] = {0, 0, 0}, hi[3] = {1, 0.5, 0.5};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 4, 2, 2, &m, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_tet10_mesh(m, &err), 0, "%s", err.msg);
+  /* bulge the midside node of one boundary edge of the face ymax outward (y up by 0.02) */
+  const int32_t a = m->edges[0], b = m->edges[1];
+  int32_t bulged = -1;
+  for (int32_t e = 0; e < m->n_edges && bulged < 0; e++) {
+    const int32_t p = m->edges[2 * e], q = m->edges[2 * e + 1];
+    if (m->x[3 * p + 1] == 0.5 && m->x[3 * q + 1] == 0.5) bulged = bs_mesh_edge_node(m, p, q);
+  }
+  (void)a, (void)b;
+  cr_assert_geq(bulged, 0);
+  const size_t n3 = 3 * (size_t)m->n_vertices;
+  double *x = malloc(sizeof(double) * n3);
+  memcpy(x, m->x, sizeof(double) * n3);
+  x[3 * bulged + 1] += 0.02;
+  cr_assert_eq(bs_mesh_write_msh(m, x, path, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_mesh_read(path, NULL, &r, &err), 0, "%s", err.msg);
+  cr_expect_eq(r->n_vertices, m->n_corners, "the linear mesh of the corners");
+  cr_expect_eq(r->n_dropped, 0, "midside nodes counted as dropped: %d", r->n_dropped);
+  cr_expect_eq(r->n_midside, 6 * r->n_tets);
+  cr_assert_eq(bs_tet10_mesh(r, &err), 0, "%s", err.msg);
+  cr_expect_eq(r->n_vertices, m->n_vertices);
+  cr_expect_eq(r->n_midside, 0);
+  /* every node where the file put it: the bulged one off its edge, the others at their edges' midpoints */
+  int moved = 0;
+  for (int32_t v = 0; v < r->n_vertices; v++) {
+    double best = INFINITY;
+    for (int32_t u = 0; u < m->n_vertices; u++) {
+      const double d = fabs(r->x[3 * v] - x[3 * u]) + fabs(r->x[3 * v + 1] - x[3 * u + 1]) + fabs(r->x[3 * v + 2] - x[3 * u + 2]);
+      if (d < best) best = d;
+    }
+    cr_expect_lt(best, 1e-15, "node %d is at no node of the written file", v);
+    moved += r->x[3 * v + 1] > 0.5;
+  }
+  cr_expect_eq(moved, 1, "%d nodes above y = 0.5, the bulged one only expected", moved);
+  /* the fem: the 14-point rule on the curved tets (those with the bulged node), 4 points elsewhere */
+  bs_material mat;
+  bs_fem *fem = NULL;
+  cr_assert_eq(bs_material_init(BS_MODEL_NEO_HOOKEAN, 1e6, 0.3, 1000, &mat, &err), 0);
+  cr_assert_eq(bs_fem_create(r, 1, &mat, NULL, &fem, &err), 0, "%s", err.msg);
+  int curved = 0;
+  for (int32_t t = 0; t < r->n_tets; t++) {
+    int has = 0;
+    for (int k = 0; k < 10; k++) has |= r->x[3 * r->tets10[10 * t + k] + 1] > 0.5;
+    cr_expect_eq(fem->q_ptr[t + 1] - fem->q_ptr[t], has ? 14 : 4, "tet %d", t);
+    curved += has;
+  }
+  cr_expect_gt(curved, 0);
+  double vol = 0;
+  for (int32_t t = 0; t < r->n_tets; t++) vol += fem->volume[t];
+  cr_expect_gt(vol, 0.25, "the bulge adds volume: %g", vol);
+  bs_fem_destroy(&fem);
+  /* a bulge past the edge folds the element: refused, named */
+  x[3 * bulged + 1] = 0.5 - 10.0;
+  cr_assert_eq(bs_mesh_write_msh(m, x, path, &err), 0, "%s", err.msg);
+  bs_mesh_destroy(&r);
+  cr_assert_eq(bs_mesh_read(path, NULL, &r, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_tet10_mesh(r, &err), 0, "%s", err.msg);
+  cr_expect_neq(bs_fem_create(r, 1, &mat, NULL, &fem, &err), 0);
+  cr_expect(strstr(err.msg, "folded") || strstr(err.msg, "det J"), "%s", err.msg);
+  bs_fem_destroy(&fem);
+  bs_mesh_destroy(&r);
+  bs_mesh_destroy(&m);
+  free(x);
+  char cmd[600];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
+}
+
+Test(tet10_sim, scene_with_a_msh_of_10_node_tets) {
+  char dir[] = "/tmp/bs_test_tet10_scene_XXXXXX", path[512], set[700];
+  cr_assert_not_null(mkdtemp(dir));
+  snprintf(path, sizeof path, "%s/beam.msh", dir);
+  char cmd[2048];
+  snprintf(cmd, sizeof cmd, "'%s' mesh convert box:20x2x2:1x0.1x0.1 '%s' --order 2 > /dev/null 2>&1", BS_BIGSTEP_EXE, path);
+  cr_assert_eq(system(cmd), 0, "%s", cmd);
+  /* beam_sag.json with the mesh file in place of its box */
+  char scene[600];
+  snprintf(scene, sizeof scene, "%s/beam.json", dir);
+  FILE *fp = fopen(scene, "w");
+  cr_assert(fp);
+  fprintf(fp, "{\"time\": {\"fps\": 24, \"frames\": 48, \"steps_per_frame\": 1},\n"
+              " \"solver\": {\"method\": \"optimization\", \"linear\": \"cg\", \"tolerance\": 1e-6, \"mode\": \"static\"},\n"
+              " \"gravity\": [0, -9.8, 0],\n"
+              " \"bodies\": [{\"mesh\": \"beam.msh\", \"element\": \"tet10\",\n"
+              "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e8, \"poisson\": 0.3, \"density\": 1000},\n"
+              "   \"scripted\": [{\"group\": \"xmin\", \"fixed\": true}]}],\n"
+              " \"qoi\": [{\"name\": \"tip_y\", \"quantity\": \"displacement\", \"group\": \"xmax\", \"component\": \"y\"},\n"
+              "         {\"name\": \"clamp_y\", \"quantity\": \"reaction\", \"group\": \"xmin\", \"component\": \"y\"}]}\n");
+  fclose(fp);
+  snprintf(set, sizeof set, "output.vtu_every=0");
+  int32_t n = 0;
+  const double d = beam_tip_of(scene, set, NULL, &n);
+  const double d_box = beam_tip("bodies.0.element=tet10 output.vtu_every=0", NULL, NULL);
+  cr_expect_eq(n, 1025);
+  cr_expect_float_eq(d, d_box, 1e-6 * d_box, "the .msh of 10-node tets: tip %g, the box's %g", d, d_box);
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   cr_expect_eq(system(cmd), 0);
 }
