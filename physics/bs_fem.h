@@ -36,10 +36,10 @@
  * diagonal of the consistent mass scaled to the element's mass, positive;
  * row-sum lumping would give the vertices negative mass, -rho V / 20 on a
  * straight tet10); load[v] = sum over tets of rho int N_v dX (kg), the
- * weights of the consistent body load (gravity: f_v = load[v] g; negative at
- * the vertices, rho V/20 less than 0, and rho V/5 at the edge nodes of a
- * straight tet10). Energy, gradient and Hessian go tet by tet in mesh order
- * on one thread (the same sums whatever the thread count), each tet through
+ * weights of the consistent body load (gravity: f_v = load[v] g; per
+ * straight tet10, -rho V/20 at each vertex and rho V/5 at each edge node).
+ * Energy, gradient and Hessian go tet by tet in mesh order on one thread
+ * (the same sums whatever the thread count), each tet through
  * bs_tet10_energy_grad / bs_tet10_hessian with the fem's psd modes (auto:
  * by the tet10's rest volume, as for tet4). bs_fem_scatter_hessian and
  * bs_fem_gather are for tet4 only.
@@ -60,7 +60,6 @@
 #include "bs_bsr.h"
 #include "bs_material.h"
 #include "bs_mesh.h"
-#include "bs_tet10.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -152,10 +151,11 @@ void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, int proje
  * min det F in *min_detF (may be NULL). */
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF);
 
-/* Order 2: tet t's rest cache (bs_tet10.h; the rule of the fem, its points'
- * gradients and weights) into *r: BS_OK, or BS_EINPUT for an order-1 fem or
- * t out of range. */
-int bs_fem_tet10_rest(const bs_fem *fem, int32_t t, bs_tet10_rest *r);
+/* Order 2: tet t's rest cache (bs_tet10.h, an internal header; the rule of
+ * the fem, its points' gradients and weights) into *r: BS_OK, or BS_EINPUT
+ * for an order-1 fem or t out of range. */
+struct bs_tet10_rest;
+int bs_fem_tet10_rest(const bs_fem *fem, int32_t t, struct bs_tet10_rest *r);
 /* Order 2: the 30 coordinates of tet t's 10 nodes (VTK order) from x. */
 void bs_fem_tet10_gather(const bs_fem *fem, const double *x, int32_t t, double xt[30]);
 

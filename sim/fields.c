@@ -10,6 +10,7 @@
 #include "bs_fields.h"
 #include "bs_forces.h"
 #include "bs_stress.h"
+#include "bs_tet10.h"
 
 #define HAS(f, F) (((f)->set & BS_FIELD_BIT(F)) != 0)
 
