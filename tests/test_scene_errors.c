@@ -44,7 +44,7 @@ Test(scene_errors, unknown_key_gets_the_nearest) {
 }
 
 Test(scene_errors, far_key_gets_no_guess) {
-  EXPECT_NOT("solver.colour=\"blue\"", "did you mean", "solver.colour: unknown key (allowed here: method, linear, ");
+  EXPECT_NOT("solver.colour=\"blue\"", "did you mean", "solver.colour: unknown key (allowed here: method, integrator, linear, ");
   EXPECT_NOT("time.x=1", "did you mean", "time.x: unknown key (allowed here: fps, frames, steps_per_frame, dt)");
   EXPECT_NOT("bodies.0.mass=1", "did you mean", "bodies.0.mass: unknown key");
 }
