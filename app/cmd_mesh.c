@@ -7,14 +7,15 @@
 
 #include "app.h"
 #include "bs_shim.h"
+#include "bs_tet10.h"
 
 static const char *mesh_help =
     "usage: bigstep mesh info FILE [--size H] [--min-dihedral DEG] [--refine N] [--reorder metis|rcm]\n"
     "                         [--merge-coincident] [--close-holes] [--max-hole F]\n"
     "                         [--mesher auto|cgal|remesh] [--time-budget S] [--json]\n"
-    "       bigstep mesh refine IN OUT [--size H] [--levels N]\n"
-    "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm]\n"
-    "       bigstep mesh convert IN OUT [--size H] [--refine N]\n"
+    "       bigstep mesh refine IN OUT [--size H] [--levels N] [--order 1|2]\n"
+    "       bigstep mesh reorder IN OUT [--size H] [--method metis|rcm] [--order 1|2]\n"
+    "       bigstep mesh convert IN OUT [--size H] [--refine N] [--order 1|2]\n"
     "\n"
     "FILE/IN: a mesh (.msh v2/v4), a geometry Gmsh meshes (.geo, .step/.stp, .brep),\n"
     "         a closed surface (.stl, .off, .obj, .ply: meshed by CGAL at --size H,\n"
@@ -41,6 +42,9 @@ static const char *mesh_help =
     "  --levels N     refinements to apply (refine; default 1)\n"
     "  --reorder M    renumber vertices (info): metis or rcm\n"
     "  --method M     reordering method (reorder; default metis)\n"
+    "  --order 2      write quadratic tets (refine, reorder, convert): each edge\n"
+    "                 gains its midpoint node; .msh: Gmsh's 10-node tets (type 11)\n"
+    "                 and 6-node triangles, .vtu: VTK_QUADRATIC_TETRA (default 1)\n"
     "  --merge-coincident  merge nodes of a .msh that share a position under\n"
     "                 distinct tags (reported as a warning otherwise)\n"
     "  --close-holes  close the holes of a surface (.off, .obj, .ply) up to the\n"
@@ -105,6 +109,7 @@ typedef struct mesh_args {
   double size, min_dihedral; /* min_dihedral: < 0 none, 0 default */
   double time_budget;        /* seconds, 0: none */
   int refine, levels, have_order, merge, close_holes, mesher, json; /* mesher: BS_SURFACE_* */
+  int element_order; /* --order: 1 (linear) or 2 (quadratic tets) */
   double max_hole;
   bs_order order;
 } mesh_args;
@@ -131,6 +136,9 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
   } else if (!strcmp(flag, "--max-hole")) {
     if (bs_parse_double(val, &a->max_hole) || !(a->max_hole > 0 && a->max_hole <= 1))
       return bs_app_usage_error("mesh", "--max-hole must be a number in (0, 1], got '%s'", val);
+  } else if (!strcmp(flag, "--order") && strcmp(sub, "info")) {
+    if (bs_parse_int(val, 1, 2, &a->element_order))
+      return bs_app_usage_error("mesh", "--order must be 1 or 2, got '%s'", val);
   } else if (!strcmp(flag, "--levels") && !strcmp(sub, "refine")) {
     if (bs_parse_int(val, 1, 6, &a->levels))
       return bs_app_usage_error("mesh", "--levels must be an integer 1..6, got '%s'", val);
@@ -147,7 +155,7 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
 /* 0, the usage status, or -1 when --help was printed. */
 static int parse_args(int argc, char **argv, mesh_args *a) {
   if (argc < 2) return bs_app_usage_error("mesh", "missing subcommand (info, refine, reorder, convert)");
-  *a = (mesh_args){.sub = argv[1], .levels = 1, .order = BS_ORDER_METIS};
+  *a = (mesh_args){.sub = argv[1], .levels = 1, .order = BS_ORDER_METIS, .element_order = 1};
   for (int i = 1; i < argc; i++)
     if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
       fputs(mesh_help, stdout);
@@ -237,11 +245,12 @@ static int mesh_write(bs_mesh *m, const mesh_args *a, bs_error *err) {
     printf("bandwidth %lld -> %lld, profile %lld -> %lld\n", (long long)bw0, (long long)bw1, (long long)p0,
            (long long)p1);
   }
-  if (bs_app_write_mesh(m, a->pos[1], err)) {
+  if ((a->element_order == 2 && bs_tet10_mesh(m, err)) || bs_app_write_mesh(m, a->pos[1], err)) {
     fprintf(stderr, "bigstep mesh: %s\n", err->msg);
     return BS_EXIT_FAIL;
   }
-  printf("wrote %s: %d vertices, %d tets\n", a->pos[1], m->n_vertices, m->n_tets);
+  if (m->tets10) printf("wrote %s: %d nodes (%d vertices), %d quadratic tets\n", a->pos[1], m->n_vertices, m->n_corners, m->n_tets);
+  else printf("wrote %s: %d vertices, %d tets\n", a->pos[1], m->n_vertices, m->n_tets);
   return 0;
 }
 

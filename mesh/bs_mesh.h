@@ -83,6 +83,29 @@ typedef struct bs_mesh {
   double auto_size;    /* bs_mesh_read of a closed surface given no size
                           (opts->size <= 0): the element size it chose
                           (bs_surface_auto_size); 0 otherwise            */
+
+  /* Quadratic tets (bodies[].element tet10; bs_tet10_mesh, bs_tet10.h made
+   * them). NULL for a linear mesh. Else 10 * n_tets node indices per tet in
+   * VTK order (bs_tet10.h), nodes 0..3 the tet's vertices tets[4t..4t+3];
+   * the vertices 0..n_corners-1 are the corners (the vertices tets use) and
+   * n_corners..n_vertices-1 the midside nodes, which no entry of tets, faces,
+   * edges or v2t names; every group's vertices include the midside nodes of
+   * its elements' edges. bs_mesh_finalize, bs_mesh_refine and
+   * bs_mesh_permute / bs_mesh_reorder work on linear meshes only (BS_EINPUT
+   * for a quadratic one). */
+  int32_t *tets10;
+  int32_t n_corners;   /* a quadratic mesh's corner count (0 when linear) */
+
+  /* bs_mesh_read of a .msh of 10-node tets (Gmsh type 11): the mesh is the
+   * linear mesh of their corners, and these are the file's midside nodes,
+   * one per tet edge (repeated for shared edges): midside_edge[2i],
+   * midside_edge[2i+1] the edge's corners, midside_x[3i..3i+2] the node's
+   * position. bs_tet10_mesh puts them in place of the edge midpoints (then
+   * frees them); bs_mesh_permute renumbers them; a refinement drops them
+   * (its quadratic mesh has straight edges). NULL / 0 otherwise. */
+  int32_t n_midside;
+  int32_t *midside_edge;
+  double *midside_x;
 } bs_mesh;
 
 /* ---- creation -------------------------------------------------------- */
@@ -173,6 +196,12 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * opts->time_budget bounds the whole (mesh/mesh_budget.c). Only
  * 4-node tets are simulated: other 3-D elements are an error naming their
  * type and count. opts may be NULL (defaults).
+ * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
+ * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
+ * 4-node tets, or 10-node tets alone (read as their corners' linear mesh and
+ * the midside list above; groups' 6-node triangles and 3-node lines as their
+ * corners), are read: other 3-D elements are an error naming their type and
+ * count. opts may be NULL (defaults).
  *
  * A .msh file is checked before Gmsh parses it (mesh/msh_check.c): its
  * format (2.x or 4.1, ASCII or binary, little-endian, 8-byte doubles), its
@@ -284,6 +313,10 @@ const bs_group *bs_mesh_group(const bs_mesh *m, const char *name);
 /* The group with this (dim, tag), or NULL. */
 const bs_group *bs_mesh_group_by_tag(const bs_mesh *m, int dim, int tag);
 
+/* The midside node of the edge (a, b) of the quadratic mesh m (a, b
+ * corners), or -1 when m is linear or no tet has that edge. */
+int32_t bs_mesh_edge_node(const bs_mesh *m, int32_t a, int32_t b);
+
 /* Signed volume of tet t at positions x (3 * n_vertices). */
 double bs_mesh_tet_volume(const bs_mesh *m, const double *x, int32_t t);
 
@@ -390,7 +423,9 @@ typedef struct bs_vtu_fields {
   int compress;                /* 1: zlib (see above)                     */
 } bs_vtu_fields;
 
-/* VTU (XML UnstructuredGrid of VTK_TETRA cells): points at f->x; point data
+/* VTU (XML UnstructuredGrid of VTK_TETRA cells, or of VTK_QUADRATIC_TETRA
+ * cells (type 24, the 10 nodes of m->tets10) for a quadratic mesh, whose
+ * built-in detF is that of the corner tet): points at f->x; point data
  * "displacement" (x - rest: always written, it gives back the rest shape),
  * "velocity" (when given), then f->point_data; cell data "material" (Int32,
  * the mesh's material tags), "detF" (given, or the signed current over rest
@@ -447,7 +482,10 @@ int bs_pvtu_write(const char *path, int n_point, const bs_pvtu_array *point, int
                   int n_pieces, const char *const *pieces, bs_error *err);
 
 /* .msh (Gmsh format 4.1) through the Gmsh API, with the groups, so results
- * open in Gmsh; x may be NULL (rest). */
+ * open in Gmsh; x may be NULL (rest). A quadratic mesh (m->tets10) is
+ * written with Gmsh's second-order elements: 10-node tets (type 11, Gmsh's
+ * node order: VTK's with nodes 8 and 9 swapped), its groups' 6-node
+ * triangles (type 9) and 3-node lines (type 8). */
 int bs_mesh_write_msh(const bs_mesh *m, const double *x, const char *path, bs_error *err);
 
 #ifdef __cplusplus

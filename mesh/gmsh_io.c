@@ -73,10 +73,14 @@
 #define BS_PI 3.14159265358979323846
 
 /* Gmsh element types used here (Gmsh's numbering). */
-enum { GMSH_LINE = 1, GMSH_TRIANGLE = 2, GMSH_TET = 4, GMSH_POINT = 15 };
+enum { GMSH_LINE = 1, GMSH_TRIANGLE = 2, GMSH_TET = 4, GMSH_TET10 = 11, GMSH_POINT = 15 };
 
 /* First-order simplex of dimension d: point, line, triangle, tet. */
 static const int simplex_type[4] = {GMSH_POINT, GMSH_LINE, GMSH_TRIANGLE, GMSH_TET};
+/* Second-order simplex of dimension d (Gmsh's 1-node point, 3-node line,
+ * 6-node triangle, 10-node tet) and its node count. */
+static const int simplex2_type[4] = {GMSH_POINT, 8, 9, 11};
+static const int simplex2_nodes[4] = {1, 3, 6, 10};
 
 /* ---- the Gmsh session --------------------------------------------------- */
 
@@ -329,8 +333,9 @@ done:
 }
 
 /* Appends the elements of type `type` (n_nodes nodes each) on entity `tag`
- * to v as vertex indices; element tags to etags if non-NULL. */
-static int append_elements(const char *path, int type, int n_nodes, int tag, const node_map *nm, ivec *v,
+ * to v as vertex indices, the first `keep` nodes of each (its corners for a
+ * second-order element); element tags to etags if non-NULL. */
+static int append_elements(const char *path, int type, int n_nodes, int keep, int tag, const node_map *nm, ivec *v,
                            size_t **etags_out, size_t *n_etags_out, bs_error *err) {
   size_t *etags = NULL, ne = 0, *ntags = NULL, nn = 0;
   int ierr = 0, rc = BS_OK;
@@ -346,7 +351,7 @@ static int append_elements(const char *path, int type, int n_nodes, int tag, con
   }
   if ((rc = ivec_reserve(v, nn, err))) goto done;
   for (size_t e = 0; e < ne; e++)
-    for (int k = 0; k < n_nodes; k++) {
+    for (int k = 0; k < keep; k++) {
       size_t nt = ntags[(size_t)n_nodes * e + k];
       int32_t i = node_map_find(nm, nt);
       if (i < 0) {
@@ -389,9 +394,10 @@ static size_t count_elements(int type) {
   return ierr ? 0 : ne;
 }
 
-/* Only 4-node tets are simulated: any other 3-D element type is an error
- * naming the types and counts; no 3-D element at all is an error too. */
-static int check_volume_types(const char *path, bs_error *err) {
+/* Only 4-node tets, or 10-node tets alone (*quadratic = 1), are read: any
+ * other 3-D element type is an error naming the types and counts; no 3-D
+ * element at all is an error too. */
+static int check_volume_types(const char *path, int *quadratic, bs_error *err) {
   int *types = NULL, ierr = 0, rc = BS_OK;
   size_t n = 0;
   gmshModelMeshGetElementTypes(&types, &n, 3, -1, &ierr);
@@ -407,8 +413,9 @@ static int check_volume_types(const char *path, bs_error *err) {
   char list[700] = "";
   size_t used = 0;
   int bad = 0;
+  *quadratic = n == 1 && types[0] == GMSH_TET10;
   for (size_t i = 0; i < n; i++) {
-    if (types[i] == GMSH_TET) continue;
+    if (types[i] == GMSH_TET || *quadratic) continue;
     char name[64];
     element_name(types[i], name, sizeof name);
     int w = snprintf(list + used, sizeof list - used, "%s%zu \"%s\" (Gmsh type %d)", bad ? ", " : "",
@@ -418,8 +425,8 @@ static int check_volume_types(const char *path, bs_error *err) {
   }
   if (bad)
     rc = bs_error_set(err, BS_EINPUT,
-                      "%s: unsupported volume elements: %s; only 4-node tetrahedra (\"Tetrahedron 4\") are simulated "
-                      "(mesh with Mesh.ElementOrder = 1 and no recombination)",
+                      "%s: unsupported volume elements: %s; only 4-node tetrahedra (\"Tetrahedron 4\") or 10-node ones "
+                      "alone (\"Tetrahedron 10\") are read (mesh with no recombination)",
                       path, list);
 done:
   if (types) gmshFree(types);
@@ -544,16 +551,18 @@ static int group_simplices(const char *path, int dim, const int *ents, size_t n_
       break;
     }
     for (size_t k = 0; k < nt && !rc; k++) {
-      if (types[k] != simplex_type[dim]) {
+      const int second = types[k] == simplex2_type[dim] && dim > 0; /* a quadratic mesh's: its corners */
+      if (types[k] != simplex_type[dim] && !second) {
         char name[64];
         element_name(types[k], name, sizeof name);
         rc = bs_error_set(err, BS_EINPUT,
                           "%s: physical group \"%s\" (dim %d, tag %d) holds \"%s\" elements (Gmsh type %d); groups "
-                          "may hold only points, 2-node lines and 3-node triangles",
+                          "may hold only points, 2- or 3-node lines and 3- or 6-node triangles",
                           path, gname, dim, gtag, name, types[k]);
         break;
       }
-      rc = append_elements(path, types[k], dim + 1, ents[i], nm, v, NULL, NULL, err);
+      rc = append_elements(path, types[k], second ? simplex2_nodes[dim] : dim + 1, dim + 1, ents[i], nm, v, NULL, NULL,
+                           err);
     }
     if (types) gmshFree(types);
   }
@@ -698,6 +707,38 @@ static int check_zero_volume(const char *path, const double *x, const ivec *tets
   return BS_OK;
 }
 
+/* The file's midside nodes of a mesh of 10-node tets (t10: 10 node indices
+ * per tet, Gmsh's order; tets: their corners) into m's midside list
+ * (bs_mesh.midside_edge / midside_x), with m's vertex numbering: the nodes
+ * some tet uses, in input order (as bs_mesh_create numbers them). */
+static int attach_midside(bs_mesh *m, int32_t n_nodes, const double *x, const ivec *tets, const ivec *t10,
+                          bs_error *err) {
+  static const int ends[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}}; /* VTK's edges 4..9 */
+  const size_t nt = tets->n / 4;
+  int32_t *newid = bs_calloc((size_t)n_nodes + 1, sizeof(int32_t), "midside renumbering", err);
+  m->midside_edge = bs_calloc(12 * nt + 1, sizeof(int32_t), "midside edges", err);
+  m->midside_x = bs_calloc(18 * nt + 1, sizeof(double), "midside nodes", err);
+  if (!newid || !m->midside_edge || !m->midside_x) {
+    free(newid);
+    return BS_ENOMEM;
+  }
+  for (size_t i = 0; i < tets->n; i++) newid[tets->a[i]] = 1;
+  for (int32_t v = 0, k = 0; v < n_nodes; v++) newid[v] = newid[v] ? k++ : -1;
+  for (size_t i = 0; i < t10->n; i++) /* the midside nodes are not dropped vertices */
+    if (newid[t10->a[i]] == -1) newid[t10->a[i]] = -2, m->n_dropped--;
+  for (size_t e = 0; e < nt; e++)
+    for (int k = 0; k < 6; k++) {
+      const int g = 4 + k == 8 ? 9 : 4 + k == 9 ? 8 : 4 + k; /* VTK's node 4 + k in Gmsh's order */
+      const size_t i = 6 * e + (size_t)k;
+      m->midside_edge[2 * i] = newid[t10->a[10 * e + (size_t)ends[k][0]]];
+      m->midside_edge[2 * i + 1] = newid[t10->a[10 * e + (size_t)ends[k][1]]];
+      memcpy(m->midside_x + 3 * i, x + 3 * (size_t)t10->a[10 * e + (size_t)g], 3 * sizeof(double));
+    }
+  m->n_midside = (int32_t)(6 * nt);
+  free(newid);
+  return BS_OK;
+}
+
 /* The current Gmsh model as a bs_mesh (coincident nodes merged with merge). */
 static int model_to_mesh(const char *path, int merge, bs_mesh **out, bs_error *err) {
   int rc, ierr = 0;
@@ -706,12 +747,12 @@ static int model_to_mesh(const char *path, int merge, bs_mesh **out, bs_error *e
   int *vdt = NULL;
   size_t nvdt = 0, n_vol = 0, *etags = NULL, n_etags = 0;
   volume_range *vr = NULL;
-  ivec tets = {0};
+  ivec tets = {0}, t10 = {0};
   bs_group *groups = NULL;
-  int n_groups = 0;
+  int n_groups = 0, quad = 0;
   int32_t n_coincident = 0;
 
-  if ((rc = check_volume_types(path, err))) goto done;
+  if ((rc = check_volume_types(path, &quad, err))) goto done;
   if ((rc = read_nodes(path, &nm, &x, err))) goto done;
   if ((rc = coincident_nodes(path, &nm, x, merge, &n_coincident, err))) goto done;
 
@@ -730,7 +771,9 @@ static int model_to_mesh(const char *path, int merge, bs_mesh **out, bs_error *e
     size_t *et = NULL, ne = 0;
     vr[j].tag = vdt[2 * j + 1];
     vr[j].first = tets.n / 4;
-    if ((rc = append_elements(path, GMSH_TET, 4, vr[j].tag, &nm, &tets, &et, &ne, err))) goto done;
+    const int type = quad ? GMSH_TET10 : GMSH_TET, nn = quad ? 10 : 4;
+    if ((rc = append_elements(path, type, nn, 4, vr[j].tag, &nm, &tets, &et, &ne, err))) goto done;
+    if (quad && (rc = append_elements(path, type, nn, nn, vr[j].tag, &nm, &t10, NULL, NULL, err))) goto done;
     vr[j].count = ne;
     size_t *grown = realloc(etags, (n_etags + ne + 1) * sizeof *etags);
     if (!grown) {
@@ -760,10 +803,12 @@ static int model_to_mesh(const char *path, int merge, bs_mesh **out, bs_error *e
     (*out)->n_coincident = n_coincident;
     (*out)->coincident_merged = nm.rep != NULL;
     if (nm.rep) (*out)->n_dropped -= n_coincident; /* the merged nodes are no tet's now */
+    if (quad) rc = attach_midside(*out, (int32_t)nm.n, x, &tets, &t10, err);
   }
 done:
   node_map_free(&nm);
   free(x);
+  free(t10.a);
   if (vdt) gmshFree(vdt);
   free(vr);
   free(tets.a);
@@ -1043,6 +1088,7 @@ static void free_classes(tet_classes *c) {
 static int group_elements(const bs_mesh *m, const bs_group *gr, size_t *etag, size_t *enodes, size_t *next_tag,
                           const char *path, bs_error *err) {
   const size_t nn = (size_t)gr->dim + 1, n = (size_t)gr->n_elems;
+  const size_t per = m->tets10 ? (size_t)simplex2_nodes[gr->dim] : nn;
   for (size_t e = 0; e < n; e++) {
     etag[e] = (*next_tag)++;
     for (size_t k = 0; k < nn; k++) {
@@ -1050,10 +1096,37 @@ static int group_elements(const bs_mesh *m, const bs_group *gr, size_t *etag, si
       if (v < 0 || v >= m->n_vertices)
         return bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d) refers to vertex %d of %d", path,
                             gr->name, gr->dim, gr->tag, v, m->n_vertices);
-      enodes[nn * e + k] = (size_t)v + 1;
+      enodes[per * e + k] = (size_t)v + 1;
+    }
+    /* a quadratic mesh: the midside nodes, Gmsh's order (0,1), (1,2), (2,0) */
+    for (size_t k = 0; k + nn < per; k++) {
+      const int32_t a = gr->elems[nn * e + k], b = gr->elems[nn * e + (k + 1) % nn];
+      const int32_t c = bs_mesh_edge_node(m, a, b);
+      if (c < 0)
+        return bs_error_set(err, BS_EINPUT, "%s: group \"%s\" (dim %d, tag %d): no tet has the edge (%d, %d)", path,
+                            gr->name, gr->dim, gr->tag, a, b);
+      enodes[per * e + nn + k] = (size_t)c + 1;
     }
   }
   return 0;
+}
+
+/* The tets of class j as element tags (from *next_tag on) and 1-based node
+ * tags (a quadratic mesh: 10 per tet in Gmsh's order, VTK's with nodes 8 and
+ * 9 swapped); their count. */
+static size_t class_elements(const bs_mesh *m, const tet_classes *c, int32_t j, size_t *etag, size_t *enodes,
+                             size_t *next_tag) {
+  size_t n = 0;
+  for (size_t t = 0; t < (size_t)m->n_tets; t++) {
+    if (c->cls[t] != j) continue;
+    etag[n] = (*next_tag)++;
+    if (m->tets10)
+      for (int k = 0; k < 10; k++) enodes[10 * n + k] = (size_t)m->tets10[10 * t + (k == 8 ? 9 : k == 9 ? 8 : k)] + 1;
+    else
+      for (int k = 0; k < 4; k++) enodes[4 * n + k] = (size_t)m->tets[4 * t + k] + 1;
+    n++;
+  }
+  return n;
 }
 
 static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, const char *path, bs_error *err) {
@@ -1064,7 +1137,8 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
     if (m->groups[g].dim < 3 && (size_t)m->groups[g].n_elems > max_elems) max_elems = (size_t)m->groups[g].n_elems;
   size_t *ntag = malloc((nv + 1) * sizeof *ntag);
   size_t *etag = malloc((max_elems + 1) * sizeof *etag);
-  size_t *enodes = malloc((4 * max_elems + 1) * sizeof *enodes);
+  const int q = m->tets10 != NULL; /* quadratic: Gmsh's second-order elements */
+  size_t *enodes = malloc(((q ? 10 : 4) * max_elems + 1) * sizeof *enodes);
   int *ents = malloc(((size_t)c->n_cls + 1) * sizeof *ents);
   if (!ntag || !etag || !enodes || !ents) {
     rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for the Gmsh model", path);
@@ -1083,14 +1157,8 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
   /* Tets, class by class; element tags run over all entities. */
   size_t next_tag = 1;
   for (int32_t j = 0; j < c->n_cls; j++) {
-    size_t n = 0;
-    for (size_t t = 0; t < nt; t++) {
-      if (c->cls[t] != j) continue;
-      etag[n] = next_tag++;
-      for (int k = 0; k < 4; k++) enodes[4 * n + k] = (size_t)m->tets[4 * t + k] + 1;
-      n++;
-    }
-    gmshModelMeshAddElementsByType(j + 1, GMSH_TET, etag, n, enodes, 4 * n, &ierr);
+    const size_t n = class_elements(m, c, j, etag, enodes, &next_tag);
+    gmshModelMeshAddElementsByType(j + 1, q ? simplex2_type[3] : GMSH_TET, etag, n, enodes, (q ? 10 : 4) * n, &ierr);
     if (ierr) {
       rc = gmsh_fail(err, BS_EGMSH, path, "take the tetrahedra");
       goto done;
@@ -1110,10 +1178,11 @@ static int build_model(const bs_mesh *m, const double *x, const tet_classes *c, 
       gmshModelAddPhysicalGroup(3, ents, n, gr->tag, &ierr);
     } else if (pdim >= 0 && pdim < 3) {
       int ent = next_ent[pdim]++;
-      size_t nn = (size_t)pdim + 1, n = (size_t)gr->n_elems;
+      size_t nn = q ? (size_t)simplex2_nodes[pdim] : (size_t)pdim + 1, n = (size_t)gr->n_elems;
       if ((rc = group_elements(m, gr, etag, enodes, &next_tag, path, err))) goto done;
       gmshModelAddDiscreteEntity(pdim, ent, NULL, 0, &ierr);
-      if (!ierr) gmshModelMeshAddElementsByType(ent, simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
+      if (!ierr)
+        gmshModelMeshAddElementsByType(ent, q ? simplex2_type[pdim] : simplex_type[pdim], etag, n, enodes, nn * n, &ierr);
       if (!ierr) gmshModelAddPhysicalGroup(pdim, &ent, 1, gr->tag, &ierr);
     } else {
       rc = bs_error_set(err, BS_EINPUT, "%s: group \"%s\" has dimension %d", path, gr->name, pdim);

@@ -487,6 +487,7 @@ static int derive_v2t(bs_mesh *m, bs_error *err) {
 
 int bs_mesh_finalize(bs_mesh *m, bs_error *err) {
   if (!m) return bs_error_set(err, BS_EINPUT, "bs_mesh_finalize: mesh is NULL");
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "bs_mesh_finalize: the mesh is quadratic (tet10): finalize its linear mesh");
   if (m->n_vertices < 0 || m->n_tets < 1 || !m->x || !m->tets)
     return bs_error_set(err, BS_EINPUT, "mesh has %d vertices and %d tets: need at least one tet", m->n_vertices,
                         m->n_tets);
@@ -552,6 +553,9 @@ void bs_mesh_destroy(bs_mesh **mp) {
   free_derived(m);
   free(m->x);
   free(m->tets);
+  free(m->tets10);
+  free(m->midside_edge);
+  free(m->midside_x);
   bs__groups_free(m->groups, m->n_groups);
   free(m);
   *mp = NULL;
@@ -662,6 +666,9 @@ int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err) {
   c->tets = c->material = c->faces = c->face_tet = c->boundary = c->edges = c->v2t_ptr = c->v2t = NULL;
   c->groups = NULL;
   c->n_groups = 0;
+  c->tets10 = NULL;
+  c->midside_edge = NULL;
+  c->midside_x = NULL;
   size_t nv = (size_t)m->n_vertices, nt = (size_t)m->n_tets, nf = (size_t)m->n_faces;
   int bad = 0;
 #define COPY(field, n, what)                                                                                           \
@@ -671,6 +678,9 @@ int bs_mesh_copy(const bs_mesh *m, bs_mesh **out, bs_error *err) {
   }
   COPY(x, 3 * nv, "mesh vertices")
   COPY(tets, 4 * nt, "mesh tets")
+  COPY(tets10, 10 * nt, "quadratic tets")
+  COPY(midside_edge, 2 * (size_t)m->n_midside, "midside edges")
+  COPY(midside_x, 3 * (size_t)m->n_midside, "midside nodes")
   COPY(material, nt, "material ids")
   COPY(faces, 3 * nf, "boundary faces")
   COPY(face_tet, nf, "boundary face tets")

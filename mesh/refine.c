@@ -312,6 +312,7 @@ int bs_mesh_refine(const bs_mesh *m, bs_mesh **out, bs_error *err) {
   *out = NULL;
   int rc = refine_check(m, err);
   if (rc) return rc;
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "refine: the mesh is quadratic (tet10): refine its linear mesh");
   const int32_t nv = m->n_vertices, nt = m->n_tets;
   edge_table e = {0};
   if ((rc = edge_table_build(m, &e, err))) return rc;

@@ -200,6 +200,7 @@ static int permute_commit(bs_mesh *m, double **x, int32_t **tets, int32_t **mat,
 
 int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
   if (!m || !perm) return bs_error_set(err, BS_EINPUT, "permute: %s is NULL", m ? "perm" : "mesh");
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "permute: the mesh is quadratic (tet10): renumber its linear mesh");
   const int32_t nv = m->n_vertices, nt = m->n_tets;
   int rc = BS_OK;
   int32_t *iperm = bs_calloc((size_t)nv + 1, sizeof(int32_t), "permute: inverse permutation", err);
@@ -216,6 +217,7 @@ int bs_mesh_permute(bs_mesh *m, const int32_t *perm, bs_error *err) {
   if (!rc) rc = permute_tets(m, iperm, count, tip, tets, mat, err);
   for (int g = 0; g < m->n_groups && !rc; g++) rc = permute_group(&m->groups[g], iperm, nv, tip, nt, &gel[g], &gvs[g], err);
   if (!rc) rc = permute_commit(m, &x, &tets, &mat, gel, gvs, err); /* the mesh changes only here */
+  for (int32_t i = 0; !rc && i < 2 * m->n_midside; i++) m->midside_edge[i] = iperm[m->midside_edge[i]];
   for (int g = 0; g < m->n_groups; g++) {
     if (gel) free(gel[g]);
     if (gvs) free(gvs[g]);
@@ -371,6 +373,7 @@ static int order_rcm(const bs_mesh *m, const int32_t *ptr, const int32_t *adj, i
 
 int bs_mesh_reorder(bs_mesh *m, bs_order order, int32_t *perm, bs_error *err) {
   if (!m) return bs_error_set(err, BS_EINPUT, "reorder: mesh is NULL");
+  if (m->tets10) return bs_error_set(err, BS_EINPUT, "reorder: the mesh is quadratic (tet10): reorder its linear mesh");
   if (order != BS_ORDER_NONE && order != BS_ORDER_METIS && order != BS_ORDER_RCM)
     return bs_error_set(err, BS_EINPUT, "reorder: unknown order %d (expected none, metis or rcm)", (int)order);
   const int32_t n = m->n_vertices;

@@ -5,7 +5,7 @@
  * a '_' marker, each raw or zlib-compressed (vtk_xml.h: the layouts, and
  * bs_mesh.h). Order, in the XML and in the block: PointData, CellData,
  * Points (Float64 x 3), connectivity and offsets (Int64), types (UInt8: 10
- * VTK_TETRA, 5 VTK_TRIANGLE). Arrays the caller holds are written from its
+ * VTK_TETRA, 24 VTK_QUADRATIC_TETRA for a quadratic mesh, 5 VTK_TRIANGLE). Arrays the caller holds are written from its
  * memory; converted ones (displacement, connectivity, ...) from one buffer
  * filled first, so every array is one fwrite. */
 #include <errno.h>
@@ -18,7 +18,7 @@
 #include "bs_mesh.h"
 #include "vtk_xml.h"
 
-enum { VTK_TRIANGLE = 5, VTK_TETRA = 10 };
+enum { VTK_TRIANGLE = 5, VTK_TETRA = 10, VTK_QUADRATIC_TETRA = 24 };
 
 /* 6 x signed volume of tet (a, b, c, d) at positions x. */
 static double tet_vol6(const double *x, const int32_t *t) {
@@ -214,11 +214,14 @@ int bs_mesh_write_vtu(const bs_mesh *m, const bs_vtu_fields *f, const char *path
   const double *x = f->x ? f->x : m->x;
   ugrid g = {.n_points = m->n_vertices, .n_cells = m->n_tets, .compress = f->compress, .vectors = "displacement"};
   if (!f->custom_cells) g.scalars = "material";
-  g.buf = malloc(41u * (size_t)m->n_tets + 8);
+  const int k = m->tets10 ? 10 : 4; /* a quadratic mesh: its 10-node cells */
+  g.buf = malloc((8u * (unsigned)k + 9u) * (size_t)m->n_tets + 8);
   int st = g.buf ? 0 : bs_error_set(err, BS_ENOMEM, "out of memory (%d tets)", m->n_tets);
   if (!st) st = tet_builtins(m, f, x, &g, err);
   if (!st) st = ug_add_given(&g, SEC_CELL_DATA, f->n_cell_data, f->cell_data, m->n_tets, err);
-  if (!st) st = ug_add_topology(&g, x, 4, m->tets, VTK_TETRA, g.buf, err);
+  if (!st)
+    st = ug_add_topology(&g, x, k, m->tets10 ? m->tets10 : m->tets, m->tets10 ? VTK_QUADRATIC_TETRA : VTK_TETRA, g.buf,
+                         err);
   if (!st) st = ug_write(&g, "vtu", path, err);
   else bs_error_prefix(err, "write vtu '%s'", path);
   ug_free(&g);

@@ -24,6 +24,26 @@
  *    rows whatever the numbering; a reordered mesh (bs_mesh_reorder) also
  *    keeps those rows close in memory.
  *
+ * Quadratic tets (mesh->tets10 set, bs_tet10.h): order 2, 3 dofs per node
+ * (mesh->n_vertices nodes, corners and midside nodes). Per tet in MESH order
+ * (no chunks or colours: n_chunks = n_colors = 0; Dm_inv, tets, tet_pos are
+ * NULL): its rest gradients and weights at its quadrature points (q_ptr,
+ * q_dNdX, q_wdetJ), the 4-point degree-2 rule for a straight tet (every
+ * midside node at its edge's midpoint, as bs_tet10_mesh makes them; the rule
+ * integrates the linear model's stiffness B^T C B exactly there), the
+ * 14-point degree-5 rule for a curved one; its rest volume; 100 block slots
+ * (10 a + b). The mass per node is HRZ-lumped (bs_tet10_mass_hrz: the
+ * diagonal of the consistent mass scaled to the element's mass, positive;
+ * row-sum lumping would give the vertices negative mass, -rho V / 20 on a
+ * straight tet10); load[v] = sum over tets of rho int N_v dX (kg), the
+ * weights of the consistent body load (gravity: f_v = load[v] g; per
+ * straight tet10, -rho V/20 at each vertex and rho V/5 at each edge node).
+ * Energy, gradient and Hessian go tet by tet in mesh order on one thread
+ * (the same sums whatever the thread count), each tet through
+ * bs_tet10_energy_grad / bs_tet10_hessian with the fem's psd modes (auto:
+ * by the tet10's rest volume, as for tet4). bs_fem_scatter_hessian and
+ * bs_fem_gather are for tet4 only.
+ *
  * Ownership: bs_fem_create returns an object owned by the caller (free with
  * bs_fem_destroy); it keeps a pointer to the mesh and a copy of the materials,
  * and the mesh must outlive it. Evaluation allocates nothing: the energy's
@@ -69,6 +89,12 @@ typedef struct bs_fem {
   int32_t *color_chunks;/* chunks grouped by colour, ascending in a colour   */
   double *partial;      /* scratch: per-block / per-chunk energy sums of one */
                         /* evaluation (so one evaluation at a time per fem)  */
+  int order;            /* 1: tet4; 2: quadratic tets (above)               */
+  double *load;         /* order 2: per node, rho int N_v dX (kg), gravity's */
+                        /* weights; NULL for order 1 (gravity weighs by mass) */
+  int32_t *q_ptr;       /* order 2: n_tets + 1, each tet's first point       */
+  double *q_dNdX;       /* order 2: 30 per point, dN_a/dX_j at [3 a + j]     */
+  double *q_wdetJ;      /* order 2: per point, w_q det J_q (m^3)             */
 } bs_fem;
 
 /* Most tets in a chunk (a multiple of BS_MATERIAL_BATCH). */
@@ -121,8 +147,17 @@ void bs_fem_elastic_hessian_auto(const bs_fem *fem, const double *x, const doubl
 void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, bs_psd_mode project_psd,
                                    const double *material_scale, bs_bsr *H);
 
-/* Number of tets with det F <= 0 at x; min det F in *min_detF (may be NULL). */
+/* Number of tets with det F <= 0 at x (order 2: at some quadrature point);
+ * min det F in *min_detF (may be NULL). */
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF);
+
+/* Order 2: tet t's rest cache (bs_tet10.h, an internal header; the rule of
+ * the fem, its points' gradients and weights) into *r: BS_OK, or BS_EINPUT
+ * for an order-1 fem or t out of range. */
+struct bs_tet10_rest;
+int bs_fem_tet10_rest(const bs_fem *fem, int32_t t, struct bs_tet10_rest *r);
+/* Order 2: the 30 coordinates of tet t's 10 nodes (VTK order) from x. */
+void bs_fem_tet10_gather(const bs_fem *fem, const double *x, int32_t t, double xt[30]);
 
 #ifdef __cplusplus
 }

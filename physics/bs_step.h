@@ -102,42 +102,36 @@ typedef struct bs_integrator_opts {
   bs_method method;
   int newton_k;           /* steps for BS_METHOD_NEWTON_K (1: linearized backward Euler) */
   bs_minimize_opts min;   /* tolerance, caps, linear solver                          */
-  /* added, for min.linear = amg: the matrix the AMG is built from is the Hessian of the
-     dynamic terms (inertia M/dt^2, damping, drag: all PSD) plus the PSD-projected elastic
-     Hessian, the latter at the rest positions (amg_at_rest = 1, the default: the
-     rest-state stiffness; rebuilt only when dt changes, between dynamic and static
-     solves, or on min.amg_rebuild_every; min.amg_rebuild_factor is ignored since P does
-     not depend on x) or at the iterate where a setup happens (amg_at_rest = 0;
-     min.amg_rebuild_factor applies too). Measured (Newton iterations): cube_stretch
-     (18.5k dofs, 6 frames) rest 96 with 1 setup, current 77 with 3 setups; fig8 random
-     (16^3 cells, first frame) rest 259, current 351 (block-Jacobi PCG: failed at 500). */
+  /* For min.linear = amg: the matrix the AMG is built from is the Hessian of the
+     dynamic terms (inertia, damping, drag: all PSD) plus the PSD-projected elastic
+     Hessian, at the rest positions (amg_at_rest = 1, the default: rebuilt only when
+     dt changes, between dynamic and static solves, or on min.amg_rebuild_every;
+     min.amg_rebuild_factor is ignored since P does not depend on x) or at the iterate
+     where a setup happens (amg_at_rest = 0; min.amg_rebuild_factor applies).
+     Measurements: docs/design/linear-solvers.md. */
   int amg_at_rest;
   /* NULL (default): silent. Else one line per accepted iteration of every solve is
      written there (iteration, ||grad E||, E, Krylov iterations, step length, line-search
      trials): to follow a slow step. */
   FILE *trace;
-  /* added, default 0: also try xⁿ as the initial guess (step 3 above). For scenes with
+  /* Default 0: also try xⁿ as the initial guess (step 3 above). For scenes with
      self-collision: when bodies close in fast, both of the paper's guesses can put a
      vertex through the middle of another body, where the penalty pushes it out on the
-     far side and the step converges to a tangle; from xⁿ the descent meets the penalty
-     on the near side. Measured on the paper-scale figure 7
-     (data/scenes/paper/fig7_two_spheres.json, 48 frames, amg): 25.6 -> 15.5 solves per
-     step, the last frame 77 -> 0 inverted tets and ~1400 -> 0 intersecting surface
-     triangle pairs. Not for scenes without contact: on the random-state cube
-     (neo_hookean) it leads into a local minimum that keeps one tet inverted. bs_sim_create
-     (sim/) sets it for the optimization integrator when the scene has self_collision. */
+     far side; from xⁿ the descent meets the penalty on the near side. Not for scenes
+     without contact (it can lead into a local minimum that keeps a tet inverted).
+     bs_sim_create (sim/) sets it for the optimization integrator when the scene has
+     self_collision. Measurements: docs/design/contact-models.md. */
   int guess_xn;
-  /* added, default BS_PENALTY_EXACT (0): with another value, the Newton model of the
-     terms that offer hessian_g (bs_terms.h: the object penalties' secant model,
-     bs_penalty.h; the self-collision term's, bs_selfcollide.h, when it is switched on
-     there) instead of their Hessians, wherever the minimizer hands over the gradient
-     (every iteration of the optimization method's solves). E and its gradient are
-     unchanged. Why: the penalty k depth³ has a gradient quadratic in the depth, on which
-     Newton halves a deep vertex's depth per iteration (its gradient falls 4x per
-     iteration) until it is near the depth where the penalty balances the other forces.
-     bs_sim_create sets it from the scene's solver.penalty_hessian for the optimization
-     method (the Newton baseline keeps the exact Hessian), and switches the
-     self-collision term's model on for BS_PENALTY_SECANT_ALL. */
+  /* Default BS_PENALTY_EXACT: with another value, the Newton model of the terms that
+     offer hessian_g (bs_terms.h: the obstacle penalties' secant model, bs_penalty.h;
+     the self-collision term's, bs_selfcollide.h, when switched on there) instead of
+     their Hessians, wherever the minimizer hands over the gradient. E and its gradient
+     are unchanged. Why: the penalty k depth³ has a gradient quadratic in the depth, on
+     which Newton halves a deep vertex's depth per iteration until it is near the depth
+     where the penalty balances the other forces. bs_sim_create sets it from the scene's
+     solver.penalty_hessian for the optimization method (the Newton baseline keeps the
+     exact Hessian), and switches the self-collision term's model on for
+     BS_PENALTY_SECANT_ALL. */
   bs_penalty_hessian penalty_secant;
   /* The time integrator (top of this header), default
      BS_INTEGRATOR_BACKWARD_EULER. */

@@ -31,7 +31,7 @@
  * The terms of this module (paper sections 2.1, 4.1, 4.2):
  *   inertia     1/(2cΔt²) (x − x̂)ᵀ M (x − x̂) (c: step->c, 1 for backward
  *               Euler; x̂ the integrator's x̃, bs_step.h)
- *   gravity     −Σ m_v gᵀ x_v
+ *   gravity     −Σ m_v gᵀ x_v (tet10: −Σ (ρ ∫ N_v) gᵀ x_v, the consistent body load)
  *   elasticity  Σ_tets V Ψ(F), one model and parameter set per material group
  *   damping     1/(2Δt) (x − xⁿ)ᵀ D (x − xⁿ), D = Σ_tets k_material H_tet⁺(xⁿ),
  *               H⁺ the PSD-projected elastic Hessian at xⁿ (lagged Rayleigh

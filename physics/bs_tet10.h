@@ -110,6 +110,7 @@
 
 #include "bs_base.h"
 #include "bs_material.h"
+#include "bs_mesh.h"
 #include "bs_stress.h"
 
 #ifdef __cplusplus
@@ -239,6 +240,24 @@ void bs_tet10_swap_gmsh_vtk(int64_t n_tets, int32_t *conn);
  * more than INT32_MAX nodes; BS_ENOMEM. */
 int bs_tet10_from_tet4(int32_t n_vertices, const double *vertices, int32_t n_tets, const int32_t *tets,
                        int32_t *n_nodes, double **nodes, int32_t **tets10, bs_error *err);
+
+/* ---- quadratic meshes (bs_mesh.tets10) ---- */
+
+/* Makes the linear mesh m quadratic in place: bs_tet10_from_tet4's nodes
+ * (the n_vertices vertices first, kept as the corners, then one node per
+ * unique edge at its midpoint) become m's vertices, m->tets10 its tets in
+ * VTK order, m->n_corners the old vertex count; v2t_ptr is extended (the
+ * midside nodes belong to no entry of tets); every group keeps its vertices
+ * and gains the midside nodes of its elements' edges (a 3-D group: the 6
+ * edges of each of its tets; a 2-D group: the 3 edges of each triangle; a
+ * 1-D group: each segment; a 0-D group: none), so that a face group holds
+ * all 6 nodes of each of its quadratic triangles. faces, edges and v2t keep
+ * naming corners only. A mesh read from a .msh of 10-node tets carries the
+ * file's midside nodes (bs_mesh.midside_x): they take the place of the edge
+ * midpoints (curved edges), and the list is freed. Errors: BS_EINPUT (NULL, quadratic already, not
+ * finalized), those of bs_tet10_from_tet4, BS_ENOMEM; after an error m is
+ * only fit to be destroyed. */
+int bs_tet10_mesh(bs_mesh *m, bs_error *err);
 
 #ifdef __cplusplus
 }

@@ -6,6 +6,7 @@
 
 #include "bs_element.h"
 #include "bs_fem.h"
+#include "fem_internal.h"
 
 void bs_fem_destroy(bs_fem **pf) {
   if (!pf || !*pf) return;
@@ -24,6 +25,10 @@ void bs_fem_destroy(bs_fem **pf) {
   free(f->tet_pos);
   free(f->color_chunks);
   free(f->partial);
+  free(f->load);
+  free(f->q_ptr);
+  free(f->q_dNdX);
+  free(f->q_wdetJ);
   free(f);
   *pf = NULL;
 }
@@ -180,6 +185,21 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
   f->mesh = mesh;
   f->n_vertices = mesh->n_vertices;
   f->n_tets = mesh->n_tets;
+  f->order = 1;
+  if (mesh->tets10) { /* quadratic tets: fem10.c */
+    int st = (f->materials = bs_calloc((size_t)n_materials, sizeof(bs_material), "materials", err)) ? 0 : BS_ENOMEM;
+    if (!st) {
+      f->n_materials = n_materials;
+      memcpy(f->materials, materials, sizeof(bs_material) * (size_t)n_materials);
+      st = bs__fem10_create(f, tet_material, err);
+    }
+    if (st) {
+      bs_fem_destroy(&f);
+      return st;
+    }
+    *out = f;
+    return 0;
+  }
   size_t nt = (size_t)mesh->n_tets, nv = (size_t)mesh->n_vertices;
   f->Dm_inv = malloc(sizeof(double) * 9 * (nt ? nt : 1));
   f->volume = malloc(sizeof(double) * (nt ? nt : 1));
@@ -333,6 +353,7 @@ static double energy_block(const bs_fem *fem, const double *x, int32_t lo, int32
 }
 
 double bs_fem_elastic_energy(const bs_fem *fem, const double *x) {
+  if (fem->order == 2) return bs__fem10_energy(fem, x);
   const int32_t nt = fem->n_tets, nb = (int32_t)(((int64_t)nt + EBLOCK - 1) / EBLOCK);
   double *part = fem->partial;
 #pragma omp parallel for schedule(static) if (nb > 2)
@@ -375,6 +396,7 @@ static double gradient_chunk(const bs_fem *fem, const double *x, int32_t c, doub
 }
 
 double bs_fem_elastic_gradient(const bs_fem *fem, const double *x, double *g) {
+  if (fem->order == 2) return bs__fem10_gradient(fem, x, g);
   double *part = fem->partial; /* part[q]: the chunk at position q of color_chunks */
   for (int c = 0; c < fem->n_colors; c++) {
     const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
@@ -429,6 +451,10 @@ static void hessian_chunk(const bs_fem *fem, const double *x, bs_psd_mode projec
 
 static void hessian_all(const bs_fem *fem, const double *x, bs_psd_mode project_psd, const double *vmax, double s,
                         const double *material_scale, bs_bsr *H) {
+  if (fem->order == 2) {
+    bs__fem10_hessian(fem, x, project_psd, vmax, s, material_scale, H);
+    return;
+  }
   for (int c = 0; c < fem->n_colors; c++) {
     const int32_t lo = fem->color_ptr[c], hi = fem->color_ptr[c + 1];
 #pragma omp parallel for schedule(dynamic, 1) if (colour_parallel(fem, c))
@@ -450,6 +476,7 @@ void bs_fem_elastic_hessian_scaled(const bs_fem *fem, const double *x, bs_psd_mo
 }
 
 int32_t bs_fem_count_inverted(const bs_fem *fem, const double *x, double *min_detF) {
+  if (fem->order == 2) return bs__fem10_count_inverted(fem, x, min_detF);
   int32_t n = 0;
   double mn = INFINITY;
 #pragma omp parallel for schedule(static) reduction(+ : n) reduction(min : mn) if (fem->n_tets > 2048)

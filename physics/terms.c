@@ -105,18 +105,22 @@ int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term 
 }
 
 /* ---- gravity ---------------------------------------------------------- */
+/* The nodes' weights of the body load: the lumped mass (tet4), or the
+ * consistent load's rho int N_v dX (tet10, bs_fem.h). */
+static const double *gravity_weights(const bs_fem *fem) { return fem->load ? fem->load : fem->mass; }
 static double gravity_load(const bs_term *t) { return t->step ? t->step->load : 1.0; }
 static int gravity_value(const bs_term *t, const double *x, double *Eout) {
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
+  const double *w = gravity_weights(fem);
   double part[BS_SUM_CHUNKS];
   const bs_sum_plan P = bs_sum_plan_of(fem->n_vertices);
 #pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
   for (int c = 0; c < P.count; c++) {
     double E = 0;
     for (int32_t v = (int32_t)bs_sum_lo(P, c); v < (int32_t)bs_sum_hi(P, c); v++)
-      E -= fem->mass[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
+      E -= w[v] * (g[0] * x[3 * v] + g[1] * x[3 * v + 1] + g[2] * x[3 * v + 2]);
     part[c] = E;
   }
   *Eout = bs_sum_parts(P.count, part);
@@ -126,9 +130,10 @@ static int gravity_gradient(const bs_term *t, const double *x, double *E, double
   const double *gd = t->data;
   double s = gravity_load(t), g[3] = {s * gd[0], s * gd[1], s * gd[2]};
   const bs_fem *fem = t->fem;
+  const double *w = gravity_weights(fem);
 #pragma omp parallel for schedule(static) if (fem->n_vertices > 8192)
   for (int32_t v = 0; v < fem->n_vertices; v++)
-    for (int k = 0; k < 3; k++) grad[3 * v + k] -= fem->mass[v] * g[k];
+    for (int k = 0; k < 3; k++) grad[3 * v + k] -= w[v] * g[k];
   return gravity_value(t, x, E);
 }
 static int gravity_hessian(const bs_term *t, const double *x, bs_bsr *H) { return BS_TERM_OK; }

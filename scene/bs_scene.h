@@ -91,6 +91,9 @@ typedef struct bs_scene_material {
   double youngs, poisson, density, rayleigh; /* Pa, 1, kg/m^3, s              */
 } bs_scene_material;
 
+/* bodies[].element: the finite element of a body. */
+typedef enum { BS_ELEMENT_TET4 = 0, BS_ELEMENT_TET10 = 1 } bs_element_kind;
+
 typedef enum { BS_INIT_REST = 0, BS_INIT_RANDOM, BS_INIT_POINT } bs_init_kind;
 
 typedef struct bs_scene_body {
@@ -103,6 +106,8 @@ typedef struct bs_scene_body {
   int close_holes;         /* a surface mesh (.off .obj .ply): close its small holes [0] */
   int mesher;              /* a closed surface at mesh_size: BS_SURFACE_AUTO / CGAL / REMESH [auto] */
   bs_order reorder;
+  int element;             /* BS_ELEMENT_TET4 [default] or BS_ELEMENT_TET10 (bs_tet10.h: the
+                              linear mesh gains its edge midpoints) */
   double translate[3], rotate[3] /* axis * angle (degrees) */, scale[3];
   int n_materials;         /* [0] is the default; others by group name          */
   bs_scene_material *materials;

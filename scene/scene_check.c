@@ -149,6 +149,19 @@ static int check_time(const bs_scene *s, bs_error *err) {
   return 0;
 }
 
+/* bodies[].element: tet4 or tet10; tet10 on the serial backend (the
+ * simulation refuses the rest: bs_sim_create). */
+static int check_elements(const bs_scene *s, bs_error *err) {
+  for (int i = 0; i < s->n_bodies; i++) {
+    const int e = s->bodies[i].element;
+    if (e != BS_ELEMENT_TET4 && e != BS_ELEMENT_TET10)
+      return bad(s, err, "bodies.%d.element: must be tet4 or tet10, got %d", i, e);
+    if (e == BS_ELEMENT_TET10 && s->backend != BS_BACKEND_SERIAL)
+      return bad(s, err, "bodies.%d.element: tet10 is not supported with solver.backend petsc", i);
+  }
+  return 0;
+}
+
 int bs_scene_check(const bs_scene *s, bs_error *err) {
   int st;
   if ((st = check_time(s, err))) return st;
@@ -174,6 +187,7 @@ int bs_scene_check(const bs_scene *s, bs_error *err) {
   if (s->n_bodies < 1) return bad(s, err, "bodies: must be a non-empty array");
   for (int i = 0; i < s->n_bodies; i++)
     if ((st = check_body(s, &s->bodies[i], i, err))) return st;
+  if ((st = check_elements(s, err))) return st;
   for (int i = 0; i < s->n_obstacles; i++)
     if ((st = check_obstacle(s, &s->obstacles[i], i, err))) return st;
   if (s->vtu_every < 0) return bad(s, err, "output.vtu_every: must be an integer in [0, 1000000], got %d", s->vtu_every);

@@ -226,7 +226,9 @@ void bs_sim_measure(const bs_sim *s, int intersections, bs_sim_measures *m);
 void bs_sim_penetration(const bs_sim *s, int32_t *count, double *max_depth);
 
 /* Body b of the scene alone, as bs_sim_create makes it: read (or built),
- * refined, reordered, scaled, rotated, translated. The caller owns it. */
+ * refined, reordered, scaled, rotated, translated, and for bodies[].element
+ * tet10 made quadratic (bs_tet10_mesh: edge midpoints appended as vertices,
+ * bs_mesh.tets10). The caller owns it. */
 int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err);
 
 /* Free dofs (3 per free vertex). */

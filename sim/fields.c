@@ -10,6 +10,7 @@
 #include "bs_fields.h"
 #include "bs_forces.h"
 #include "bs_stress.h"
+#include "bs_tet10.h"
 
 #define HAS(f, F) (((f)->set & BS_FIELD_BIT(F)) != 0)
 
@@ -147,9 +148,50 @@ int bs_fields_create(const bs_sim *s, uint32_t set, bs_fields **out, bs_error *e
   return 0;
 }
 
+/* The stress fields of a quadratic tet t: det F and every measure averaged
+ * over its quadrature points, weighted by w_q det J_q (the plain mean on a
+ * straight tet's 4-point rule); inverted when det F <= 0 at some point. */
+static void tet10_fields(bs_fields *f, const bs_sim *s, int32_t t, int stress) {
+  const bs_fem *fem = s->fem;
+  bs_tet10_rest r;
+  double xt[30], J = 0, W = 0, F[9];
+  int inv = 0;
+  bs_fem_tet10_rest(fem, t, &r);
+  bs_fem_tet10_gather(fem, s->x, t, xt);
+  bs_stress_fields q[BS_TET10_MAX_POINTS], a;
+  memset(&a, 0, sizeof a);
+  if (stress) bs_tet10_stress(&s->materials[s->tet_material[t]], &r, xt, q);
+  for (int p = 0; p < r.n_points; p++) {
+    const double w = r.wdetJ[p];
+    bs_tet10_F(&r, p, xt, F);
+    const double Jp = bs_det3(F);
+    inv |= !(Jp > 0.0);
+    J += w * Jp, W += w;
+    if (!stress) continue;
+    for (int i = 0; i < 9; i++) a.P[i] += w * q[p].P[i], a.cauchy[i] += w * q[p].cauchy[i], a.green[i] += w * q[p].green[i];
+    for (int i = 0; i < 3; i++) a.stretch[i] += w * q[p].stretch[i];
+    a.von_mises += w * q[p].von_mises, a.psi += w * q[p].psi;
+  }
+  if (f->J) f->J[t] = J / W;
+  if (f->inverted) f->inverted[t] = (uint8_t)inv;
+  if (!stress) return;
+  for (int i = 0; i < 9; i++) a.P[i] /= W, a.cauchy[i] /= W, a.green[i] /= W;
+  for (int i = 0; i < 3; i++) a.stretch[i] /= W;
+  if (f->P) memcpy(f->P + 9 * (size_t)t, a.P, sizeof a.P);
+  if (f->cauchy) memcpy(f->cauchy + 9 * (size_t)t, a.cauchy, sizeof a.cauchy);
+  if (f->green) memcpy(f->green + 9 * (size_t)t, a.green, sizeof a.green);
+  if (f->stretch) memcpy(f->stretch + 3 * (size_t)t, a.stretch, sizeof a.stretch);
+  if (f->von_mises) f->von_mises[t] = a.von_mises / W;
+  if (f->psi) f->psi[t] = a.psi / W;
+}
+
 /* Tet t's measures into the buffers the set has. */
 static void tet_fields(bs_fields *f, const bs_sim *s, int32_t t, int stress) {
   const bs_fem *fem = s->fem;
+  if (fem->order == 2) {
+    tet10_fields(f, s, t, stress);
+    return;
+  }
   double xt[12], F[9];
   bs_fem_gather(fem, s->x, t, xt);
   bs_tet_F(xt, fem->Dm_inv + 9 * (size_t)fem->tet_pos[t], F);

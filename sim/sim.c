@@ -189,7 +189,7 @@ void bs_measure_state(const bs_fem *fem, const double *x, const double *v, const
   for (int32_t i = 0; i < fem->n_vertices; i++) {
     const double *vv = v + 3 * i, *xx = x + 3 * i;
     k += 0.5 * fem->mass[i] * (vv[0] * vv[0] + vv[1] * vv[1] + vv[2] * vv[2]);
-    gp -= fem->mass[i] * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
+    gp -= (fem->load ? fem->load[i] : fem->mass[i]) * (g[0] * xx[0] + g[1] * xx[1] + g[2] * xx[2]);
   }
   m->kinetic = k;
   m->gravity = gp;

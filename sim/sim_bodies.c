@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_tet10.h"
 #include "sim_internal.h"
 
 /* Rotation matrix from an axis-angle vector given in degrees. */
@@ -56,6 +57,11 @@ int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
     double p[3];
     for (int k = 0; k < 3; k++) p[k] = m->x[3 * v + k] * bd->scale[k];
     for (int k = 0; k < 3; k++) m->x[3 * v + k] = R[3 * k] * p[0] + R[3 * k + 1] * p[1] + R[3 * k + 2] * p[2] + bd->translate[k];
+  }
+  if (bd->element == BS_ELEMENT_TET10 && !m->tets10 && (st = bs_tet10_mesh(m, err))) {
+    bs_mesh_destroy(out);
+    bs_error_prefix(err, "%s: bodies.%d (element tet10)", sc->path, b);
+    return st;
   }
   return 0;
 }
@@ -192,9 +198,25 @@ static int per_body(bs_sim *s, bs_mesh **meshes, const int32_t *toff, const int 
   return 0;
 }
 
+/* What tet10 bodies do not run yet: self-collision (penalty or barrier:
+ * their contact pairs are linear triangles) and scenes of several bodies. */
+static int refuse_tet10(const bs_scene *sc, bs_error *err) {
+  for (int b = 0; b < sc->n_bodies; b++) {
+    if (sc->bodies[b].element != BS_ELEMENT_TET10) continue;
+    if (sc->self_collision)
+      return bs_error_set(err, BS_EINPUT, "%s: self_collision is not supported with bodies[].element tet10 (bodies.%d; model %s)",
+                          sc->path, b, sc->self_model == BS_SELF_MODEL_BARRIER ? "barrier" : "penalty");
+    if (sc->n_bodies > 1)
+      return bs_error_set(err, BS_EINPUT, "%s: bodies.%d.element: tet10 is supported in a scene of one body only (%d bodies)",
+                          sc->path, b, sc->n_bodies);
+  }
+  return 0;
+}
+
 int bs__sim_make_bodies(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
-  int nb = sc->n_bodies, st = 0, n_scripts = 0;
+  int nb = sc->n_bodies, st = refuse_tet10(sc, err), n_scripts = 0;
+  if (st) return st;
   s->n_bodies = nb;
   bs_mesh **meshes = calloc((size_t)nb, sizeof(bs_mesh *));
   int32_t *toff = calloc((size_t)nb + 1, sizeof(int32_t));

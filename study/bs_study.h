@@ -379,6 +379,21 @@ int bs_study_plots_write(const bs_study *S, bs_error *err);
  * GCI along each refinement or time knob, and the observed orders. */
 void bs_study_summary_write(const bs_study *S, FILE *f);
 
+
+/* ---- the study's results, for programs (the Python package) ------------- */
+
+/* GCI of quantity q (an index into S->qoi) along knob k for method: the
+ * three finest complete runs of the knob's group (other knobs at the
+ * reference, distinct h), their q_last values.
+ * used[3] gets their run indices (-1: missing), *n_skipped the runs of the
+ * group that failed or timed out. BS_GCI_BAD_INPUT with fewer than three. */
+bs_gci_status bs_study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
+                              int *n_skipped);
+/* h of run r for knob k: 2^-refine (space) or dt (time). */
+double bs_study_knob_h(const bs_study *S, const bs_study_run *r, int k);
+/* The distinct methods of the runs, in run order (pointers into the runs). */
+int bs_study_methods(const bs_study *S, const char **names, int max);
+
 #ifdef __cplusplus
 }
 #endif

@@ -63,13 +63,6 @@ int bs__study_compare_run(const bs_study *S, bs_study_run *r, const char *ref_di
  * lacks a name. */
 int bs__study_read_qoi(bs_study *S);
 
-/* GCI of quantity q (an index into S->qoi) along knob k for method: the
- * three finest complete runs of the knob's group (other knobs at the
- * reference, distinct h), their q_last values.
- * used[3] gets their run indices (-1: missing), *n_skipped the runs of the
- * group that failed or timed out. BS_GCI_BAD_INPUT with fewer than three. */
-bs_gci_status bs__study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
-                               int *n_skipped);
 
 /* Largest vertex speed over all frames of dir/state.bin (m/s); 0 if unreadable. */
 double bs__study_max_speed(const char *dir);
@@ -84,8 +77,6 @@ typedef struct bs_study_order {
 /* The runs of method with every knob but k (and the method) at its finest
  * value, into out (n_runs entries); returns how many. */
 int bs__study_group(const bs_study *S, int k, const char *method, int *out);
-/* h of run r for knob k: 2^-refine (space) or dt (time). */
-double bs__study_knob_h(const bs_study *S, const bs_study_run *r, int k);
 /* Whether run r of a knob-k group enters the fit against the reference. */
 int bs__study_fit_point(const bs_study *S, const bs_study_run *r, int k);
 /* The order of knob k for method against the reference. */
@@ -94,7 +85,5 @@ bs_study_order bs__study_order_fit(const bs_study *S, int k, const char *method)
  * the next finer one; reads their state files). pts (may be NULL) gets a
  * line "LEVEL ERROR" per pair. NAN when fewer than two pairs. */
 double bs__study_order_successive(const bs_study *S, int k, const char *method, int *used, FILE *pts);
-/* The distinct methods of the runs, in run order (pointers into the runs). */
-int bs__study_methods(const bs_study *S, const char **names, int max);
 
 #endif

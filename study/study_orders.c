@@ -20,13 +20,13 @@ int bs__study_group(const bs_study *S, int k, const char *method, int *out) {
   return n;
 }
 
-double bs__study_knob_h(const bs_study *S, const bs_study_run *r, int k) {
+double bs_study_knob_h(const bs_study *S, const bs_study_run *r, int k) {
   const bs_study_knob *v = &S->knobs[k];
   if (v->kind == BS_KNOB_REFINE) return pow(2.0, -v->num[r->idx[k]]);
   return 1.0 / (r->fps * r->spf);
 }
 
-int bs__study_methods(const bs_study *S, const char **names, int max) {
+int bs_study_methods(const bs_study *S, const char **names, int max) {
   int n = 0;
   for (int i = 0; i < S->n_runs && n < max; i++) {
     int seen = 0;
@@ -53,7 +53,7 @@ bs_study_order bs__study_order_fit(const bs_study *S, int k, const char *method)
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
       if (!bs__study_fit_point(S, r, k)) continue;
-      x[m] = bs__study_knob_h(S, r, k);
+      x[m] = bs_study_knob_h(S, r, k);
       y[m] = r->pos_max;
       m++;
     }
@@ -69,7 +69,7 @@ bs_study_order bs__study_order_fit(const bs_study *S, int k, const char *method)
 static int sorted_group(const bs_study *S, int k, const char *method, int *grp) {
   int ng = bs__study_group(S, k, method, grp);
   for (int i = 1; i < ng; i++)
-    for (int j = i; j > 0 && bs__study_knob_h(S, &S->runs[grp[j]], k) > bs__study_knob_h(S, &S->runs[grp[j - 1]], k);
+    for (int j = i; j > 0 && bs_study_knob_h(S, &S->runs[grp[j]], k) > bs_study_knob_h(S, &S->runs[grp[j - 1]], k);
          j--) {
       int t = grp[j];
       grp[j] = grp[j - 1];
@@ -85,7 +85,7 @@ static int level_pairs(const bs_study *S, int k, const int *grp, int ng, double 
   int m = 0;
   for (int i = 0; i + 1 < ng; i++) {
     const bs_study_run *a = &S->runs[grp[i]], *b = &S->runs[grp[i + 1]];
-    double ha = bs__study_knob_h(S, a, k), hb = bs__study_knob_h(S, b, k);
+    double ha = bs_study_knob_h(S, a, k), hb = bs_study_knob_h(S, b, k);
     if (a->exit_code != 0 || b->exit_code != 0 || !(hb < ha)) continue;
     bs_study_run tmp = *a;
     int64_t off_b[BS_STUDY_MAX_BODIES];

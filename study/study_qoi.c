@@ -101,7 +101,7 @@ int bs__study_read_qoi(bs_study *S) {
   return n_bad;
 }
 
-bs_gci_status bs__study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
+bs_gci_status bs_study_qoi_gci(const bs_study *S, int k, const char *method, int q, bs_gci *g, int used[3],
                                int *n_skipped) {
   int *grp = malloc(sizeof(int) * ((size_t)S->n_runs + 1));
   used[0] = used[1] = used[2] = -1;
@@ -110,10 +110,10 @@ bs_gci_status bs__study_qoi_gci(const bs_study *S, int k, const char *method, in
   /* the three finest (smallest h) complete runs, fine to coarse */
   for (int pass = 0; pass < 3; pass++) {
     int best = -1;
-    double hb = INFINITY, hprev = pass ? bs__study_knob_h(S, &S->runs[used[pass - 1]], k) : 0;
+    double hb = INFINITY, hprev = pass ? bs_study_knob_h(S, &S->runs[used[pass - 1]], k) : 0;
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
-      double h = bs__study_knob_h(S, r, k), v = r->q_last[q];
+      double h = bs_study_knob_h(S, r, k), v = r->q_last[q];
       if (pass == 0 && (r->exit_code != 0 || r->timed_out)) (*n_skipped)++;
       if (r->exit_code != 0 || r->timed_out || !isfinite(v) || !(h > hprev * (1 + 1e-12)) || !(h < hb)) continue;
       best = grp[i], hb = h;
@@ -124,7 +124,7 @@ bs_gci_status bs__study_qoi_gci(const bs_study *S, int k, const char *method, in
   free(grp);
   double h[3], f[3];
   for (int i = 0; i < m; i++) {
-    h[i] = bs__study_knob_h(S, &S->runs[used[i]], k);
+    h[i] = bs_study_knob_h(S, &S->runs[used[i]], k);
     f[i] = S->runs[used[i]].q_last[q];
   }
   if (m < 3) {

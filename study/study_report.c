@@ -188,7 +188,7 @@ static void plot_refine_method(const bs_study *S, int k, int m, const char *meth
     for (int i = 0; i < ng; i++) {
       const bs_study_run *r = &S->runs[grp[i]];
       if (!bs__study_fit_point(S, r, k) || !(r->pos_max > 0)) continue;
-      if (is_t) fprintf(d, "%.9g %.9g\n", bs__study_knob_h(S, r, k), r->pos_max);
+      if (is_t) fprintf(d, "%.9g %.9g\n", bs_study_knob_h(S, r, k), r->pos_max);
       else fprintf(d, "%s %.9g\n", S->knobs[k].vals[r->idx[k]], r->pos_max);
     }
     fprintf(d, "\n\n");
@@ -280,7 +280,7 @@ static void plot_iterations(const bs_study *S, int k, const char **methods, int 
 
 int bs_study_plots_write(const bs_study *S, bs_error *err) {
   const char *methods[MAX_METHODS];
-  int nm = bs__study_methods(S, methods, MAX_METHODS);
+  int nm = bs_study_methods(S, methods, MAX_METHODS);
   char p[BS_STUDY_FILE_PATH];
   int st = bs_study_file_path(S->out, "plots.gp", p, err);
   if (st) return st;

@@ -61,7 +61,7 @@ static void summary_qoi_runs(const bs_study *S, FILE *f) {
 static void summary_gci(const bs_study *S, int k, const char *method, int q, FILE *f) {
   bs_gci g;
   int used[3], skipped;
-  bs_gci_status st = bs__study_qoi_gci(S, k, method, q, &g, used, &skipped);
+  bs_gci_status st = bs_study_qoi_gci(S, k, method, q, &g, used, &skipped);
   fprintf(f, "  %s along %s (%s), method %s: ", S->qoi[q], S->knobs[k].key,
           bs_study_knob_is_time(&S->knobs[k]) ? "h = dt" : "h = 2^-level", method);
   if (used[2] < 0) {
@@ -93,7 +93,7 @@ static void summary_qoi(const bs_study *S, const char **methods, int nm, FILE *f
 
 void bs_study_summary_write(const bs_study *S, FILE *f) {
   const char *methods[MAX_METHODS];
-  int nm = bs__study_methods(S, methods, MAX_METHODS);
+  int nm = bs_study_methods(S, methods, MAX_METHODS);
   int n_failed = 0, n_timeout = 0;
   for (int i = 0; i < S->n_runs; i++) {
     n_failed += S->runs[i].exit_code != 0 && !S->runs[i].timed_out;

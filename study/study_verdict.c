@@ -29,7 +29,7 @@ static int quantity_gci(const bs_study *S, const char *method, int q, bs_study_j
       if (pass == 0 ? v->kind != BS_KNOB_REFINE : !bs_study_knob_is_time(v)) continue;
       bs_gci g;
       int used[3], skipped;
-      bs_gci_status st = bs__study_qoi_gci(S, k, method, q, &g, used, &skipped);
+      bs_gci_status st = bs_study_qoi_gci(S, k, method, q, &g, used, &skipped);
       if (st == BS_GCI_BAD_INPUT) continue;
       int ok = (st == BS_GCI_OK || st == BS_GCI_CONVERGED) && isfinite(g.extrapolated);
       if (j->knob < 0 || ok) {

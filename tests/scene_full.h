@@ -23,7 +23,7 @@ static const char *const bs_test_full_scene =
     " \"gravity\": [0, -9.8, 0], \"drag\": 0,\n"
     " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [2, 2, 2], \"size\": [1, 1, 1]}, \"mesh_size\": 0,\n"
     "   \"min_dihedral\": 10,\n"
-    "   \"refine\": 0, \"close_holes\": false, \"reorder\": \"none\", \"scale\": [1, 1, 1], \"rotate\": [0, 0, 0],\n"
+    "   \"refine\": 0, \"close_holes\": false, \"reorder\": \"none\", \"element\": \"tet4\", \"scale\": [1, 1, 1], \"rotate\": [0, 0, 0],\n"
     "   \"translate\": [0, 0, 0],\n"
     "   \"material\": {\"model\": \"fixed_corotated\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000,\n"
     "                \"rayleigh\": 0},\n"

@@ -570,23 +570,51 @@ Test(mesh_read, surface_only_msh_has_no_volume_elements) {
   remove_tmpdir();
 }
 
-Test(mesh_read, second_order_tets_are_named_and_counted) {
+Test(mesh_read, second_order_tets_read_as_corners_and_midside_nodes) {
   make_tmpdir();
-  /* Two 10-node tets (Gmsh type 11) written by hand. */
+  /* One 10-node tet (Gmsh type 11) written by hand: its corners' linear mesh and its 6 midside nodes
+     (node 10 is off its edge (1, 3), Gmsh's 9th node); a 4-node and a 10-node tet together are refused. */
   const char *msh = tmp_path("tet10.msh");
   write_text(msh, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
                   "$Nodes\n10\n"
                   "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.5 0 0\n6 0.5 0.5 0\n7 0 0.5 0\n"
-                  "8 0 0 0.5\n9 0 0.5 0.5\n10 0.5 0 0.5\n$EndNodes\n"
-                  "$Elements\n2\n"
-                  "1 11 2 1 1 1 2 3 4 5 6 7 8 9 10\n"
-                  "2 11 2 1 1 1 2 3 4 5 6 7 8 9 10\n$EndElements\n");
-  read_fails(msh, NULL, BS_EINPUT, (const char *[]){msh, "2 \"Tetrahedron 10\"", NULL});
-  /* And from a geometry meshed at order 2. */
+                  "8 0 0 0.5\n9 0 0.5 0.5\n10 0.55 0 0.5\n$EndNodes\n"
+                  "$Elements\n1\n"
+                  "1 11 2 1 1 1 2 3 4 5 6 7 8 9 10\n$EndElements\n");
+  bs_mesh *m = read_ok(msh, NULL);
+  cr_expect_eq(m->n_vertices, 4);
+  cr_expect_eq(m->n_dropped, 0);
+  cr_expect_eq(m->n_midside, 6);
+  int found = 0;
+  for (int i = 0; i < 6; i++) {
+    const int32_t a = m->midside_edge[2 * i], b = m->midside_edge[2 * i + 1];
+    const double *p = m->midside_x + 3 * i;
+    if (p[0] == 0.55) { /* Gmsh's node 10 is the edge (1, 3), VTK's node 8: the corners at x = 1 and z = 1 */
+      found = 1;
+      cr_expect_eq(m->x[3 * a] + m->x[3 * b], 1.0);
+      cr_expect_eq(m->x[3 * a + 2] + m->x[3 * b + 2], 1.0);
+    } else {
+      for (int k = 0; k < 3; k++) cr_expect_eq(p[k], 0.5 * (m->x[3 * a + k] + m->x[3 * b + k]));
+    }
+  }
+  cr_expect(found);
+  bs_mesh_destroy(&m);
+  const char *mixed = tmp_path("mixed.msh");
+  write_text(mixed, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+                    "$Nodes\n11\n"
+                    "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0.5 0 0\n6 0.5 0.5 0\n7 0 0.5 0\n"
+                    "8 0 0 0.5\n9 0 0.5 0.5\n10 0.5 0 0.5\n11 1 1 1\n$EndNodes\n"
+                    "$Elements\n2\n"
+                    "1 11 2 1 1 1 2 3 4 5 6 7 8 9 10\n"
+                    "2 4 2 1 2 2 3 4 11\n$EndElements\n"); /* on another entity */
+  read_fails(mixed, NULL, BS_EINPUT, (const char *[]){mixed, "1 \"Tetrahedron 10\"", NULL});
+  /* And from a geometry meshed at order 2: read. */
   const char *geo = tmp_path("order2.geo");
   write_text(geo, "SetFactory(\"OpenCASCADE\");\nBox(1) = {0, 0, 0, 1, 1, 1};\n"
                   "Mesh.MeshSizeMax = 0.5;\nMesh.ElementOrder = 2;\n");
-  read_fails(geo, NULL, BS_EINPUT, (const char *[]){geo, "\"Tetrahedron 10\"", NULL});
+  m = read_ok(geo, NULL);
+  cr_expect_eq(m->n_midside, 6 * m->n_tets);
+  bs_mesh_destroy(&m);
   remove_tmpdir();
 }
 

@@ -1,4 +1,4 @@
-/* A study's quantities of interest (bs__study_read_qoi, bs__study_qoi_gci)
+/* A study's quantities of interest (bs__study_read_qoi, bs_study_qoi_gci)
  * without processes: run folders get hand-written qoi.csv files whose last
  * value follows f(dt) = f0 + C dt^p, so that the observed order, the
  * Richardson extrapolation and the errors against the reference are known;
@@ -77,14 +77,14 @@ Test(study_qoi, errors_order_and_extrapolation_of_a_known_sequence) {
   cr_expect_eq(S->runs[3].q_err_last[0], 0.0);
   bs_gci g;
   int used[3], skipped;
-  cr_assert_eq(bs__study_qoi_gci(S, 0, "optimization", 0, &g, used, &skipped), BS_GCI_OK);
+  cr_assert_eq(bs_study_qoi_gci(S, 0, "optimization", 0, &g, used, &skipped), BS_GCI_OK);
   cr_expect(used[0] == 3 && used[1] == 2 && used[2] == 1, "the three finest, fine to coarse: %d %d %d", used[0],
             used[1], used[2]);
   cr_expect(fabs(g.p - 1.5) < 1e-9, "order %.12g", g.p);
   cr_expect(fabs(g.extrapolated - 0.25) < 1e-12, "extrapolated %.15g", g.extrapolated);
   /* the finest level fails: the GCI comes from the three levels left, none skipped silently */
   S->runs[3].exit_code = 1;
-  cr_assert_eq(bs__study_qoi_gci(S, 0, "optimization", 0, &g, used, &skipped), BS_GCI_OK);
+  cr_assert_eq(bs_study_qoi_gci(S, 0, "optimization", 0, &g, used, &skipped), BS_GCI_OK);
   cr_expect_eq(skipped, 1);
   cr_expect(used[0] == 2 && used[2] == 0);
   cr_expect(fabs(g.extrapolated - 0.25) < 1e-12);

@@ -45,6 +45,7 @@ typedef struct bs_group {
   int dim; int tag; char *name;
   int32_t n_elems; int32_t *elems;
   int32_t n_vertices; int32_t *vertices;
+  ...;
 } bs_group;
 typedef struct bs_mesh {
   int32_t n_vertices; double *x;
@@ -62,6 +63,7 @@ typedef struct bs_mesh_read_opts {
 typedef struct bs_mesh_quality {
   double vol_min, vol_max, dihedral_min, dihedral_max, radius_ratio_min, radius_ratio_mean;
   int32_t n_inverted, n_degenerate, n_sliver;
+  ...;
 } bs_mesh_quality;
 int bs_mesh_load(const char *spec, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 int bs_mesh_create(int32_t n_vertices, const double *x, int32_t n_tets, const int32_t *tets,
@@ -123,6 +125,7 @@ typedef struct bs_sim_step { bs_step_stats st; double time; int32_t inverted; ch
 typedef struct bs_frame_stats {
   int frame; double time; int n_steps; const bs_sim_step *steps;
   long iterations, cg_iterations, failed; double seconds; double grad_max;
+  ...;
 } bs_frame_stats;
 typedef struct bs_run_totals {
   long steps, failed, iterations, cg, ls, indefinite, fb_dx, fb_grad, clamps, chol_fb, downhill, floor;
@@ -139,6 +142,7 @@ typedef struct bs_sim {
 typedef struct bs_sim_measures {
   double kinetic, elastic, gravity, total; int32_t inverted; double min_detF;
   int32_t penetrating; double max_depth; int64_t self_intersections;
+  ...;
 } bs_sim_measures;
 int bs_sim_create(const bs_scene *scene, bs_sim **out, bs_error *err);
 void bs_sim_destroy(bs_sim **s);
@@ -170,7 +174,9 @@ void bs_qoi_destroy(bs_qoi **q);
 
 /* ---- run folders ----------------------------------------------------------- */
 typedef struct bs_runfolder bs_runfolder;
-typedef struct bs_runfolder_opts { int replace; const char *command_line; } bs_runfolder_opts;
+typedef struct bs_runfolder_opts { int replace; const char *command_line; 
+  ...;
+} bs_runfolder_opts;
 int bs_runfolder_open(const char *dir, const bs_sim *s, const bs_runfolder_opts *opts, bs_runfolder **out,
                       bs_error *err);
 void bs_runfolder_destroy(bs_runfolder **rf);
@@ -181,7 +187,9 @@ int bs_runfolder_checkpoint(bs_runfolder *rf, const bs_sim *s, bs_error *err);
 /* ---- studies ----------------------------------------------------------------- */
 typedef enum { BS_GCI_OK, BS_GCI_OSCILLATORY, BS_GCI_DIVERGENT, BS_GCI_CONVERGED, BS_GCI_NO_ORDER,
                BS_GCI_BAD_INPUT } bs_gci_status;
-typedef struct bs_gci { bs_gci_status status; double p, extrapolated, e_a, e_ext, gci_fine, gci_coarse, asymptotic; } bs_gci;
+typedef struct bs_gci { bs_gci_status status; double p, extrapolated, e_a, e_ext, gci_fine, gci_coarse, asymptotic; 
+  ...;
+} bs_gci;
 const char *bs_gci_status_name(bs_gci_status s);
 bs_gci_status bs_study_gci(const double h[3], const double f[3], bs_gci *g);
 typedef enum { BS_KNOB_STEPS_PER_FRAME, BS_KNOB_TOLERANCE, BS_KNOB_REFINE, BS_KNOB_METHOD, BS_KNOB_DT,
@@ -208,6 +216,7 @@ const char *bs_study_run_status(const bs_study_run *r);
 typedef struct bs_study_opts {
   const char *scene; int n_sets; const char *const *sets; int n_knobs; const bs_study_knob *knobs;
   const char *reference; const char *out; int n_qoi; const char *const *qoi;
+  ...;
 } bs_study_opts;
 typedef struct bs_study {
   char scene_path[...], name[...], out[...]; char ref_dir[...];
