@@ -221,6 +221,7 @@ static int merge(ipc_data *d, int nt) {
   if (grow((void **)&d->pairs, &d->cap_pairs, n, sizeof(ipc_pair))) return BS_ENOMEM;
   d->n_pairs = 0;
   for (int t = 0; t < nt; t++) {
+    if (d->tb[t].n == 0) continue; /* no pairs (and maybe no buffers) */
     memcpy(d->pairs + d->n_pairs, d->tb[t].p, sizeof(ipc_pair) * (size_t)d->tb[t].n);
     d->n_pairs += d->tb[t].n;
   }
