@@ -88,9 +88,10 @@ struct Constrained_edges {
 };
 
 // std::cout silenced for the lifetime of the object.
+// (sink is declared first: members are built in declaration order.)
 struct Quiet_cout {
-  std::streambuf *saved;
   std::ostringstream sink;
+  std::streambuf *saved;
   Quiet_cout() : saved(std::cout.rdbuf(sink.rdbuf())) {}
   ~Quiet_cout() { std::cout.rdbuf(saved); }
 };

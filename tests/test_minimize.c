@@ -159,13 +159,18 @@ static bs_objective make_obj(fx *f, const uint8_t *mask) {
 }
 
 /* One bs_minimize call of a fresh minimizer with options o on f from x
- * (no mask); asserts that the call ran (status 0) and returns its stats. */
+ * (no mask); asserts that the call ran (status 0) and returns its stats.
+ * stats.reason_text points into the minimizer, so it is copied to a buffer
+ * that outlives it (valid until the next call). */
 static void min_run_obj(const bs_bsr *P, const bs_minimize_opts *o, const bs_objective *obj, double *x,
                         bs_minimize_stats *st) {
+  static char reason[512];
   bs_minimizer *m = NULL;
   bs_error err = {0};
   cr_assert_eq(bs_minimizer_create(P, o, &m, &err), 0, "%s", err.msg);
   cr_assert_eq(bs_minimize(m, obj, x, st, &err), 0, "%s", err.msg);
+  snprintf(reason, sizeof reason, "%s", st->reason_text ? st->reason_text : "");
+  st->reason_text = reason;
   bs_minimizer_destroy(&m);
 }
 
