@@ -1,13 +1,13 @@
 #!/usr/bin/python3
 """The cost of driving bigstep from Python (not a test).
 
-    /usr/bin/python3 bench/python_overhead.py [--cli build/app/bigstep] [--reps 3] [--force]
+    /usr/bin/python3 bench/python_overhead.py [--cli build/app/bigstep] [--reps 5] [--force]
 
 For data/scenes/cube_stretch.json and the paper's Figure 7
 (data/scenes/paper/fig7_two_spheres.json), 24 frames each: the wall time of
 `bigstep run` (a process: start, scene, mesh, run, its folder) against the
 same run from Python in this process (Scene, Simulation, run(), close(): the
-same folder written), best of --reps, alternating; then the cost of reading
+same folder written), median of --reps, alternating; then the cost of reading
 sim.x once per frame (a view: O(1), independent of the vertex count) against
 copying it, and the cost of a call into a Python energy term (a term that
 adds nothing, counted). Prints a table with ratios and writes it to
@@ -19,6 +19,7 @@ average is above 3 (other builds on the machine), unless --force.
 import argparse
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -34,7 +35,7 @@ FRAMES = 24
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", default=os.path.join(SRC, "build", "app", "bigstep"))
-    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--force", action="store_true")
     ap.add_argument("--out", default=os.path.join(HERE, "results", "python-overhead.txt"))
     a = ap.parse_args()
@@ -68,7 +69,7 @@ def main():
                     sim.run()
                     n = sim.n_vertices
                 t_py.append(time.perf_counter() - t0)
-            rows.append((name, n, min(t_cli), min(t_py)))
+            rows.append((name, n, statistics.median(t_cli), statistics.median(t_py)))
 
         # reading sim.x per frame: a view (O(1)) against a copy (O(n))
         reads = []
@@ -122,7 +123,7 @@ def main():
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
-    lines = head + ["", "24-frame runs (wall seconds, best of %d; both write the scene's run folder)" % a.reps,
+    lines = head + ["", "24-frame runs (wall seconds, median of %d; both write the scene's run folder)" % a.reps,
                     "%-18s %9s %12s %12s %8s" % ("scene", "vertices", "cli s", "python s", "py/cli")]
     for name, n, c, p in rows:
         lines.append("%-18s %9d %12.3f %12.3f %8.3f" % (name, n, c, p, p / c))

@@ -12,7 +12,7 @@
 
 static bs_frame_loop loop_of(bs_dsim *s) {
   return (bs_frame_loop){s->scene, bs_dintegrator_integrator(s->integrator), s->x, s->v, &s->frame, &s->time,
-                         s->steps};
+                         s->steps, NULL};
 }
 
 int bs_dsim_set_stop(bs_dsim *s, volatile sig_atomic_t *stop, bs_error *err) {

@@ -31,13 +31,15 @@ typedef struct bs_frame_loop {
   int *frame;          /* frames completed                                 */
   double *time;        /* s                                                */
   bs_sim_step *steps;  /* steps_per_frame records of the last frame       */
+  int *substep;        /* steps of frame *frame + 1 already taken (between  */
+                       /* frames 0); NULL: frames are taken whole only      */
 } bs_frame_loop;
 
 typedef struct bs_frame_snap {
   double *xv; /* 9 per vertex: x, v and the previous step's displacement,
                  then the integrator's history (bs_integrator_history_doubles) */
   double time;
-  int frame;
+  int frame, substep;
   bs_min_carry carry;
   bs_previous_step prev;
   bs_step_history hist; /* hist.h points into xv */
@@ -49,10 +51,18 @@ void bs_frame_snap_take(const bs_frame_loop *L, bs_frame_snap *sn);
 /* Puts the snapshot back and returns BS_SIM_STOPPED. */
 int bs_frame_snap_undo(const bs_frame_loop *L, const bs_frame_snap *sn);
 
-/* One frame; stop (may be NULL) and sn (NULL when no stop can come) as at
- * the top. fs: the frame's sums (fs->steps points into L->steps). */
+/* One frame (the rest of it, after steps taken with bs_frame_step); stop
+ * (may be NULL) and sn (NULL when no stop can come) as at the top. fs: the
+ * frame's sums (fs->steps points into L->steps). */
 int bs_frame_advance(const bs_frame_loop *L, volatile sig_atomic_t *stop, bs_frame_snap *sn, bs_frame_stats *fs,
                      bs_error *err);
+
+/* One step: step *substep of frame *frame + 1 (L->substep must be set).
+ * After the frame's last step the frame is complete as bs_frame_advance
+ * completes it: *done = 1 and *fs its sums; otherwise *done = 0 and fs is
+ * untouched. k steps one at a time give bs_frame_advance's state bit for
+ * bit. */
+int bs_frame_step(const bs_frame_loop *L, int *done, bs_frame_stats *fs, bs_error *err);
 
 /* The static solve (load_steps from the scene) as frame 1; with sn, a solve
  * stopped by the integrator's stop flag is undone (BS_SIM_STOPPED). */

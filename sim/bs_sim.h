@@ -7,7 +7,8 @@
  * self-collision: a term exists only when the scene asks for it), the
  * scripted vertices, the obstacles' projection and friction hooks, and the
  * integrator (bs_step.h). Then:
- *   bs_sim_advance_frame   one frame: steps_per_frame backward Euler steps;
+ *   bs_sim_advance_frame   one frame: steps_per_frame time steps;
+ *   bs_sim_take_step       one time step (a frame taken step by step);
  *   bs_sim_statics         the static solve (scene mode "static");
  *   bs_sim_run             every frame of the scene (or the static solve),
  *                          calling a callback after each for whoever prints
@@ -137,6 +138,8 @@ typedef struct bs_sim {
   bs_step_data step;    /* filled by the integrator each step */
   bs_integrator *integrator;
   int frame;            /* frames completed                   */
+  int substep;          /* steps of frame `frame` + 1 taken (bs_sim_take_step); */
+                        /* 0 between frames                                  */
   double time;          /* s                                  */
   bs_sim_step *steps;   /* steps_per_frame records of the last frame */
 } bs_sim;
@@ -151,8 +154,21 @@ void bs_sim_destroy(bs_sim **s);
  * error). Call before the first step. */
 int bs_sim_add_term(bs_sim *s, bs_term *t, bs_error *err);
 
-/* One frame of the dynamic scene: steps_per_frame steps from s->time. */
+/* One frame of the dynamic scene: steps_per_frame steps from s->time (the
+ * rest of the frame when bs_sim_take_step began it). */
 int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err);
+
+/* One time step of the dynamic scene: step s->substep of frame s->frame + 1,
+ * its record in s->steps[k]. After the frame's last step the frame is
+ * complete (s->frame advances, s->substep is 0, s->time is exactly
+ * frame / fps): *frame_done = 1 and *fs (may be NULL) holds the frame's sums;
+ * otherwise *frame_done = 0. Steps taken one at a time give the state and
+ * the statistics of bs_sim_advance_frame, bit for bit. BS_EINPUT for a
+ * static scene. Example:
+ *     int done = 0;
+ *     while (!done) if (bs_sim_take_step(s, &done, &fs, &err)) ...;   (one frame)
+ */
+int bs_sim_take_step(bs_sim *s, int *frame_done, bs_frame_stats *fs, bs_error *err);
 
 /* The static solve of a scene in mode "static" (frame 1, at time 0). */
 int bs_sim_statics(bs_sim *s, bs_frame_stats *fs, bs_error *err);
@@ -189,7 +205,7 @@ int bs_sim_run_with(bs_sim *s, const bs_sim_run_opts *opts, bs_run_totals *total
  * frame / fps, with positions x and velocities v (3n each, copied): to
  * continue a run from a saved state (bs_runfolder.h, checkpoint.bin).
  * BS_EINPUT when the frame is outside [0, frames], the scene is static or a
- * value is not finite; before the first frame only or between frames. */
+ * value is not finite; s->substep is 0 after it. */
 int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err);
 
 /* What a frame row records of the current state. */

@@ -24,6 +24,7 @@ void bs_frame_snap_take(const bs_frame_loop *L, bs_frame_snap *sn) {
   memcpy(sn->xv + n3, L->v, sizeof(double) * n3);
   sn->time = *L->time;
   sn->frame = *L->frame;
+  sn->substep = L->substep ? *L->substep : 0;
   bs_integrator_get_carry(L->integ, &sn->carry);
   sn->prev.d = sn->xv + 2 * n3;
   bs_integrator_get_previous(L->integ, &sn->prev);
@@ -37,6 +38,7 @@ int bs_frame_snap_undo(const bs_frame_loop *L, const bs_frame_snap *sn) {
   memcpy(L->v, sn->xv + n3, sizeof(double) * n3);
   *L->time = sn->time;
   *L->frame = sn->frame;
+  if (L->substep) *L->substep = sn->substep;
   bs_integrator_set_carry(L->integ, &sn->carry);
   bs_integrator_set_previous(L->integ, &sn->prev);
   bs_integrator_set_history(L->integ, &sn->hist);
@@ -61,30 +63,64 @@ static int stop_asked(const bs_frame_loop *L, volatile sig_atomic_t *stop, int *
   return stop ? bs_integrator_any(L->integ, *stop != 0, asked, err) : 0;
 }
 
+/* Step k of frame f: the integrator's step, the time at its end, its record. */
+static int take_step(const bs_frame_loop *L, int f, int k, bs_error *err) {
+  const bs_scene *sc = L->scene;
+  bs_sim_step *rec = &L->steps[k];
+  int rc = bs_integrator_step(L->integ, *L->time, sc->dt, L->x, L->v, &rec->st, err);
+  if (rc) {
+    bs_error_prefix(err, "frame %d step %d", f, k);
+    return rc;
+  }
+  *L->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
+  return record(L, rec, err);
+}
+
+/* The frame's end after its last step: time exactly f / fps, its sums. */
+static void end_frame(const bs_frame_loop *L, int f, bs_frame_stats *fs) {
+  const bs_scene *sc = L->scene;
+  *L->time = f / sc->fps;
+  *L->frame = f;
+  if (L->substep) *L->substep = 0;
+  bs_frame_sums(*L->frame, *L->time, sc->steps_per_frame, L->steps, fs);
+}
+
+static int dynamic_only(const bs_frame_loop *L, bs_error *err) {
+  const bs_scene *sc = L->scene;
+  if (sc->mode != BS_MODE_DYNAMIC)
+    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
+  return 0;
+}
+
 int bs_frame_advance(const bs_frame_loop *L, volatile sig_atomic_t *stop, bs_frame_snap *sn, bs_frame_stats *fs,
                      bs_error *err) {
   const bs_scene *sc = L->scene;
   const int f = *L->frame + 1;
-  if (sc->mode != BS_MODE_DYNAMIC)
-    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no frames to advance (bs_sim_statics)", sc->path);
+  int rc = dynamic_only(L, err);
+  if (rc) return rc;
   if (sn) bs_frame_snap_take(L, sn);
-  for (int k = 0; k < sc->steps_per_frame; k++) {
-    int asked = 0, rc = sn ? stop_asked(L, stop, &asked, err) : 0;
-    if (rc) return rc;
+  for (int k = L->substep ? *L->substep : 0; k < sc->steps_per_frame; k++) {
+    int asked = 0;
+    if (sn && (rc = stop_asked(L, stop, &asked, err))) return rc;
     if (asked) return bs_frame_snap_undo(L, sn);
-    bs_sim_step *rec = &L->steps[k];
-    rc = bs_integrator_step(L->integ, *L->time, sc->dt, L->x, L->v, &rec->st, err);
-    if (rc) {
-      bs_error_prefix(err, "frame %d step %d", f, k);
-      return rc;
-    }
-    if (rec->st.min.reason == BS_MIN_STOPPED && sn) return bs_frame_snap_undo(L, sn);
-    *L->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-    if ((rc = record(L, rec, err))) return rc;
+    if ((rc = take_step(L, f, k, err))) return rc;
+    if (L->steps[k].st.min.reason == BS_MIN_STOPPED && sn) return bs_frame_snap_undo(L, sn);
   }
-  *L->time = f / sc->fps;
-  *L->frame = f;
-  bs_frame_sums(*L->frame, *L->time, sc->steps_per_frame, L->steps, fs);
+  end_frame(L, f, fs);
+  return 0;
+}
+
+int bs_frame_step(const bs_frame_loop *L, int *done, bs_frame_stats *fs, bs_error *err) {
+  const int f = *L->frame + 1, k = *L->substep;
+  *done = 0;
+  int rc = dynamic_only(L, err);
+  if (rc || (rc = take_step(L, f, k, err))) return rc;
+  if (k + 1 < L->scene->steps_per_frame) {
+    *L->substep = k + 1;
+    return 0;
+  }
+  end_frame(L, f, fs);
+  *done = 1;
   return 0;
 }
 

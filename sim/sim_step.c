@@ -29,12 +29,18 @@ static void frame_sums(const bs_sim *s, int n, bs_frame_stats *fs) { bs_frame_su
 
 /* The frame loop (bs_frame_loop.h) over s. */
 static bs_frame_loop loop_of(bs_sim *s) {
-  return (bs_frame_loop){s->scene, s->integrator, s->x, s->v, &s->frame, &s->time, s->steps};
+  return (bs_frame_loop){s->scene, s->integrator, s->x, s->v, &s->frame, &s->time, s->steps, &s->substep};
 }
 
 int bs_sim_advance_frame(bs_sim *s, bs_frame_stats *fs, bs_error *err) {
   const bs_frame_loop L = loop_of(s);
   return bs_frame_advance(&L, NULL, NULL, fs, err);
+}
+
+int bs_sim_take_step(bs_sim *s, int *frame_done, bs_frame_stats *fs, bs_error *err) {
+  const bs_frame_loop L = loop_of(s);
+  bs_frame_stats local;
+  return bs_frame_step(&L, frame_done, fs ? fs : &local, err);
 }
 
 int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_error *err) {
@@ -50,6 +56,7 @@ int bs_sim_restore(bs_sim *s, int frame, const double *x, const double *v, bs_er
   memcpy(s->x, x, sizeof(double) * n3);
   memcpy(s->v, v, sizeof(double) * n3);
   s->frame = frame;
+  s->substep = 0;
   s->time = frame / sc->fps;
   return 0;
 }

@@ -226,3 +226,43 @@ Test(sim_stop, restore_checks_its_input) {
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
 }
+
+/* bs_sim_take_step: frame 1 taken one step at a time, and frame 2 begun with
+ * one step and completed by bs_sim_advance_frame, end where two whole frames
+ * do, bit for bit, with the same frame sums; substep counts the steps taken. */
+Test(sim_stop, steps_taken_one_at_a_time_give_the_whole_frames_bit_for_bit) {
+  bs_scene *sc = bs_test_box_scene(3, 24.0, 3);
+  bs_error err;
+  sc->gravity[1] = -9.8;
+  cr_assert_eq(bs_scene_validate(sc, &err), 0, "%s", err.msg);
+  bs_sim *ref = make_sim(sc), *s = make_sim(sc);
+  bs_frame_stats fr, fs;
+  long iterations = 0;
+  cr_assert_eq(bs_sim_advance_frame(ref, &fr, &err), 0, "%s", err.msg);
+  for (int k = 0, done = 0; k < 3; k++) {
+    cr_expect_eq(s->substep, k);
+    cr_assert_eq(bs_sim_take_step(s, &done, &fs, &err), 0, "%s", err.msg);
+    cr_expect_eq(done, k == 2, "step %d", k);
+    iterations += s->steps[k].st.min.iterations;
+  }
+  cr_expect_eq(s->substep, 0);
+  cr_expect_eq(s->frame, 1);
+  cr_expect_eq(s->time, ref->time);
+  cr_expect_eq(fs.iterations, fr.iterations);
+  cr_expect_eq(fs.iterations, iterations);
+  int done = 1;
+  cr_assert_eq(bs_sim_take_step(s, &done, NULL, &err), 0, "%s", err.msg);
+  cr_expect_eq(done, 0);
+  cr_expect_eq(s->substep, 1);
+  cr_assert_eq(bs_sim_advance_frame(s, &fs, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_advance_frame(ref, &fr, &err), 0, "%s", err.msg);
+  cr_expect_eq(s->substep, 0);
+  cr_expect_eq(s->frame, 2);
+  cr_expect_eq(fs.iterations, fr.iterations);
+  const size_t n3 = 3 * (size_t)s->mesh->n_vertices;
+  cr_expect_eq(memcmp(s->x, ref->x, sizeof(double) * n3), 0, "x differs");
+  cr_expect_eq(memcmp(s->v, ref->v, sizeof(double) * n3), 0, "v differs");
+  bs_sim_destroy(&s);
+  bs_sim_destroy(&ref);
+  bs_scene_destroy(&sc);
+}

@@ -136,7 +136,7 @@ typedef struct bs_run_totals {
 typedef struct bs_sim {
   const bs_scene *scene; bs_mesh *mesh; int n_bodies; int32_t *vertex_offset;
   double *x0; double size; double memory_bytes; double *x, *v; uint8_t *mask; int32_t n_free;
-  bs_fem *fem; int n_terms; bs_step_data step; int frame; double time; bs_sim_step *steps;
+  bs_fem *fem; int n_terms; bs_step_data step; int frame; int substep; double time; bs_sim_step *steps;
   ...;
 } bs_sim;
 typedef struct bs_sim_measures {
@@ -249,9 +249,7 @@ typedef struct bspy_run {
 int bspy_run_sim(bs_sim *s, bspy_run *r, int resume, bs_run_totals *T, int catch_sigint, bs_error *err);
 int bspy_finish(bspy_run *r, const bs_sim *s, const bs_run_totals *T, int stopped, double wall, bs_error *err);
 double bspy_folder_wall(bspy_run *r);
-int bspy_step(bs_sim *s, int k, bs_error *err);
-int bspy_step_sig(bs_sim *s, int k, int catch_sigint, int *got_sigint, bs_error *err);
-void bspy_frame_end(bs_sim *s, bs_frame_stats *fs);
+int bspy_step_sig(bs_sim *s, int catch_sigint, int *got_sigint, int *frame_done, bs_frame_stats *fs, bs_error *err);
 int bspy_add_term(bs_sim *s, const char *name, void *py, int dynamic_only, int quadratic, int external,
                   bs_error *err);
 int64_t bspy_bsr_add(bs_bsr *H, int64_t m, const int32_t *i, const int32_t *j, const double *B);

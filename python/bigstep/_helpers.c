@@ -7,8 +7,7 @@
  *                  put back after), an on_frame that writes the run folder
  *                  like `bigstep run` and calls back into Python, and a frame
  *                  limit (the flag is also set after the last wanted frame);
- *   bspy_step      one time step of the current frame, as bs_sim_advance_frame
- *                  takes it (the API has no single-step function);
+ *   bspy_step_sig  bs_sim_take_step with SIGINT caught for its duration;
  *   bspy_add_term  a term whose value, gradient and Hessian are Python's.
  * The Python callbacks are cffi extern "Python" functions: cffi takes the GIL
  * around them; every other call runs with the GIL released. */
@@ -98,35 +97,11 @@ int bspy_finish(bspy_run *r, const bs_sim *s, const bs_run_totals *T, int stoppe
 
 double bspy_folder_wall(bspy_run *r) { return r->folder ? bs_runfolder_wall(r->folder) : 0.0; }
 
-/* Step k of frame s->frame + 1, as bs_sim_advance_frame takes it (sim/sim_step.c):
- * the same integrator call and the same time arithmetic, so that k steps then
- * the rest give the frame bs_sim_advance_frame gives, bit for bit. */
-int bspy_step(bs_sim *s, int k, bs_error *err) {
-  const bs_scene *sc = s->scene;
-  const int f = s->frame + 1;
-  if (sc->mode != BS_MODE_DYNAMIC)
-    return bs_error_set(err, BS_EINPUT, "%s: a static scene has no time steps (statics)", sc->path);
-  if (k < 0 || k >= sc->steps_per_frame) return bs_error_set(err, BS_EINPUT, "step %d outside the frame", k);
-  if (s->frame >= sc->frames)
-    return bs_error_set(err, BS_EINPUT, "%s: the scene's %d frames are done", sc->path, sc->frames);
-  bs_sim_step *rec = &s->steps[k];
-  int st = bs_integrator_step(s->integrator, s->time, sc->dt, s->x, s->v, &rec->st, err);
-  if (st) {
-    bs_error_prefix(err, "frame %d step %d", f, k);
-    return st;
-  }
-  s->time = (f - 1) / sc->fps + (k + 1) * sc->dt;
-  rec->time = s->time;
-  rec->inverted = bs_fem_count_inverted(s->fem, s->x, NULL);
-  snprintf(rec->reason, sizeof rec->reason, "%s", rec->st.min.reason_text ? rec->st.min.reason_text : "");
-  rec->st.min.reason_text = rec->reason;
-  return 0;
-}
-
-/* bspy_step with SIGINT caught for its duration (catch_sigint): *got_sigint
- * says whether one came, for the caller to raise KeyboardInterrupt once its
- * bookkeeping is done (the step itself is completed, not undone). */
-int bspy_step_sig(bs_sim *s, int k, int catch_sigint, int *got_sigint, bs_error *err) {
+/* bs_sim_take_step with SIGINT caught for its duration (catch_sigint):
+ * *got_sigint says whether one came, for the caller to raise
+ * KeyboardInterrupt once its bookkeeping is done (the step itself is
+ * completed, not undone). */
+int bspy_step_sig(bs_sim *s, int catch_sigint, int *got_sigint, int *frame_done, bs_frame_stats *fs, bs_error *err) {
   struct sigaction sa, old;
   int installed = 0;
   volatile sig_atomic_t flag = 0;
@@ -139,21 +114,13 @@ int bspy_step_sig(bs_sim *s, int k, int catch_sigint, int *got_sigint, bs_error 
     if (sigaction(SIGINT, &sa, &old) == 0) installed = 1;
     else bspy_flag = NULL;
   }
-  int st = bspy_step(s, k, err);
+  int st = bs_sim_take_step(s, frame_done, fs, err);
   if (installed) {
     sigaction(SIGINT, &old, NULL);
     bspy_flag = NULL;
   }
   *got_sigint = flag != 0;
   return st;
-}
-
-void bspy_frame_end(bs_sim *s, bs_frame_stats *fs) {
-  const bs_scene *sc = s->scene;
-  const int f = s->frame + 1;
-  s->time = f / sc->fps;
-  s->frame = f;
-  bs_frame_sums(f, s->time, sc->steps_per_frame, s->steps, fs);
 }
 
 int bspy_scene_mode(const bs_scene *s) { return (int)s->mode; }

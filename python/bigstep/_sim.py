@@ -322,7 +322,7 @@ class Simulation:
         check(lib.bs_runfolder_write(r.folder, s, self._fs, ffi.addressof(r, "last_m"), err), err)
 
     def step(self) -> Dict[str, Any]:
-        """One backward Euler time step of the current frame (dynamic scenes).
+        """One time step of the current frame (dynamic scenes; bs_sim_take_step).
 
         Returns the step's statistics (a dict of :data:`STEP_DTYPE`'s fields).
         After the frame's last step the frame is complete (``sim.frame``
@@ -332,23 +332,24 @@ class Simulation:
         with self._guard(stepping=True) as s:
             if self.scene.mode != "dynamic":
                 raise InputError("%s: a static scene has no time steps (use statics())" % self.scene.path)
+            if s.frame >= s.scene.frames:
+                raise InputError("%s: the scene's %d frames are done" % (self.scene.path, s.scene.frames))
             self._report0(s)
             err = new_error()
-            k = self._substep
+            k, f = int(s.substep), int(s.frame) + 1
             got = ffi.new("int *")
-            st = lib.bspy_step_sig(s, k, int(_catch_sigint()), got, err)
+            done = ffi.new("int *")
+            st = lib.bspy_step_sig(s, int(_catch_sigint()), got, done, self._fs, err)
             if st == 0:
                 rec = _step_record(s.steps[k])
-                self._substep += 1
-                if self._substep == self.scene.steps_per_frame:
-                    self._substep = 0
-                    lib.bspy_frame_end(s, self._fs)
+                self._substep = int(s.substep)
+                if done[0]:
                     lib.bs_run_totals_add(self._totals, self._fs)
                     self._write_frame(s)
             self._check_terms()
             check(st, err)
             if got[0]:  # Ctrl-C during the step: it was completed, then stop here
-                raise KeyboardInterrupt("bigstep: stopped after step %d of frame %d" % (k + 1, s.frame + 1))
+                raise KeyboardInterrupt("bigstep: stopped after step %d of frame %d" % (k + 1, f))
             return rec
 
     def advance_frame(self) -> Dict[str, Any]:
