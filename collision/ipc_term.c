@@ -11,6 +11,7 @@
 #include "bs_bvh.h"
 #include "bs_ipc.h"
 #include "bs_ipc_term.h"
+#include "bs_shim.h"
 
 #define PAR_MIN 64 /* pairs (triangles) below which loops run on one thread */
 
@@ -85,18 +86,15 @@ static int grow(void **buf, int64_t *cap, int64_t n, size_t elem) {
 
 /* ---- geometry ------------------------------------------------------------ */
 
-static double orient(const double *a, const double *b, const double *c, const double *d) {
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]},
-               w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
-}
-
 /* 1 when segment pq crosses triangle abc (touching counts; a segment in the
- * triangle's plane does not: it touches an edge first, a zero distance). */
+ * triangle's plane does not: it touches an edge first, a zero distance).
+ * Exact orientations (bs_shim_orient3d): with rounded ones, a segment and a
+ * triangle of one flat face that is not axis-aligned (a rotated box) were
+ * seen to cross, the signs of orientations near zero being noise. */
 static int seg_tri_cross(const double *p, const double *q, const double *a, const double *b, const double *c) {
-  const double s1 = orient(a, b, c, p), s2 = orient(a, b, c, q);
-  if ((s1 > 0 && s2 > 0) || (s1 < 0 && s2 < 0) || (s1 == 0 && s2 == 0)) return 0;
-  const double o1 = orient(p, q, a, b), o2 = orient(p, q, b, c), o3 = orient(p, q, c, a);
+  const int s1 = bs_shim_orient3d(a, b, c, p), s2 = bs_shim_orient3d(a, b, c, q);
+  if (s1 == s2) return 0; /* both on one side, or both in the plane */
+  const int o1 = bs_shim_orient3d(p, q, a, b), o2 = bs_shim_orient3d(p, q, b, c), o3 = bs_shim_orient3d(p, q, c, a);
   return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
 }
 
