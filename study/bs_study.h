@@ -151,7 +151,8 @@ typedef enum {
 
 typedef struct bs_study_knob {
   char key[256];   /* as given (the study.csv column)                          */
-  char path[256];  /* scene key path; "" for refine over every body            */
+  char path[256];  /* scene key path; "" for refine over every body, and       */
+                   /* "bodies.*.KEY" for a shorthand of every body (element)   */
   bs_knob_kind kind;
   int body;        /* BS_KNOB_REFINE through bodies.N.refine: N; -1 every body */
   int n;           /* values                                                   */

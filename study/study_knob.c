@@ -33,6 +33,8 @@ static void knob_kind(bs_study_knob *k) {
                {"tolerance", "solver.tolerance", "solver.tolerance", BS_KNOB_TOLERANCE},
                {"method", "solver.method", "solver.method", BS_KNOB_METHOD},
                {"refine", "refine", "", BS_KNOB_REFINE},
+               {"element", "bodies.*.element", "bodies.*.element", BS_KNOB_OTHER},
+               {"integrator", "solver.integrator", "solver.integrator", BS_KNOB_OTHER},
                {"time.dt", "time.dt", "time.dt", BS_KNOB_DT},
                {"time.fps", "time.fps", "time.fps", BS_KNOB_FPS}};
   k->body = -1;

@@ -185,10 +185,13 @@ static int build_sets(const bs_study *S, bs_study_run *r, bs_error *err) {
   for (int k = 0; k < S->n_knobs; k++) {
     const bs_study_knob *v = &S->knobs[k];
     const char *val = v->vals[r->idx[k]];
-    if (v->kind == BS_KNOB_REFINE && v->body < 0) {
+    const char *every = v->kind == BS_KNOB_REFINE && v->body < 0       ? "refine"
+                        : !strncmp(v->path, "bodies.*.", strlen("bodies.*.")) ? v->path + strlen("bodies.*.")
+                                                                              : NULL;
+    if (every) { /* a shorthand of every body: bodies.B.KEY for each body B */
       for (int b = 0; b < S->n_bodies; b++) {
-        char buf[64];
-        snprintf(buf, sizeof buf, "bodies.%d.refine=", b);
+        char buf[300];
+        snprintf(buf, sizeof buf, "bodies.%d.%s=", b, every);
         add_set(r, xprintf("%s%s", buf, val), &oom);
       }
     } else {

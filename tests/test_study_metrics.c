@@ -186,6 +186,8 @@ Test(study_plan, finest_value_per_kind) {
       {"method=newton,optimization", BS_KNOB_METHOD, "solver.method", 1},
       {"solver.method=newton,newton_k", BS_KNOB_METHOD, "solver.method", 0},
       {"solver.max_iterations=5,50,10", BS_KNOB_OTHER, "solver.max_iterations", 2},
+      {"element=tet4,tet10", BS_KNOB_OTHER, "bodies.*.element", 1},
+      {"integrator=backward_euler,newmark,bdf2", BS_KNOB_OTHER, "solver.integrator", 2},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     bs_study_knob k;
@@ -262,6 +264,24 @@ static int has_set(const bs_study_run *r, const char *s) {
   for (int i = 0; i < r->n_sets; i++)
     if (!strcmp(r->sets[i], s)) return 1;
   return 0;
+}
+
+/* The shorthands of every body and of the integrator become each body's key
+ * and solver.integrator in every run's settings. */
+Test(study_plan, element_and_integrator_shorthands_set_every_body) {
+  char dir[256];
+  bs_study *S = NULL;
+  bs_error err;
+  const char *specs[2] = {"element=tet4,tet10", "integrator=backward_euler,bdf2"};
+  cr_assert_eq(box_study(dir, sizeof dir, 2, specs, &S, &err), 0, "%s", err.msg);
+  cr_assert_eq(S->n_runs, 4);
+  for (int i = 0; i < 4; i++) {
+    const bs_study_run *r = &S->runs[i];
+    cr_expect(has_set(r, i < 2 ? "bodies.0.element=tet4" : "bodies.0.element=tet10"), "run %d: %s", i, r->name);
+    cr_expect(has_set(r, i % 2 ? "solver.integrator=bdf2" : "solver.integrator=backward_euler"), "run %d", i);
+  }
+  cr_expect_eq(S->ref, 3, "the reference: the last listed values (tet10, bdf2)");
+  bs_study_destroy(&S);
 }
 
 Test(study_plan, cross_product_names_and_reference) {
