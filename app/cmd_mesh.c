@@ -279,9 +279,11 @@ static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
 
 /* The input surface of path (when it is one the shim reads) against m's
  * boundary: "surface": {volume_in, volume_change, hausdorff, ...} or null.
- * The Hausdorff distance is two-sided and sampled every diagonal / 400 (it
+ * volume_in: the volume the repaired (oriented, closed) surface encloses, as
+ * the mesher's volume check uses it (r->volume), else the input's own. The
+ * Hausdorff distance is two-sided and sampled every diagonal / 400 (it
  * underestimates by at most about half of that). */
-static int json_surface(const bs_mesh *m, const char *path, bs_error *err) {
+static int json_surface(const bs_mesh *m, const char *path, const bs_surface_report *r, bs_error *err) {
   const char *dot = strrchr(path, '.');
   static const char *const exts[] = {".off", ".stl", ".obj", ".ply"};
   int surface = 0;
@@ -293,7 +295,8 @@ static int json_surface(const bs_mesh *m, const char *path, bs_error *err) {
   int rc = bs_shim_read_surface(path, &x, &np, &t, &nt, err);
   if (!rc) {
     bs_bbox(np, x, lo, hi);
-    const double diag = bs_bbox_diagonal(lo, hi), spacing = diag / 400.0, v0 = soup_volume(x, t, nt);
+    const double diag = bs_bbox_diagonal(lo, hi), spacing = diag / 400.0,
+                 v0 = r && r->volume > 0 ? r->volume : soup_volume(x, t, nt);
     rc = bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, x, np, t, nt, spacing, &d1, NULL, err);
     if (!rc) rc = bs_shim_surface_distance(x, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, spacing, &d2, NULL, err);
     const double v = bs_mesh_volume(m), d = d1 > d2 ? d1 : d2;
@@ -332,7 +335,7 @@ static int mesh_json(const bs_mesh *m, const char *path, const bs_surface_report
     printf("  \"tet_remesh\": {\"runs\": %d, \"dihedral_before\": %.6g, \"dihedral_after\": %.6g, \"seconds\": %.3f},\n",
            r->lifted, r->lift_dihedral_in, r->lift_dihedral, r->lift_seconds);
   else printf("  \"tet_remesh\": null,\n");
-  int rc = json_surface(m, path, err);
+  int rc = json_surface(m, path, r, err);
   if (!rc) rc = bs_mesh_check(m, err);
   printf("  \"check\": %s,\n  \"seconds\": %.3f\n}\n", rc ? "false" : "true", t_load);
   return rc;
