@@ -4,14 +4,10 @@
  * differences at random configurations of two boxes (point-triangle and
  * edge-edge pairs, every |u| below eps, every one above, and mixed); the
  * normal force of a single point-triangle pair against the barrier's force
- * and the sliding force mu lambda; the same bits on 1 and 2 threads; and
- * scenes: a box on a fixed box under gravity tilted by theta sticks for
- * mu > tan(theta) and slides with g (sin theta - mu cos theta) for
- * mu < tan(theta). */
+ * and the sliding force mu lambda; the same bits on 1 and 2 threads; bad
+ * input. The scenes (a box on a box, sticking and sliding):
+ * test_barrier_friction_scenes.c. */
 #include <criterion/criterion.h>
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
 #include <math.h>
 #include <omp.h>
 #include <stdio.h>
@@ -23,8 +19,6 @@
 #include "bs_ipc_friction.h"
 #include "bs_ipc_term.h"
 #include "bs_mesh.h"
-#include "bs_scene.h"
-#include "bs_sim.h"
 #include "bs_terms.h"
 #include "test_term_eval.h"
 
