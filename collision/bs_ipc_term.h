@@ -61,6 +61,9 @@
  * grow (amortised doubling) when a detection finds more pairs than ever
  * before: nothing else allocates during evaluation.
  *
+ * Friction: not in this term. bs_ipc_friction.h is a separate term that
+ * lags this term's pairs (bs_term_ipc_pairs) at each step's start.
+ *
  * Ownership: the term keeps pointers to the fem (and its mesh) and the step
  * data, which must outlive it; free it with bs_term_destroy. One thread
  * evaluates a term at a time.
