@@ -202,6 +202,55 @@ int bs_ipc_ee_energy(const double ea0[3], const double ea1[3], const double eb0[
                      bs_error *err);
 
 /* ---------------------------------------------------------------------------
+ * Friction (IPC section 5: lagged, smoothed Coulomb friction). A contact
+ * lagged at the step's start xⁿ has a normal force lambda (N), an
+ * orthonormal tangent basis T (3 x 2, row-major: T[2 k + j] is component k
+ * of basis vector j) and a linear map from the positions to a relative
+ * displacement dx (3); its tangential part u = T^T dx (2) enters
+ *     D = mul f0(|u|),  mul = mu lambda (N),
+ *     f0(y) = -y^3 / (3 eps^2) + y^2 / eps + eps / 3  (y < eps),  y  (y >= eps),
+ * eps = eps_v dt (m): f1 = f0' = 2y/eps - y^2/eps^2 below eps, 1 above, so
+ * the force -mul f1(|u|) T u/|u| is Coulomb's mu lambda when the contact
+ * slides more than eps in the step and a stiff spring (2 mul / eps) when it
+ * sticks. Implemented in ipc_friction.c; used by the obstacles' term
+ * (bs_ipc_obstacle.h: dx = x_v - r) and by self-contact friction
+ * (bs_ipc_friction.h: dx = sum_i w_i x_i - r over a pair's 4 vertices). */
+
+/* f0(y), f1(y) = f0'(y) and f1'(y) above at y >= 0, eps > 0. */
+void bs_ipc_friction_f(double y, double eps, double *f0, double *f1, double *f1p);
+
+/* An orthonormal basis T (3 x 2, row-major as above) of the plane
+ * perpendicular to the unit vector n (n's least aligned axis crossed with n,
+ * then n crossed with that). */
+void bs_ipc_tangent_basis(const double n[3], double T[6]);
+
+/* One lagged contact: returns D = mul f0(|u|), u = T^T dx, and sets (not
+ * adds; each may be NULL) g[3] = dD/d(dx) = mul f1(y)/y T u (f1/y -> 2/eps
+ * at y = 0) and H[9] = d2D/d(dx)2 = mul T H2 T^T with
+ *     H2 = (f1'(y) - f1(y)/y) u u^T / y^2 + f1(y)/y I   (2/eps I at y = 0),
+ * whose eigenvalues are f1'(y) along u and f1(y)/y across it: H2 is used as
+ * it stands when both are >= 0, which holds for every y with the f0 above
+ * (f1' = 2 (eps - y) / eps^2 >= 0 below eps, 0 above), and a negative f1' is
+ * clamped to 0 (IPC's PSD projection of the 2 x 2) otherwise. mul >= 0,
+ * eps > 0. */
+double bs_ipc_friction_eval(const double T[6], const double dx[3], double mul, double eps, double g[3],
+                            double H[9]);
+
+/* The closest points of a point-triangle pair (p, t0, t1, t2) at these
+ * positions as weights w[4] such that sum_i w_i y_i = p - c, c the point of
+ * the triangle nearest p: w = (1, -(1 - b1 - b2), -b1, -b2) with c = t0 +
+ * b1 (t1 - t0) + b2 (t2 - t0), by bs_ipc_pt_classify's type (a vertex, the
+ * nearest point of an edge, or the projection into the triangle). */
+void bs_ipc_pt_closest_weights(const double p[3], const double t0[3], const double t1[3], const double t2[3],
+                               double w[4]);
+
+/* The same for two edges (ea0, ea1, eb0, eb1): w = (1 - a, a, -(1 - b), -b),
+ * sum_i w_i y_i = ca - cb with ca = ea0 + a (ea1 - ea0), cb = eb0 + b (eb1 -
+ * eb0) the closest points of the segments, by bs_ipc_ee_classify's type. */
+void bs_ipc_ee_closest_weights(const double ea0[3], const double ea1[3], const double eb0[3], const double eb1[3],
+                               double w[4]);
+
+/* ---------------------------------------------------------------------------
  * Barrier stiffness (Li et al. 2020, supplement, "adaptive barrier
  * stiffness"; the defaults of ipc-toolkit). All pure functions. */
 

@@ -82,8 +82,9 @@
  * eps_v, a stiff spring below). Its Hessian, mu lambda T H2 T^T with
  * H2 = (f1'(y) - f1(y)/y) u u^T / y^2 + f1(y)/y I, is PSD as it stands
  * (eigenvalues f1' and f1/y >= 0 for y <= eps; 0 and 1/y above; (2/eps) I
- * at u = 0). The post-solve friction of bs_obstacles.h is skipped for
- * barrier obstacles.
+ * at u = 0); the kernels are bs_ipc.h's ("Friction"), shared with the
+ * self-contact friction (bs_ipc_friction.h). The post-solve friction of
+ * bs_obstacles.h is skipped for barrier obstacles.
  *
  * kappa: given, or IPC's initial value (bs_term_ipc_obstacle_kappa_init)
  * adapted at begin_step (bs_term_ipc_obstacle_set_adaptive) from the

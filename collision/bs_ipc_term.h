@@ -61,6 +61,9 @@
  * grow (amortised doubling) when a detection finds more pairs than ever
  * before: nothing else allocates during evaluation.
  *
+ * Friction: not in this term. bs_ipc_friction.h is a separate term that
+ * lags this term's pairs (bs_term_ipc_pairs) at each step's start.
+ *
  * Ownership: the term keeps pointers to the fem (and its mesh) and the step
  * data, which must outlive it; free it with bs_term_destroy. One thread
  * evaluates a term at a time.
@@ -137,6 +140,22 @@ int bs_term_ipc_detect(bs_term *t, const double *x, bs_ipc_stats *out, bs_error 
 /* The term's max_step (above) as a function: *alpha in [0, 1]. BS_ENUMERIC
  * for a non-finite x or d. */
 int bs_term_ipc_max_step(bs_term *t, const double *x, const double *d, double *alpha, bs_error *err);
+
+/* An active pair (d < dhat): its 4 vertices, (p, t0, t1, t2) for a
+ * point-triangle pair, (ea0, ea1, eb0, eb1) for an edge-edge pair. */
+typedef struct bs_ipc_pair {
+  int32_t v[4];
+  int32_t ee; /* 1: edge-edge, 0: point-triangle */
+} bs_ipc_pair;
+
+/* The active pairs at x (a detection, or the last one's when x is bitwise
+ * its positions), in the term's order (the same on any thread count):
+ * *pairs points into the term and stays valid until its next detection
+ * (any evaluation, max_step, detect or begin_step of the term). What the
+ * self-contact friction (bs_ipc_friction.h) lags at each step's start.
+ * BS_ENUMERIC for a non-finite x or touching or crossing surfaces;
+ * BS_ENOMEM. */
+int bs_term_ipc_pairs(bs_term *t, const double *x, const bs_ipc_pair **pairs, int64_t *n, bs_error *err);
 
 #ifdef __cplusplus
 }

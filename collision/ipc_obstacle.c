@@ -121,61 +121,15 @@ static int barrier_pass(obs_data *d, const double *x, double time, int need) {
 
 /* ---- friction ------------------------------------------------------------ */
 
-/* f0, f1 = f0' and f1' of IPC's smoothed friction at y >= 0, eps > 0. */
-static void friction_f(double y, double eps, double *f0, double *f1, double *f1p) {
-  if (y < eps) {
-    *f0 = -y * y * y / (3 * eps * eps) + y * y / eps + eps / 3;
-    *f1 = 2 * y / eps - y * y / (eps * eps);
-    *f1p = 2 / eps - 2 * y / (eps * eps);
-  } else {
-    *f0 = y, *f1 = 1, *f1p = 0;
-  }
-}
-
 /* Friction of pair c at x: energy returned; gradient (3) and Hessian (9)
- * added into g and H when non-NULL. */
+ * added into g and H when non-NULL (bs_ipc_friction_eval). */
 static double friction_pair(const fr_pair *c, double eps, const double *x, double *g, double *H) {
   const double *p = x + 3 * (size_t)c->v, dx[3] = {p[0] - c->r[0], p[1] - c->r[1], p[2] - c->r[2]};
-  double u[2];
-  for (int j = 0; j < 2; j++) u[j] = c->T[j] * dx[0] + c->T[2 + j] * dx[1] + c->T[4 + j] * dx[2];
-  const double y = hypot(u[0], u[1]);
-  double f0, f1, f1p;
-  friction_f(y, eps, &f0, &f1, &f1p);
-  if (g) { /* mul f1(y)/y T u; f1/y -> 2/eps at y = 0 */
-    const double w = y > 0 ? f1 / y : 2 / eps;
-    for (int k = 0; k < 3; k++) g[k] += c->mul * w * (c->T[2 * k] * u[0] + c->T[2 * k + 1] * u[1]);
-  }
-  if (H) { /* H2 = (f1' - f1/y) u u^T / y^2 + f1/y I */
-    double H2[4];
-    if (y > 0) {
-      const double a = (f1p - f1 / y) / (y * y), b = f1 / y;
-      H2[0] = a * u[0] * u[0] + b, H2[1] = H2[2] = a * u[0] * u[1], H2[3] = a * u[1] * u[1] + b;
-    } else {
-      H2[0] = H2[3] = 2 / eps, H2[1] = H2[2] = 0;
-    }
-    for (int i = 0; i < 3; i++)
-      for (int k = 0; k < 3; k++) {
-        double s = 0;
-        for (int a = 0; a < 2; a++)
-          for (int b = 0; b < 2; b++) s += c->T[2 * i + a] * H2[2 * a + b] * c->T[2 * k + b];
-        H[3 * i + k] += c->mul * s;
-      }
-  }
-  return c->mul * f0;
-}
-
-/* An orthonormal basis T (3x2, row-major) of the plane perpendicular to n. */
-static void tangent_basis(const double n[3], double T[6]) {
-  double a[3] = {0, 0, 0}, t1[3], t2[3];
-  int m = 0; /* the axis least aligned with n */
-  for (int k = 1; k < 3; k++)
-    if (fabs(n[k]) < fabs(n[m])) m = k;
-  a[m] = 1;
-  bs_cross3(n, a, t1);
-  const double l = sqrt(bs_dot3(t1, t1));
-  for (int k = 0; k < 3; k++) t1[k] /= l;
-  bs_cross3(n, t1, t2);
-  for (int k = 0; k < 3; k++) T[2 * k] = t1[k], T[2 * k + 1] = t2[k];
+  double gl[3], Hl[9];
+  const double e = bs_ipc_friction_eval(c->T, dx, c->mul, eps, g ? gl : NULL, H ? Hl : NULL);
+  for (int k = 0; g && k < 3; k++) g[k] += gl[k];
+  for (int k = 0; H && k < 9; k++) H[k] += Hl[k];
+  return e;
 }
 
 static int push_pair(obs_data *d, const fr_pair *c) {
@@ -208,7 +162,7 @@ static int lag_friction(obs_data *d, const double *xn, double t0, double dt) {
       const double l = sqrt(bs_dot3(n, n));
       if (!(l > 0) || !(c.mul > 0)) continue;
       for (int k = 0; k < 3; k++) n[k] /= l;
-      tangent_basis(n, c.T);
+      bs_ipc_tangent_basis(n, c.T);
       double vo[3], rr[3] = {p[0] - f.c[0], p[1] - f.c[1], p[2] - f.c[2]};
       bs_cross3(f.w, rr, vo);
       for (int k = 0; k < 3; k++) c.r[k] = p[k] + dt * (f.v[k] + vo[k]);

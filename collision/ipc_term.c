@@ -15,10 +15,7 @@
 
 #define PAR_MIN 64 /* pairs (triangles) below which loops run on one thread */
 
-typedef struct ipc_pair {
-  int32_t v[4]; /* PT: p, t0, t1, t2; EE: ea0, ea1, eb0, eb1 */
-  int32_t ee;   /* 1: edge-edge                               */
-} ipc_pair;
+typedef bs_ipc_pair ipc_pair; /* bs_ipc_term.h */
 
 /* One thread's buffers: query results and the pairs of its triangle range. */
 typedef struct tbuf {
@@ -684,5 +681,22 @@ int bs_term_ipc_max_step(bs_term *t, const double *x, const double *dx, double *
   if (not_ipc(t, err)) return BS_EINPUT;
   if (max_step_impl(t->data, x, dx, alpha))
     return bs_error_set(err, BS_ENUMERIC, "barrier contact: CCD on non-finite positions or motion");
+  return 0;
+}
+
+int bs_term_ipc_pairs(bs_term *t, const double *x, const bs_ipc_pair **pairs, int64_t *n, bs_error *err) {
+  if (pairs) *pairs = NULL;
+  if (n) *n = 0;
+  if (not_ipc(t, err)) return BS_EINPUT;
+  if (!pairs || !n) return bs_error_set(err, BS_EINPUT, "barrier contact: pairs or n is NULL");
+  ipc_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv)) return bs_error_set(err, BS_ENUMERIC, "barrier contact: x is not finite");
+  if (detect(d, x))
+    return d->st.intersecting > 0
+               ? bs_error_set(err, BS_ENUMERIC, "barrier contact: %lld pairs touch or cross",
+                              (long long)d->st.intersecting)
+               : bs_error_set(err, BS_ENOMEM, "barrier contact: out of memory listing the pairs");
+  *pairs = d->pairs;
+  *n = d->n_pairs;
   return 0;
 }

@@ -205,7 +205,9 @@ const bs_schema_key bs__schema_keys[] = {
 
     /* ---- self_collision, output ---- */
     {"self_collision", "stiffness", NUM, .range = "(0, )", .def = "100000", SC(self_stiffness), .doc = "penalty stiffness k"},
-    {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", SC(self_friction), .doc = "friction coefficient mu"},
+    {"self_collision", "friction", NUM, .range = "[0, )", .def = "0", SC(self_friction),
+     .doc = "friction coefficient mu (penalty: Coulomb friction after the solve; barrier: IPC's smoothed friction in "
+            "the solve, lagged once per step, contact.eps_v)"},
     {"self_collision", "model", STR, .choices = CHOICES("penalty", "barrier"), .def = "\"penalty\"", SC(self_model),
      .doc = "penalty (the paper's, section 5.3) or barrier (IPC: log barrier within contact.dhat, line searches bounded "
             "by continuous collision detection, no intersections)"},
@@ -216,7 +218,7 @@ const bs_schema_key bs__schema_keys[] = {
             "100 kappa_min]), doubled at a step's start while surfaces keep closing in below 1e-9 diagonals"},
     {"contact", "eps_v", NUM, .range = "(0, )", .def = "0.001", SC(contact_eps_v),
      .doc = "barrier friction's smoothing speed (m/s): below it, static friction is a stiff spring (IPC's epsilon_v; "
-            "obstacles[].collision \"barrier\" with friction)"},
+            "obstacles[].collision \"barrier\" and self_collision.model \"barrier\" with friction)"},
 
     {"output", "dir", STR, .def = "\"\"", SC(out_dir), .doc = "output folder (empty: no files)"},
     {"output", "vtu_every", INT, .range = "[0, 1000000]", .def = "1", SC(vtu_every), .doc = "frames between VTU files (0: none)"},

@@ -130,10 +130,15 @@ typedef struct bs_sim {
                            /* "barrier", bs_ipc_term.h) or NULL              */
   bs_term *obstacle_barrier; /* the barrier against the obstacles with collision */
                            /* "barrier" (in terms[]; bs_ipc_obstacle.h) or NULL */
+  bs_term *barrier_friction; /* friction of the barrier self-contact (in terms[],  */
+                           /* after barrier; self_collision.friction > 0 with     */
+                           /* the barrier model, bs_ipc_friction.h) or NULL       */
   bs_step_hooks obstacle_hooks;
-  double *friction_impulse; /* 3n (N s): what Coulomb friction (obstacles and  */
-                          /* self-contact) gave each vertex in the last step,   */
-                          /* m_p dv_p; NULL when the scene has no friction      */
+  double *friction_impulse; /* 3n (N s): what post-solve Coulomb friction       */
+                          /* (obstacles but barrier ones, penalty self-contact) */
+                          /* gave each vertex in the last step, m_p dv_p; NULL  */
+                          /* when the scene has no such friction (the barrier   */
+                          /* models' friction is a force of the solve)          */
   double *v_pre;          /* 3n work: velocities before self-contact friction */
   bs_step_data step;    /* filled by the integrator each step */
   bs_integrator *integrator;

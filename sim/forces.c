@@ -10,10 +10,11 @@
 typedef enum { PICK_ELASTIC, PICK_ALL, PICK_NOT_CONTACT, PICK_CONTACT } pick;
 
 /* The penalty obstacle whose term t is (its scene index), or -1; -2 for
- * contact between the bodies (the self-collision or barrier contact term);
+ * contact between the bodies (the self-collision or barrier contact term,
+ * and the barrier's friction);
  * -3 for the barrier obstacles' term (all of them, with their friction). */
 static int contact_owner(const bs_sim *s, const bs_term *t) {
-  if (t == s->self || t == s->barrier) return -2;
+  if (t == s->self || t == s->barrier || (t && t == s->barrier_friction)) return -2;
   if (t && t == s->obstacle_barrier) return -3;
   if (!s->obstacles) return -1;
   bs_term *const *pt = NULL;

@@ -1,5 +1,6 @@
 /* sim_contact.c — the barrier contact models: self-contact
- * (self_collision.model "barrier", bs_ipc_term.h) and obstacles
+ * (self_collision.model "barrier", bs_ipc_term.h, with its friction,
+ * bs_ipc_friction.h) and obstacles
  * (obstacles[].collision "barrier", bs_ipc_obstacle.h): their terms from the
  * scene's contact keys, the refusal of a start in contact, and kappa as IPC
  * chooses it. */
@@ -8,6 +9,7 @@
 #include <string.h>
 
 #include "bs_ipc.h"
+#include "bs_ipc_friction.h"
 #include "bs_ipc_obstacle.h"
 #include "bs_ipc_term.h"
 #include "bs_obstacles.h"
@@ -134,13 +136,24 @@ int bs__sim_make_obstacle_barrier(bs_sim *s, bs_error *err) {
   return 0;
 }
 
+/* The barrier's friction term (self_collision.friction > 0), after it. */
+static int barrier_friction(bs_sim *s, bs_error *err) {
+  const bs_scene *sc = s->scene;
+  if (!(sc->self_friction > 0)) return 0;
+  if (s->n_terms >= BS_SIM_MAX_TERMS) return bs_error_set(err, BS_EINPUT, "%s: too many terms", sc->path);
+  bs_term *t = NULL;
+  int st = bs_term_ipc_friction_create(s->barrier, sc->self_friction, sc->contact_eps_v, &t, err);
+  if (st) {
+    bs_error_prefix(err, "%s: self_collision.friction", sc->path);
+    return st;
+  }
+  s->barrier_friction = t;
+  s->terms[s->n_terms++] = t;
+  return 0;
+}
+
 int bs__sim_make_barrier(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
-  if (sc->self_friction > 0)
-    return bs_error_set(err, BS_EINPUT,
-                        "%s: self_collision.friction: not available with self_collision.model \"barrier\" (got %g; "
-                        "use 0)",
-                        sc->path, sc->self_friction);
   double dhat;
   int st = contact_dhat(s, &dhat, err);
   if (!st) st = refuse_intersecting(s, err);
@@ -164,5 +177,5 @@ int bs__sim_make_barrier(bs_sim *s, bs_error *err) {
   }
   s->barrier = t;
   s->terms[s->n_terms++] = t;
-  return 0;
+  return barrier_friction(s, err);
 }

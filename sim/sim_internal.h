@@ -18,8 +18,10 @@ void bs__sim_hooks(bs_sim *s, bs_step_hooks *hooks);
 int bs__sim_make_friction(bs_sim *s, bs_error *err);
 void bs__sim_script_positions(double t, double *x, void *ctx);
 /* sim_contact.c: the barrier self-contact term (self_collision.model
- * "barrier") into s->barrier and s->terms; refuses a start whose surfaces
- * intersect (naming the bodies and the count) or touch. */
+ * "barrier") into s->barrier and s->terms, and with self_collision.friction
+ * > 0 its friction term (bs_ipc_friction.h) into s->barrier_friction and
+ * s->terms after it; refuses a start whose surfaces intersect (naming the
+ * bodies and the count) or touch. */
 int bs__sim_make_barrier(bs_sim *s, bs_error *err);
 /* sim_contact.c: the barrier against the obstacles with collision "barrier"
  * (bs_ipc_obstacle.h) into s->obstacle_barrier and s->terms (none without

@@ -68,7 +68,7 @@ static int sim_post_solve(const double *x_n, double *x, const double *g, double 
   if (s->friction_impulse && !s->obstacle_hooks.post_solve) memset(s->friction_impulse, 0, sizeof(double) * n3);
   if (s->obstacle_hooks.post_solve && (st = s->obstacle_hooks.post_solve(x_n, x, g, v, dt, s->obstacle_hooks.ctx, err)))
     return st;
-  if (s->self && s->scene->self_friction > 0) {
+  if (s->self && s->scene->self_friction > 0) { /* penalty self-contact (barrier: a term of the solve) */
     int32_t n = 0;
     memcpy(s->v_pre, v, sizeof(double) * n3);
     if ((st = bs_self_friction(s->self, x, s->scene->self_friction, dt, s->mask, v, &n, err))) return st;
@@ -81,7 +81,8 @@ static int sim_post_solve(const double *x_n, double *x, const double *g, double 
 
 int bs__sim_make_friction(bs_sim *s, bs_error *err) {
   const bs_scene *sc = s->scene;
-  const int self = sc->self_collision && sc->self_friction > 0;
+  /* barrier self-contact friction is a term of the solve (bs_ipc_friction.h), not a post-solve pass */
+  const int self = sc->self_collision && sc->self_model != BS_SELF_MODEL_BARRIER && sc->self_friction > 0;
   int any = self;
   for (int i = 0; i < sc->n_obstacles; i++) any |= sc->obstacles[i].friction > 0;
   if (!any || sc->mode != BS_MODE_DYNAMIC) return 0;
