@@ -13,7 +13,7 @@
 static uint64_t rng = BS_TEST_SEED;
 
 /* Uniform in [0, 1). */
-static double urand(void) {
+static inline double urand(void) {
   uint64_t z = (rng += 0x9E3779B97F4A7C15ull);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -22,13 +22,13 @@ static double urand(void) {
 }
 
 /* Standard normal (Box–Muller). */
-static double nrand(void) {
+static inline double nrand(void) {
   double u = urand(), v = urand();
   return sqrt(-2.0 * log(u + 1e-300)) * cos(6.283185307179586 * v);
 }
 
 /* A uniformly random rotation (from a random unit quaternion), row-major. */
-static void rand_rot(double Q[9]) {
+static inline void rand_rot(double Q[9]) {
   double q[4], n = 0;
   for (int i = 0; i < 4; i++) {
     q[i] = nrand();
