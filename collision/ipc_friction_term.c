@@ -11,6 +11,7 @@
 #include "bs_ipc.h"
 #include "bs_ipc_friction.h"
 #include "bs_ipc_term.h"
+#include "ipc_internal.h"
 
 #define PAR_MIN 64 /* pairs below which loops run on one thread */
 #define PB 13      /* per-pair buffer: energy, gradient (3), Hessian (9) */
@@ -36,23 +37,6 @@ typedef struct fr_data {
   bs_ipc_friction_stats st;
 } fr_data;
 
-/* Grows *buf (elem bytes each) to hold at least n; 0 or BS_ENOMEM. */
-static int grow(void **buf, int64_t *cap, int64_t n, size_t elem) {
-  if (n <= *cap) return 0;
-  int64_t c = *cap > 0 ? *cap : 64;
-  while (c < n) c *= 2;
-  void *p = realloc(*buf, (size_t)c * elem);
-  if (!p) return BS_ENOMEM;
-  *buf = p;
-  *cap = c;
-  return 0;
-}
-
-static void gather(const double *x, const int32_t v[4], double y[12]) {
-  for (int a = 0; a < 4; a++)
-    for (int k = 0; k < 3; k++) y[3 * a + k] = x[3 * (size_t)v[a] + k];
-}
-
 /* ---- lagging ----------------------------------------------------------------- */
 
 /* Pair q at xⁿ into c (c->lambda = 0: left out). rest: the mesh's rest
@@ -63,10 +47,10 @@ static void lag_pair(const bs_ipc_pair *q, const double *xn, const double *rest,
   c->ee = q->ee;
   c->lambda = 0;
   double *y = c->y0, d2, m = 1;
-  gather(xn, q->v, y);
+  bs__ipc_gather(xn, q->v, y);
   if (q->ee) {
     double r[12];
-    gather(rest, q->v, r);
+    bs__ipc_gather(rest, q->v, r);
     d2 = bs_ipc_ee_d2_full(y, y + 3, y + 6, y + 9, NULL, NULL, NULL);
     bs_ipc_ee_closest_weights(y, y + 3, y + 6, y + 9, c->w);
     m = bs_ipc_mollifier(y, y + 3, y + 6, y + 9, bs_ipc_mollifier_eps(r, r + 3, r + 6, r + 9), NULL, NULL);
@@ -101,7 +85,8 @@ static int lag(fr_data *d, const bs_term *t, bs_error *err) {
   if (st) return st;
   bs_ipc_stats bst;
   if ((st = bs_term_ipc_stats(d->barrier, &bst, err))) return st;
-  if (grow((void **)&d->p, &d->cap, n, sizeof(fr_pair)) || grow((void **)&d->buf, &d->cap_buf, PB * n, sizeof(double)))
+  if (bs__ipc_grow((void **)&d->p, &d->cap, n, sizeof(fr_pair)) ||
+      bs__ipc_grow((void **)&d->buf, &d->cap_buf, PB * n, sizeof(double)))
     return bs_error_set(err, BS_ENOMEM, "barrier friction: out of memory listing %lld pairs", (long long)n);
   const double *rest = t->fem->mesh->x;
 #pragma omp parallel for schedule(static) num_threads(d->nthreads) if (n >= PAR_MIN)

@@ -11,6 +11,7 @@
 #include "bs_bvh.h"
 #include "bs_ipc.h"
 #include "bs_ipc_term.h"
+#include "ipc_internal.h"
 #include "bs_shim.h"
 
 #define PAR_MIN 64 /* pairs (triangles) below which loops run on one thread */
@@ -69,18 +70,6 @@ static int team_size(void) {
 #endif
 }
 
-/* Grows *buf (elem bytes each) to hold at least n; 0 or BS_ENOMEM. */
-static int grow(void **buf, int64_t *cap, int64_t n, size_t elem) {
-  if (n <= *cap) return 0;
-  int64_t c = *cap > 0 ? *cap : 64;
-  while (c < n) c *= 2;
-  void *p = realloc(*buf, (size_t)c * elem);
-  if (!p) return BS_ENOMEM;
-  *buf = p;
-  *cap = c;
-  return 0;
-}
-
 /* ---- geometry ------------------------------------------------------------ */
 
 /* 1 when segment pq crosses triangle abc (touching counts; a segment in the
@@ -119,16 +108,10 @@ static int has_vertex(const int32_t *vs, int n, int32_t v) {
   return 0;
 }
 
-/* The pair's 4 points at x into y[12]. */
-static void gather(const double *x, const int32_t v[4], double y[12]) {
-  for (int a = 0; a < 4; a++)
-    for (int k = 0; k < 3; k++) y[3 * a + k] = x[3 * (size_t)v[a] + k];
-}
-
 /* ---- detection ----------------------------------------------------------- */
 
 static void push(tbuf *b, const int32_t v[4], int ee) {
-  if (grow((void **)&b->p, &b->cap, b->n + 1, sizeof(ipc_pair))) {
+  if (bs__ipc_grow((void **)&b->p, &b->cap, b->n + 1, sizeof(ipc_pair))) {
     b->fail = 1;
     return;
   }
@@ -145,7 +128,7 @@ static void pt_candidates(const ipc_data *d, const double *x, const int32_t *F, 
     if (has_vertex(F, 3, v)) continue;
     const int32_t pv[4] = {v, F[0], F[1], F[2]};
     double y[12];
-    gather(x, pv, y);
+    bs__ipc_gather(x, pv, y);
     const double d2 = bs_ipc_pt_d2_full(y, y + 3, y + 6, y + 9, NULL, NULL, NULL);
     b->min_d2 = fmin(b->min_d2, d2);
     if (!(d2 > 0)) b->inter++;
@@ -169,7 +152,7 @@ static void ee_candidates(const ipc_data *d, const double *x, int32_t f, int64_t
       if (d->owner[ea] != f || eb <= ea || has_vertex(EA, 2, EB[0]) || has_vertex(EA, 2, EB[1])) continue;
       const int32_t pv[4] = {EA[0], EA[1], EB[0], EB[1]};
       double y[12];
-      gather(x, pv, y);
+      bs__ipc_gather(x, pv, y);
       const double d2 = bs_ipc_ee_d2_full(y, y + 3, y + 6, y + 9, NULL, NULL, NULL);
       b->min_d2 = fmin(b->min_d2, d2);
       if (!(d2 > 0)) b->inter++;
@@ -213,7 +196,7 @@ static int merge(ipc_data *d, int nt) {
     if (d->tb[t].fail) return BS_ENOMEM;
     n += d->tb[t].n, inter += d->tb[t].inter, m = fmin(m, d->tb[t].min_d2);
   }
-  if (grow((void **)&d->pairs, &d->cap_pairs, n, sizeof(ipc_pair))) return BS_ENOMEM;
+  if (bs__ipc_grow((void **)&d->pairs, &d->cap_pairs, n, sizeof(ipc_pair))) return BS_ENOMEM;
   d->n_pairs = 0;
   for (int t = 0; t < nt; t++) {
     if (d->tb[t].n == 0) continue; /* no pairs (and maybe no buffers) */
@@ -261,10 +244,10 @@ static int detect(ipc_data *d, const double *x) {
 static int pair_energy(const ipc_data *d, const double *x, const ipc_pair *p, double kappa, double *E, double *g,
                        double *H) {
   double y[12];
-  gather(x, p->v, y);
+  bs__ipc_gather(x, p->v, y);
   if (!p->ee) return bs_ipc_pt_energy(y, y + 3, y + 6, y + 9, d->dhat, kappa, d->project, E, g, H, NULL);
   double r[12];
-  gather(d->mesh->x, p->v, r);
+  bs__ipc_gather(d->mesh->x, p->v, r);
   const double eps = bs_ipc_mollifier_eps(r, r + 3, r + 6, r + 9);
   return bs_ipc_ee_energy(y, y + 3, y + 6, y + 9, eps, d->dhat, kappa, d->project, E, g, H, NULL);
 }
@@ -273,9 +256,9 @@ static int pair_energy(const ipc_data *d, const double *x, const ipc_pair *p, do
  * in parallel; 0, or 1 when a pair is not evaluable. */
 static int pair_loop(ipc_data *d, const double *x, double kappa, int want) {
   const int64_t n = d->n_pairs;
-  if (grow((void **)&d->pe, &d->cap_e, n, sizeof(double)) ||
-      (want >= 1 && grow((void **)&d->pg, &d->cap_g, 12 * n, sizeof(double))) ||
-      (want >= 2 && grow((void **)&d->ph, &d->cap_h, 144 * n, sizeof(double))))
+  if (bs__ipc_grow((void **)&d->pe, &d->cap_e, n, sizeof(double)) ||
+      (want >= 1 && bs__ipc_grow((void **)&d->pg, &d->cap_g, 12 * n, sizeof(double))) ||
+      (want >= 2 && bs__ipc_grow((void **)&d->ph, &d->cap_h, 144 * n, sizeof(double))))
     return 1;
   int bad = 0;
 #pragma omp parallel for schedule(static) num_threads(d->nthreads) reduction(| : bad) if (n >= PAR_MIN)
@@ -332,8 +315,8 @@ static int ipc_hessian(const bs_term *t, const double *x, bs_bsr *H) {
  * second): into b->tmin. */
 static void ccd_pair(const ipc_data *d, const int32_t v[4], int ee, tbuf *b) {
   double x0[12], x1[12], t = 1;
-  gather(d->X2, v, x0);
-  gather(d->X2 + 3 * (size_t)d->nv, v, x1);
+  bs__ipc_gather(d->X2, v, x0);
+  bs__ipc_gather(d->X2 + 3 * (size_t)d->nv, v, x1);
   const int rc = ee ? bs_ccd_ee(x0, x1, BS_IPC_CCD_S, BS_IPC_CCD_ITER, &t, NULL)
                     : bs_ccd_pt(x0, x1, BS_IPC_CCD_S, BS_IPC_CCD_ITER, &t, NULL);
   if (rc == BS_EINPUT) b->fail = 1;

@@ -993,11 +993,8 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();
   if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
-  /* Under the gate: lifted by the tet remeshing, but not a surface's own
-   * triangles with no size (a scan's: armadillo's 52k triangles took over
-   * 10 minutes to lift), which go straight to the size chosen below. */
-  const int own_triangles = cgal_soup && size <= 0;
-  if (rc == BS_EINPUT && m && gate > 0 && !own_triangles) rc = lift_gmsh(path, &m, size, gate, err);
+  /* Under the gate: lifted, but not a surface's own triangles (no size): too slow on scans; the size below. */
+  if (rc == BS_EINPUT && m && gate > 0 && !(cgal_soup && size <= 0)) rc = lift_gmsh(path, &m, size, gate, err);
   if (rc == BS_EINPUT && cgal_soup && gate > 0 && !bs__budget_exceeded(err)) {
     bs_mesh_destroy(&m);
     rc = bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);
