@@ -11,10 +11,13 @@
  * ... UInt64, Float32, Float64 (and the legacy names Float, Double, Int, Char,
  * UChar). Read: Points (3 components), the Cells arrays connectivity, offsets
  * and types, every PointData and CellData array; FieldData and other
- * elements are skipped. Cells must all be tetrahedra (VTK type 10): a file
- * with other cells (a mesh exported with its surface triangles, say) is an
- * error naming the first such cell and its type, because a bs_vtu is a tet
- * mesh whose cell data has one tuple per tet.
+ * elements are skipped. Cells must all be tetrahedra (VTK type 10) or all
+ * quadratic tetrahedra (VTK type 24, VTK_QUADRATIC_TETRA: 10 nodes, the
+ * order of bs_tet10.h): a file with other cells (a mesh exported with its
+ * surface triangles, say) or a mix of the two is an error naming the first
+ * such cell and its type, because a bs_vtu is a tet mesh whose cell data has
+ * one tuple per tet. For quadratic cells, tets holds their corners (nodes
+ * 0..3) and tets10 all 10 nodes.
  *
  * Every size in a file is checked before it sizes an allocation: an array
  * must hold exactly NumberOfPoints (or NumberOfCells) x NumberOfComponents
@@ -73,7 +76,10 @@ typedef struct bs_vtu {
   int32_t n_points;
   double *x;                   /* 3 * n_points: Points (current positions)    */
   int32_t n_cells;
-  int32_t *tets;               /* 4 * n_cells: connectivity, as stored        */
+  int32_t *tets;               /* 4 * n_cells: connectivity, as stored (the
+                                  corners of quadratic cells)                 */
+  int32_t *tets10;             /* 10 * n_cells: quadratic cells' nodes, as
+                                  stored; NULL when the cells are linear      */
   const double *displacement;  /* 3 * n_points: the "displacement" point data
                                   (x - rest) when present with 3 components,
                                   else NULL; points into point_data           */

@@ -14,7 +14,7 @@
 
 #include "vtu_internal.h"
 
-enum { VTK_TETRA = 10 };
+enum { VTK_TETRA = 10, VTK_QUADRATIC_TETRA = 24 };
 
 static const char *section_name(bs__vtu_section s) {
   switch (s) {
@@ -107,28 +107,55 @@ static int read_points(const char *path, const bs__vtu_doc *d, const bs__vtu_dec
   return BS_OK;
 }
 
-/* Every cell a tetrahedron: types all 10, offsets 4, 8, 12, ... */
-static int check_cells(const char *path, const bs__vtu_doc *d, const roles *r, bs_error *err) {
+/* Every cell a tetrahedron, all of one kind: types all 10 (4 nodes) or all
+ * 24 (VTK_QUADRATIC_TETRA, 10 nodes); offsets k, 2k, 3k, ... Sets *nodes. */
+static int check_cells(const char *path, const bs__vtu_doc *d, const roles *r, int *nodes, bs_error *err) {
   const int64_t nc = d->n_cells;
   const unsigned char *data;
   unsigned char *owned;
   int rc = values(path, d, r->types, nc, &data, &owned, err);
+  int64_t first = 0;
   for (int64_t c = 0; c < nc && !rc; c++) {
     int64_t ty;
-    if (bs__vtu_get_int(data, r->types->type, (size_t)c, &ty) || ty != VTK_TETRA)
-      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld has VTK type %g; only tetrahedra (10) are read", path,
+    if (bs__vtu_get_int(data, r->types->type, (size_t)c, &ty) || (ty != VTK_TETRA && ty != VTK_QUADRATIC_TETRA))
+      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld has VTK type %g; only tetrahedra (10) and quadratic tetrahedra (24) are read", path,
                         (long long)c, bs__vtu_get_double(data, r->types->type, (size_t)c));
+    else if (c == 0)
+      first = ty;
+    else if (ty != first)
+      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld has VTK type %lld but cell 0 has type %lld: a mesh of one kind of tetrahedron is read",
+                        path, (long long)c, (long long)ty, (long long)first);
   }
   free(owned);
   if (rc) return rc;
+  const int k = first == VTK_QUADRATIC_TETRA ? 10 : 4;
+  *nodes = k;
   rc = values(path, d, r->offs, nc, &data, &owned, err);
   for (int64_t c = 0; c < nc && !rc; c++) {
     int64_t o;
-    if (bs__vtu_get_int(data, r->offs->type, (size_t)c, &o) || o != 4 * (c + 1))
-      rc = bs_error_set(err, BS_EINPUT,
-                        "'%s': cell %lld ends at connectivity offset %g, expected %lld (4 vertices per tetrahedron)",
+    if (bs__vtu_get_int(data, r->offs->type, (size_t)c, &o) || o != k * (c + 1))
+      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld ends at connectivity offset %g, expected %lld (%d nodes per %s)",
                         path, (long long)c, bs__vtu_get_double(data, r->offs->type, (size_t)c),
-                        (long long)(4 * (c + 1)));
+                        (long long)(k * (c + 1)), k, k == 10 ? "quadratic tetrahedron" : "tetrahedron");
+  }
+  free(owned);
+  return rc;
+}
+
+/* The connectivity (k nodes per cell) into conn, range-checked. */
+static int read_conn(const char *path, const bs__vtu_doc *d, const roles *r, int k, int32_t *conn, bs_error *err) {
+  const int64_t nc = d->n_cells;
+  const unsigned char *data;
+  unsigned char *owned;
+  int rc = values(path, d, r->conn, k * nc, &data, &owned, err);
+  if (rc) return rc;
+  for (int64_t i = 0; i < k * nc && !rc; i++) {
+    int64_t id;
+    if (bs__vtu_get_int(data, r->conn->type, (size_t)i, &id) || id < 0 || id >= d->n_points)
+      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld %s %d is %g, outside [0, %lld)", path, (long long)(i / k),
+                        k == 10 ? "node" : "vertex", (int)(i % k), bs__vtu_get_double(data, r->conn->type, (size_t)i), (long long)d->n_points);
+    else
+      conn[i] = (int32_t)id;
   }
   free(owned);
   return rc;
@@ -136,26 +163,19 @@ static int check_cells(const char *path, const bs__vtu_doc *d, const roles *r, b
 
 static int read_cells(const char *path, const bs__vtu_doc *d, const roles *r, bs_vtu *v, bs_error *err) {
   const int64_t nc = d->n_cells;
-  int rc = nc ? check_cells(path, d, r, err) : BS_OK; /* the types hold nc cells: nc is not a bare count */
+  int k = 4;
+  int rc = nc ? check_cells(path, d, r, &k, err) : BS_OK; /* the types hold nc cells: nc is not a bare count */
   if (rc) return rc;
   v->tets = malloc(4 * (size_t)nc * sizeof(int32_t) + 1);
-  if (!v->tets) return bs_error_set(err, BS_ENOMEM, "reading '%s': out of memory for %lld cells", path, (long long)nc);
+  if (k == 10) v->tets10 = malloc(10 * (size_t)nc * sizeof(int32_t) + 1);
+  if (!v->tets || (k == 10 && !v->tets10))
+    return bs_error_set(err, BS_ENOMEM, "reading '%s': out of memory for %lld cells", path, (long long)nc);
   v->n_cells = (int32_t)nc;
   if (nc == 0) return BS_OK;
-  const unsigned char *data;
-  unsigned char *owned;
-  if ((rc = values(path, d, r->conn, 4 * nc, &data, &owned, err))) return rc;
-  for (int64_t i = 0; i < 4 * nc && !rc; i++) {
-    int64_t id;
-    if (bs__vtu_get_int(data, r->conn->type, (size_t)i, &id) || id < 0 || id >= d->n_points)
-      rc = bs_error_set(err, BS_EINPUT, "'%s': cell %lld vertex %d is %g, outside [0, %lld)", path,
-                        (long long)(i / 4), (int)(i % 4), bs__vtu_get_double(data, r->conn->type, (size_t)i),
-                        (long long)d->n_points);
-    else
-      v->tets[i] = (int32_t)id;
-  }
-  free(owned);
-  return rc;
+  if ((rc = read_conn(path, d, r, k, k == 10 ? v->tets10 : v->tets, err))) return rc;
+  if (k == 10)
+    for (int64_t c = 0; c < nc; c++) memcpy(v->tets + 4 * c, v->tets10 + 10 * c, 4 * sizeof(int32_t));
+  return BS_OK;
 }
 
 /* Point and cell data, in file order (takes the names out of d). */
@@ -217,6 +237,7 @@ void bs_vtu_destroy(bs_vtu **pv) {
   bs_vtu *v = *pv;
   free(v->x);
   free(v->tets);
+  free(v->tets10);
   for (int i = 0; i < v->n_point_data; i++) {
     free(v->point_data[i].name);
     free(v->point_data[i].data);

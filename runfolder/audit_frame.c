@@ -7,6 +7,7 @@
 
 #include "bs_audit.h"
 #include "bs_shim.h"
+#include "bs_tet10.h"
 #include "bs_vtu_read.h"
 
 /* The rest mesh of the previous frame, reused while the connectivity and the
@@ -195,12 +196,43 @@ static int count_defects(const bs_mesh *m, const double *xc, const char *path, b
   return BS_OK;
 }
 
+/* Element t's 10 nodes of positions x (VTK order), reoriented as a positive
+ * tet at rest when sign < 0 (nodes 1 and 2 swapped, with their edges). */
+static void gather10(const int32_t *n10, const double *x, int sign, double out[30]) {
+  static const int swap12[10] = {0, 2, 1, 3, 6, 5, 4, 7, 9, 8};
+  for (int a = 0; a < 10; a++)
+    memcpy(out + 3 * a, x + 3 * (size_t)n10[sign < 0 ? swap12[a] : a], 3 * sizeof(double));
+}
+
+/* Quadratic cells whose corners are not inverted but whose curved map
+ * folds: det J <= 0 at one of its 10 nodes or 14 quadrature points
+ * (bs_tet10_rest_init on the current positions; floating point, not exact). */
+static int count_folded_tet10(const bs_vtu *v, const double *rest, const char *path, bs_audit_counts *c,
+                              bs_error *err) {
+  for (int32_t t = 0; t < v->n_cells; t++) {
+    const int32_t *n = v->tets10 + 10 * (size_t)t;
+    const int o0 = bs_shim_orient3d(rest + 3 * (size_t)n[0], rest + 3 * (size_t)n[1], rest + 3 * (size_t)n[2],
+                                    rest + 3 * (size_t)n[3]);
+    const int o = bs_shim_orient3d(v->x + 3 * (size_t)n[0], v->x + 3 * (size_t)n[1], v->x + 3 * (size_t)n[2],
+                                   v->x + 3 * (size_t)n[3]);
+    if (o0 < -1 || o < -1) return bs_error_set(err, BS_EINTERNAL, "'%s': orientation test failed on tet %d", path, t);
+    if (o0 == 0 || o != o0) continue; /* counted by count_defects (or refused at rest) */
+    double x[30];
+    bs_tet10_rest r;
+    bs_error ignore;
+    gather10(n, v->x, o0, x);
+    if (bs_tet10_rest_init(x, BS_TET10_RULE_14PT_DEG5, &r, &ignore) == BS_ENUMERIC) c->inverted++;
+  }
+  return BS_OK;
+}
+
 int bs_auditor_frame(bs_auditor *a, const char *path, double t, bs_audit_counts *c, bs_error *err) {
   memset(c, 0, sizeof *c);
   bs_vtu *v = NULL;
   int rc = read_state(a, path, t, &v, c, err);
   if (!rc) rc = current_positions(a, v, path, err);
-  bs_vtu_destroy(&v);
   if (!rc) rc = count_defects(a->cache.mesh, a->xc, path, c, err);
+  if (!rc && v->tets10) rc = count_folded_tet10(v, a->cache.rest, path, c, err);
+  bs_vtu_destroy(&v);
   return rc;
 }

@@ -9,8 +9,13 @@
  *    (bs_vtu_rest) and the mesh rebuilt from it (bs_mesh_create orients every
  *    tet positively at rest and refuses a tet of zero rest volume); a tet is
  *    inverted when the exact orientation of its four current positions is not
- *    positive, i.e. det F <= 0 decided without round-off;
- *  - surface self-intersections: the boundary triangles of that rest mesh,
+ *    positive, i.e. det F <= 0 decided without round-off. A quadratic tet
+ *    (VTK type 24) is inverted when its corners are, or when its curved map
+ *    folds: det J <= 0 at one of its 10 nodes or 14 quadrature points of the
+ *    current positions (bs_tet10_rest_init; floating point, not exact);
+ *  - surface self-intersections: the boundary triangles of that rest mesh
+ *    (of a quadratic mesh: the flat triangles of its corners, which do not
+ *    follow the curved faces),
  *    placed at the current positions, tested pairwise with exact predicates
  *    (degenerate triangles count as a pair);
  *  - vertices inside obstacles (with a simulation of the scene that produced

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bs_audit.h"
 #include "bs_fem.h"
 #include "bs_mesh.h"
 #include "bs_qoi.h"
@@ -355,11 +356,70 @@ Test(tet10_sim, vtu_quadratic_cells_and_stress) {
   cr_log_info("largest cell von Mises %g Pa; beam theory's root bending stress %g Pa", top, smax);
   cr_expect(top > 0.4 * smax && top < 1.3 * smax, "largest von Mises %g against %g", top, smax);
   free(types), free(conn), free(vm), free(text);
+  /* `bigstep check` reads the quadratic frames (with the scene's simulation: every node is a vertex of it) */
+  bs_audit_list L;
+  bs_audit_totals AT;
+  bs_error err;
+  cr_assert_eq(bs_audit_list_frames(dir, &L, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_audit_run(&L, s, NULL, NULL, &AT, &err), 0, "%s", err.msg);
+  cr_expect_eq(AT.n_frames, 2);
+  cr_expect_eq(AT.unreadable, 0, "%d quadratic frames could not be audited", AT.unreadable);
+  cr_expect_eq(AT.inverted, 0);
+  cr_expect_eq(AT.self_pairs, 0);
+  bs_audit_list_free(&L);
   char cmd[256];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   cr_expect_eq(system(cmd), 0);
   bs_sim_destroy(&s);
   bs_scene_destroy(&sc);
+}
+
+/* The audit of a quadratic VTU: a clean box, then one midside node pushed
+ * along its edge to 0.9 of it, which folds the curved map of every tet around
+ * that edge while their corners stay positive. */
+Test(tet10_sim, audit_sees_a_folded_quadratic_element) {
+  char dir[] = "/tmp/bs_test_tet10_audit_XXXXXX";
+  cr_assert_not_null(mkdtemp(dir));
+  bs_mesh *m = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  const double lo[3] = {0, 0, 0}, hi[3] = {0.3, 0.2, 0.1};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 3, 2, 1, &m, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_tet10_mesh(m, &err), 0, "%s", err.msg);
+  const size_t n3 = 3 * (size_t)m->n_vertices;
+  double *x = malloc(n3 * sizeof(double));
+  memcpy(x, m->x, n3 * sizeof(double));
+  char path[1200];
+  snprintf(path, sizeof path, "%s/clean.vtu", dir);
+  bs_vtu_fields f = {.x = x};
+  cr_assert_eq(bs_mesh_write_vtu(m, &f, path, &err), 0, "%s", err.msg);
+  bs_auditor *a = NULL;
+  bs_audit_counts c;
+  cr_assert_eq(bs_auditor_create(NULL, &a, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_auditor_frame(a, path, 0, &c, &err), 0, "%s", err.msg);
+  cr_expect_eq(c.n_tets, m->n_tets);
+  cr_expect_eq(c.inverted, 0);
+  cr_expect_eq(c.self_pairs, 0);
+  /* tet 0's edge (0, 1): its midside node to 0.9 of the way from node 0 to node 1 */
+  const int32_t va = m->tets10[0], vb = m->tets10[1], mid = m->tets10[4];
+  for (int k = 0; k < 3; k++) x[3 * mid + k] = m->x[3 * va + k] + 0.9 * (m->x[3 * vb + k] - m->x[3 * va + k]);
+  int32_t around = 0;
+  for (int32_t t = 0; t < m->n_tets; t++) {
+    int has = 0;
+    for (int j = 0; j < 4; j++) has += m->tets[4 * t + j] == va || m->tets[4 * t + j] == vb;
+    around += has == 2;
+  }
+  snprintf(path, sizeof path, "%s/folded.vtu", dir);
+  cr_assert_eq(bs_mesh_write_vtu(m, &f, path, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_auditor_frame(a, path, 0, &c, &err), 0, "%s", err.msg);
+  cr_expect_eq(c.inverted, around, "%d folded tets seen, %d share the edge", c.inverted, around);
+  cr_expect_gt(around, 0);
+  bs_auditor_destroy(&a);
+  bs_mesh_destroy(&m);
+  free(x);
+  char cmd[1300];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  cr_expect_eq(system(cmd), 0);
 }
 
 /* ---- dynamics and obstacles ---- */

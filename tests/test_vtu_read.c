@@ -312,7 +312,11 @@ Test(vtu_read, non_finite_point_and_bad_connectivity) {
   b = load("paraview_appended.vtu");
   unsigned char *t = block(&b, "types");
   t[8 + 287] = 5; /* a triangle */
-  expect_error(&b, "triangle.vtu", BS_EINPUT, "cell 287 has VTK type 5; only tetrahedra (10) are read", NULL);
+  expect_error(&b, "triangle.vtu", BS_EINPUT, "cell 287 has VTK type 5; only tetrahedra (10) and quadratic tetrahedra (24) are read", NULL);
+  b = load("paraview_appended.vtu");
+  t = block(&b, "types");
+  t[8 + 3] = 24; /* one quadratic tetra among linear ones */
+  expect_error(&b, "mixed.vtu", BS_EINPUT, "cell 3 has VTK type 24 but cell 0 has type 10", NULL);
 }
 
 Test(vtu_read, missing_closing_tags_and_unsupported_forms) {
