@@ -73,7 +73,7 @@ static int make_chunks(bs_fem *f, int32_t *chunk_of, bs_error *err) {
 
 /* Greedy colouring of the chunks, in order: each chunk takes the smallest
  * colour that no chunk sharing a vertex with it has taken yet. */
-static int color_chunks(bs_fem *f, bs_error *err) {
+int bs__fem_color_chunks(bs_fem *f, bs_error *err) {
   const bs_mesh *m = f->mesh;
   const int32_t nt = m->n_tets, nv = m->n_vertices;
   const int32_t ns = nv > nt ? nv : nt;
@@ -254,7 +254,7 @@ int bs_fem_create(const bs_mesh *mesh, int n_materials, const bs_material *mater
         f->slots[16 * t + 4 * a + b] = s;
       }
   }
-  if ((st = color_chunks(f, err))) goto fail;
+  if ((st = bs__fem_color_chunks(f, err))) goto fail;
   if ((st = permute_to_positions(f, err))) goto fail;
   /* Partial energy sums: one per chunk (gradient) or per EBLOCK tets (energy). */
   const int32_t n_part = f->n_chunks > f->n_tets / EBLOCK + 1 ? f->n_chunks : f->n_tets / EBLOCK + 1;

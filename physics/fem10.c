@@ -1,8 +1,10 @@
 /* fem10.c — the fem cache over quadratic tets (bs_fem.h, "Quadratic tets"):
  * the rest gradients at the quadrature points, the HRZ-lumped mass, the
  * weights of the consistent body load, the block pattern over the 10 nodes,
- * and the elastic energy, gradient and Hessian assembled tet by tet in mesh
- * order (serial: the sums do not depend on the thread count). */
+ * and the elastic energy, gradient and Hessian assembled in parallel over
+ * the chunks of fem.c's colouring (of the corners: tets that share a node
+ * share a corner), each chunk's tets in order and the partial sums added in
+ * a fixed order, so that the results do not depend on the thread count. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -134,29 +136,32 @@ int bs__fem10_create(bs_fem *f, const int32_t *tet_material, bs_error *err) {
   if (d) f->q_dNdX = d;
   if (w) f->q_wdetJ = w;
   int st = make_pattern(f, err);
+  if (!st) st = bs__fem_color_chunks(f, err);
   if (st) return st;
+  f->partial = bs_calloc((size_t)f->n_chunks + 1, sizeof(double), "the energy partial sums", err);
+  if (!f->partial) return BS_ENOMEM;
   free(f->pattern->val);
   f->pattern->val = NULL;
   return 0;
 }
 
-double bs__fem10_energy(const bs_fem *f, const double *x) {
-  double E = 0, xt[30];
-  bs_tet10_rest r;
-  for (int32_t t = 0; t < f->n_tets; t++) {
-    gather10(f, x, t, xt);
-    rest_of(f, t, &r);
-    E += bs_tet10_energy(&f->materials[f->tet_material[t]], &r, xt);
-  }
-  return E;
-}
+/* A colour's chunks (or the chunks, for the energy) run on several threads
+ * when there are at least this many: as in fem.c. */
+enum { PAR_CHUNKS10 = 4 };
 
-double bs__fem10_gradient(const bs_fem *f, const double *x, double *g) {
+/* The energy (and when g is not NULL, the gradient added into g) of the tets
+ * of chunk c, in chunk order. */
+static double chunk_energy(const bs_fem *f, const double *x, int32_t c, double *g) {
   double E = 0, xt[30], ge[30];
   bs_tet10_rest r;
-  for (int32_t t = 0; t < f->n_tets; t++) {
+  for (int32_t q = f->chunk_ptr[c]; q < f->chunk_ptr[c + 1]; q++) {
+    const int32_t t = f->chunk_tets[q];
     gather10(f, x, t, xt);
     rest_of(f, t, &r);
+    if (!g) {
+      E += bs_tet10_energy(&f->materials[f->tet_material[t]], &r, xt);
+      continue;
+    }
     E += bs_tet10_energy_grad(&f->materials[f->tet_material[t]], &r, xt, ge);
     const int32_t *tv = f->mesh->tets10 + 10 * (size_t)t;
     for (int a = 0; a < 10; a++)
@@ -165,33 +170,71 @@ double bs__fem10_gradient(const bs_fem *f, const double *x, double *g) {
   return E;
 }
 
-void bs__fem10_hessian(const bs_fem *f, const double *x, int project_psd, const double *vmax, double s,
-                       const double *material_scale, bs_bsr *H) {
+double bs__fem10_energy(const bs_fem *f, const double *x) {
+  double *part = f->partial;
+  const int32_t nk = f->n_chunks;
+#pragma omp parallel for schedule(dynamic, 1) if (nk >= PAR_CHUNKS10)
+  for (int32_t c = 0; c < nk; c++) part[c] = chunk_energy(f, x, c, NULL);
+  double E = 0;
+  for (int32_t c = 0; c < nk; c++) E += part[c];
+  return E;
+}
+
+/* Colour by colour: the chunks of a colour share no node (they share no
+ * corner, and a midside node belongs to the tets of its edge), so they add
+ * into g at once; the sums are in a fixed order whatever the thread count. */
+double bs__fem10_gradient(const bs_fem *f, const double *x, double *g) {
+  double *part = f->partial; /* part[q]: the chunk at position q of color_chunks */
+  for (int c = 0; c < f->n_colors; c++) {
+    const int32_t lo = f->color_ptr[c], hi = f->color_ptr[c + 1];
+#pragma omp parallel for schedule(dynamic, 1) if (hi - lo >= PAR_CHUNKS10)
+    for (int32_t q = lo; q < hi; q++) part[q] = chunk_energy(f, x, f->color_chunks[q], g);
+  }
+  double E = 0;
+  for (int32_t q = 0; q < f->n_chunks; q++) E += part[q];
+  return E;
+}
+
+static void hessian_tet(const bs_fem *f, const double *x, int32_t t, int project_psd, const double *vmax, double s,
+                        const double *material_scale, bs_bsr *H) {
   double xt[30], He[900];
   bs_tet10_rest r;
-  for (int32_t t = 0; t < f->n_tets; t++) {
-    const int32_t mi = f->tet_material[t];
-    const double sc = material_scale ? material_scale[mi] : s;
-    if (material_scale && sc == 0) continue;
-    const int mode = vmax ? (f->volume[t] <= vmax[mi] ? BS_PSD_INVERTED : BS_PSD_NONE) : project_psd;
-    gather10(f, x, t, xt);
-    rest_of(f, t, &r);
-    bs_tet10_hessian(&f->materials[mi], &r, xt, mode, He);
-    const int32_t *sl = f->slots + 100 * (size_t)t;
-    for (int a = 0; a < 10; a++)
-      for (int b = 0; b < 10; b++) {
-        double *blk = H->val + 9 * (size_t)sl[10 * a + b];
-        for (int i = 0; i < 3; i++)
-          for (int j = 0; j < 3; j++) blk[3 * i + j] += sc * He[30 * (3 * a + i) + 3 * b + j];
-      }
+  const int32_t mi = f->tet_material[t];
+  const double sc = material_scale ? material_scale[mi] : s;
+  if (material_scale && sc == 0) return;
+  const int mode = vmax ? (f->volume[t] <= vmax[mi] ? BS_PSD_INVERTED : BS_PSD_NONE) : project_psd;
+  gather10(f, x, t, xt);
+  rest_of(f, t, &r);
+  bs_tet10_hessian(&f->materials[mi], &r, xt, mode, He);
+  const int32_t *sl = f->slots + 100 * (size_t)t;
+  for (int a = 0; a < 10; a++)
+    for (int b = 0; b < 10; b++) {
+      double *blk = H->val + 9 * (size_t)sl[10 * a + b];
+      for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) blk[3 * i + j] += sc * He[30 * (3 * a + i) + 3 * b + j];
+    }
+}
+
+void bs__fem10_hessian(const bs_fem *f, const double *x, int project_psd, const double *vmax, double s,
+                       const double *material_scale, bs_bsr *H) {
+  for (int c = 0; c < f->n_colors; c++) {
+    const int32_t lo = f->color_ptr[c], hi = f->color_ptr[c + 1];
+#pragma omp parallel for schedule(dynamic, 1) if (hi - lo >= PAR_CHUNKS10)
+    for (int32_t q = lo; q < hi; q++) {
+      const int32_t k = f->color_chunks[q];
+      for (int32_t p = f->chunk_ptr[k]; p < f->chunk_ptr[k + 1]; p++)
+        hessian_tet(f, x, f->chunk_tets[p], project_psd, vmax, s, material_scale, H);
+    }
   }
 }
 
 int32_t bs__fem10_count_inverted(const bs_fem *f, const double *x, double *min_detF) {
   int32_t n = 0;
-  double mn = INFINITY, xt[30], F[9];
-  bs_tet10_rest r;
+  double mn = INFINITY;
+#pragma omp parallel for schedule(static) reduction(+ : n) reduction(min : mn) if (f->n_tets > 512)
   for (int32_t t = 0; t < f->n_tets; t++) {
+    double xt[30], F[9];
+    bs_tet10_rest r;
     gather10(f, x, t, xt);
     rest_of(f, t, &r);
     int bad = 0;

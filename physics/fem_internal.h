@@ -8,6 +8,10 @@
 /* Fills the tet10 part of f (f->mesh, f->n_materials, f->materials set; the
  * rest calloc'ed): order 2, volumes, HRZ masses, load weights, materials,
  * quadrature cache, pattern and slots. On an error f is to be destroyed. */
+/* Chunks of nearby tets (chunk_ptr, chunk_tets: position -> tet) and a
+ * greedy colouring of them (n_colors, color_ptr, color_chunks) in which no
+ * two chunks of a colour share a corner (fem.c; for both orders). */
+int bs__fem_color_chunks(bs_fem *f, bs_error *err);
 int bs__fem10_create(bs_fem *f, const int32_t *tet_material, bs_error *err);
 double bs__fem10_energy(const bs_fem *f, const double *x);
 double bs__fem10_gradient(const bs_fem *f, const double *x, double *g);

@@ -6,6 +6,7 @@
 #define _GNU_SOURCE /* mkdtemp */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -173,6 +174,50 @@ Test(tet10_fem, gradient_and_hessian_against_differences) {
   cr_expect_float_eq(mn, 1.0, 1e-12);
   bs_bsr_destroy(&H);
   free(x), free(g), free(gp), free(gm), free(d), free(Hd);
+  fem_free(&f);
+}
+
+/* Energy, gradient, Hessian and inverted count on n threads (16^3 cells:
+ * 24,576 tets, 48 chunks, so that colours run in parallel). */
+static void assemble_on(int n, const fem_fixture *f, const double *x, double *E, double *g, bs_bsr *H, int32_t *inv) {
+  omp_set_num_threads(n);
+  memset(g, 0, sizeof(double) * 3 * (size_t)f->fem->n_vertices);
+  memset(H->val, 0, sizeof(double) * 9 * (size_t)H->nnzb);
+  E[0] = bs_fem_elastic_energy(f->fem, x);
+  E[1] = bs_fem_elastic_gradient(f->fem, x, g);
+  bs_fem_elastic_hessian(f->fem, x, BS_PSD_ALL, 1.0, H);
+  double mn;
+  *inv = bs_fem_count_inverted(f->fem, x, &mn);
+}
+
+Test(tet10_fem, one_and_two_threads_give_the_same_bits) {
+  fem_fixture f;
+  bs_error err;
+  const double lo[3] = {0, 0, 0}, hi[3] = {0.4, 0.3, 0.2};
+  cr_assert_eq(bs_mesh_create_box(lo, hi, 16, 16, 16, &f.mesh, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_tet10_mesh(f.mesh, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_material_init(BS_MODEL_NEO_HOOKEAN, 1e6, 0.3, 1000, &f.mat, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_create(f.mesh, 1, &f.mat, NULL, &f.fem, &err), 0, "%s", err.msg);
+  const size_t n3 = 3 * (size_t)f.fem->n_vertices;
+  double *x = malloc(n3 * sizeof(double)), *g1 = malloc(n3 * sizeof(double)), *g2 = malloc(n3 * sizeof(double));
+  deform(f.mesh, x);
+  bs_bsr *H1 = NULL, *H2 = NULL;
+  cr_assert_eq(bs_fem_matrix(f.fem, &H1, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_fem_matrix(f.fem, &H2, &err), 0, "%s", err.msg);
+  double E1[2], E2[2];
+  int32_t i1, i2;
+  const int saved = omp_get_max_threads();
+  assemble_on(1, &f, x, E1, g1, H1, &i1);
+  assemble_on(2, &f, x, E2, g2, H2, &i2);
+  omp_set_num_threads(saved);
+  cr_expect_eq(memcmp(E1, E2, sizeof E1), 0, "energy %.17g / %.17g on 1 thread, %.17g / %.17g on 2", E1[0], E1[1], E2[0], E2[1]);
+  cr_expect_float_eq(E1[0], E1[1], 1e-12 * fabs(E1[0]));
+  cr_expect_eq(memcmp(g1, g2, n3 * sizeof(double)), 0, "the gradient differs between 1 and 2 threads");
+  cr_expect_eq(memcmp(H1->val, H2->val, 9 * (size_t)H1->nnzb * sizeof(double)), 0, "the Hessian differs");
+  cr_expect_eq(i1, i2);
+  bs_bsr_destroy(&H1);
+  bs_bsr_destroy(&H2);
+  free(x), free(g1), free(g2);
   fem_free(&f);
 }
 
