@@ -354,7 +354,7 @@ int bs_cmd_mesh(int argc, char **argv) {
   bs_mesh_read_opts o = {.size = a.size, .refine = !strcmp(a.sub, "refine") ? a.levels : a.refine,
                          .merge_coincident = a.merge, .close_holes = a.close_holes, .max_hole = a.max_hole,
                          .min_dihedral = a.min_dihedral, .report = &rep, .surface_mesher = a.mesher,
-                         .time_budget = a.time_budget};
+                         .time_budget = a.time_budget, .element_order = a.element_order};
   if (bs_app_load_mesh_opts(a.pos[0], &o, &m, &err)) {
     if (rep.tris_out > 0 && !a.json) bs_app_print_surface_report(a.pos[0], &rep); /* repaired, then meshing failed */
     fprintf(stderr, "bigstep mesh: %s\n", err.msg);

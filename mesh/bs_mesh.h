@@ -152,6 +152,12 @@ typedef struct bs_mesh_read_opts {
                     mesher and Gmsh's optimisers) or
                     BS_SURFACE_GMSH (Gmsh reparametrises and remeshes the
                     surface; kept for comparison)                       */
+  int element_order; /* 2: geometry inputs (.geo, STEP, BREP, IGES) get
+                    Gmsh's second-order nodes (Mesh.ElementOrder 2, then
+                    Mesh.HighOrderOptimize), placed on the geometry: the
+                    curved boundary kept in bs_mesh.midside_x for
+                    bs_tet10_mesh. Dropped (straight edges) when the mesh
+                    is remeshed to pass the gate or refined. 0 or 1: linear */
   double time_budget; /* seconds of wall time bs_mesh_read may spend
                     making a mesh (> 0), checked between its stages and
                     inside the CGAL loops that allow it (alpha wrap,

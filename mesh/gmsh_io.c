@@ -877,6 +877,16 @@ static int mesh_geometry(const char *path, double size, const bs_mesh_read_opts 
   return ierr ? gmsh_fail(err, BS_EGMSH, path, "mesh the geometry in 3-D") : 0;
 }
 
+/* Second-order nodes on the geometry (curved boundary edges), then Gmsh's
+ * high-order optimiser, which untangles curved elements the placement
+ * folded (Mesh.HighOrderOptimize 2: elastic analogy and optimisation). */
+static int second_order(const char *path, bs_error *err) {
+  int ierr = 0;
+  gmshOptionSetNumber("Mesh.HighOrderOptimize", 2, &ierr);
+  gmshModelMeshSetOrder(2, &ierr);
+  return ierr ? gmsh_fail(err, BS_EGMSH, path, "place second-order nodes on the geometry") : 0;
+}
+
 /* Gmsh's optimisers towards the gate (gmsh_optimize.c); with finer (an
  * assembly at its own size) a mesh still under it is meshed again with
  * smaller elements (bs__cad_assembly_finer) and optimised again. */
@@ -989,6 +999,7 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
   }
   const double gate = kind == IN_MESH ? 0.0 : bs__mesh_gate(opts);
   if (!rc && gate > 0) rc = optimise(path, gate, assembly && size <= 0, err);
+  if (!rc && kind == IN_GEOMETRY && opts && opts->element_order == 2) rc = second_order(path, err);
   gmsh_quiet();
   if (!rc) rc = model_to_mesh(path, opts && opts->merge_coincident, &m, err);
   gmsh_end();

@@ -41,7 +41,8 @@ int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
   else {
     bs_mesh_read_opts o = {.size = bd->mesh_size, .refine = bd->refine, .max_tets = bs_memory_max_tets(sc),
                            .close_holes = bd->close_holes, .surface_mesher = bd->mesher,
-                           .min_dihedral = bd->min_dihedral > 0 ? bd->min_dihedral : -1};
+                           .min_dihedral = bd->min_dihedral > 0 ? bd->min_dihedral : -1,
+                           .element_order = bd->element == BS_ELEMENT_TET10 ? 2 : 1};
     st = bs_mesh_read(bd->mesh, &o, out, err);
   }
   if (!st && bd->reorder != BS_ORDER_NONE) st = bs_mesh_reorder(*out, bd->reorder, NULL, err);

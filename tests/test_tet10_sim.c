@@ -65,6 +65,45 @@ Test(tet10_mesh, box_nodes_and_groups) {
   bs_mesh_destroy(&m);
 }
 
+/* A geometry input meshed at order 2: the midside nodes of its boundary
+ * edges lie on the sphere (Gmsh places them on the geometry), so the curved
+ * tet10 mesh encloses the ball's volume far better than its flat corners. */
+Test(tet10_mesh, geometry_at_order_two_has_curved_boundary_nodes) {
+  bs_mesh *m = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh_read_opts o = {.element_order = 2};
+  cr_assert_eq(bs_mesh_read(BS_SOURCE_DIR "/data/geo/sphere.geo", &o, &m, &err), 0, "%s", err.msg);
+  const int32_t nc = m->n_vertices;
+  double v1 = 0, v2 = 0;
+  for (int32_t t = 0; t < m->n_tets; t++) v1 += bs_mesh_tet_volume(m, m->x, t);
+  cr_assert_eq(bs_tet10_mesh(m, &err), 0, "%s", err.msg);
+  int32_t on = 0, boundary_edges = 0;
+  for (int32_t f = 0; f < m->n_faces; f++)
+    for (int k = 0; k < 3; k++) {
+      const int32_t a = m->faces[3 * f + k], b = m->faces[3 * f + (k + 1) % 3];
+      if (a > b) continue; /* each boundary edge once (its two faces run it both ways) */
+      boundary_edges++;
+      const int32_t n = bs_mesh_edge_node(m, a, b);
+      cr_assert(n >= nc, "boundary edge (%d, %d) has no midside node", a, b);
+      const double *p = m->x + 3 * (size_t)n;
+      on += fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 0.5) < 1e-9;
+    }
+  cr_expect_eq(on, boundary_edges, "%d of %d boundary midside nodes on the sphere", on, boundary_edges);
+  for (int32_t t = 0; t < m->n_tets; t++) {
+    double X[30];
+    bs_tet10_rest r;
+    for (int a = 0; a < 10; a++) memcpy(X + 3 * a, m->x + 3 * (size_t)m->tets10[10 * t + a], 3 * sizeof(double));
+    cr_assert_eq(bs_tet10_rest_init(X, BS_TET10_RULE_14PT_DEG5, &r, &err), 0, "%s", err.msg);
+    v2 += r.volume;
+  }
+  const double ball = 4.0 / 3.0 * M_PI * 0.125, e1 = fabs(v1 - ball) / ball, e2 = fabs(v2 - ball) / ball;
+  cr_log_info("sphere.geo: %d tets; volume flat %.6f (%.3f%% off), curved %.6f (%.4f%% off), ball %.6f", m->n_tets, v1,
+              100 * e1, v2, 100 * e2, ball);
+  cr_expect_lt(e2, 0.05 * e1, "curved volume %.6g is %.3g off, flat %.3g", v2, e2, e1);
+  bs_mesh_destroy(&m);
+}
+
 /* ---- the fem over tet10 ---- */
 
 typedef struct fem_fixture {
