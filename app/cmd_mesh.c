@@ -201,6 +201,10 @@ static void print_wrap_and_size(const bs_mesh *m, const bs_surface_report *r) {
   if (r->lifted)
     printf("tetrahedral remeshing (%d run%s, %.2f s): smallest dihedral angle %.2f -> %.2f degrees\n", r->lifted,
            r->lifted == 1 ? "" : "s", r->lift_seconds, r->lift_dihedral_in, r->lift_dihedral);
+  if (r->from_boundary)
+    printf("meshed again from its boundary by CGAL (Gmsh's mesh: smallest dihedral angle %.2f degrees): volume change "
+           "%+.3f%%\n",
+           r->from_boundary_dihedral_in, 100 * r->from_boundary_volume_change);
   if (r->wrapped)
     printf("alpha wrap (%s): alpha %.4g m, offset %.4g m, volume change %+.3f%%, %.2f s\n",
            r->wrapped == 1 ? "the repair could not make the surface clean" : "the meshes of the surface were refused",
@@ -335,6 +339,10 @@ static int mesh_json(const bs_mesh *m, const char *path, const bs_surface_report
     printf("  \"tet_remesh\": {\"runs\": %d, \"dihedral_before\": %.6g, \"dihedral_after\": %.6g, \"seconds\": %.3f},\n",
            r->lifted, r->lift_dihedral_in, r->lift_dihedral, r->lift_seconds);
   else printf("  \"tet_remesh\": null,\n");
+  if (r && r->from_boundary)
+    printf("  \"from_boundary\": {\"dihedral_before\": %.6g, \"volume_change\": %.6g},\n", r->from_boundary_dihedral_in,
+           r->from_boundary_volume_change);
+  else printf("  \"from_boundary\": null,\n");
   int rc = json_surface(m, path, r, err);
   if (!rc) rc = bs_mesh_check(m, err);
   printf("  \"check\": %s,\n  \"seconds\": %.3f\n}\n", rc ? "false" : "true", t_load);

@@ -942,6 +942,15 @@ static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs
   return BS_OK;
 }
 
+/* lift_gmsh, then for a geometry still under the gate its boundary meshed
+ * again by CGAL's surface path, groups kept (bs__mesh_cad_by_surface). */
+static int lift_or_from_boundary(const char *path, bs_mesh **m, double size, double gate, int geometry,
+                                 const bs_mesh_read_opts *opts, bs_error *err) {
+  int rc = lift_gmsh(path, m, size, gate, err);
+  if (rc == BS_EINPUT && geometry && !bs__budget_exceeded(err)) rc = bs__mesh_cad_by_surface(path, m, size, opts, err);
+  return rc;
+}
+
 static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "bs_mesh_read: NULL output pointer");
   *out = NULL;
@@ -1005,7 +1014,8 @@ static int read_mesh(const char *path, const bs_mesh_read_opts *opts, bs_mesh **
   gmsh_end();
   if (!rc) rc = bs_mesh_dihedral_gate(m, gate, path, err);
   /* Under the gate: lifted, but not a surface's own triangles (no size): too slow on scans; the size below. */
-  if (rc == BS_EINPUT && m && gate > 0 && !(cgal_soup && size <= 0)) rc = lift_gmsh(path, &m, size, gate, err);
+  if (rc == BS_EINPUT && m && gate > 0 && !(cgal_soup && size <= 0))
+    rc = lift_or_from_boundary(path, &m, size, gate, kind == IN_GEOMETRY, opts, err);
   if (rc == BS_EINPUT && cgal_soup && gate > 0 && !bs__budget_exceeded(err)) {
     bs_mesh_destroy(&m);
     rc = bs__mesh_surface_auto(path, pts, np, tris, ntri, opts, &m, err);

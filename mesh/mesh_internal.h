@@ -235,6 +235,21 @@ struct bs_shim_tet_remesh_out;
 int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets, const int32_t *sub,
                   double h, double gate, int allow_boundary, struct bs_shim_tet_remesh_out *out, bs_error *err);
 int bs__mesh_lift(const char *path, bs_mesh **m, double h, double gate, bs_error *err);
+
+/* Mean edge length of the nt tets (each tet's six edges; shared edges count
+ * once per tet); 0 without tets (tet_lift.c). */
+double bs__mean_tet_edge(const double *x, int32_t nt, const int32_t *tets);
+
+/* cad_surface.c: a geometry's mesh *m that misses the gate (err holds the
+ * gate's message) and could not be lifted, meshed again from its boundary
+ * by bs__mesh_closed_surface at h (<= 0: the mean tet edge), its groups
+ * carried over (one 3-D group; 2-D groups by the closest old boundary
+ * triangle), its volume within BS_FROM_BOUNDARY_VOLUME_TOL of *m's. BS_OK with *m replaced; BS_EINPUT with err untouched when the
+ * groups cannot be carried (several 3-D groups, 0-D or 1-D groups, faces in
+ * two 2-D groups), or with the surface path's message appended to err;
+ * the budget's error or BS_ENOMEM as they are. */
+#define BS_FROM_BOUNDARY_VOLUME_TOL 0.01
+int bs__mesh_cad_by_surface(const char *path, bs_mesh **m, double h, const bs_mesh_read_opts *opts, bs_error *err);
 /* tet_lift.c: appends "; CGAL's tetrahedral remeshing of it reached D
  * degrees" (m's smallest angle) to the gate's message in err; BS_EINPUT. */
 int bs__lift_note(const bs_mesh *m, bs_error *err);

@@ -19,9 +19,7 @@
 #include "bs_shim.h"
 #include "mesh_internal.h"
 
-/* Mean edge length of the tets (each tet's six edges; shared edges count
- * once per tet). */
-static double mean_edge(const double *x, int32_t nt, const int32_t *tets) {
+double bs__mean_tet_edge(const double *x, int32_t nt, const int32_t *tets) {
   double sum = 0;
   int64_t n = 0;
   for (int32_t t = 0; t < nt; t++)
@@ -79,7 +77,7 @@ int bs__tets_lift(const char *path, int32_t nv, const double *x, int32_t nt, con
   memset(out, 0, sizeof *out);
   int rc = bs__budget_check(path, "the tetrahedral remeshing", err);
   if (rc) return rc;
-  if (!(h > 0)) h = mean_edge(x, nt, tets);
+  if (!(h > 0)) h = bs__mean_tet_edge(x, nt, tets);
   const double target = gate > 0 ? gate : BS_MESH_MIN_DIHEDRAL;
   rc = lift_once(path, nv, x, nt, tets, sub, h, target, BS_SHIM_TET_PROTECT_BOUNDARY, out, err);
   if (rc || out->dihedral >= target || !allow_boundary) return record(out, rc);

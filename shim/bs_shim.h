@@ -264,6 +264,12 @@ typedef struct bs_surface_report {
   double lift_dihedral_in;       /* the last one's smallest dihedral angle before */
   double lift_dihedral;          /* ... and after (degrees)                        */
   double lift_seconds;           /* their wall time in all                         */
+  int from_boundary;             /* 1: a geometry's Gmsh mesh missed the gate, the
+                                    lift could not take it, and its boundary was
+                                    meshed again by the surface path
+                                    (mesh/cad_surface.c)                          */
+  double from_boundary_dihedral_in; /* the Gmsh mesh's smallest dihedral (degrees) */
+  double from_boundary_volume_change; /* (V_new - V_gmsh) / V_gmsh              */
 } bs_surface_report;
 
 /* Repairs the surface (points, n_points; tris, n_tris: see Data above) into
