@@ -34,6 +34,13 @@ static double rnd(uint64_t *s) {
   return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
 }
 
+/* p scaled, rotated by R and translated as the body asks. */
+static void place(const bs_scene_body *bd, const double R[9], double *p) {
+  double q[3];
+  for (int k = 0; k < 3; k++) q[k] = p[k] * bd->scale[k];
+  for (int k = 0; k < 3; k++) p[k] = R[3 * k] * q[0] + R[3 * k + 1] * q[1] + R[3 * k + 2] * q[2] + bd->translate[k];
+}
+
 int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
   const bs_scene_body *bd = &sc->bodies[b];
   int st;
@@ -54,11 +61,8 @@ int bs_sim_body_mesh(const bs_scene *sc, int b, bs_mesh **out, bs_error *err) {
   double R[9];
   axis_angle(bd->rotate, R);
   bs_mesh *m = *out;
-  for (int32_t v = 0; v < m->n_vertices; v++) {
-    double p[3];
-    for (int k = 0; k < 3; k++) p[k] = m->x[3 * v + k] * bd->scale[k];
-    for (int k = 0; k < 3; k++) m->x[3 * v + k] = R[3 * k] * p[0] + R[3 * k + 1] * p[1] + R[3 * k + 2] * p[2] + bd->translate[k];
-  }
+  for (int32_t v = 0; v < m->n_vertices; v++) place(bd, R, m->x + 3 * (size_t)v);
+  for (int32_t i = 0; i < m->n_midside; i++) place(bd, R, m->midside_x + 3 * (size_t)i); /* a file's curved nodes */
   if (bd->element == BS_ELEMENT_TET10 && !m->tets10 && (st = bs_tet10_mesh(m, err))) {
     bs_mesh_destroy(out);
     bs_error_prefix(err, "%s: bodies.%d (element tet10)", sc->path, b);

@@ -104,6 +104,38 @@ Test(tet10_mesh, geometry_at_order_two_has_curved_boundary_nodes) {
   bs_mesh_destroy(&m);
 }
 
+/* The body's placement (scale, rotate, translate) moves the file's curved
+ * midside nodes with the corners: every boundary midside node of the
+ * scaled, moved sphere lies on it (they were left at the file's place). */
+Test(tet10_mesh, placed_body_keeps_its_curved_nodes_on_the_geometry) {
+  static const char *const scene =
+      "{\"time\": {\"fps\": 24, \"frames\": 1},\n"
+      " \"bodies\": [{\"mesh\": \"" BS_SOURCE_DIR "/data/geo/sphere.geo\", \"element\": \"tet10\",\n"
+      "   \"scale\": [2, 2, 2], \"rotate\": [0.3, 0.5, 0.1], \"translate\": [0.3, 1, -0.2],\n"
+      "   \"material\": {\"model\": \"neo_hookean\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n";
+  bs_scene *sc = NULL;
+  bs_sim *s = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  cr_assert_eq(bs_scene_parse(scene, "placed", 0, NULL, &sc, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  const bs_mesh *m = s->mesh;
+  int32_t on = 0, n = 0;
+  for (int32_t f = 0; f < m->n_faces; f++)
+    for (int k = 0; k < 3; k++) {
+      const int32_t a = m->faces[3 * f + k], b = m->faces[3 * f + (k + 1) % 3];
+      if (a > b) continue;
+      const int32_t v = bs_mesh_edge_node(m, a, b);
+      cr_assert(v >= 0);
+      const double *p = s->x0 + 3 * (size_t)v, d[3] = {p[0] - 0.3, p[1] - 1, p[2] + 0.2};
+      on += fabs(sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0) < 1e-9;
+      n++;
+    }
+  cr_expect_eq(on, n, "%d of %d boundary midside nodes on the placed sphere", on, n);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
+
 /* ---- the fem over tet10 ---- */
 
 typedef struct fem_fixture {
