@@ -562,6 +562,10 @@ typedef struct bs_shim_tet_remesh_out {
   double volume_in, volume; /* total tet volume before and after                        */
   int rounds;             /* remeshing rounds run                                       */
   double seconds;         /* wall time of the rounds                                    */
+  int64_t collapses_refused; /* edge collapses refused because the cells around the edge's
+                             two vertices do not make a valid triangulation (they touch
+                             only at a vertex: thin parts); CGAL 5.5 itself crashed on
+                             them (shim_tet_remesh.cpp)                                 */
 } bs_shim_tet_remesh_out;
 
 /* Remeshes the tets (4 int32_t 0-based vertex indices each, any orientation,

@@ -8,6 +8,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -75,6 +76,58 @@ Test(mesh_lift, slivers_lifted_groups_kept) {
   cr_expect_eq(bs_mesh_group(m, "xmin")->n_elems, xmin0, "the boundary triangles are kept");
   cr_expect_eq(bs_mesh_group(m, "body")->n_elems, m->n_tets);
   bs_mesh_destroy(&m);
+}
+
+/* ---- an edge collapse whose stars are not a ball ------------------------ */
+
+/* tests/data/tet/thin_collapse.tets (its header says what it is) into
+ * malloc'ed arrays. */
+static void read_tets(const char *path, double **x, int32_t *nv, int32_t **t, int32_t *nt) {
+  FILE *f = fopen(path, "r");
+  cr_assert_not_null(f, "%s", path);
+  char line[256];
+  long pos = 0;
+  while (fgets(line, sizeof line, f) && line[0] == '#') pos = ftell(f);
+  fseek(f, pos, SEEK_SET);
+  cr_assert_eq(fscanf(f, "%d %d", nv, nt), 2);
+  *x = malloc(3 * (size_t)*nv * sizeof **x);
+  *t = malloc(4 * (size_t)*nt * sizeof **t);
+  cr_assert(*x && *t);
+  for (int32_t k = 0; k < 3 * *nv; k++) cr_assert_eq(fscanf(f, "%lf", *x + k), 1);
+  for (int32_t k = 0; k < 4 * *nt; k++) cr_assert_eq(fscanf(f, "%d", *t + k), 1);
+  fclose(f);
+}
+
+/* A thin part of femur.off's mesh (every vertex on the boundary) where CGAL
+ * 5.5's remesher, with the boundary remeshed, tries to collapse an edge
+ * whose two vertex stars do not make a valid triangulation (they touch at
+ * a third vertex only): CGAL then used an uninitialised flag and crashed
+ * (SIGSEGV; bigstep mesh info femur.off --size D/25 exited without a word;
+ * whether it crashes depends on the stack's garbage). The collapse is
+ * refused instead (counted: the shim's fix is in effect), and the remeshing
+ * returns valid tets. */
+Test(mesh_lift, collapse_of_an_edge_whose_stars_touch_at_a_vertex) {
+  double *x = NULL;
+  int32_t *t = NULL, nv = 0, nt = 0;
+  read_tets(BS_SOURCE_DIR "/tests/data/tet/thin_collapse.tets", &x, &nv, &t, &nt);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_tet_remesh_opts o = {.size = 0.045131187, .protect = BS_SHIM_TET_PROTECT_FEATURES, .feature_angle = 60,
+                               .target_dihedral = BS_MESH_MIN_DIHEDRAL, .iterations = BS_LIFT_ROUNDS};
+  bs_shim_tet_remesh_out r;
+  cr_assert_eq(bs_shim_tet_remesh("thin part", x, nv, t, nt, NULL, &o, &r, &err), BS_OK, "%s", err.msg);
+  cr_log_info("thin part: %d tets, %.2f -> %.2f degrees in %d rounds, volume %.6g -> %.6g, %lld collapses refused",
+              nt, r.dihedral_in, r.dihedral, r.rounds, r.volume_in, r.volume, (long long)r.collapses_refused);
+  cr_expect_geq(r.collapses_refused, 1, "the input makes the remesher try such a collapse");
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs_mesh_create((int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, 0, NULL, &m, &err), BS_OK, "%s",
+               err.msg);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_expect_geq(r.dihedral, r.dihedral_in);
+  cr_expect_leq(fabs(r.volume - r.volume_in), 0.05 * r.volume_in, "volume %g -> %g", r.volume_in, r.volume);
+  bs_mesh_destroy(&m);
+  bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
+  free(x), free(t);
 }
 
 /* ---- a thin slab with a long thin wall ------------------------------------ */
