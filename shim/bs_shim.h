@@ -331,11 +331,13 @@ typedef struct bs_shim_mesh3_opts {
   double size_gradation;      /* the local size grows at most this much per unit length
                                  away from thin parts; <= 0: 0.5                         */
   double min_size;            /* the local size's floor; <= 0: h / 8                     */
-  double deadline;            /* > 0: a bs_seconds() time: the optimisers get the time left
-                                 as their time_limit, and past it after refinement or the
-                                 optimisers the mesh is refused (BS_EINPUT "the meshing time
-                                 budget was exceeded during Mesh_3"); <= 0: none. Mesh_3's
-                                 refinement itself cannot be stopped (CGAL 5.5)           */
+  double deadline;            /* > 0: a bs_seconds() time: Mesh_3's refinement is stopped
+                                 there (a watchdog thread sets its stop flag), the
+                                 optimisers get the time left as their time_limit, and past
+                                 it the mesh is refused (BS_EINPUT "the meshing time budget
+                                 was exceeded during Mesh_3"); <= 0: none. Not stoppable:
+                                 building the domain's search tree, detecting its sharp
+                                 edges and the thickness field (before the refinement)     */
 } bs_shim_mesh3_opts;
 
 typedef struct bs_shim_mesh3_out {

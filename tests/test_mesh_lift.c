@@ -255,6 +255,32 @@ Test(mesh_lift, time_budget_during_meshing) {
   unlink(path);
 }
 
+/* Mesh_3's refinement itself is stopped at the deadline (its stop flag, set
+ * by the shim's watchdog thread): an icosahedron of circumradius 1 at h =
+ * 0.02 asks for about 7e5 tets (many seconds of refinement); with 0.3 s
+ * left, the error names the refinement and where it stopped. Had the
+ * refinement run to its end, the budget would be found spent only after
+ * it (in the optimisers, another message). */
+Test(mesh_lift, time_budget_stops_mesh3_refinement) {
+  const double g = (1 + sqrt(5.0)) / 2, r = 1 / sqrt(1 + g * g);
+  const double x[12 * 3] = {-r, g * r, 0, r, g * r, 0, -r, -g * r, 0, r, -g * r, 0, 0, -r, g * r, 0, r, g * r,
+                            0, -r, -g * r, 0, r, -g * r, g * r, 0, -r, g * r, 0, r, -g * r, 0, -r, -g * r, 0, r};
+  static const int32_t t[20 * 3] = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
+                                    7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10,
+                                    8, 6, 7, 9, 8, 1};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_mesh3_opts o = {.size = 0.02, .deadline = bs_seconds() + 0.3};
+  bs_shim_mesh3_out out;
+  const int rc = bs_shim_mesh_surface("icosahedron", x, 12, t, 20, &o, &out, &err);
+  cr_log_info("icosahedron at h 0.02, 0.3 s left: rc %d: %s", rc, err.msg);
+  cr_expect_eq(rc, BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget was exceeded during Mesh_3's refinement (stopped at ") != NULL, "%s",
+            err.msg);
+  cr_expect_null(out.x);
+  cr_expect_null(out.tets);
+}
+
 /* Inside the wrap's loop: a deadline already past stops it by name. */
 Test(mesh_lift, time_budget_inside_the_alpha_wrap) {
   static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
