@@ -3,7 +3,8 @@
  *
  * Gmsh keeps one global state. Every use of it here runs under one mutex,
  * between gmshInitialize (no configuration files) and gmshFinalize, with
- * General.Terminal = 0 so that the library prints nothing; Gmsh's messages go
+ * General.Terminal = 0 so that the library prints nothing (and stdout pointed
+ * at /dev/null, for the reports Gmsh prints regardless); Gmsh's messages go
  * to its logger, and its last error is copied into the bs_error. Gmsh sets
  * LC_NUMERIC to "C" and the OpenMP thread count (omp_set_num_threads, from
  * General.NumThreads); the caller's settings of both are restored afterwards.
@@ -51,6 +52,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <fcntl.h>
 #include <locale.h>
 #include <math.h>
 #include <pthread.h>
@@ -60,6 +62,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <gmshc.h>
 #ifdef _OPENMP
@@ -131,10 +134,40 @@ static void gmsh_quiet(void) {
  * parallel region after a Gmsh call ran on one thread. */
 static int gmsh_saved_threads = 1;
 
+/* Gmsh 4.8.4's TetGen boundary recovery (HXT's and Delaunay's) reports
+ * nearly overlapping facets with printf on stdout whatever General.Terminal
+ * says ("Found two nearly self-intersecting facets ..."): a JSON report
+ * printed after it (bigstep mesh info --json) was no longer JSON. stdout's
+ * descriptor points at /dev/null for the session (flushed on both sides, so
+ * what was printed before goes out and what Gmsh printed is dropped);
+ * stderr is left alone (a sanitizer's report must get out). Process-wide,
+ * like Gmsh's state: nothing else in bigstep prints while a library call
+ * runs. gmsh_stdout_fd: the saved descriptor, -1 when not silenced (no
+ * /dev/null or no descriptor left: Gmsh may then print). */
+static int gmsh_stdout_fd = -1;
+
+static void gmsh_stdout_off(void) {
+  fflush(stdout);
+  const int null_fd = open("/dev/null", O_WRONLY);
+  if (null_fd < 0) return;
+  gmsh_stdout_fd = dup(STDOUT_FILENO);
+  if (gmsh_stdout_fd >= 0 && dup2(null_fd, STDOUT_FILENO) < 0) close(gmsh_stdout_fd), gmsh_stdout_fd = -1;
+  close(null_fd);
+}
+
+static void gmsh_stdout_on(void) {
+  if (gmsh_stdout_fd < 0) return;
+  fflush(stdout);
+  dup2(gmsh_stdout_fd, STDOUT_FILENO);
+  close(gmsh_stdout_fd);
+  gmsh_stdout_fd = -1;
+}
+
 static void gmsh_end(void) {
   int ierr = 0;
   gmshLoggerStop(&ierr);
   gmshFinalize(&ierr);
+  gmsh_stdout_on();
   setlocale(LC_NUMERIC, gmsh_saved_locale);
 #ifdef _OPENMP
   omp_set_num_threads(gmsh_saved_threads);
@@ -145,6 +178,7 @@ static void gmsh_end(void) {
 /* Takes the Gmsh lock and initializes Gmsh; on failure the lock is released. */
 static int gmsh_begin(const char *path, bs_error *err) {
   pthread_mutex_lock(&gmsh_mutex);
+  gmsh_stdout_off();
   const char *loc = setlocale(LC_NUMERIC, NULL);
   snprintf(gmsh_saved_locale, sizeof gmsh_saved_locale, "%s", loc ? loc : "C");
 #ifdef _OPENMP

@@ -1,10 +1,26 @@
 /* mesh_budget.c — the meshing time budget of bs_mesh_read
  * (bs_mesh_read_opts.time_budget): a deadline per thread, set when a read
  * begins and checked between the meshing stages (bs__budget_check) and, as a
- * bs_seconds() time, inside the long CGAL loops that take one (the alpha
- * wrap's facets, the tetrahedral remesher's iterations); and the read's
- * report (opts->report), for the stages that record into it from below the
- * calls that carry opts (the tetrahedral remeshing). */
+ * bs_seconds() time, inside the long CGAL loops that take one; and the
+ * read's report (opts->report), for the stages that record into it from
+ * below the calls that carry opts (the tetrahedral remeshing).
+ *
+ * Inside the stages (CGAL 5.5, Gmsh 4.8.4):
+ *   Mesh_3's refinement   stopped by its stop flag, which a watchdog thread
+ *                         sets at the deadline (shim_mesh3.cpp); its
+ *                         optimisers get the time left as their time_limit.
+ *                         CGAL checks the flag between points, and in the
+ *                         protection of sharp edges between vertices only:
+ *                         one vertex's curve repopulated with ever smaller
+ *                         balls (feature curves nearly touching) runs on;
+ *   the alpha wrap        its visitor, before each facet (every 256th);
+ *   tetrahedral remeshing its visitor, before each split or flip (every
+ *                         256th), and between rounds; CGAL's visitor has no
+ *                         hook in the collapses and the smoothing;
+ *   no hook at all        the surface repair and isotropic remeshing
+ *                         (Polygon_mesh_processing), Mesh_3's domain (search
+ *                         tree, sharp edges), Gmsh's meshers and optimisers:
+ *                         checked before and after only. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

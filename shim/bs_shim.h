@@ -301,6 +301,16 @@ int bs_shim_repair_surface(const double *points, int64_t n_points, const int32_t
  * allocated by the shim and freed with bs_shim_free.
  * ========================================================================== */
 
+/* Sharp edges are protected (Mesh_3, the surface remesher) only when no two
+ * of them leave a vertex at less than this angle (degrees): Mesh_3 protects
+ * a sharp edge with balls that must not meet the balls of another sharp
+ * edge, so at distance r from a corner of angle a they are about r a
+ * across, and the corner costs about 1 / a balls per e-fold of r (mpi.off,
+ * a corner of 7e-5 degrees from non-planar polygons: millions of balls,
+ * 528 s past a 20 s budget, inside the one stage CGAL checks no stop flag
+ * in). A surface with such a corner is meshed as a smooth one. */
+#define BS_SHIM_FEATURE_MIN_CORNER 1.0
+
 /* Smoothing after Mesh_3's refinement (CGAL::odt_optimize_mesh_3 or
  * CGAL::lloyd_optimize_mesh_3), or none. */
 enum { BS_SHIM_SMOOTH_NONE = 0, BS_SHIM_SMOOTH_ODT = 1, BS_SHIM_SMOOTH_LLOYD = 2 };
@@ -318,7 +328,8 @@ typedef struct bs_shim_mesh3_opts {
                              is CAD-like: chains of such edges at least
                              feature_min_length long make >= 80% of their length (a
                              scan's creases are many short chains, which Mesh_3 would
-                             protect with tiny balls and slivers; they are ignored)      */
+                             protect with tiny balls and slivers; they are ignored) and
+                             no two meet at less than BS_SHIM_FEATURE_MIN_CORNER        */
   double feature_min_length; /* <= 0: 2 h                                                */
   int smoother;           /* BS_SHIM_SMOOTH_*                                            */
   int smooth_iterations;  /* iterations of the smoother (0: none)                       */
@@ -337,11 +348,13 @@ typedef struct bs_shim_mesh3_opts {
   double size_gradation;      /* the local size grows at most this much per unit length
                                  away from thin parts; <= 0: 0.5                         */
   double min_size;            /* the local size's floor; <= 0: h / 8                     */
-  double deadline;            /* > 0: a bs_seconds() time: the optimisers get the time left
-                                 as their time_limit, and past it after refinement or the
-                                 optimisers the mesh is refused (BS_EINPUT "the meshing time
-                                 budget was exceeded during Mesh_3"); <= 0: none. Mesh_3's
-                                 refinement itself cannot be stopped (CGAL 5.5)           */
+  double deadline;            /* > 0: a bs_seconds() time: Mesh_3's refinement is stopped
+                                 there (a watchdog thread sets its stop flag), the
+                                 optimisers get the time left as their time_limit, and past
+                                 it the mesh is refused (BS_EINPUT "the meshing time budget
+                                 was exceeded during Mesh_3"); <= 0: none. Not stoppable:
+                                 building the domain's search tree, detecting its sharp
+                                 edges and the thickness field (before the refinement)     */
 } bs_shim_mesh3_opts;
 
 typedef struct bs_shim_mesh3_out {
@@ -568,6 +581,10 @@ typedef struct bs_shim_tet_remesh_out {
   double volume_in, volume; /* total tet volume before and after                        */
   int rounds;             /* remeshing rounds run                                       */
   double seconds;         /* wall time of the rounds                                    */
+  int64_t collapses_refused; /* edge collapses refused because the cells around the edge's
+                             two vertices do not make a valid triangulation (they touch
+                             only at a vertex: thin parts); CGAL 5.5 itself crashed on
+                             them (shim_tet_remesh.cpp)                                 */
 } bs_shim_tet_remesh_out;
 
 /* Remeshes the tets (4 int32_t 0-based vertex indices each, any orientation,

@@ -15,8 +15,11 @@ namespace bs_shim {
 // between the vertices where chains end or branch (closed loops as they
 // are). A CAD part's sharp edges are long chains; a scan's creases are many
 // short ones: the surface is taken as CAD-like when the chains of length >=
-// min_length make at least 80% of the sharp edges' length. Returns that
-// answer; *n_long: how many such chains. sm is left as it was.
+// min_length make at least 80% of the sharp edges' length, and no two sharp
+// edges leave a vertex at less than BS_SHIM_FEATURE_MIN_CORNER degrees
+// apart (bs_shim.h: such curves cannot be protected). Returns that answer;
+// *n_long: how many such chains (0 when refused for a corner). sm is left
+// as it was.
 bool cad_like(Surface &sm, double angle, double min_length, int64_t *n_long);
 
 } // namespace bs_shim

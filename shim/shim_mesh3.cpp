@@ -33,11 +33,16 @@
 #include <CGAL/Polygon_mesh_processing/detect_features.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
 #include <exception>
+#include <mutex>
 #include <new>
+#include <thread>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -63,16 +68,61 @@ double min_dihedral(const C3t3 &c3t3) { return CGAL::to_double(CGAL::Mesh_3::min
 // perturbation, then rounds of exudation (CGAL's order; exuding first was
 // measured worse on the fandisk, 7.9 against 10.1 degrees), each while the
 // smallest angle is below the target and improves.
-struct budget_exceeded {};
+// The budget ran out `stage` ("during Mesh_3's refinement", ...); the
+// refinement's vertices when it was stopped there.
+struct budget_exceeded {
+  const char *stage;
+  std::size_t vertices;
+};
 
 // The time left before o.deadline as an optimiser's time_limit (0: no
-// limit); throws budget_exceeded once it has passed.
-double time_left(const bs_shim_mesh3_opts &o) {
+// limit); throws budget_exceeded (at `stage`) once it has passed.
+double time_left(const bs_shim_mesh3_opts &o, const char *stage = "during Mesh_3's optimisers") {
   if (!(o.deadline > 0)) return 0;
   const double left = o.deadline - bs_seconds();
-  if (left <= 0) throw budget_exceeded();
+  if (left <= 0) throw budget_exceeded{stage, 0};
   return left;
 }
+
+// Mesh_3's refinement stops when the atomic flag it is given
+// (mesh_3_options(pointer_to_stop_atomic_boolean), checked before each
+// point it inserts: Refine_facets_3 / Refine_cells_3, and in the
+// protection of sharp edges) is set. The watchdog is a thread that sets it
+// at the deadline (a bs_seconds() time, CLOCK_MONOTONIC as steady_clock on
+// Linux) unless it is let go first; the refinement returns a partial
+// complex, which refine() then refuses by the budget. With no deadline
+// there is no thread.
+class Watchdog {
+public:
+  explicit Watchdog(double deadline) {
+    if (!(deadline > 0)) return;
+    const auto wait = std::chrono::duration<double>(std::max(0.0, deadline - bs_seconds()));
+    thread_ = std::thread([this, wait] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (!cv_.wait_for(lock, wait, [this] { return done_; })) stop_.store(true, std::memory_order_release);
+    });
+  }
+  ~Watchdog() {
+    if (!thread_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+  Watchdog(const Watchdog &) = delete;
+  Watchdog &operator=(const Watchdog &) = delete;
+  std::atomic<bool> *flag() { return &stop_; }
+  bool fired() const { return stop_.load(std::memory_order_acquire); }
+
+private:
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
 
 void optimise(C3t3 &c3t3, const Domain &domain, const bs_shim_mesh3_opts &o, double *achieved) {
   namespace P = CGAL::parameters;
@@ -315,10 +365,17 @@ C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mes
   }
   out->local_size_min = h;
   out->local_fraction = 0;
+  time_left(o, "before Mesh_3's refinement");
+  Watchdog watchdog(o.deadline);
+  const auto options = P::mesh_3_options(P::pointer_to_stop_atomic_boolean = watchdog.flag());
   if (cad || !(o.thickness_elements > 0)) {
     Criteria criteria(P::edge_size = fs, P::facet_angle = fa, P::facet_size = fs, P::facet_distance = dist,
                       P::cell_radius_edge_ratio = re, P::cell_size = h);
-    return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+    C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd(),
+                                        options);
+    if (watchdog.fired())
+      throw budget_exceeded{"during Mesh_3's refinement", c3t3.triangulation().number_of_vertices()};
+    return c3t3;
   }
   const double floor = o.min_size > 0 ? std::min(o.min_size, h) : h / 8;
   const bs_shim::Local_size field(sm, {h, o.thickness_elements, o.size_gradation > 0 ? o.size_gradation : 0.5, floor});
@@ -327,7 +384,10 @@ C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mes
   const bs_shim::Scaled_size facet{field, fs / h};
   Criteria criteria(P::edge_size = facet, P::facet_angle = fa, P::facet_size = facet, P::facet_distance = dist,
                     P::cell_radius_edge_ratio = re, P::cell_size = field);
-  return CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd());
+  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd(),
+                                      options);
+  if (watchdog.fired()) throw budget_exceeded{"during Mesh_3's refinement", c3t3.triangulation().number_of_vertices()};
+  return c3t3;
 }
 
 int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
@@ -365,8 +425,11 @@ extern "C" int bs_shim_mesh_surface(const char *name, const double *points, int6
   *out = bs_shim_mesh3_out{};
   try {
     return mesh_surface(name, points, n_points, tris, n_tris, *opts, out, err);
-  } catch (const budget_exceeded &) {
-    return bs_error_set(err, BS_EINPUT, "%s: the meshing time budget was exceeded during Mesh_3", name);
+  } catch (const budget_exceeded &b) {
+    if (b.vertices)
+      return bs_error_set(err, BS_EINPUT, "%s: the meshing time budget was exceeded %s (stopped at %zu vertices)", name,
+                          b.stage, b.vertices);
+    return bs_error_set(err, BS_EINPUT, "%s: the meshing time budget was exceeded %s", name, b.stage);
   } catch (const std::bad_alloc &) {
     return bs_error_set(err, BS_ENOMEM, "%s: out of memory while CGAL meshed the volume", name);
   } catch (const std::exception &e) {

@@ -44,6 +44,8 @@
 #include <map>
 #include <new>
 #include <set>
+#include <type_traits>
+#include <unordered_set>
 #include <unordered_map>
 #include <vector>
 
@@ -57,6 +59,71 @@ typedef CGAL::Tetrahedral_remeshing::Remeshing_triangulation_3<K> Tr;
 typedef Tr::Vertex_handle Vh;
 typedef Tr::Cell_handle Ch;
 typedef std::pair<Vh, Vh> Edge_vv;
+
+} // namespace
+
+// CGAL 5.5's edge collapse (collapse_short_edges.h) copies the stars of the
+// edge's two vertices into a local triangulation (CollapseTriangulation) to
+// try the collapse there first. When those cells do not make a valid
+// triangulation (build_triangulation fails: their union is not a ball, e.g.
+// the stars of two boundary vertices meet again across a thin part; femur.off
+// at diagonal / 25 has one), the constructor returns without setting its
+// member not_an_edge, and collapse() reads it uninitialised: it then works
+// on a default Edge and crashes (SIGSEGV) or corrupts the mesh. This is the
+// same constructor for the remesher's complex with not_an_edge set first,
+// so that such a collapse is refused (E_PROBLEM) as CGAL means it to be;
+// each refusal is counted (bs_shim_tet_remesh_out.collapses_refused).
+namespace {
+thread_local int64_t refused_collapses = 0;
+} // namespace
+
+namespace CGAL {
+namespace Tetrahedral_remeshing {
+namespace internal {
+typedef CGAL::Mesh_complex_3_in_triangulation_3<::Tr::Base, int, int> Bs_remesh_c3t3;
+template <>
+CollapseTriangulation<Bs_remesh_c3t3>::CollapseTriangulation(const Edge &e,
+                                                             const std::unordered_set<Cell_handle> &cells_to_insert,
+                                                             Collapse_type _collapse_type)
+    : collapse_type(_collapse_type), v0_init(e.first->vertex(e.second)), v1_init(e.first->vertex(e.third)),
+      not_an_edge(true) {
+  std::unordered_map<Vertex_handle, int> v2i;
+  std::vector<Point_3> points;
+  std::vector<std::array<int, 5>> finite_cells;
+  for (Cell_handle ch : cells_to_insert) {
+    std::array<int, 5> t;
+    for (int i = 0; i < 4; ++i) {
+      auto it = v2i.emplace(ch->vertex(i), (int)points.size());
+      if (it.second) points.push_back(ch->vertex(i)->point());
+      t[i] = it.first->second;
+    }
+    t[4] = ch->subdomain_index();
+    finite_cells.push_back(t);
+  }
+  if (!v2i.count(v0_init) || !v2i.count(v1_init)) return;
+  std::vector<Vertex_handle> new_vertices;
+  std::map<std::array<int, 3>, Surface_patch_index> border_facets;
+  if (!CGAL::build_triangulation<Tr, false>(triangulation, points, finite_cells, border_facets, new_vertices, false)) {
+    refused_collapses++;
+    return;
+  }
+  vh0 = new_vertices[v2i.at(v0_init) + 1];
+  vh1 = new_vertices[v2i.at(v1_init) + 1];
+  Cell_handle ch;
+  int i0, i1;
+  if (triangulation.is_edge(vh0, vh1, ch, i0, i1)) {
+    edge = Edge(ch, i0, i1);
+    not_an_edge = false;
+  }
+}
+} // namespace internal
+} // namespace Tetrahedral_remeshing
+} // namespace CGAL
+
+namespace {
+
+static_assert(std::is_same<Tr::Base, CGAL::Triangulation_3<K, Tr::Tds>>::value,
+              "the remesher's complex is Mesh_complex_3_in_triangulation_3<Tr::Base, int, int>");
 
 struct budget_exceeded {};
 
@@ -298,6 +365,7 @@ int remesh(const char *name, const double *x, int64_t nv, const int32_t *tets, i
   if (rc) return rc;
   out->dihedral_in = out->dihedral = tr_min_dihedral(tr, &out->volume_in);
   const double t0 = bs_seconds();
+  refused_collapses = 0;
   try {
     rounds(tr, o, best, out);
   } catch (const budget_exceeded &) {
@@ -306,6 +374,7 @@ int remesh(const char *name, const double *x, int64_t nv, const int32_t *tets, i
                         name, bs_seconds() - t0);
   }
   out->seconds = bs_seconds() - t0;
+  out->collapses_refused = refused_collapses;
   tr_min_dihedral(best, &out->volume);
   return extract(best, out, err);
 }

@@ -8,6 +8,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -75,6 +76,58 @@ Test(mesh_lift, slivers_lifted_groups_kept) {
   cr_expect_eq(bs_mesh_group(m, "xmin")->n_elems, xmin0, "the boundary triangles are kept");
   cr_expect_eq(bs_mesh_group(m, "body")->n_elems, m->n_tets);
   bs_mesh_destroy(&m);
+}
+
+/* ---- an edge collapse whose stars are not a ball ------------------------ */
+
+/* tests/data/tet/thin_collapse.tets (its header says what it is) into
+ * malloc'ed arrays. */
+static void read_tets(const char *path, double **x, int32_t *nv, int32_t **t, int32_t *nt) {
+  FILE *f = fopen(path, "r");
+  cr_assert_not_null(f, "%s", path);
+  char line[256];
+  long pos = 0;
+  while (fgets(line, sizeof line, f) && line[0] == '#') pos = ftell(f);
+  fseek(f, pos, SEEK_SET);
+  cr_assert_eq(fscanf(f, "%d %d", nv, nt), 2);
+  *x = malloc(3 * (size_t)*nv * sizeof **x);
+  *t = malloc(4 * (size_t)*nt * sizeof **t);
+  cr_assert(*x && *t);
+  for (int32_t k = 0; k < 3 * *nv; k++) cr_assert_eq(fscanf(f, "%lf", *x + k), 1);
+  for (int32_t k = 0; k < 4 * *nt; k++) cr_assert_eq(fscanf(f, "%d", *t + k), 1);
+  fclose(f);
+}
+
+/* A thin part of femur.off's mesh (every vertex on the boundary) where CGAL
+ * 5.5's remesher, with the boundary remeshed, tries to collapse an edge
+ * whose two vertex stars do not make a valid triangulation (they touch at
+ * a third vertex only): CGAL then used an uninitialised flag and crashed
+ * (SIGSEGV; bigstep mesh info femur.off --size D/25 exited without a word;
+ * whether it crashes depends on the stack's garbage). The collapse is
+ * refused instead (counted: the shim's fix is in effect), and the remeshing
+ * returns valid tets. */
+Test(mesh_lift, collapse_of_an_edge_whose_stars_touch_at_a_vertex) {
+  double *x = NULL;
+  int32_t *t = NULL, nv = 0, nt = 0;
+  read_tets(BS_SOURCE_DIR "/tests/data/tet/thin_collapse.tets", &x, &nv, &t, &nt);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_tet_remesh_opts o = {.size = 0.045131187, .protect = BS_SHIM_TET_PROTECT_FEATURES, .feature_angle = 60,
+                               .target_dihedral = BS_MESH_MIN_DIHEDRAL, .iterations = BS_LIFT_ROUNDS};
+  bs_shim_tet_remesh_out r;
+  cr_assert_eq(bs_shim_tet_remesh("thin part", x, nv, t, nt, NULL, &o, &r, &err), BS_OK, "%s", err.msg);
+  cr_log_info("thin part: %d tets, %.2f -> %.2f degrees in %d rounds, volume %.6g -> %.6g, %lld collapses refused",
+              nt, r.dihedral_in, r.dihedral, r.rounds, r.volume_in, r.volume, (long long)r.collapses_refused);
+  cr_expect_geq(r.collapses_refused, 1, "the input makes the remesher try such a collapse");
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs_mesh_create((int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, 0, NULL, &m, &err), BS_OK, "%s",
+               err.msg);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  cr_expect_geq(r.dihedral, r.dihedral_in);
+  cr_expect_leq(fabs(r.volume - r.volume_in), 0.05 * r.volume_in, "volume %g -> %g", r.volume_in, r.volume);
+  bs_mesh_destroy(&m);
+  bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
+  free(x), free(t);
 }
 
 /* ---- a thin slab with a long thin wall ------------------------------------ */
@@ -306,6 +359,63 @@ Test(mesh_lift, time_budget_during_meshing) {
   cr_expect(strstr(err.msg, "time budget") && strstr(err.msg, "0.3 s"), "%s", err.msg);
   cr_expect_null(m);
   unlink(path);
+}
+
+/* Mesh_3's refinement itself is stopped at the deadline (its stop flag, set
+ * by the shim's watchdog thread): an icosahedron of circumradius 1 at h =
+ * 0.02 asks for about 7e5 tets (many seconds of refinement); with 0.3 s
+ * left, the error names the refinement and where it stopped. Had the
+ * refinement run to its end, the budget would be found spent only after
+ * it (in the optimisers, another message). */
+Test(mesh_lift, time_budget_stops_mesh3_refinement) {
+  const double g = (1 + sqrt(5.0)) / 2, r = 1 / sqrt(1 + g * g);
+  const double x[12 * 3] = {-r, g * r, 0, r, g * r, 0, -r, -g * r, 0, r, -g * r, 0, 0, -r, g * r, 0, r, g * r,
+                            0, -r, -g * r, 0, r, -g * r, g * r, 0, -r, g * r, 0, r, -g * r, 0, -r, -g * r, 0, r};
+  static const int32_t t[20 * 3] = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
+                                    7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10,
+                                    8, 6, 7, 9, 8, 1};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_mesh3_opts o = {.size = 0.02, .deadline = bs_seconds() + 0.3};
+  bs_shim_mesh3_out out;
+  const int rc = bs_shim_mesh_surface("icosahedron", x, 12, t, 20, &o, &out, &err);
+  cr_log_info("icosahedron at h 0.02, 0.3 s left: rc %d: %s", rc, err.msg);
+  cr_expect_eq(rc, BS_EINPUT);
+  cr_expect(strstr(err.msg, "time budget was exceeded during Mesh_3's refinement (stopped at ") != NULL, "%s",
+            err.msg);
+  cr_expect_null(out.x);
+  cr_expect_null(out.tets);
+}
+
+/* mpi.off (CGAL's data/meshes: the letters MPI as non-planar polygons) as the
+ * repair leaves it: 27 points, 50 triangles, two sharp edges leaving point 1
+ * at 7e-5 degrees apart. Mesh_3's protection of such a corner shrinks its
+ * balls without end (528 s, millions of balls, past a 20 s budget: CGAL
+ * checks no stop flag there); the surface is meshed as a smooth one
+ * instead. */
+static const double mpi_x[27 * 3] = {-10.0402, -10.0402, -10.0402, -10, 10, 10, 10, 10, 10, -9.9999199999999995, 10.040100000000001, -9.9999199999999995, -1.9999866667293342, 10.010683303213094, 4.6666799664602578, -1.1410339540811094, 3.3261159707677077, 6.8871644837482933, -7.337029247025991, 3.7408533525438634, 7.3747364897239311, -6.0192422547121467, -6.0048964457634879, 8.0205019087228919, -10.007999999999999, 6.0240600000000004, 5.0200500000000003, -6.0240600000000004, -10.012, 4.0160400000000003, -10.013999999999999, 0, 3.0120300000000002, 10, 6, 10, 10.02, 0, -1.9999899999999999, -10.02, 0, -2.0080200000000001, -6.0116300000000003, -2.0038800000000001, 0.33143699999999998, -10.0219, -0.92678099999999997, -0.92678099999999997, -9.9999400000000005, -6.0172100000000004, 10.0321, -9.9999800000000008, 5.9965700000000002, 10.007999999999999, -6.0240499999999999, -9.9999400000000005, 10.0321, -9.9999199999999995, -9.9999199999999995, 10.040100000000001, 10.0219, -0.92307300000000003, -0.92307300000000003, 10.019399999999999, -2.00387, 0.33785900000000002, -5.9999599999999997, 10.0321, -5.9999599999999997, -5.9999599999999997, 10.0321, -9.9999400000000005, -10.007999999999999, 6.0240600000000004, -10.007999999999999, -6.0192600000000001, -6.0192600000000001, 10.0321, 10, 10, -10};
+static const int32_t mpi_t[50 * 3] = {0, 19, 16, 16, 10, 0, 10, 17, 0, 0, 17, 1, 0, 1, 15, 23, 22, 13, 24, 23, 13, 26, 12, 22, 12, 13, 22, 8, 24, 13, 2, 26, 4, 0, 9, 18, 0, 18, 19, 22, 4, 26, 1, 17, 4, 5, 11, 4, 17, 5, 4, 25, 7, 6, 21, 5, 14, 5, 7, 14, 9, 14, 7, 5, 6, 7, 17, 10, 6, 4, 22, 1, 2, 4, 11, 16, 25, 6, 15, 13, 12, 15, 12, 20, 15, 20, 21, 15, 21, 14, 11, 5, 21, 6, 5, 17, 16, 6, 10, 18, 7, 25, 24, 8, 3, 3, 8, 1, 1, 8, 15, 8, 13, 15, 7, 18, 9, 3, 22, 23, 24, 3, 23, 26, 20, 12, 26, 2, 20, 1, 22, 3, 11, 20, 2, 11, 21, 20, 14, 9, 0, 15, 14, 0, 19, 18, 25, 16, 19, 25};
+
+Test(mesh_lift, sharp_edges_at_a_hairline_corner_are_not_protected) {
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_mesh3_opts o = {.size = 1.39, .feature_angle = BS_MESH_FEATURE_ANGLE, .smoother = BS_SHIM_SMOOTH_ODT,
+                          .smooth_iterations = 10, .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
+  bs_shim_mesh3_out out;
+  cr_assert_eq(bs_shim_mesh_surface("mpi", mpi_x, 27, mpi_t, 50, &o, &out, &err), BS_OK, "%s", err.msg);
+  cr_log_info("mpi at h 1.39: %lld tets, %lld feature chains, %.2f degrees", (long long)out.n_tets,
+              (long long)out.n_features, out.dihedral);
+  cr_expect_eq(out.n_features, 0);
+  cr_expect_gt(out.n_tets, 1000);
+  bs_shim_free(out.x), bs_shim_free(out.tets);
+  /* a box's corners (90 degrees) keep their sharp edges */
+  static const double bx[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+  static const int32_t bt[12 * 3] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                     2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+  o.size = 0.25;
+  cr_assert_eq(bs_shim_mesh_surface("box", bx, 8, bt, 12, &o, &out, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(out.n_features, 12, "%lld chains", (long long)out.n_features);
+  bs_shim_free(out.x), bs_shim_free(out.tets);
 }
 
 /* Inside the wrap's loop: a deadline already past stops it by name. */
