@@ -168,8 +168,8 @@ static void detect_range(ipc_data *d, const double *x, int32_t f0, int32_t f1, t
     const int32_t *F = d->mesh->faces + 3 * (size_t)f;
     double lo[3], hi[3];
     box_of(d->X2, d->nv, F, 3, 0, d->dhat, lo, hi);
-    pt_candidates(d, x, F, bs_bvh_within(&d->vt, d->X2, lo, hi, b->qv, d->n_sv), b);
-    ee_candidates(d, x, f, bs_bvh_within(&d->et, d->X2, lo, hi, b->qe, d->n_edges), b);
+    pt_candidates(d, x, F, bs_bvh_within(&d->vt, lo, hi, b->qv, d->n_sv), b);
+    ee_candidates(d, x, f, bs_bvh_within(&d->et, lo, hi, b->qe, d->n_edges), b);
   }
 }
 
@@ -331,12 +331,12 @@ static void ccd_range(ipc_data *d, int32_t f0, int32_t f1, tbuf *b) {
     const int32_t *F = d->mesh->faces + 3 * (size_t)f;
     double lo[3], hi[3];
     box_of(d->X2, d->nv, F, 3, 1, 0.0, lo, hi);
-    const int64_t nq = bs_bvh_within(&d->vt, d->X2, lo, hi, b->qv, d->n_sv);
+    const int64_t nq = bs_bvh_within(&d->vt, lo, hi, b->qv, d->n_sv);
     for (int64_t j = 0; j < nq; j++) {
       const int32_t v = d->sv[b->qv[j]], pv[4] = {v, F[0], F[1], F[2]};
       if (!has_vertex(F, 3, v)) ccd_pair(d, pv, 0, b);
     }
-    const int64_t ne = bs_bvh_within(&d->et, d->X2, lo, hi, b->qe, d->n_edges);
+    const int64_t ne = bs_bvh_within(&d->et, lo, hi, b->qe, d->n_edges);
     for (int64_t j = 0; j < ne; j++) {
       const int32_t eb = b->qe[j], *EB = d->edges + 2 * (size_t)eb;
       double blo[3], bhi[3];
