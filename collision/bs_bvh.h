@@ -21,7 +21,7 @@
  *   if (bs_bvh_init(&b, mesh->faces, 3, mesh->n_faces, &err)) return err.code;
  *   bs_bvh_build(&b, x0, nthreads);
  *   ... bs_bvh_refit(&b, x, nthreads);
- *   int64_t n = bs_bvh_within(&b, x, lo, hi, out, cap);  // simplices whose box meets [lo, hi]
+ *   int64_t n = bs_bvh_within(&b, lo, hi, out, cap);  // simplices whose box meets [lo, hi]
  *   bs_bvh_free(&b);
  */
 #ifndef BS_BVH_H
@@ -51,6 +51,9 @@ typedef struct bs_bvh {
   int32_t *leaf_elems;  /* arity n: their vertices in leaf order (simplex
                            order[j]'s at leaf_elems + arity j), so leaves
                            read one run of memory                           */
+  double *leaf_box;     /* 6 n: simplex order[j]'s box at the last refit at
+                           leaf_box + 6 j (lo[3], hi[3]): queries read it
+                           and never the positions                          */
   struct bs_bvh_rec *rec; /* n: centroids and indices, bs_bvh_build's scratch */
 } bs_bvh;
 
@@ -66,8 +69,8 @@ void bs_bvh_free(bs_bvh *b);
  * thread count. The boxes are not set: call bs_bvh_refit before a query. */
 void bs_bvh_build(bs_bvh *b, const double *x, int nthreads);
 
-/* Every box to x: the leaves on up to nthreads threads (less than 1 counts
- * as 1), then the inner nodes. An infinite coordinate makes the boxes around
+/* Every box to x: each simplex's own box (leaf_box) and the leaves on up to
+ * nthreads threads (less than 1 counts as 1), then the inner nodes. An infinite coordinate makes the boxes around
  * it infinite (bs_bvh_finite then says 0); a NaN coordinate is skipped by the
  * min and max, so check positions for NaN before trusting a query. */
 void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads);
@@ -83,10 +86,10 @@ double bs_bvh_cost(const bs_bvh *b);
 /* 1 when the root's box at the last refit is finite. */
 int bs_bvh_finite(const bs_bvh *b);
 
-/* The simplices whose own box at x meets the closed box [lo, hi], in leaf
- * order, written to out (up to cap of them); returns how many there are
- * (more than cap: out holds the first cap). x must be the refit's x. */
-int64_t bs_bvh_within(const bs_bvh *b, const double *x, const double lo[3], const double hi[3], int32_t *out,
-                      int64_t cap);
+/* The simplices whose own box at the last refit meets the closed box [lo,
+ * hi], in leaf order, written to out (up to cap of them); returns how many
+ * there are (more than cap: out holds the first cap). Reads the boxes cached
+ * by bs_bvh_refit (leaf_box), not the positions. */
+int64_t bs_bvh_within(const bs_bvh *b, const double lo[3], const double hi[3], int32_t *out, int64_t cap);
 
 #endif

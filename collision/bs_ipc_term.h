@@ -24,11 +24,26 @@
  * its box grown by dhat is queried in both trees (a box gap never exceeds
  * the distance, so every pair within dhat is found). An edge-edge pair is
  * enumerated from the lower-indexed triangle of its first edge (its "owner").
- * The pairs are found in parallel over contiguous ranges of triangles and
- * concatenated in range order, so their list, and every sum over it, is the
- * same on any thread count (test: ipc_term/same_bits_on_1_and_2_threads).
+ * The pairs are found in parallel over contiguous ranges of triangles (as
+ * many as threads at creation) and concatenated in range order, so their
+ * list, and every sum over it, is the same on any thread count (test:
+ * ipc_term/same_bits_on_1_and_2_threads).
  * The trees are built at creation (rest shape) and rebuilt at begin_step
  * when their cost (bs_bvh_cost) at xⁿ exceeds 1.25 times the last rebuild's.
+ *
+ * Detection along a motion: max_step(x, d) queries each triangle's swept box
+ * over (x, x + d) grown by dhat and keeps what it finds. A later detection
+ * at a y whose every surface vertex lies in its own box over that motion
+ * (the line search's trial points x + a d, a in [0, 1], and any projection
+ * of them that stays there; checked vertex by vertex, exactly) runs only the
+ * narrow phase on those candidates: every primitive's box at y is then
+ * inside its swept box, so a pair within dhat at y is among them; each list
+ * is filtered by the very box test the trees' query at y makes and is in
+ * the trees' leaf order, so the pairs, their order and every statistic are
+ * those of the trees' detection, bit for bit (test:
+ * ipc_term/detection_on_max_step_candidates_is_the_trees_detection). Any
+ * other y refits the trees to (y, y) and queries them; a rebuild drops the
+ * candidates.
  *
  * Domain: where some pair's d^2 <= 0 or some edge crosses a triangle it
  * shares no vertex with (tested on the same candidates; an intersecting
@@ -59,7 +74,8 @@
  * Memory: the trees, per-thread query buffers and the doubled positions are
  * sized at creation; the pair list and its per-pair gradient/Hessian buffers
  * grow (amortised doubling) when a detection finds more pairs than ever
- * before: nothing else allocates during evaluation.
+ * before, and max_step's candidate lists when it finds more candidates:
+ * nothing else allocates during evaluation.
  *
  * Friction: not in this term. bs_ipc_friction.h is a separate term that
  * lags this term's pairs (bs_term_ipc_pairs) at each step's start.
@@ -125,6 +141,7 @@ typedef struct bs_ipc_stats {
   double kappa, dhat;         /* in force                                        */
   int64_t missing_blocks;     /* Hessian blocks dropped by the last Hessian      */
   int64_t detections;         /* detections since creation                       */
+  int64_t detections_swept;   /* of which on max_step's candidates (no query)    */
   int64_t ccd_calls;          /* max_step calls since creation                   */
   int64_t ccd_limited;        /* of which returned alpha < 1                     */
   int64_t rebuilds;           /* tree rebuilds (creation counts one)             */

@@ -30,7 +30,8 @@ int bs_bvh_init(bs_bvh *b, const int32_t *elems, int arity, int32_t n, bs_error 
   b->order = bs_calloc((size_t)n + 1, sizeof(int32_t), "a bounding-volume hierarchy", err);
   b->rec = bs_calloc((size_t)n + 1, sizeof(struct bs_bvh_rec), "a bounding-volume hierarchy", err);
   b->leaf_elems = bs_calloc((size_t)arity * (size_t)n + 1, sizeof(int32_t), "a bounding-volume hierarchy", err);
-  if (!b->nodes || !b->order || !b->rec || !b->leaf_elems) {
+  b->leaf_box = bs_calloc(6 * (size_t)n + 1, sizeof(double), "a bounding-volume hierarchy", err);
+  if (!b->nodes || !b->order || !b->rec || !b->leaf_elems || !b->leaf_box) {
     bs_bvh_free(b);
     return BS_ENOMEM;
   }
@@ -43,6 +44,7 @@ void bs_bvh_free(bs_bvh *b) {
   free(b->order);
   free(b->rec);
   free(b->leaf_elems);
+  free(b->leaf_box);
   memset(b, 0, sizeof *b);
 }
 
@@ -165,20 +167,28 @@ void bs_bvh_build(bs_bvh *b, const double *x, int nthreads) {
   }
 }
 
-/* The box at x of the simplex in leaf slot j. */
+/* The box at x of the simplex in leaf slot j, into leaf_box[6 j ..] (lo, hi),
+ * and grown around it: lo, hi. */
 static void simplex_box(const bs_bvh *b, const double *x, int32_t j, double lo[3], double hi[3]) {
   const int32_t *tv = b->leaf_elems + (size_t)b->arity * j;
+  double slo[3] = {INFINITY, INFINITY, INFINITY}, shi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int a = 0; a < b->arity; a++)
     for (int k = 0; k < 3; k++) {
       double c = x[3 * (size_t)tv[a] + k];
-      lo[k] = c < lo[k] ? c : lo[k];
-      hi[k] = c > hi[k] ? c : hi[k];
+      slo[k] = c < slo[k] ? c : slo[k];
+      shi[k] = c > shi[k] ? c : shi[k];
     }
+  double *box = b->leaf_box + 6 * (size_t)j;
+  for (int k = 0; k < 3; k++) {
+    box[k] = slo[k], box[3 + k] = shi[k];
+    lo[k] = slo[k] < lo[k] ? slo[k] : lo[k];
+    hi[k] = shi[k] > hi[k] ? shi[k] : hi[k];
+  }
 }
 
-/* The leaves in parallel (min and max are exact in any order), then the
- * inner nodes from the last to the first (children have larger indices than
- * their parent). */
+/* The leaves and their simplices' boxes in parallel (min and max are exact
+ * in any order), then the inner nodes from the last to the first (children
+ * have larger indices than their parent). */
 void bs_bvh_refit(bs_bvh *b, const double *x, int nthreads) {
   const int32_t nn = b->n_nodes;
   if (nthreads < 1) nthreads = 1;
@@ -224,8 +234,7 @@ static int boxes_meet(const double *alo, const double *ahi, const double *blo, c
            ahi[2] < blo[2]);
 }
 
-int64_t bs_bvh_within(const bs_bvh *b, const double *x, const double lo[3], const double hi[3], int32_t *out,
-                      int64_t cap) {
+int64_t bs_bvh_within(const bs_bvh *b, const double lo[3], const double hi[3], int32_t *out, int64_t cap) {
   if (b->n == 0) return 0;
   int32_t stack[BS_BVH_STACK];
   int top = 0;
@@ -240,9 +249,8 @@ int64_t bs_bvh_within(const bs_bvh *b, const double *x, const double lo[3], cons
       continue;
     }
     for (int32_t j = nd->first; j < nd->first + nd->count; j++) {
-      double tlo[3] = {INFINITY, INFINITY, INFINITY}, thi[3] = {-INFINITY, -INFINITY, -INFINITY};
-      simplex_box(b, x, j, tlo, thi);
-      if (!boxes_meet(tlo, thi, lo, hi)) continue;
+      const double *box = b->leaf_box + 6 * (size_t)j;
+      if (!boxes_meet(box, box + 3, lo, hi)) continue;
       if (cnt < cap) out[cnt] = b->order[j];
       cnt++;
     }

@@ -18,15 +18,21 @@
 
 typedef bs_ipc_pair ipc_pair; /* bs_ipc_term.h */
 
-/* One thread's buffers: query results and the pairs of its triangle range. */
+/* One chunk's buffers (a contiguous range of triangles, one thread's at a
+ * time): query results, the pairs of its triangles, and the candidates the
+ * last max_step found for them (bs_ipc_term.h, "Candidates"). */
 typedef struct tbuf {
   int32_t *qv, *qe;   /* n_sv, n_edges                               */
   ipc_pair *p;        /* its pairs (grown by doubling)               */
   int64_t n, cap;
+  int32_t *cv, *ce;   /* max_step's candidates: surface vertices and edges,
+                         triangle after triangle (grown by doubling) */
+  int64_t ncv, cap_cv, nce, cap_ce;
   int64_t inter;      /* touching pairs and edge-triangle crossings  */
   double min_d2;      /* smallest candidate d^2                     */
   double tmin;        /* max_step: smallest safe t                   */
   int fail;           /* out of memory, or a CCD input error         */
+  int cut;            /* max_step stopped early (t = 0): cv, ce partial */
 } tbuf;
 
 typedef struct ipc_data {
@@ -45,8 +51,13 @@ typedef struct ipc_data {
   double *X2;          /* 6 nv: (x, x + d)                         */
   double *x_last;      /* 3 nv: the last detection's x             */
   int have_last, last_ok;
-  int nthreads;
-  tbuf *tb;
+  int nthreads;        /* and chunks of triangles                  */
+  tbuf *tb;            /* nthreads chunks                          */
+  int64_t *cv_end, *ce_end; /* per triangle: the end of its candidates in
+                               its chunk's cv, ce                 */
+  double *sweep;       /* 6 n_sv: each surface vertex's box over max_step's
+                          motion (lo[3], hi[3])                   */
+  int sweep_ok;        /* 1: the candidates above are usable       */
   ipc_pair *pairs;     /* the active pairs of the last detection   */
   int64_t n_pairs, cap_pairs;
   double *pe, *pg, *ph; /* per pair: energy, gradient (12), Hessian (144) */
@@ -54,20 +65,10 @@ typedef struct ipc_data {
   bs_ipc_stats st;
 } ipc_data;
 
-static int thread_num(void) {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
-
-static int team_size(void) {
-#ifdef _OPENMP
-  return omp_get_num_threads();
-#else
-  return 1;
-#endif
+/* Chunk c of n's triangles: [*f0, *f1). */
+static void chunk_range(const ipc_data *d, int c, int32_t *f0, int32_t *f1) {
+  *f0 = (int32_t)((int64_t)d->n_faces * c / d->nthreads);
+  *f1 = (int32_t)((int64_t)d->n_faces * (c + 1) / d->nthreads);
 }
 
 /* ---- geometry ------------------------------------------------------------ */
@@ -85,21 +86,47 @@ static int seg_tri_cross(const double *p, const double *q, const double *a, cons
 }
 
 /* The box of n vertices vs (of X2's first half; with swept, also the second
- * half's), grown by pad. */
+ * half's), grown by pad. Positions are finite here (checked by the callers). */
 static void box_of(const double *X2, int32_t nv, const int32_t *vs, int n, int swept, double pad, double lo[3],
                    double hi[3]) {
   for (int k = 0; k < 3; k++) lo[k] = INFINITY, hi[k] = -INFINITY;
   for (int h = 0; h <= swept; h++)
     for (int i = 0; i < n; i++) {
       const double *p = X2 + 3 * ((size_t)vs[i] + (size_t)h * (size_t)nv);
-      for (int k = 0; k < 3; k++) lo[k] = fmin(lo[k], p[k]), hi[k] = fmax(hi[k], p[k]);
+      for (int k = 0; k < 3; k++) {
+        lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+        hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+      }
     }
   for (int k = 0; k < 3; k++) lo[k] -= pad, hi[k] += pad;
 }
 
+/* The box of the points p and q (coordinates finite). */
+static inline void box2(const double *p, const double *q, double lo[3], double hi[3]) {
+  for (int k = 0; k < 3; k++) {
+    const int o = p[k] < q[k];
+    lo[k] = o ? p[k] : q[k];
+    hi[k] = o ? q[k] : p[k];
+  }
+}
+
+/* The box of the points p, q, r, s. */
+static inline void box4(const double *p, const double *q, const double *r, const double *s, double lo[3],
+                        double hi[3]) {
+  double l2[3], h2[3];
+  box2(p, q, lo, hi);
+  box2(r, s, l2, h2);
+  for (int k = 0; k < 3; k++) {
+    lo[k] = l2[k] < lo[k] ? l2[k] : lo[k];
+    hi[k] = h2[k] > hi[k] ? h2[k] : hi[k];
+  }
+}
+
+/* The closed boxes meet (bs_bvh_within's test, so that a filter with it
+ * keeps what a query would have found). */
 static int boxes_meet(const double *alo, const double *ahi, const double *blo, const double *bhi) {
-  return alo[0] <= bhi[0] && blo[0] <= ahi[0] && alo[1] <= bhi[1] && blo[1] <= ahi[1] && alo[2] <= bhi[2] &&
-         blo[2] <= ahi[2];
+  return !(alo[0] > bhi[0] || ahi[0] < blo[0] || alo[1] > bhi[1] || ahi[1] < blo[1] || alo[2] > bhi[2] ||
+           ahi[2] < blo[2]);
 }
 
 static int has_vertex(const int32_t *vs, int n, int32_t v) {
@@ -130,7 +157,7 @@ static void pt_candidates(const ipc_data *d, const double *x, const int32_t *F, 
     double y[12];
     bs__ipc_gather(x, pv, y);
     const double d2 = bs_ipc_pt_d2_full(y, y + 3, y + 6, y + 9, NULL, NULL, NULL);
-    b->min_d2 = fmin(b->min_d2, d2);
+    if (d2 < b->min_d2) b->min_d2 = d2;
     if (!(d2 > 0)) b->inter++;
     else if (d2 < dh2) push(b, pv, 0);
   }
@@ -154,7 +181,7 @@ static void ee_candidates(const ipc_data *d, const double *x, int32_t f, int64_t
       double y[12];
       bs__ipc_gather(x, pv, y);
       const double d2 = bs_ipc_ee_d2_full(y, y + 3, y + 6, y + 9, NULL, NULL, NULL);
-      b->min_d2 = fmin(b->min_d2, d2);
+      if (d2 < b->min_d2) b->min_d2 = d2;
       if (!(d2 > 0)) b->inter++;
       else if (d2 < dh2) push(b, pv, 1);
     }
@@ -163,13 +190,37 @@ static void ee_candidates(const ipc_data *d, const double *x, int32_t f, int64_t
 
 /* The candidates of triangles [f0, f1) at x (trees refit to (x, x)). */
 static void detect_range(ipc_data *d, const double *x, int32_t f0, int32_t f1, tbuf *b) {
-  b->n = 0, b->inter = 0, b->min_d2 = INFINITY, b->fail = 0;
   for (int32_t f = f0; f < f1; f++) {
     const int32_t *F = d->mesh->faces + 3 * (size_t)f;
     double lo[3], hi[3];
     box_of(d->X2, d->nv, F, 3, 0, d->dhat, lo, hi);
-    pt_candidates(d, x, F, bs_bvh_within(&d->vt, d->X2, lo, hi, b->qv, d->n_sv), b);
-    ee_candidates(d, x, f, bs_bvh_within(&d->et, d->X2, lo, hi, b->qe, d->n_edges), b);
+    pt_candidates(d, x, F, bs_bvh_within(&d->vt, lo, hi, b->qv, d->n_sv), b);
+    ee_candidates(d, x, f, bs_bvh_within(&d->et, lo, hi, b->qe, d->n_edges), b);
+  }
+}
+
+/* detect_range on the last max_step's candidates (x in its sweep): each
+ * triangle's list filtered by the box test a query of the trees refit to
+ * (x, x) makes, so the same vertices and edges in the same (leaf) order. */
+static void detect_swept(ipc_data *d, const double *x, int32_t f0, int32_t f1, tbuf *b) {
+  int64_t jv = 0, je = 0;
+  for (int32_t f = f0; f < f1; f++) {
+    const int32_t *F = d->mesh->faces + 3 * (size_t)f;
+    double lo[3], hi[3], blo[3], bhi[3];
+    box_of(x, d->nv, F, 3, 0, d->dhat, lo, hi);
+    int64_t nq = 0;
+    for (; jv < d->cv_end[f]; jv++) {
+      const double *p = x + 3 * (size_t)d->sv[b->cv[jv]];
+      if (boxes_meet(p, p, lo, hi)) b->qv[nq++] = b->cv[jv];
+    }
+    pt_candidates(d, x, F, nq, b);
+    nq = 0;
+    for (; je < d->ce_end[f]; je++) {
+      const int32_t *E = d->edges + 2 * (size_t)b->ce[je];
+      box2(x + 3 * (size_t)E[0], x + 3 * (size_t)E[1], blo, bhi);
+      if (boxes_meet(blo, bhi, lo, hi)) b->qe[nq++] = b->ce[je];
+    }
+    ee_candidates(d, x, f, nq, b);
   }
 }
 
@@ -188,17 +239,30 @@ static int finite_all(const double *a, size_t n) {
   return 1;
 }
 
-/* The threads' pairs concatenated in range order into d->pairs. */
-static int merge(ipc_data *d, int nt) {
+/* 1 when every surface vertex of x is inside its box over the last
+ * max_step's motion (d->sweep): then every primitive's box at x is inside
+ * its swept box, and a pair within dhat at x is among that max_step's
+ * candidates (queried with the swept boxes grown by dhat). */
+static int in_sweep(const ipc_data *d, const double *x) {
+  if (!d->sweep_ok) return 0;
+  for (int32_t i = 0; i < d->n_sv; i++) {
+    const double *p = x + 3 * (size_t)d->sv[i], *s = d->sweep + 6 * (size_t)i;
+    if (p[0] < s[0] || p[1] < s[1] || p[2] < s[2] || p[0] > s[3] || p[1] > s[4] || p[2] > s[5]) return 0;
+  }
+  return 1;
+}
+
+/* The chunks' pairs concatenated in triangle order into d->pairs. */
+static int merge(ipc_data *d) {
   int64_t n = 0, inter = 0;
   double m = INFINITY;
-  for (int t = 0; t < nt; t++) {
+  for (int t = 0; t < d->nthreads; t++) {
     if (d->tb[t].fail) return BS_ENOMEM;
     n += d->tb[t].n, inter += d->tb[t].inter, m = fmin(m, d->tb[t].min_d2);
   }
   if (bs__ipc_grow((void **)&d->pairs, &d->cap_pairs, n, sizeof(ipc_pair))) return BS_ENOMEM;
   d->n_pairs = 0;
-  for (int t = 0; t < nt; t++) {
+  for (int t = 0; t < d->nthreads; t++) {
     if (d->tb[t].n == 0) continue; /* no pairs (and maybe no buffers) */
     memcpy(d->pairs + d->n_pairs, d->tb[t].p, sizeof(ipc_pair) * (size_t)d->tb[t].n);
     d->n_pairs += d->tb[t].n;
@@ -215,23 +279,28 @@ static int merge(ipc_data *d, int nt) {
 
 /* The pairs at x (reused when x is bitwise the last detection's): 0 when
  * the term is evaluable there, 1 when not (non-finite x, touching or
- * crossing surfaces, or no memory for the pair list). */
+ * crossing surfaces, or no memory for the pair list). Inside the last
+ * max_step's sweep only the narrow phase runs, on its candidates; else the
+ * trees are refit to x and queried. Either way the same pairs. */
 static int detect(ipc_data *d, const double *x) {
   const size_t n3 = 3 * (size_t)d->nv;
   if (d->have_last && memcmp(x, d->x_last, sizeof(double) * n3) == 0) return !d->last_ok;
   d->have_last = 0;
   if (!finite_all(x, n3)) return 1;
-  refit(d, x, NULL);
-  int nt_used = 1;
-#pragma omp parallel num_threads(d->nthreads) if (d->n_faces >= PAR_MIN)
-  {
-    const int t = thread_num(), nt = team_size();
-    const int32_t f0 = (int32_t)((int64_t)d->n_faces * t / nt), f1 = (int32_t)((int64_t)d->n_faces * (t + 1) / nt);
-    detect_range(d, x, f0, f1, &d->tb[t]);
-    if (t == 0) nt_used = nt;
+  const int swept = in_sweep(d, x);
+  if (!swept) refit(d, x, NULL);
+#pragma omp parallel for schedule(static) num_threads(d->nthreads) if (d->n_faces >= PAR_MIN)
+  for (int c = 0; c < d->nthreads; c++) {
+    tbuf *b = &d->tb[c];
+    int32_t f0, f1;
+    chunk_range(d, c, &f0, &f1);
+    b->n = 0, b->inter = 0, b->min_d2 = INFINITY, b->fail = 0;
+    if (swept) detect_swept(d, x, f0, f1, b);
+    else detect_range(d, x, f0, f1, b);
   }
   d->st.detections++;
-  if (merge(d, nt_used)) return 1;
+  d->st.detections_swept += swept;
+  if (merge(d)) return 1;
   memcpy(d->x_last, x, sizeof(double) * n3);
   d->have_last = 1;
   d->last_ok = d->st.intersecting == 0;
@@ -323,33 +392,72 @@ static void ccd_pair(const ipc_data *d, const int32_t v[4], int ee, tbuf *b) {
   b->tmin = fmin(b->tmin, rc < 0 ? 0.0 : t);
 }
 
+/* Appends the n entries of q to *list (grown by doubling); 0 or 1 (no memory). */
+static int append(int32_t **list, int64_t *len, int64_t *cap, const int32_t *q, int64_t n) {
+  if (bs__ipc_grow((void **)list, cap, *len + n, sizeof(int32_t))) return 1;
+  memcpy(*list + *len, q, sizeof(int32_t) * (size_t)n);
+  *len += n;
+  return 0;
+}
+
+/* Triangle f's edge candidates b->qe[0..ne) whose swept boxes meet its own
+ * (lo, hi): the edge-edge pairs of the edges f owns, through the CCD. */
+static void ccd_edges(ipc_data *d, int32_t f, const double lo[3], const double hi[3], int64_t ne, tbuf *b) {
+  const double *X0 = d->X2, *X1 = d->X2 + 3 * (size_t)d->nv;
+  for (int64_t j = 0; j < ne; j++) {
+    const int32_t eb = b->qe[j], *EB = d->edges + 2 * (size_t)eb;
+    double blo[3], bhi[3];
+    box4(X0 + 3 * (size_t)EB[0], X0 + 3 * (size_t)EB[1], X1 + 3 * (size_t)EB[0], X1 + 3 * (size_t)EB[1], blo, bhi);
+    if (!boxes_meet(blo, bhi, lo, hi)) continue;
+    for (int k = 0; k < 3; k++) {
+      const int32_t ea = d->face_edge[3 * (size_t)f + k], *EA = d->edges + 2 * (size_t)ea;
+      if (d->owner[ea] != f || eb <= ea || has_vertex(EA, 2, EB[0]) || has_vertex(EA, 2, EB[1])) continue;
+      double alo[3], ahi[3];
+      box4(X0 + 3 * (size_t)EA[0], X0 + 3 * (size_t)EA[1], X1 + 3 * (size_t)EA[0], X1 + 3 * (size_t)EA[1], alo, ahi);
+      const int32_t pv[4] = {EA[0], EA[1], EB[0], EB[1]};
+      if (boxes_meet(alo, ahi, blo, bhi)) ccd_pair(d, pv, 1, b);
+    }
+  }
+}
+
 /* The CCD of triangles [f0, f1)'s pairs over the motion in X2 (trees refit
- * to it): the smallest t into b->tmin. */
+ * to it): the smallest t into b->tmin. Each triangle's trees are queried
+ * once, with its swept box grown by dhat: those candidates are kept (b->cv,
+ * b->ce, their ends in d->cv_end, d->ce_end) for the detections along the
+ * motion, and the CCD takes those whose boxes meet the triangle's own. */
 static void ccd_range(ipc_data *d, int32_t f0, int32_t f1, tbuf *b) {
-  b->tmin = 1, b->fail = 0;
-  for (int32_t f = f0; f < f1 && b->tmin > 0; f++) {
+  b->tmin = 1, b->fail = 0, b->cut = 0, b->ncv = 0, b->nce = 0;
+  for (int32_t f = f0; f < f1; f++) {
+    if (!(b->tmin > 0)) {
+      b->cut = 1; /* no step: the rest would not be used */
+      return;
+    }
     const int32_t *F = d->mesh->faces + 3 * (size_t)f;
-    double lo[3], hi[3];
+    double lo[3], hi[3], plo[3], phi[3], vlo[3], vhi[3];
     box_of(d->X2, d->nv, F, 3, 1, 0.0, lo, hi);
-    const int64_t nq = bs_bvh_within(&d->vt, d->X2, lo, hi, b->qv, d->n_sv);
+    for (int k = 0; k < 3; k++) plo[k] = lo[k] - d->dhat, phi[k] = hi[k] + d->dhat;
+    const int64_t nq = bs_bvh_within(&d->vt, plo, phi, b->qv, d->n_sv);
+    const int64_t ne = bs_bvh_within(&d->et, plo, phi, b->qe, d->n_edges);
+    if (append(&b->cv, &b->ncv, &b->cap_cv, b->qv, nq) || append(&b->ce, &b->nce, &b->cap_ce, b->qe, ne)) {
+      b->fail = 1;
+      return;
+    }
+    d->cv_end[f] = b->ncv, d->ce_end[f] = b->nce;
     for (int64_t j = 0; j < nq; j++) {
       const int32_t v = d->sv[b->qv[j]], pv[4] = {v, F[0], F[1], F[2]};
-      if (!has_vertex(F, 3, v)) ccd_pair(d, pv, 0, b);
+      box2(d->X2 + 3 * (size_t)v, d->X2 + 3 * ((size_t)v + (size_t)d->nv), vlo, vhi);
+      if (!has_vertex(F, 3, v) && boxes_meet(vlo, vhi, lo, hi)) ccd_pair(d, pv, 0, b);
     }
-    const int64_t ne = bs_bvh_within(&d->et, d->X2, lo, hi, b->qe, d->n_edges);
-    for (int64_t j = 0; j < ne; j++) {
-      const int32_t eb = b->qe[j], *EB = d->edges + 2 * (size_t)eb;
-      double blo[3], bhi[3];
-      box_of(d->X2, d->nv, EB, 2, 1, 0.0, blo, bhi);
-      for (int k = 0; k < 3; k++) {
-        const int32_t ea = d->face_edge[3 * (size_t)f + k], *EA = d->edges + 2 * (size_t)ea;
-        if (d->owner[ea] != f || eb <= ea || has_vertex(EA, 2, EB[0]) || has_vertex(EA, 2, EB[1])) continue;
-        double alo[3], ahi[3];
-        box_of(d->X2, d->nv, EA, 2, 1, 0.0, alo, ahi);
-        const int32_t pv[4] = {EA[0], EA[1], EB[0], EB[1]};
-        if (boxes_meet(alo, ahi, blo, bhi)) ccd_pair(d, pv, 1, b);
-      }
-    }
+    ccd_edges(d, f, lo, hi, ne, b);
+  }
+}
+
+/* Each surface vertex's box over the motion in X2 into d->sweep. */
+static void set_sweep(ipc_data *d) {
+  for (int32_t i = 0; i < d->n_sv; i++) {
+    double *s = d->sweep + 6 * (size_t)i;
+    const size_t v = (size_t)d->sv[i];
+    box2(d->X2 + 3 * v, d->X2 + 3 * (v + (size_t)d->nv), s, s + 3);
   }
 }
 
@@ -357,21 +465,25 @@ static void ccd_range(ipc_data *d, int32_t f0, int32_t f1, tbuf *b) {
 static int max_step_impl(ipc_data *d, const double *x, const double *dx, double *alpha) {
   const size_t n3 = 3 * (size_t)d->nv;
   *alpha = 0;
+  d->sweep_ok = 0;
   if (!finite_all(x, n3) || !finite_all(dx, n3)) return 1;
   refit(d, x, dx);
-  d->have_last = 0; /* the trees no longer hold (x, x) */
-  int nt_used = 1;
-#pragma omp parallel num_threads(d->nthreads) if (d->n_faces >= PAR_MIN)
-  {
-    const int t = thread_num(), nt = team_size();
-    const int32_t f0 = (int32_t)((int64_t)d->n_faces * t / nt), f1 = (int32_t)((int64_t)d->n_faces * (t + 1) / nt);
-    ccd_range(d, f0, f1, &d->tb[t]);
-    if (t == 0) nt_used = nt;
+#pragma omp parallel for schedule(static) num_threads(d->nthreads) if (d->n_faces >= PAR_MIN)
+  for (int c = 0; c < d->nthreads; c++) {
+    int32_t f0, f1;
+    chunk_range(d, c, &f0, &f1);
+    ccd_range(d, f0, f1, &d->tb[c]);
   }
   double a = 1;
-  for (int t = 0; t < nt_used; t++) {
+  int cut = 0;
+  for (int t = 0; t < d->nthreads; t++) {
     if (d->tb[t].fail) return 1;
     a = fmin(a, d->tb[t].tmin);
+    cut |= d->tb[t].cut;
+  }
+  if (!cut && finite_all(d->X2 + n3, n3)) {
+    set_sweep(d);
+    d->sweep_ok = 1;
   }
   d->st.ccd_calls++;
   d->st.ccd_limited += a < 1;
@@ -394,6 +506,7 @@ static void rebuild(ipc_data *d, const double *x) {
   d->cost_built = bs_bvh_cost(&d->vt) + bs_bvh_cost(&d->et);
   d->st.rebuilds++;
   d->have_last = 0;
+  d->sweep_ok = 0; /* the candidates are in the old trees' leaf order */
 }
 
 /* At xⁿ: the trees rebuilt when their cost grew (bs_ipc_term.h), then the
@@ -429,6 +542,8 @@ static void ipc_free(void *p) {
     free(d->tb[t].qv);
     free(d->tb[t].qe);
     free(d->tb[t].p);
+    free(d->tb[t].cv);
+    free(d->tb[t].ce);
   }
   free(d->tb);
   free(d->sv);
@@ -439,6 +554,9 @@ static void ipc_free(void *p) {
   free(d->et_elems);
   free(d->X2);
   free(d->x_last);
+  free(d->cv_end);
+  free(d->ce_end);
+  free(d->sweep);
   free(d->pairs);
   free(d->pe);
   free(d->pg);
@@ -514,7 +632,13 @@ static int build_surface(ipc_data *d, bs_error *err) {
   d->X2 = bs_calloc(6 * (size_t)d->nv + 1, sizeof(double), "the barrier's positions", err);
   d->x_last = bs_calloc(3 * (size_t)d->nv + 1, sizeof(double), "the barrier's positions", err);
   d->tb = bs_calloc((size_t)d->nthreads, sizeof(tbuf), "the barrier's thread buffers", err);
-  int st = !d->sv || !d->vt_elems || !d->et_elems || !d->X2 || !d->x_last || !d->tb ? BS_ENOMEM : 0;
+  d->cv_end = bs_calloc((size_t)d->n_faces + 1, sizeof(int64_t), "the barrier's candidates", err);
+  d->ce_end = bs_calloc((size_t)d->n_faces + 1, sizeof(int64_t), "the barrier's candidates", err);
+  d->sweep = bs_calloc(6 * (size_t)d->n_sv + 1, sizeof(double), "the barrier's candidates", err);
+  int st = !d->sv || !d->vt_elems || !d->et_elems || !d->X2 || !d->x_last || !d->tb || !d->cv_end || !d->ce_end ||
+                   !d->sweep
+               ? BS_ENOMEM
+               : 0;
   for (int t = 0; !st && t < d->nthreads; t++) {
     d->tb[t].qv = bs_calloc((size_t)d->n_sv + 1, sizeof(int32_t), "the barrier's query buffers", err);
     d->tb[t].qe = bs_calloc((size_t)d->n_edges + 1, sizeof(int32_t), "the barrier's query buffers", err);

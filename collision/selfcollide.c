@@ -599,7 +599,7 @@ static int closest_primitive(self_data *d, const double *x, int32_t i, double di
   if (iface && sqrt(ib) < r) r = sqrt(ib);
   for (;;) {
     double lo[3] = {p[0] - r, p[1] - r, p[2] - r}, hi[3] = {p[0] + r, p[1] + r, p[2] + r};
-    const int64_t cnt = bs_bvh_within(&d->tri_bvh, x, lo, hi, buf, m->n_faces);
+    const int64_t cnt = bs_bvh_within(&d->tri_bvh, lo, hi, buf, m->n_faces);
     double best = INFINITY;
     int32_t bt = -1;
     for (int64_t j = 0; j < cnt; j++) {

@@ -44,7 +44,7 @@ static int64_t check_queries(const bs_bvh *b, const double *x, const int32_t *el
   for (int q = 0; q < 200; q++) {
     double c[3], lo[3], hi[3], r = 0.3 * rnd(&seed);
     for (int k = 0; k < 3; k++) c[k] = -0.2 + 1.4 * rnd(&seed), lo[k] = c[k] - r, hi[k] = c[k] + r;
-    int64_t ng = bs_bvh_within(b, x, lo, hi, got, n), nw = 0;
+    int64_t ng = bs_bvh_within(b, lo, hi, got, n), nw = 0;
     for (int32_t t = 0; t < n; t++)
       if (meets(x, elems + (size_t)arity * t, arity, lo, hi)) want[nw++] = t;
     cr_assert_eq(ng, nw, "query %d: %lld simplices, brute force %lld", q, (long long)ng, (long long)nw);
@@ -85,7 +85,7 @@ static void run_case(int arity) {
   /* the cap: the count of all, the first cap written */
   double all_lo[3] = {-9, -9, -9}, all_hi[3] = {9, 9, 9};
   int32_t few[5] = {-1, -1, -1, -1, -1};
-  cr_assert_eq(bs_bvh_within(&b, x, all_lo, all_hi, few, 4), n);
+  cr_assert_eq(bs_bvh_within(&b, all_lo, all_hi, few, 4), n);
   for (int i = 0; i < 4; i++) cr_assert(few[i] >= 0 && few[i] < n);
   cr_assert_eq(few[4], -1, "wrote past the cap");
   /* a non-finite position shows in the root's box */
@@ -110,7 +110,7 @@ Test(bvh, bad_arguments) {
   cr_assert_eq(bs_bvh_init(&b, e, 3, 0, &err), BS_OK);
   double x[3] = {0, 0, 0}, lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
   bs_bvh_build(&b, x, 1);
-  cr_assert_eq(bs_bvh_within(&b, x, lo, hi, NULL, 0), 0);
+  cr_assert_eq(bs_bvh_within(&b, lo, hi, NULL, 0), 0);
   bs_bvh_free(&b);
 }
 

@@ -265,6 +265,67 @@ Test(ipc_term, max_step_stops_before_contact) {
   two_free(&s);
 }
 
+/* The pairs of t at y into a fresh copy (pairs and count). */
+static bs_ipc_pair *pairs_at(bs_term *t, const double *y, int64_t *n) {
+  const bs_ipc_pair *p = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_term_ipc_pairs(t, y, &p, n, &err), 0, "%s", err.msg);
+  bs_ipc_pair *c = malloc(sizeof *c * (size_t)(*n + 1));
+  memcpy(c, p, sizeof *c * (size_t)*n);
+  return c;
+}
+
+/* Detection along a motion after max_step runs on max_step's candidates
+ * (no tree query: detections_swept counts it) and finds what a term that
+ * never saw the motion finds by its trees: the same pairs in the same
+ * order, the same smallest distance; a point off the motion is detected by
+ * the trees again, with the same answer too. Box B sinks from 3 cm above box
+ * A to 8 mm (dhat 2 cm: only the candidates of the swept boxes grown by dhat
+ * hold the pairs at the end), and slides and twists a little, so that the
+ * pairs change along the motion. */
+Test(ipc_term, detection_on_max_step_candidates_is_the_trees_detection) {
+  two s, fresh;
+  two_boxes(&s, 5, 0.03, 0.02);
+  two_boxes(&fresh, 5, 0.03, 0.02);
+  bs_error err = {0};
+  const int32_t nA = s.mesh->n_vertices / 2;
+  double *d = calloc((size_t)s.n3, sizeof(double)), *y = malloc(sizeof(double) * (size_t)s.n3);
+  for (int32_t v = nA; v < s.mesh->n_vertices; v++) {
+    const double *p = s.x + 3 * (size_t)v;
+    d[3 * v] = 0.01 + 0.01 * (p[1] - 0.5);
+    d[3 * v + 1] = -0.01 * (p[0] - 0.5);
+    d[3 * v + 2] = -0.022;
+  }
+  double alpha = -1;
+  cr_assert_eq(bs_term_ipc_max_step(s.t, s.x, d, &alpha, &err), 0, "%s", err.msg);
+  cr_assert_eq(alpha, 1.0, "alpha %g: the motion ends 8 mm apart", alpha);
+  const double as[6] = {0, 0.25, 0.5, 0.75, 1, 0.5};
+  int64_t max_pairs = 0;
+  for (int k = 0; k < 6; k++) {
+    for (int i = 0; i < s.n3; i++) y[i] = s.x[i] + as[k] * d[i];
+    if (k == 5) y[3 * nA] -= 1e-2; /* off the motion (B's vertices move along +x, by 0.55 cm at most) */
+    bs_ipc_stats a, b, a1;
+    cr_assert_eq(bs_term_ipc_stats(s.t, &a, &err), 0);
+    cr_assert_eq(bs_term_ipc_detect(s.t, y, &a1, &err), 0, "%s", err.msg);
+    cr_assert_eq(a1.detections_swept - a.detections_swept, k < 5 ? 1 : 0, "point %d", k);
+    cr_assert_eq(bs_term_ipc_detect(fresh.t, y, &b, &err), 0, "%s", err.msg);
+    cr_assert_eq(b.detections_swept, 0);
+    int64_t na, nb;
+    bs_ipc_pair *pa = pairs_at(s.t, y, &na), *pb = pairs_at(fresh.t, y, &nb);
+    cr_assert_eq(na, nb, "point %d: %lld pairs, the trees find %lld", k, (long long)na, (long long)nb);
+    cr_assert_eq(memcmp(pa, pb, sizeof *pa * (size_t)na), 0, "point %d: other pairs or order", k);
+    cr_assert_eq(memcmp(&a1.min_distance, &b.min_distance, sizeof(double)), 0, "point %d: %.17g vs %.17g", k,
+                 a1.min_distance, b.min_distance);
+    cr_assert_eq(a1.intersecting, b.intersecting);
+    if (na > max_pairs) max_pairs = na;
+    free(pa), free(pb);
+  }
+  cr_assert_gt(max_pairs, 20, "pairs %lld: the motion should bring the boxes within dhat", (long long)max_pairs);
+  free(d), free(y);
+  two_free(&s);
+  two_free(&fresh);
+}
+
 /* B's apex pushed into A: no distance is 0, but B's edges cross A's top
  * face: value, gradient and hessian say "not evaluable" (no NaN). */
 Test(ipc_term, intersecting_state_is_not_evaluable) {
