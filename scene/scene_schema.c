@@ -130,7 +130,7 @@ const bs_schema_key bs__schema_keys[] = {
      BD(reorder), .doc = "vertex renumbering"},
     {"bodies[]", "element", STR, .choices = CHOICES("tet4", "tet10"), .def = "\"tet4\"",
      BD(element), VALUES(BS_ELEMENT_TET4, BS_ELEMENT_TET10), .doc = "the finite element: tet4 (linear) or tet10 (quadratic: "
-            "10 nodes, the linear mesh's vertices and its edge midpoints, or a .msh of 10-node tets as it is; one body, no self-collision)"},
+            "10 nodes; geometry inputs meshed at order 2 with curved boundaries, other meshes gain edge midpoints, a .msh of 10-node tets is taken as it is; one body, no self-collision)"},
     {"bodies[]", "scale", BS_SCHEMA_NUM_OR_VEC3, .range = "(0, )", .def = "[1, 1, 1]",
      BD(scale), .doc = "scale factors (a number or 3), applied first"},
     {"bodies[]", "rotate", VEC3, .def = ZERO3, BD(rotate), .doc = "rotation axis x angle (degrees), applied after scale"},
