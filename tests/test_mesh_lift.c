@@ -78,6 +78,62 @@ Test(mesh_lift, slivers_lifted_groups_kept) {
   bs_mesh_destroy(&m);
 }
 
+/* A 5 x 5 x 2 box of unit cells with a square hole through it (the cells
+ * (2, 2, *) left out: a ring, its boundary a torus), Kuhn-split, its inner
+ * vertex (1, 1, 1) pushed down to z = 0.05: slivers. The remesher took only
+ * tets whose boundary is one sphere (the Euler relation of CGAL's validity
+ * check, which the shim asked of the whole triangulation): it refused this
+ * one ("not a valid triangulation"); it lifts it now, boundary kept. */
+Test(mesh_lift, a_part_with_a_hole_through_it_is_lifted) {
+  enum { N = 5, NZ = 2 };
+  double x[3 * (N + 1) * (N + 1) * (NZ + 1)];
+  int32_t t[4 * 6 * N * N * NZ], nt = 0;
+  static const int kuhn[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+  for (int k = 0; k <= NZ; k++)
+    for (int j = 0; j <= N; j++)
+      for (int i = 0; i <= N; i++) {
+        double *p = x + 3 * (i + (N + 1) * (j + (N + 1) * k));
+        p[0] = i, p[1] = j, p[2] = (i == 1 && j == 1 && k == 1) ? 0.05 : k;
+      }
+  for (int k = 0; k < NZ; k++)
+    for (int j = 0; j < N; j++)
+      for (int i = 0; i < N; i++) {
+        if (i == 2 && j == 2) continue;
+        int32_t c[8];
+        for (int b = 0; b < 8; b++) c[b] = (i + (b & 1)) + (N + 1) * ((j + (b >> 1 & 1)) + (N + 1) * (k + (b >> 2 & 1)));
+        for (int s = 0; s < 6; s++, nt++)
+          for (int a = 0; a < 4; a++) t[4 * nt + a] = c[kuhn[s][a]];
+      }
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs__mesh_default_groups("ring", (N + 1) * (N + 1) * (NZ + 1), x, nt, t, &m, &err), BS_OK, "%s",
+               err.msg);
+  bs_mesh_quality q0, q1;
+  bs_mesh_quality_compute(m, NULL, &q0);
+  cr_assert_eq(bs__mesh_lift("ring", &m, 1.0, BS_MESH_MIN_DIHEDRAL, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality_compute(m, NULL, &q1);
+  cr_log_info("ring with slivers: min dihedral %.2f -> %.2f, %d tets", q0.dihedral_min, q1.dihedral_min, m->n_tets);
+  cr_expect_lt(q0.dihedral_min, 5.0);
+  cr_expect_geq(q1.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_float_eq(bs_mesh_volume(m), N * N * NZ - NZ, 1e-9);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
+
+/* Two tets that touch at one vertex only are still refused by name. */
+Test(mesh_lift, tets_touching_at_a_vertex_are_refused) {
+  static const double x[7 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 2, 1, 0, 2, 0, 1, 2};
+  static const int32_t t[2 * 4] = {0, 1, 2, 3, 3, 4, 5, 6};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_tet_remesh_opts o = {.size = 1, .target_dihedral = 60};
+  bs_shim_tet_remesh_out r;
+  cr_expect_eq(bs_shim_tet_remesh("pinch", x, 7, t, 2, NULL, &o, &r, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "not form a valid triangulation") != NULL, "%s", err.msg);
+  cr_expect_null(r.x);
+}
+
 /* ---- an edge collapse whose stars are not a ball ------------------------ */
 
 /* tests/data/tet/thin_collapse.tets (its header says what it is) into
