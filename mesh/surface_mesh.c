@@ -354,7 +354,11 @@ static int mesh3_once(const char *path, const double *pts, int64_t np, const int
  * then -0.51% at h / 40), and where Mesh_3's perturber ends just under the
  * gate a finer surface can end over it (the cow at diagonal / 30: 5.73
  * degrees, then 10.0 and -0.38%). The passing mesh closest to the volume is
- * kept; when none passes, the first's message stands. */
+ * kept; when none passes, the first's message stands. A CAD part's mesh
+ * (its sharp edges kept, facet distance h / 10) that passes but is more
+ * than 1% off is meshed again the same way with facet distance h /
+ * scan_finer[k]: the chords' sag on its curved faces, which scales with the
+ * facet distance (pinion.off at D/25: -1.12%, then -0.33% at h / 40). */
 #define BS_MESH3_SCAN_VOLUME_TOL 0.01
 static const double scan_finer[] = {40.0, 55.0};
 
@@ -375,10 +379,11 @@ static int mesh3_path(const char *path, const double *pts, int64_t np, const int
   bs_shim_mesh3_opts o = mesh3_opts(h, diag, opts);
   int scan = 0;
   int rc = mesh3_once(path, pts, np, tris, nt, &o, opts, &scan, out, err);
-  if ((rc && rc != BS_EINPUT) || !scan || !(o.scan_facet_distance > 0) || !(volume > 0)) return rc;
+  if ((rc && rc != BS_EINPUT) || !(volume > 0) || (scan ? !(o.scan_facet_distance > 0) : rc != BS_OK)) return rc;
   double off = rc ? INFINITY : fabs(bs_mesh_volume(*out) - volume) / volume;
   for (size_t k = 0; k < sizeof scan_finer / sizeof *scan_finer && off > BS_MESH3_SCAN_VOLUME_TOL; k++) {
-    o.scan_facet_distance = h / scan_finer[k];
+    if (scan) o.scan_facet_distance = h / scan_finer[k];
+    else o.facet_distance = h / scan_finer[k];
     bs_mesh *fine = NULL;
     bs_error e2;
     bs_error_clear(&e2);
