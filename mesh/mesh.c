@@ -324,14 +324,18 @@ static int check_tet_ranges(const int32_t *tets, int32_t nt, int32_t nv, bs_erro
   return BS_OK;
 }
 
-/* Reorients each tet to positive volume; zero volume (relative to the
- * longest edge cubed) is an error naming the tet. */
+int bs__tet_flat(const double *x, const int32_t *tv) {
+  const double l2 = longest_edge2(x, tv);
+  return !(fabs(tet_volume(x, tv)) > 1e-14 * l2 * sqrt(l2));
+}
+
+/* Reorients each tet to positive volume; zero volume (bs__tet_flat) is an
+ * error naming the tet. */
 static int orient_tets(bs_mesh *m, bs_error *err) {
   for (int32_t t = 0; t < m->n_tets; ++t) {
     int32_t *tv = m->tets + 4 * (size_t)t;
     double vol = tet_volume(m->x, tv);
-    double l2 = longest_edge2(m->x, tv);
-    if (!(fabs(vol) > 1e-14 * l2 * sqrt(l2)))
+    if (bs__tet_flat(m->x, tv))
       return bs_error_set(err, BS_EINPUT, "tet %d has zero volume (vertices %d %d %d %d)", t, tv[0], tv[1], tv[2],
                           tv[3]);
     if (vol < 0) {

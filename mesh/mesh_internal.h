@@ -78,6 +78,10 @@ int bs__msh_check(const char *path, bs_error *err);
  * err) when the work array cannot be allocated. */
 int64_t bs__coincident(int64_t n, const double *x, int32_t *rep, bs_error *err);
 
+/* mesh.c: 1 when the tet tv (4 indices into x) has zero volume: |V| <=
+ * 1e-14 l^3, l its longest edge (bs_mesh_create refuses such a tet). */
+int bs__tet_flat(const double *x, const int32_t *tv);
+
 /* quality.c: the measures of one tet (p[0..3] its vertices), as defined in
  * quality.c's comment: signed volume, extreme dihedral angles (degrees) and
  * signed radius ratio. */

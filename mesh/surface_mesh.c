@@ -109,9 +109,88 @@ static int check_size(const char *path, const double *pts, int64_t np, const int
   return bs__check_mesh_size(*volume, h, opts, path, err);
 }
 
+/* A tet face as its sorted vertices, and qsort's order of them. */
+typedef struct tet_face {
+  int32_t v[3];
+} tet_face;
+
+static int cmp_face(const void *a, const void *b) {
+  const int32_t *p = ((const tet_face *)a)->v, *q = ((const tet_face *)b)->v;
+  for (int k = 0; k < 3; k++)
+    if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
+  return 0;
+}
+
+static tet_face face_of(const int32_t *tv, int f) {
+  tet_face r = {{tv[bs_tet_face[f][0]], tv[bs_tet_face[f][1]], tv[bs_tet_face[f][2]]}};
+  for (int i = 0; i < 2; i++)
+    for (int j = 0; j < 2 - i; j++)
+      if (r.v[j] > r.v[j + 1]) {
+        const int32_t s = r.v[j];
+        r.v[j] = r.v[j + 1], r.v[j + 1] = s;
+      }
+  return r;
+}
+
+/* One pass: the flat tets (bs__tet_flat) of tets[0 .. *nt) that have a face
+ * in no other tet are removed (tets compacted, *nt updated); faces: 4 *nt
+ * scratch. Returns the flat tets left (0: none). */
+static int32_t peel_pass(const double *x, int32_t *tets, int32_t *nt, tet_face *faces) {
+  for (int32_t t = 0; t < *nt; t++)
+    for (int f = 0; f < 4; f++) faces[4 * (size_t)t + f] = face_of(tets + 4 * (size_t)t, f);
+  qsort(faces, 4 * (size_t)*nt, sizeof *faces, cmp_face);
+  int32_t n = 0, left = 0;
+  for (int32_t t = 0; t < *nt; t++) {
+    const int32_t *tv = tets + 4 * (size_t)t;
+    int open = 0;
+    if (bs__tet_flat(x, tv))
+      for (int f = 0; f < 4 && !open; f++) {
+        const tet_face key = face_of(tv, f);
+        const tet_face *hit = bsearch(&key, faces, 4 * (size_t)*nt, sizeof *faces, cmp_face);
+        const tet_face *end = faces + 4 * (size_t)*nt;
+        open = (hit == faces || cmp_face(hit - 1, hit)) && (hit + 1 == end || cmp_face(hit, hit + 1));
+      }
+    if (open) continue;
+    left += bs__tet_flat(x, tv);
+    memmove(tets + 4 * (size_t)n++, tv, 4 * sizeof *tets);
+  }
+  const int32_t removed = *nt - n;
+  *nt = n;
+  return removed ? left : -left;
+}
+
+/* The tets but the flat ones that lie on the boundary (a face in no other
+ * tet), removed in turn (a removal can bring another one to the boundary),
+ * into *kept (malloc'ed, *nk of them): a flat tet has no volume, and its
+ * other faces lie in the plane of the face it showed, so the body and its
+ * surface stay as they were. BS_EINPUT naming the count when flat tets are
+ * left inside (removing them would leave flat voids). */
+static int peel_flat_tets(const char *path, const double *x, int32_t nt, const int32_t *tets, int32_t **kept,
+                          int32_t *nk, bs_error *err) {
+  *kept = malloc(4 * ((size_t)nt + 1) * sizeof **kept);
+  tet_face *faces = malloc(4 * ((size_t)nt + 1) * sizeof *faces);
+  if (!*kept || !faces) {
+    free(*kept), free(faces), *kept = NULL;
+    return bs_error_set(err, BS_ENOMEM, "%s: out of memory for the flat tets", path);
+  }
+  memcpy(*kept, tets, 4 * (size_t)nt * sizeof **kept);
+  *nk = nt;
+  int32_t left;
+  while ((left = peel_pass(x, *kept, nk, faces)) > 0) {
+  }
+  free(faces);
+  if (left == 0) return BS_OK;
+  free(*kept), *kept = NULL;
+  return bs_error_set(err, BS_EINPUT, "%s: %d tets of zero volume lie inside the mesh, where neither CGAL's "
+                      "tetrahedral remeshing nor their removal can take them", path, -left);
+}
+
 /* The mesh of the raw tets, or, when one has zero volume, of their lift
- * (bs__tets_lift towards the default gate): a degenerate tet is remeshed,
- * never an error. */
+ * (bs__tets_lift towards the default gate), or when the remesher cannot
+ * take them (a boundary that pinches), of the tets but the flat ones on the
+ * boundary (peel_flat_tets): a degenerate tet is remeshed or removed, never
+ * the error (the mesh's other faults are found after: manifold.c, the
+ * gate). */
 static int create_or_lift(const char *path, int32_t nv, const double *x, int32_t nt, const int32_t *tets,
                           bs_mesh **out, bs_error *err) {
   int rc = bs_mesh_create(nv, x, nt, tets, 0, NULL, out, err);
@@ -119,7 +198,15 @@ static int create_or_lift(const char *path, int32_t nv, const double *x, int32_t
   bs_shim_tet_remesh_out r;
   bs_error e2;
   bs_error_clear(&e2);
-  if (bs__tets_lift(path, nv, x, nt, tets, NULL, 0.0, BS_MESH_MIN_DIHEDRAL, 1, &r, &e2)) return rc;
+  if (bs__tets_lift(path, nv, x, nt, tets, NULL, 0.0, BS_MESH_MIN_DIHEDRAL, 1, &r, &e2)) {
+    if (e2.code != BS_EINPUT || bs__budget_exceeded(&e2)) return *err = e2, e2.code;
+    int32_t *kept = NULL, nk = 0;
+    bs_error_clear(err);
+    if ((rc = peel_flat_tets(path, x, nt, tets, &kept, &nk, err))) return rc;
+    rc = bs_mesh_create(nv, x, nk, kept, 0, NULL, out, err);
+    free(kept);
+    return rc;
+  }
   if (r.n_vertices <= INT32_MAX && r.n_tets <= INT32_MAX)
     rc = bs_mesh_create((int32_t)r.n_vertices, r.x, (int32_t)r.n_tets, r.tets, 0, NULL, out, err);
   bs_shim_free(r.x), bs_shim_free(r.tets), bs_shim_free(r.subdomain);
@@ -267,7 +354,11 @@ static int mesh3_once(const char *path, const double *pts, int64_t np, const int
  * then -0.51% at h / 40), and where Mesh_3's perturber ends just under the
  * gate a finer surface can end over it (the cow at diagonal / 30: 5.73
  * degrees, then 10.0 and -0.38%). The passing mesh closest to the volume is
- * kept; when none passes, the first's message stands. */
+ * kept; when none passes, the first's message stands. A CAD part's mesh
+ * (its sharp edges kept, facet distance h / 10) that passes but is more
+ * than 1% off is meshed again the same way with facet distance h /
+ * scan_finer[k]: the chords' sag on its curved faces, which scales with the
+ * facet distance (pinion.off at D/25: -1.12%, then -0.33% at h / 40). */
 #define BS_MESH3_SCAN_VOLUME_TOL 0.01
 static const double scan_finer[] = {40.0, 55.0};
 
@@ -288,10 +379,11 @@ static int mesh3_path(const char *path, const double *pts, int64_t np, const int
   bs_shim_mesh3_opts o = mesh3_opts(h, diag, opts);
   int scan = 0;
   int rc = mesh3_once(path, pts, np, tris, nt, &o, opts, &scan, out, err);
-  if ((rc && rc != BS_EINPUT) || !scan || !(o.scan_facet_distance > 0) || !(volume > 0)) return rc;
+  if ((rc && rc != BS_EINPUT) || !(volume > 0) || (scan ? !(o.scan_facet_distance > 0) : rc != BS_OK)) return rc;
   double off = rc ? INFINITY : fabs(bs_mesh_volume(*out) - volume) / volume;
   for (size_t k = 0; k < sizeof scan_finer / sizeof *scan_finer && off > BS_MESH3_SCAN_VOLUME_TOL; k++) {
-    o.scan_facet_distance = h / scan_finer[k];
+    if (scan) o.scan_facet_distance = h / scan_finer[k];
+    else o.facet_distance = h / scan_finer[k];
     bs_mesh *fine = NULL;
     bs_error e2;
     bs_error_clear(&e2);

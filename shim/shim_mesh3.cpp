@@ -386,7 +386,8 @@ C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mes
                     P::cell_radius_edge_ratio = re, P::cell_size = field);
   C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd(),
                                       options);
-  if (watchdog.fired()) throw budget_exceeded{"during Mesh_3's refinement", c3t3.triangulation().number_of_vertices()};
+  if (watchdog.fired())
+    throw budget_exceeded{"during Mesh_3's refinement", c3t3.triangulation().number_of_vertices()};
   return c3t3;
 }
 

@@ -46,6 +46,28 @@ Test(mesh_lift, zero_volume_tet_is_remeshed_not_an_error) {
   bs_mesh_destroy(&m);
 }
 
+/* A tet, a flat tet on its face z = 0 (its fourth vertex in that plane, so
+ * three of its faces are on the boundary) and a second tet that touches the
+ * first at its apex only: the remesher refuses the pinch, so the flat tet is
+ * removed instead (the volume stays, no zero-volume error); the pinch is
+ * left for the manifold check (bs__boundary_manifold names it). */
+Test(mesh_lift, flat_boundary_tet_removed_when_the_remesher_cannot_take_the_mesh) {
+  static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 0, 0, 0, 2, 1, 0, 2, 0, 1, 2};
+  static const int32_t t[3 * 4] = {0, 1, 2, 3, 0, 1, 2, 4, 3, 5, 6, 7};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_expect_eq(bs_mesh_create(8, x, 3, t, 0, NULL, &m, &err), BS_EINPUT, "the flat tet is refused raw");
+  bs_mesh_destroy(&m);
+  bs_error_clear(&err);
+  cr_assert_eq(bs__mesh_default_groups("pinched", 8, x, 3, t, &m, &err), BS_OK, "%s", err.msg);
+  cr_expect_eq(m->n_tets, 2);
+  cr_expect_float_eq(bs_mesh_volume(m), 2.0 / 6.0, 1e-12);
+  cr_expect_eq(bs__boundary_manifold(m, "pinched", 0, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "1 vertices where two parts of the body touch") != NULL, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
+
 /* A box of 3 x 3 x 3 cells whose inner vertex (1, 1, 1) is pushed down to
  * z = 0.08, almost onto the bottom face: flat tets, far under the gate. The lift (boundary kept) passes the gate
  * with the same volume and the box's groups. */
@@ -76,6 +98,63 @@ Test(mesh_lift, slivers_lifted_groups_kept) {
   cr_expect_eq(bs_mesh_group(m, "xmin")->n_elems, xmin0, "the boundary triangles are kept");
   cr_expect_eq(bs_mesh_group(m, "body")->n_elems, m->n_tets);
   bs_mesh_destroy(&m);
+}
+
+/* A 5 x 5 x 2 box of unit cells with a square hole through it (the cells
+ * (2, 2, *) left out: a ring, its boundary a torus), Kuhn-split, its inner
+ * vertex (1, 1, 1) pushed down to z = 0.05: slivers. The remesher took only
+ * tets whose boundary is one sphere (the Euler relation of CGAL's validity
+ * check, which the shim asked of the whole triangulation): it refused this
+ * one ("not a valid triangulation"); it lifts it now, boundary kept. */
+Test(mesh_lift, a_part_with_a_hole_through_it_is_lifted) {
+  enum { N = 5, NZ = 2 };
+  double x[3 * (N + 1) * (N + 1) * (NZ + 1)];
+  int32_t t[4 * 6 * N * N * NZ], nt = 0;
+  static const int kuhn[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
+  for (int k = 0; k <= NZ; k++)
+    for (int j = 0; j <= N; j++)
+      for (int i = 0; i <= N; i++) {
+        double *p = x + 3 * (i + (N + 1) * (j + (N + 1) * k));
+        p[0] = i, p[1] = j, p[2] = (i == 1 && j == 1 && k == 1) ? 0.05 : k;
+      }
+  for (int k = 0; k < NZ; k++)
+    for (int j = 0; j < N; j++)
+      for (int i = 0; i < N; i++) {
+        if (i == 2 && j == 2) continue;
+        int32_t c[8];
+        for (int b = 0; b < 8; b++)
+          c[b] = (i + (b & 1)) + (N + 1) * ((j + (b >> 1 & 1)) + (N + 1) * (k + (b >> 2 & 1)));
+        for (int s = 0; s < 6; s++, nt++)
+          for (int a = 0; a < 4; a++) t[4 * nt + a] = c[kuhn[s][a]];
+      }
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs__mesh_default_groups("ring", (N + 1) * (N + 1) * (NZ + 1), x, nt, t, &m, &err), BS_OK, "%s",
+               err.msg);
+  bs_mesh_quality q0, q1;
+  bs_mesh_quality_compute(m, NULL, &q0);
+  cr_assert_eq(bs__mesh_lift("ring", &m, 1.0, BS_MESH_MIN_DIHEDRAL, &err), BS_OK, "%s", err.msg);
+  bs_mesh_quality_compute(m, NULL, &q1);
+  cr_log_info("ring with slivers: min dihedral %.2f -> %.2f, %d tets", q0.dihedral_min, q1.dihedral_min, m->n_tets);
+  cr_expect_lt(q0.dihedral_min, 5.0);
+  cr_expect_geq(q1.dihedral_min, BS_MESH_MIN_DIHEDRAL);
+  cr_expect_float_eq(bs_mesh_volume(m), N * N * NZ - NZ, 1e-9);
+  cr_expect_eq(bs_mesh_check(m, &err), BS_OK, "%s", err.msg);
+  bs_mesh_destroy(&m);
+}
+
+/* Two tets that touch at one vertex only are still refused by name. */
+Test(mesh_lift, tets_touching_at_a_vertex_are_refused) {
+  static const double x[7 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 2, 1, 0, 2, 0, 1, 2};
+  static const int32_t t[2 * 4] = {0, 1, 2, 3, 3, 4, 5, 6};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_shim_tet_remesh_opts o = {.size = 1, .target_dihedral = 60};
+  bs_shim_tet_remesh_out r;
+  cr_expect_eq(bs_shim_tet_remesh("pinch", x, 7, t, 2, NULL, &o, &r, &err), BS_EINPUT);
+  cr_expect(strstr(err.msg, "not form a valid triangulation") != NULL, "%s", err.msg);
+  cr_expect_null(r.x);
 }
 
 /* ---- an edge collapse whose stars are not a ball ------------------------ */
@@ -371,9 +450,9 @@ Test(mesh_lift, time_budget_stops_mesh3_refinement) {
   const double g = (1 + sqrt(5.0)) / 2, r = 1 / sqrt(1 + g * g);
   const double x[12 * 3] = {-r, g * r, 0, r, g * r, 0, -r, -g * r, 0, r, -g * r, 0, 0, -r, g * r, 0, r, g * r,
                             0, -r, -g * r, 0, r, -g * r, g * r, 0, -r, g * r, 0, r, -g * r, 0, -r, -g * r, 0, r};
-  static const int32_t t[20 * 3] = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
-                                    7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10,
-                                    8, 6, 7, 9, 8, 1};
+  static const int32_t t[20 * 3] = {0, 11, 5, 0, 5, 1,  0, 1, 7,  0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
+                                    11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2,   3, 2, 6,   3, 6, 8, 3, 8, 9,
+                                    4, 9, 5,  2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
   bs_error err;
   bs_error_clear(&err);
   bs_shim_mesh3_opts o = {.size = 0.02, .deadline = bs_seconds() + 0.3};
@@ -393,8 +472,31 @@ Test(mesh_lift, time_budget_stops_mesh3_refinement) {
  * balls without end (528 s, millions of balls, past a 20 s budget: CGAL
  * checks no stop flag there); the surface is meshed as a smooth one
  * instead. */
-static const double mpi_x[27 * 3] = {-10.0402, -10.0402, -10.0402, -10, 10, 10, 10, 10, 10, -9.9999199999999995, 10.040100000000001, -9.9999199999999995, -1.9999866667293342, 10.010683303213094, 4.6666799664602578, -1.1410339540811094, 3.3261159707677077, 6.8871644837482933, -7.337029247025991, 3.7408533525438634, 7.3747364897239311, -6.0192422547121467, -6.0048964457634879, 8.0205019087228919, -10.007999999999999, 6.0240600000000004, 5.0200500000000003, -6.0240600000000004, -10.012, 4.0160400000000003, -10.013999999999999, 0, 3.0120300000000002, 10, 6, 10, 10.02, 0, -1.9999899999999999, -10.02, 0, -2.0080200000000001, -6.0116300000000003, -2.0038800000000001, 0.33143699999999998, -10.0219, -0.92678099999999997, -0.92678099999999997, -9.9999400000000005, -6.0172100000000004, 10.0321, -9.9999800000000008, 5.9965700000000002, 10.007999999999999, -6.0240499999999999, -9.9999400000000005, 10.0321, -9.9999199999999995, -9.9999199999999995, 10.040100000000001, 10.0219, -0.92307300000000003, -0.92307300000000003, 10.019399999999999, -2.00387, 0.33785900000000002, -5.9999599999999997, 10.0321, -5.9999599999999997, -5.9999599999999997, 10.0321, -9.9999400000000005, -10.007999999999999, 6.0240600000000004, -10.007999999999999, -6.0192600000000001, -6.0192600000000001, 10.0321, 10, 10, -10};
-static const int32_t mpi_t[50 * 3] = {0, 19, 16, 16, 10, 0, 10, 17, 0, 0, 17, 1, 0, 1, 15, 23, 22, 13, 24, 23, 13, 26, 12, 22, 12, 13, 22, 8, 24, 13, 2, 26, 4, 0, 9, 18, 0, 18, 19, 22, 4, 26, 1, 17, 4, 5, 11, 4, 17, 5, 4, 25, 7, 6, 21, 5, 14, 5, 7, 14, 9, 14, 7, 5, 6, 7, 17, 10, 6, 4, 22, 1, 2, 4, 11, 16, 25, 6, 15, 13, 12, 15, 12, 20, 15, 20, 21, 15, 21, 14, 11, 5, 21, 6, 5, 17, 16, 6, 10, 18, 7, 25, 24, 8, 3, 3, 8, 1, 1, 8, 15, 8, 13, 15, 7, 18, 9, 3, 22, 23, 24, 3, 23, 26, 20, 12, 26, 2, 20, 1, 22, 3, 11, 20, 2, 11, 21, 20, 14, 9, 0, 15, 14, 0, 19, 18, 25, 16, 19, 25};
+static const double mpi_x[27 * 3] = {
+    -10.0402, -10.0402, -10.0402, -10, 10, 10, 10, 10, 10,
+    -9.9999199999999995, 10.040100000000001, -9.9999199999999995,
+    -1.9999866667293342, 10.010683303213094, 4.6666799664602578,
+    -1.1410339540811094, 3.3261159707677077, 6.8871644837482933,
+    -7.337029247025991, 3.7408533525438634, 7.3747364897239311,
+    -6.0192422547121467, -6.0048964457634879, 8.0205019087228919,
+    -10.007999999999999, 6.0240600000000004, 5.0200500000000003, -6.0240600000000004, -10.012, 4.0160400000000003,
+    -10.013999999999999, 0, 3.0120300000000002, 10, 6, 10, 10.02, 0, -1.9999899999999999,
+    -10.02, 0, -2.0080200000000001, -6.0116300000000003, -2.0038800000000001, 0.33143699999999998,
+    -10.0219, -0.92678099999999997, -0.92678099999999997, -9.9999400000000005, -6.0172100000000004, 10.0321,
+    -9.9999800000000008, 5.9965700000000002, 10.007999999999999, -6.0240499999999999, -9.9999400000000005, 10.0321,
+    -9.9999199999999995, -9.9999199999999995, 10.040100000000001,
+    10.0219, -0.92307300000000003, -0.92307300000000003, 10.019399999999999, -2.00387, 0.33785900000000002,
+    -5.9999599999999997, 10.0321, -5.9999599999999997, -5.9999599999999997, 10.0321, -9.9999400000000005,
+    -10.007999999999999, 6.0240600000000004, -10.007999999999999, -6.0192600000000001, -6.0192600000000001, 10.0321,
+    10, 10, -10
+};
+static const int32_t mpi_t[50 * 3] = {
+    0, 19, 16, 16, 10, 0, 10, 17, 0, 0, 17, 1, 0, 1, 15, 23, 22, 13, 24, 23, 13, 26, 12, 22, 12, 13, 22, 8, 24, 13,
+    2, 26, 4, 0, 9, 18, 0, 18, 19, 22, 4, 26, 1, 17, 4, 5, 11, 4, 17, 5, 4, 25, 7, 6, 21, 5, 14, 5, 7, 14, 9, 14, 7,
+    5, 6, 7, 17, 10, 6, 4, 22, 1, 2, 4, 11, 16, 25, 6, 15, 13, 12, 15, 12, 20, 15, 20, 21, 15, 21, 14, 11, 5, 21,
+    6, 5, 17, 16, 6, 10, 18, 7, 25, 24, 8, 3, 3, 8, 1, 1, 8, 15, 8, 13, 15, 7, 18, 9, 3, 22, 23, 24, 3, 23,
+    26, 20, 12, 26, 2, 20, 1, 22, 3, 11, 20, 2, 11, 21, 20, 14, 9, 0, 15, 14, 0, 19, 18, 25, 16, 19, 25
+};
 
 Test(mesh_lift, sharp_edges_at_a_hairline_corner_are_not_protected) {
   bs_error err;
