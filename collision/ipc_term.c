@@ -404,18 +404,25 @@ static int append(int32_t **list, int64_t *len, int64_t *cap, const int32_t *q, 
  * (lo, hi): the edge-edge pairs of the edges f owns, through the CCD. */
 static void ccd_edges(ipc_data *d, int32_t f, const double lo[3], const double hi[3], int64_t ne, tbuf *b) {
   const double *X0 = d->X2, *X1 = d->X2 + 3 * (size_t)d->nv;
-  for (int64_t j = 0; j < ne; j++) {
+  int32_t own[3], n_own = 0;
+  double alo[3][3], ahi[3][3];
+  for (int k = 0; k < 3; k++) {
+    const int32_t ea = d->face_edge[3 * (size_t)f + k], *EA = d->edges + 2 * (size_t)ea;
+    if (d->owner[ea] != f) continue;
+    box4(X0 + 3 * (size_t)EA[0], X0 + 3 * (size_t)EA[1], X1 + 3 * (size_t)EA[0], X1 + 3 * (size_t)EA[1],
+         alo[n_own], ahi[n_own]);
+    own[n_own++] = ea;
+  }
+  for (int64_t j = 0; j < ne && n_own > 0; j++) {
     const int32_t eb = b->qe[j], *EB = d->edges + 2 * (size_t)eb;
     double blo[3], bhi[3];
     box4(X0 + 3 * (size_t)EB[0], X0 + 3 * (size_t)EB[1], X1 + 3 * (size_t)EB[0], X1 + 3 * (size_t)EB[1], blo, bhi);
     if (!boxes_meet(blo, bhi, lo, hi)) continue;
-    for (int k = 0; k < 3; k++) {
-      const int32_t ea = d->face_edge[3 * (size_t)f + k], *EA = d->edges + 2 * (size_t)ea;
-      if (d->owner[ea] != f || eb <= ea || has_vertex(EA, 2, EB[0]) || has_vertex(EA, 2, EB[1])) continue;
-      double alo[3], ahi[3];
-      box4(X0 + 3 * (size_t)EA[0], X0 + 3 * (size_t)EA[1], X1 + 3 * (size_t)EA[0], X1 + 3 * (size_t)EA[1], alo, ahi);
+    for (int k = 0; k < n_own; k++) {
+      const int32_t ea = own[k], *EA = d->edges + 2 * (size_t)ea;
+      if (eb <= ea || has_vertex(EA, 2, EB[0]) || has_vertex(EA, 2, EB[1])) continue;
       const int32_t pv[4] = {EA[0], EA[1], EB[0], EB[1]};
-      if (boxes_meet(alo, ahi, blo, bhi)) ccd_pair(d, pv, 1, b);
+      if (boxes_meet(alo[k], ahi[k], blo, bhi)) ccd_pair(d, pv, 1, b);
     }
   }
 }

@@ -403,11 +403,13 @@ static void hook_register(const double *x, const double *g, void *ctx) {
 
 static void obj_trace(const bs_min_iter *it, void *ctx) {
   bs_integrator *I = ctx;
-  char kept[32] = "";
+  char kept[32] = "", bound[32] = "";
   if (it->lin_downhill_iterate > 0) snprintf(kept, sizeof kept, " (iterate %d)", it->lin_downhill_iterate);
-  fprintf(I->opts.trace, "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s%s  alpha %.4g (%d trials)%s\n",
+  if (it->alpha_bound < 1) snprintf(bound, sizeof bound, " bound %.4g", it->alpha_bound);
+  fprintf(I->opts.trace,
+          "  iteration %d: |grad E| %.6e  E %.12e -> %.12e  krylov %d%s%s%s  alpha %.4g (%d trials)%s%s\n",
           it->iteration, it->grad_norm, it->phi0, it->phi, it->lin_iterations, it->lin_indefinite ? " (indefinite)" : "",
-          kept, it->convexified ? " (convexified)" : "", it->alpha, it->ls_evaluations,
+          kept, it->convexified ? " (convexified)" : "", it->alpha, it->ls_evaluations, bound,
           it->direction != BS_DIR_NEWTON ? (it->direction == BS_DIR_NEG_DX ? " fallback -dx" : " fallback -g") : "");
   fflush(I->opts.trace);
 }
