@@ -111,10 +111,25 @@ static int keep_first(bs_error *err, const bs_error *second) {
   return BS_EINPUT;
 }
 
+/* The mean thickness 2 V / A of a (volume over boundary area). */
+static double mean_thickness(const bs_mesh *a) {
+  double area = 0;
+  for (int32_t f = 0; f < a->n_faces; f++) {
+    const double *p = a->x + 3 * (size_t)a->faces[3 * (size_t)f], *q = a->x + 3 * (size_t)a->faces[3 * (size_t)f + 1],
+                 *r = a->x + 3 * (size_t)a->faces[3 * (size_t)f + 2];
+    const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    area += 0.5 * sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  }
+  return area > 0 ? 2 * bs_mesh_volume(a) / area : 0.0;
+}
+
 int bs__mesh_cad_by_surface(const char *path, bs_mesh **m, double h, const bs_mesh_read_opts *opts, bs_error *err) {
   const bs_mesh *a = *m;
   if (!carriable(a)) return BS_EINPUT;
   if (!(h > 0)) h = bs__mean_tet_edge(a->x, a->n_tets, a->tets);
+  /* a part much thinner than h (a plate): Mesh_3's protection of its edges takes minutes, for nothing */
+  if (mean_thickness(a) < BS_FROM_BOUNDARY_MIN_THICKNESS * h) return BS_EINPUT;
   bs_mesh *b = NULL, *c = NULL;
   bs_error e2;
   bs_error_clear(&e2);

@@ -963,10 +963,11 @@ int bs__gmsh_surface_volume(const char *path, const double *pts, int64_t np, con
  * (bs__mesh_lift at size, <= 0: the mean edge length; its groups kept);
  * BS_OK when the lift passes the gate, else BS_EINPUT with the gate's
  * first message (the budget's when spent). */
-static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs_error *err) {
+static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, int *refused, bs_error *err) {
   bs_error e2;
   bs_error_clear(&e2);
   int rc = bs__mesh_lift(path, m, size, gate, &e2);
+  *refused = rc == BS_EINPUT && !bs__budget_exceeded(&e2);
   if (rc) {
     if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
     return rc;
@@ -977,10 +978,11 @@ static int lift_gmsh(const char *path, bs_mesh **m, double size, double gate, bs
 }
 
 /* lift_gmsh, then for a geometry still under the gate its boundary meshed
- * again by CGAL's surface path, groups kept (bs__mesh_cad_by_surface). */
+ * again by CGAL's surface path, groups kept (bs__mesh_cad_by_surface, which
+ * declines parts much thinner than the size). */
 static int lift_or_from_boundary(const char *path, bs_mesh **m, double size, double gate, int geometry,
                                  const bs_mesh_read_opts *opts, bs_error *err) {
-  int rc = lift_gmsh(path, m, size, gate, err);
+  int refused = 0, rc = lift_gmsh(path, m, size, gate, &refused, err);
   if (rc == BS_EINPUT && geometry && !bs__budget_exceeded(err)) rc = bs__mesh_cad_by_surface(path, m, size, opts, err);
   return rc;
 }

@@ -248,11 +248,14 @@ double bs__mean_tet_edge(const double *x, int32_t nt, const int32_t *tets);
  * gate's message) and could not be lifted, meshed again from its boundary
  * by bs__mesh_closed_surface at h (<= 0: the mean tet edge), its groups
  * carried over (one 3-D group; 2-D groups by the closest old boundary
- * triangle), its volume within BS_FROM_BOUNDARY_VOLUME_TOL of *m's. BS_OK with *m replaced; BS_EINPUT with err untouched when the
+ * triangle), its volume within BS_FROM_BOUNDARY_VOLUME_TOL of *m's; not
+ * tried (BS_EINPUT, err untouched) on a part whose mean thickness 2V/A is
+ * under BS_FROM_BOUNDARY_MIN_THICKNESS h. BS_OK with *m replaced; BS_EINPUT with err untouched when the
  * groups cannot be carried (several 3-D groups, 0-D or 1-D groups, faces in
  * two 2-D groups), or with the surface path's message appended to err;
  * the budget's error or BS_ENOMEM as they are. */
 #define BS_FROM_BOUNDARY_VOLUME_TOL 0.01
+#define BS_FROM_BOUNDARY_MIN_THICKNESS 0.25 /* mean thickness 2V/A over h below which it is not tried */
 int bs__mesh_cad_by_surface(const char *path, bs_mesh **m, double h, const bs_mesh_read_opts *opts, bs_error *err);
 /* tet_lift.c: appends "; CGAL's tetrahedral remeshing of it reached D
  * degrees" (m's smallest angle) to the gate's message in err; BS_EINPUT. */
