@@ -271,7 +271,7 @@ static bs_ipc_pair *pairs_at(bs_term *t, const double *y, int64_t *n) {
   bs_error err = {0};
   cr_assert_eq(bs_term_ipc_pairs(t, y, &p, n, &err), 0, "%s", err.msg);
   bs_ipc_pair *c = malloc(sizeof *c * (size_t)(*n + 1));
-  memcpy(c, p, sizeof *c * (size_t)*n);
+  if (*n) memcpy(c, p, sizeof *c * (size_t)*n); /* p may be NULL when there are none */
   return c;
 }
 
