@@ -88,6 +88,14 @@ static void element(const bs_sim *s, int32_t t, double X[30], bs_tet10_rest *r) 
   cr_assert_eq(bs_tet10_rest_init(X, BS_TET10_RULE_14PT_DEG5, r, &err), 0, "%s", err.msg);
 }
 
+/* Quadrature point q of the element with nodes X: its shape values N and
+ * its position p in the cube's coordinates (lo its corner). */
+static void point(const bs_tet10_rule *R, int q, const double X[30], const double lo[3], double N[10], double p[3]) {
+  bs_tet10_shape(R->xi[q], N);
+  bs_tet10_map(X, R->xi[q], p);
+  for (int i = 0; i < 3; i++) p[i] -= lo[i];
+}
+
 static void consistent_load(const bs_sim *s, const double lo[3], double *f) {
   const bs_tet10_rule *R = bs_tet10_rule_get(BS_TET10_RULE_14PT_DEG5);
   for (int32_t t = 0; t < s->mesh->n_tets; t++) {
@@ -95,9 +103,7 @@ static void consistent_load(const bs_sim *s, const double lo[3], double *f) {
     bs_tet10_rest r;
     element(s, t, X, &r);
     for (int q = 0; q < R->n_points; q++) {
-      bs_tet10_shape(R->xi[q], N);
-      bs_tet10_map(X, R->xi[q], p);
-      for (int i = 0; i < 3; i++) p[i] -= lo[i];
+      point(R, q, X, lo, N, p);
       body_force(p, b);
       for (int a = 0; a < 10; a++)
         for (int i = 0; i < 3; i++) f[3 * (size_t)s->mesh->tets10[10 * t + a] + i] += r.wdetJ[q] * N[a] * b[i];
@@ -114,9 +120,7 @@ static double l2_error(const bs_sim *s, const double lo[3], double *norm_u) {
     bs_tet10_rest r;
     element(s, t, X, &r);
     for (int q = 0; q < R->n_points; q++) {
-      bs_tet10_shape(R->xi[q], N);
-      bs_tet10_map(X, R->xi[q], p);
-      for (int i = 0; i < 3; i++) p[i] -= lo[i];
+      point(R, q, X, lo, N, p);
       const double ph = phi_hess(p, H);
       for (int i = 0; i < 3; i++) {
         double uh = 0;
