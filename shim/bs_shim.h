@@ -592,8 +592,9 @@ typedef struct bs_shim_tet_remesh_out {
  * subdomain subdomain[t] >= 1 (NULL: all 1; the faces between subdomains are
  * kept as boundaries are, and every output tet gets its subdomain) with
  * CGAL::tetrahedral_isotropic_remeshing at opts->size, one iteration per
- * round, until the smallest dihedral angle reaches opts->target_dihedral or
- * opts->iterations rounds have run; the round with the largest smallest
+ * round, until the smallest dihedral angle reaches opts->target_dihedral,
+ * opts->iterations rounds have run, or two rounds in a row have not raised
+ * it; the round with the largest smallest
  * angle is returned (the input itself when none improves it). Deterministic;
  * sequential. `name` starts every message. Errors: BS_EINPUT (empty, an
  * index out of range, size <= 0, tets that are not a valid triangulation: a

@@ -71,6 +71,18 @@ Test(mesh_surface, camel_under_the_gate_meshed_again_inside_its_boundary) {
   mesh_checked_with("data/corpus/cgal/camel.off", 40, BS_SURFACE_CGAL, 0.01, 0.75);
 }
 
+/* At diagonal / 50 (the mesher auto): Mesh_3's first mesh is under the
+ * gate (7.07 degrees, and after HXT inside its boundary); the tetrahedral
+ * remeshing does not lift it (2 rounds of each protection, no gain); made
+ * again with facet distance h / 40 its complex had 7 cavities (2 to 52
+ * cells) in a 3 mm sheet on the head, now filled (a one-piece surface
+ * encloses no void), and HXT inside that boundary meets the gate.
+ * Measured: 129.5k tets, 10.02 degrees, volume -0.49%, Hausdorff 0.31 h
+ * (before: the remesh path, 2.67% short). */
+Test(mesh_surface, camel_at_diagonal_50_meshed_again_finer_when_mesh3_misses_the_gate) {
+  mesh_checked_with("data/corpus/cgal/camel.off", 50, BS_SURFACE_AUTO, 0.01, 0.5);
+}
+
 /* The elk (7 self-intersecting pairs, removed locally) at diagonal / 40:
  * Mesh_3 with the scan criteria passes the gate 1.06% short of the volume
  * (28.8k tets, 10.02 degrees); meshed again with facet distance h / 40 it

@@ -216,31 +216,6 @@ Test(surface_repair, camel_self_intersections_autorefined) {
   bs_mesh_destroy(&m);
 }
 
-/* At a size, with the gate (the mesher auto): the repaired camel at
- * diagonal / 50 is under the gate through Mesh_3 (7.07 degrees, and after
- * HXT inside its boundary); made again with facet distance h / 40 its
- * complex had 7 cavities (2 to 52 cells) in a 3 mm sheet on the head, now
- * filled (a one-piece surface encloses no void), and HXT inside that
- * boundary meets the gate. Measured: 129.5k tets, 10.02 degrees, volume
- * -0.49%, Hausdorff 0.31 h (before: the remesh path, 2.67% short). */
-Test(surface_repair, camel_at_a_size_meshed_again_finer_when_mesh3_misses_the_gate) {
-  const double h = 1.43211 / 50; /* the camel's bounding-box diagonal / 50 */
-  bs_surface_report r;
-  bs_mesh_read_opts o = {.size = h, .report = &r};
-  bs_mesh *m = NULL;
-  bs_error err = {0};
-  const char *path = corpus("camel.off");
-  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
-  bs_mesh_quality q;
-  bs_mesh_quality_compute(m, NULL, &q);
-  cr_expect_eq(q.n_inverted, 0);
-  cr_expect_geq(q.dihedral_min, 10.0, "%.3f degrees", q.dihedral_min);
-  cr_expect_eq(bs__boundary_manifold(m, path, 1, &err), BS_OK, "%s", err.msg);
-  cr_expect(fabs(bs_mesh_volume(m) - r.volume) <= 0.01 * r.volume, "tets %.9g, surface %.9g", bs_mesh_volume(m),
-            r.volume);
-  bs_mesh_destroy(&m);
-}
-
 /* Gmsh refused the cow after the local removal ("overlapping facets") until
  * the folds it leaves were cut out and re-filled. */
 Test(surface_repair, cow_folds_refilled) {
