@@ -27,7 +27,7 @@ static const char *mesh_help =
     "                 surface given none gets one chosen from its bounding box,\n"
     "                 printed as 'size chosen')\n"
     "  --time-budget S  stop meshing after S seconds with an error naming the\n"
-    "                 budget (default: none)\n"
+    "                 budget (default 600; 0: none)\n"
     "  --json         info: print the report as one JSON object (quality, gate,\n"
     "                 and for a surface its volume change and Hausdorff distance)\n"
     "  --min-dihedral DEG  quality gate for the meshes bigstep makes (not .msh):\n"
@@ -107,7 +107,7 @@ typedef struct mesh_args {
   const char *pos[2]; /* FILE, or IN and OUT */
   int npos;
   double size, min_dihedral; /* min_dihedral: < 0 none, 0 default */
-  double time_budget;        /* seconds, 0: none */
+  double time_budget;        /* seconds; 0: BS_MESH_TIME_BUDGET, < 0: none */
   int refine, levels, have_order, merge, close_holes, mesher, json; /* mesher: BS_SURFACE_* */
   int element_order; /* --order: 1 (linear) or 2 (quadratic tets) */
   double max_hole;
@@ -125,8 +125,9 @@ static int parse_flag(mesh_args *a, const char *flag, const char *val) {
       return bs_app_usage_error("mesh", "--min-dihedral must be a number of degrees in [0, 70.5), got '%s'", val);
     if (a->min_dihedral == 0) a->min_dihedral = -1; /* no gate */
   } else if (!strcmp(flag, "--time-budget")) {
-    if (bs_parse_double(val, &a->time_budget) || !(a->time_budget > 0))
-      return bs_app_usage_error("mesh", "--time-budget must be a positive number of seconds, got '%s'", val);
+    if (bs_parse_double(val, &a->time_budget) || !(a->time_budget >= 0))
+      return bs_app_usage_error("mesh", "--time-budget must be a number of seconds >= 0 (0: none), got '%s'", val);
+    if (a->time_budget == 0) a->time_budget = -1; /* no budget */
   } else if (!strcmp(flag, "--mesher")) {
     if (bs_mesh_parse_mesher(val, &a->mesher))
       return bs_app_usage_error("mesh", "--mesher must be auto, cgal or remesh, got '%s'", val);

@@ -160,13 +160,16 @@ typedef struct bs_mesh_read_opts {
                     is remeshed to pass the gate or refined. 0 or 1: linear */
   double time_budget; /* seconds of wall time bs_mesh_read may spend
                     making a mesh (> 0), checked between its stages and
-                    inside the CGAL loops that allow it (alpha wrap,
-                    tetrahedral remeshing); past it the read stops with
-                    BS_EINPUT "... the meshing time budget of B s ... was
-                    exceeded ..." naming the stage. <= 0: no budget     */
+                    inside the CGAL loops that allow it (Mesh_3, alpha
+                    wrap, tetrahedral remeshing); past it the read stops
+                    with BS_EINPUT "... the meshing time budget of B s ...
+                    was exceeded ..." naming the stage. 0: the default,
+                    BS_MESH_TIME_BUDGET; < 0: no budget                 */
 } bs_mesh_read_opts;
 
 #define BS_MESH_MIN_DIHEDRAL 10.0
+/* The meshing time budget when none is given (s): no read runs unbounded. */
+#define BS_MESH_TIME_BUDGET 600.0
 #define BS_MESH_FEATURE_ANGLE 60.0
 enum { BS_SURFACE_AUTO = 0, BS_SURFACE_GMSH = 1, BS_SURFACE_REMESH = 2, BS_SURFACE_CGAL = 3 };
 /* The mesher named by s ("auto", "cgal" or "remesh": the --mesher option and
@@ -200,10 +203,6 @@ double bs_mesh_max_tets(const bs_mesh_read_opts *opts);
  * its alpha wrap at the size (mesh/surface_wrap.c, the rule in bs_shim.h),
  * held to the wrap's volume check; what was done goes to *opts->report.
  * opts->time_budget bounds the whole (mesh/mesh_budget.c). Only
- * 4-node tets are simulated: other 3-D elements are an error naming their
- * type and count. opts may be NULL (defaults).
- * kept, optimised: surface_mesh.c), with size <= 0 by Gmsh on the surface's
- * own triangles. Meshes bigstep makes are held to opts->min_dihedral. Only
  * 4-node tets, or 10-node tets alone (read as their corners' linear mesh and
  * the midside list above; groups' 6-node triangles and 3-node lines as their
  * corners), are read: other 3-D elements are an error naming their type and

@@ -33,7 +33,8 @@ static _Thread_local struct bs_surface_report *report_;
 
 void bs__budget_begin(const bs_mesh_read_opts *opts) {
   report_ = opts ? opts->report : NULL;
-  const double b = opts ? opts->time_budget : 0.0;
+  double b = opts ? opts->time_budget : 0.0;
+  if (b == 0) b = BS_MESH_TIME_BUDGET;
   budget_ = b > 0 && isfinite(b) ? b : 0.0;
   deadline_ = budget_ > 0 ? bs_seconds() + budget_ : 0.0;
 }

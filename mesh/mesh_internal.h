@@ -185,8 +185,9 @@ int bs__gmsh_optimize_to_gate(const char *path, double gate, double *achieved, b
 double bs__mesh_gate(const bs_mesh_read_opts *opts);
 
 /* mesh_budget.c: the meshing time budget (bs_mesh_read_opts.time_budget)
- * of this thread's bs_mesh_read. bs__budget_begin starts it (none when
- * opts->time_budget <= 0), bs__budget_end clears it. bs__budget_deadline:
+ * of this thread's bs_mesh_read. bs__budget_begin starts it
+ * (BS_MESH_TIME_BUDGET when opts->time_budget is 0, none when it is < 0),
+ * bs__budget_end clears it. bs__budget_deadline:
  * the bs_seconds() time it ends (0: none), for the shim's loops.
  * bs__budget_check: BS_OK, or BS_EINPUT "<path>: the meshing time budget of
  * B s (...) was exceeded before <stage>" once past it. bs__budget_exceeded:

@@ -420,6 +420,26 @@ Test(mesh_lift, time_budget_gives_the_named_error) {
   unlink(path);
 }
 
+/* No budget given is the default one (no read runs unbounded); a negative
+ * one is none. */
+Test(mesh_lift, time_budget_default_and_none) {
+  bs_mesh_read_opts o = {0};
+  const double t0 = bs_seconds();
+  bs__budget_begin(&o);
+  const double d = bs__budget_deadline();
+  bs__budget_end();
+  cr_expect(d >= t0 + BS_MESH_TIME_BUDGET && d <= bs_seconds() + BS_MESH_TIME_BUDGET, "deadline %.3f, now %.3f", d,
+            bs_seconds());
+  o.time_budget = -1;
+  bs__budget_begin(&o);
+  cr_expect_eq(bs__budget_deadline(), 0.0, "a negative budget is none");
+  bs__budget_end();
+  o.time_budget = 5;
+  bs__budget_begin(&o);
+  cr_expect_leq(bs__budget_deadline(), bs_seconds() + 5);
+  bs__budget_end();
+}
+
 /* A budget that runs out while the volume is meshed (Mesh_3's refinement,
  * then its optimisers, which get the time left): the read ends with the
  * budget's error, whichever stage it ran out in. */
