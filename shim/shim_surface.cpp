@@ -5,13 +5,21 @@
 // .stl and .ts through CGAL::IO::read_polygon_soup, after shim_surface_check
 // has checked a .stl's or .ply's counts against the file's size (see
 // shim_soup.hpp for what CGAL's readers would do otherwise). Polygons of
-// k > 3 vertices are split into the k - 2 triangles of a fan from their first
-// vertex (exact for the convex, planar faces that OFF/OBJ/PLY writers emit).
+// k > 3 vertices are split into k - 2 triangles on their own vertices: a fan
+// from the first vertex when the polygon is convex (every turn the same way
+// about its Newell normal), else the triangulation of the polygon as a
+// polyline that CGAL's hole filling finds (Liepa's dynamic programme, worst
+// dihedral angle first, then area: a triangle outside a planar non-convex
+// polygon folds back onto the others, the worst angle there is, so none is
+// chosen). A fan of an L-shaped hexagon has a triangle outside it, which
+// overlaps the faces next to it (corner_poly.off: 12 intersecting pairs, and
+// a repaired surface that Mesh_3 pinched).
 //
 // Every entry point catches every exception; nothing is printed (the readers
 // run with verbose = false).
 
 #include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 
 #include <algorithm>
 #include <cctype>
@@ -30,6 +38,7 @@
 
 namespace {
 
+using bs_shim::Kernel;
 using bs_shim::Point;
 using bs_shim::Polygon;
 
@@ -46,6 +55,52 @@ int read_soup(const char *path, const std::string &ext, std::vector<Point> &poin
   bool ok = CGAL::IO::read_polygon_soup(std::string(path), points, polygons, CGAL::parameters::verbose(false));
   if (!ok) return bs_error_set(err, BS_EINPUT, "%s: CGAL could not read the file as .%s", path, ext.c_str());
   return BS_OK;
+}
+
+// Polygons of more vertices than this that are not convex are split as fans
+// all the same: the hole filling is cubic in the vertex count.
+constexpr std::size_t MAX_FILLED_POLYGON = 256;
+
+// Whether poly turns the same way at every vertex about its Newell normal.
+bool convex(const std::vector<Point> &pts, const Polygon &poly) {
+  const std::size_t k = poly.size();
+  double n[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < k; i++) {
+    const Point &a = pts[poly[i]], &b = pts[poly[(i + 1) % k]];
+    n[0] += (a.y() - b.y()) * (a.z() + b.z());
+    n[1] += (a.z() - b.z()) * (a.x() + b.x());
+    n[2] += (a.x() - b.x()) * (a.y() + b.y());
+  }
+  for (std::size_t i = 0; i < k; i++) {
+    const Point &a = pts[poly[i]], &b = pts[poly[(i + 1) % k]], &c = pts[poly[(i + 2) % k]];
+    const Kernel::Vector_3 t = CGAL::cross_product(b - a, c - b);
+    if (t.x() * n[0] + t.y() * n[1] + t.z() * n[2] < 0) return false;
+  }
+  return true;
+}
+
+// The k - 2 triangles of poly (k vertices) into t, 3 indices each.
+void split_polygon(const std::vector<Point> &pts, const Polygon &poly, int32_t *t) {
+  const std::size_t k = poly.size();
+  if (k > 3 && k <= MAX_FILLED_POLYGON && !convex(pts, poly)) {
+    std::vector<Point> line;
+    for (std::size_t v : poly) line.push_back(pts[v]);
+    std::vector<CGAL::Triple<int, int, int>> tris;
+    CGAL::Polygon_mesh_processing::triangulate_hole_polyline(line, std::back_inserter(tris));
+    if (tris.size() == k - 2) {
+      for (std::size_t j = 0; j < tris.size(); j++) {
+        t[3 * j + 0] = (int32_t)poly[(std::size_t)tris[j].first];
+        t[3 * j + 1] = (int32_t)poly[(std::size_t)tris[j].second];
+        t[3 * j + 2] = (int32_t)poly[(std::size_t)tris[j].third];
+      }
+      return;
+    }
+  }
+  for (std::size_t j = 1; j + 1 < k; j++) { // fan (v0, vj, vj+1)
+    t[3 * (j - 1) + 0] = (int32_t)poly[0];
+    t[3 * (j - 1) + 1] = (int32_t)poly[j];
+    t[3 * (j - 1) + 2] = (int32_t)poly[j + 1];
+  }
 }
 
 std::string lower_extension(const char *path) {
@@ -115,13 +170,10 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
     x[3 * i + 2] = points[i].z();
   }
   std::size_t k = 0;
-  for (const Polygon &poly : polygons)
-    for (std::size_t j = 1; j + 1 < poly.size(); j++) { // fan (v0, vj, vj+1)
-      t[3 * k + 0] = (int32_t)poly[0];
-      t[3 * k + 1] = (int32_t)poly[j];
-      t[3 * k + 2] = (int32_t)poly[j + 1];
-      k++;
-    }
+  for (const Polygon &poly : polygons) {
+    split_polygon(points, poly, t + 3 * k);
+    k += poly.size() - 2;
+  }
   *points_out = x;
   *n_points_out = (int64_t)points.size();
   *tris_out = t;
