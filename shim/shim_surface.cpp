@@ -156,6 +156,12 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
     return bs_error_set(err, BS_EINPUT, "%s: %zu triangles exceed bigstep's limit of %ld", path, n_tris,
                         (long)BS_MAX_SURFACE_FACES);
 
+  std::vector<int32_t> split(3 * n_tris); // before the C arrays: nothing to free if it throws
+  std::size_t k = 0;
+  for (const Polygon &poly : polygons) {
+    split_polygon(points, poly, split.data() + 3 * k);
+    k += poly.size() - 2;
+  }
   double *x = (double *)std::malloc(3 * points.size() * sizeof(double));
   int32_t *t = (int32_t *)std::malloc(3 * n_tris * sizeof(int32_t));
   if (!x || !t) {
@@ -169,11 +175,7 @@ int read_surface(const char *path, double **points_out, int64_t *n_points_out, i
     x[3 * i + 1] = points[i].y();
     x[3 * i + 2] = points[i].z();
   }
-  std::size_t k = 0;
-  for (const Polygon &poly : polygons) {
-    split_polygon(points, poly, t + 3 * k);
-    k += poly.size() - 2;
-  }
+  std::copy(split.begin(), split.end(), t);
   *points_out = x;
   *n_points_out = (int64_t)points.size();
   *tris_out = t;
