@@ -208,8 +208,7 @@ static void print_wrap_and_size(const bs_mesh *m, const bs_surface_report *r) {
            r->from_boundary_dihedral_in, 100 * r->from_boundary_volume_change);
   if (r->wrapped)
     printf("alpha wrap (%s): alpha %.4g m, offset %.4g m, volume change %+.3f%%, %.2f s\n",
-           r->wrapped == 1 ? "the repair could not make the surface clean"
-                           : "the meshes of the surface were refused or more than 1% off its volume",
+           r->wrapped == 1 ? "the repair could not make the surface clean" : "the meshes of the surface were refused",
            r->wrap_alpha, r->wrap_offset, 100 * r->wrap_volume_change, r->wrap_seconds);
 }
 

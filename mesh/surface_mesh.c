@@ -460,35 +460,6 @@ static int mesh_wrap(const char *path, const double *pts, int64_t np, const int3
   return rc;
 }
 
-/* A mesh that passed but is more than BS_MESH3_SCAN_VOLUME_TOL off the
- * surface's volume, compared with the mesh of the surface's alpha wrap
- * (mesh_wrap): the closer one to the volume is kept. The report is the
- * kept mesh's. A wrap refused, or the budget spent in it, keeps *out. pig.off
- * at diagonal / 25, holes closed: Mesh_3's mesh, under the gate and meshed
- * again by HXT inside its boundary, passed 1.67% short in one run; the
- * wrap's mesh is 0.63% short (HXT is not deterministic: in another run it
- * missed the gate and the wrap was meshed anyway). */
-static int closer_of_wrap(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
-                          double diag, double volume, const bs_mesh_read_opts *opts, bs_mesh **out) {
-  const double off = fabs(bs_mesh_volume(*out) - volume) / volume;
-  if (!(off > BS_MESH3_SCAN_VOLUME_TOL)) return BS_OK;
-  bs_surface_report *rep = opts ? opts->report : NULL;
-  bs_surface_report saved;
-  if (rep) saved = *rep;
-  bs_mesh *w = NULL;
-  bs_error e2;
-  bs_error_clear(&e2);
-  if (mesh_wrap(path, pts, np, tris, nt, h, diag, opts, &w, &e2) == BS_OK &&
-      fabs(bs_mesh_volume(w) - volume) / volume < off) {
-    bs_mesh_destroy(out);
-    *out = w;
-    return BS_OK;
-  }
-  bs_mesh_destroy(&w);
-  if (rep) *rep = saved;
-  return BS_OK;
-}
-
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   *out = NULL;
@@ -500,7 +471,6 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
   int rc = check_size(path, pts, np, tris, nt, h, opts, &diag, &volume, err);
   if (rc) return rc;
   rc = mesh_with_meshers(path, pts, np, tris, nt, h, diag, volume, opts, out, err);
-  if (rc == BS_OK && volume > 0) return closer_of_wrap(path, pts, np, tris, nt, h, diag, volume, opts, out);
   if (rc != BS_EINPUT || bs__budget_exceeded(err)) return rc;
   return mesh_wrap(path, pts, np, tris, nt, h, diag, opts, out, err);
 }
