@@ -87,7 +87,11 @@ void split_polygon(const std::vector<Point> &pts, const Polygon &poly, int32_t *
     for (std::size_t v : poly) line.push_back(pts[v]);
     std::vector<CGAL::Triple<int, int, int>> tris;
     CGAL::Polygon_mesh_processing::triangulate_hole_polyline(line, std::back_inserter(tris));
-    if (tris.size() == k - 2) {
+    bool inside = tris.size() == k - 2;
+    for (const auto &tr : tris)
+      inside = inside && tr.first >= 0 && tr.second >= 0 && tr.third >= 0 && (std::size_t)tr.first < k &&
+               (std::size_t)tr.second < k && (std::size_t)tr.third < k;
+    if (inside) { // k - 2 triangles on the polygon's own vertices, else the fan
       for (std::size_t j = 0; j < tris.size(); j++) {
         t[3 * j + 0] = (int32_t)poly[(std::size_t)tris[j].first];
         t[3 * j + 1] = (int32_t)poly[(std::size_t)tris[j].second];
