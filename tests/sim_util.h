@@ -44,6 +44,18 @@ static inline int sim_finite(const double *a, size_t n, size_t *bad) {
   return 1;
 }
 
+/* The scene text parsed (name starts its messages) and its simulation
+ * created, both asserted; *sc gets the scene (destroy it after the sim). */
+static inline bs_sim *sim_from_text(const char *text, const char *name, bs_scene **sc) {
+  bs_sim *s = NULL;
+  bs_error err;
+  bs_error_clear(&err);
+  *sc = NULL;
+  cr_assert_eq(bs_scene_parse(text, name, 0, NULL, sc, &err), 0, "%s", err.msg);
+  cr_assert_eq(bs_sim_create(*sc, &s, &err), 0, "%s", err.msg);
+  return s;
+}
+
 /* A bs_frame_fn recording into a sim_rec (ctx). */
 static inline int sim_rec_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_error *err) {
   sim_rec *r = ctx;

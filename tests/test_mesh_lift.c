@@ -317,23 +317,26 @@ static double washer_volume(void) {
   return M_PI * (r1 * r1 * 0.192 + h / 3 * (r1 * r1 + r1 * r2 + r2 * r2) - 0.2 * 0.2 * 0.2);
 }
 
-static void write_washer(char *path, size_t n) {
+/* The washer written to path (n bytes) and read with o, asserted. */
+static bs_mesh *read_washer(char *path, size_t n, bs_mesh_read_opts o) {
   snprintf(path, n, "/tmp/bs_test_lift_%d_washer.geo", (int)getpid());
   FILE *f = fopen(path, "w");
   cr_assert_not_null(f);
   fputs(washer_geo, f);
   fclose(f);
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  cr_assert_eq(bs_mesh_read(path, &o, &m, &err), BS_OK, "%s", err.msg);
+  return m;
 }
 
 /* The step itself, on Gmsh's mesh read without a gate. */
 Test(mesh_lift, cad_with_a_hole_meshed_again_from_its_boundary) {
   char path[96];
-  write_washer(path, sizeof path);
+  bs_mesh *m = read_washer(path, sizeof path, (bs_mesh_read_opts){.size = 0.05, .min_dihedral = -1});
   bs_error err;
   bs_error_clear(&err);
-  bs_mesh *m = NULL;
-  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05, .min_dihedral = -1}, &m, &err), BS_OK, "%s",
-               err.msg);
   const double v0 = bs_mesh_volume(m);
   int n2 = 0;
   for (int g = 0; g < m->n_groups; g++) n2 += m->groups[g].dim == 2;
@@ -382,13 +385,8 @@ Test(mesh_lift, cad_with_a_hole_meshed_again_from_its_boundary) {
  * and holds the washer's volume. */
 Test(mesh_lift, cad_with_a_hole_and_a_thin_chamfer_passes_the_gate) {
   char path[96];
-  write_washer(path, sizeof path);
-  bs_error err;
-  bs_error_clear(&err);
-  bs_mesh *m = NULL;
   bs_surface_report rep = {0};
-  cr_assert_eq(bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.05, .report = &rep}, &m, &err), BS_OK, "%s",
-               err.msg);
+  bs_mesh *m = read_washer(path, sizeof path, (bs_mesh_read_opts){.size = 0.05, .report = &rep});
   bs_mesh_quality q;
   bs_mesh_quality_compute(m, NULL, &q);
   const double v = bs_mesh_volume(m), ve = washer_volume();

@@ -23,6 +23,7 @@
 #include "bs_sim.h"
 #include "bs_terms.h"
 #include "bs_tet10.h"
+#include "sim_util.h"
 
 static const double amp[3] = {1e-3, -2e-3, 1.5e-3}; /* a (m)          */
 static const double E_young = 1e6, nu = 0.3;          /* the material   */
@@ -152,12 +153,10 @@ static double solve_cube(int n, int32_t *nodes) {
   char text[2048];
   snprintf(text, sizeof text, cube_scene, n, n, n);
   bs_scene *sc = NULL;
-  bs_sim *s = NULL;
+  bs_sim *s = sim_from_text(text, "cube", &sc);
   bs_term *t = NULL;
   bs_error err;
   bs_error_clear(&err);
-  cr_assert_eq(bs_scene_parse(text, "cube", 0, NULL, &sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   cr_assert(s->mesh->tets10, "the mesh is not quadratic");
   const int64_t n3 = 3 * (int64_t)s->mesh->n_vertices;
   double lo[3], hi[3], *f = calloc((size_t)n3, sizeof(double));

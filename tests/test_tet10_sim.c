@@ -114,11 +114,7 @@ Test(tet10_mesh, placed_body_keeps_its_curved_nodes_on_the_geometry) {
       "   \"scale\": [2, 2, 2], \"rotate\": [0.3, 0.5, 0.1], \"translate\": [0.3, 1, -0.2],\n"
       "   \"material\": {\"model\": \"neo_hookean\", \"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}]}\n";
   bs_scene *sc = NULL;
-  bs_sim *s = NULL;
-  bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_scene_parse(scene, "placed", 0, NULL, &sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_sim *s = sim_from_text(scene, "placed", &sc);
   const bs_mesh *m = s->mesh;
   int32_t on = 0, n = 0;
   for (int32_t f = 0; f < m->n_faces; f++)
@@ -363,11 +359,9 @@ static const char *const patch_scene =
 
 Test(tet10_sim, patch_test_affine_stretch) {
   bs_scene *sc = NULL;
-  bs_sim *s = NULL;
+  bs_sim *s = sim_from_text(patch_scene, "patch", &sc);
   bs_error err;
   bs_error_clear(&err);
-  cr_assert_eq(bs_scene_parse(patch_scene, "patch", 0, NULL, &sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   bs_frame_stats fs;
   cr_assert_eq(bs_sim_statics(s, &fs, &err), 0, "%s", err.msg);
   /* nu = 0: the uniaxial stretch x -> (1 + 0.1) x is the exact solution (no lateral traction) */
@@ -555,11 +549,9 @@ static void drop(const char *collision, const char *extra, double depth) {
   char text[2048];
   snprintf(text, sizeof text, drop_scene, collision, extra);
   bs_scene *sc = NULL;
-  bs_sim *s = NULL;
+  bs_sim *s = sim_from_text(text, "drop", &sc);
   bs_error err;
   bs_error_clear(&err);
-  cr_assert_eq(bs_scene_parse(text, "drop", 0, NULL, &sc, &err), 0, "%s", err.msg);
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   sim_rec rec;
   memset(&rec, 0, sizeof rec);
   rec.first_clean = -1;
