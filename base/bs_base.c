@@ -76,9 +76,11 @@ double bs_seconds(void) {
 const char *bs_version(void) { return BS_VERSION_STRING; }
 
 size_t bs_peak_rss(void) {
-  struct rusage ru;
-  if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
-  return (size_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
+  struct rusage self, children;
+  if (getrusage(RUSAGE_SELF, &self) != 0) return 0;
+  long kib = self.ru_maxrss; /* Linux reports KiB */
+  if (getrusage(RUSAGE_CHILDREN, &children) == 0 && children.ru_maxrss > kib) kib = children.ru_maxrss;
+  return (size_t)kib * 1024u;
 }
 
 double bs_machine_memory(void) {

@@ -70,7 +70,9 @@ double bs_seconds(void);
 /* bigstep's version, "MAJOR.MINOR.PATCH" (the CMake project version). */
 const char *bs_version(void);
 
-/* Peak resident memory of this process in bytes (0 if unknown). */
+/* Peak resident memory in bytes (0 if unknown): of this process, or of the
+ * largest child process it has waited for when that is larger (Mesh_3
+ * meshes in one, bs_shim_mesh_surface). */
 size_t bs_peak_rss(void);
 
 /* Physical memory of this machine in bytes (sysconf; 0 if unknown). */

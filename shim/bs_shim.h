@@ -392,11 +392,22 @@ typedef struct bs_shim_mesh3_out {
  * Sequential and seeded: the same input gives the same mesh. The surface
  * must be an orientable, closed 2-manifold without self-intersections (an
  * inconsistently oriented soup is oriented first). `name` (the file) starts
- * every message. Errors: BS_EINPUT (empty, an index out of range, a
+ * every message.
+ * It runs in a child process (bs_run_in_child, bs_child.h), which sends the
+ * mesh back: a crash inside CGAL ends the child, and the call returns
+ * BS_EINPUT "NAME: CGAL Mesh_3 crashed (signal 11, Segmentation fault) and
+ * sent no result" (CGAL 5.5's ODT smoother crashes in
+ * C3T3_helpers::move_point_topo_change on the corpus's cheese.off at 1/50
+ * of its diagonal, sharp edges protected; CGAL's pull request 9541, after
+ * 5.5, stops its global optimisers from hiding points, a likely cause).
+ * Its memory is the child's (bs_peak_rss counts the largest child).
+ * Errors: BS_EINPUT (empty, an index out of range, a
  * triangle repeating a vertex, non-manifold, not closed: the count of hole
- * edges, self-intersecting, size <= 0, CGAL's failure with its text),
- * BS_ENUMERIC (a non-finite point), BS_ENOMEM. On success *out holds the
- * arrays (free x and tets with bs_shim_free); on error it is zeroed.
+ * edges, self-intersecting, size <= 0, CGAL's failure with its text, a crash
+ * inside CGAL),
+ * BS_ENUMERIC (a non-finite point), BS_ENOMEM (also: no child process could
+ * be started). On success *out holds the arrays (free x and tets with
+ * bs_shim_free); on error it is zeroed.
  * Example:
  *   bs_shim_mesh3_opts o = {.size = 0.01, .feature_angle = 60, .smoother = BS_SHIM_SMOOTH_ODT,
  *                           .smooth_iterations = 10, .perturb = 1, .exude = 1, .target_dihedral = 10,

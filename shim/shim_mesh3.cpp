@@ -38,6 +38,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <mutex>
@@ -47,6 +48,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "bs_child.h"
 #include "bs_shim.h"
 #include "shim_local_size.hpp"
 #include "shim_features.hpp"
@@ -418,14 +420,13 @@ int mesh_surface(const char *name, const double *pts, int64_t np, const int32_t 
 
 } // namespace
 
-extern "C" int bs_shim_mesh_surface(const char *name, const double *points, int64_t n_points, const int32_t *tris,
-                                    int64_t n_tris, const bs_shim_mesh3_opts *opts, bs_shim_mesh3_out *out,
-                                    bs_error *err) {
-  if (!name) name = "(surface)";
-  if (!points || !tris || !opts || !out) return bs_error_set(err, BS_EINPUT, "%s: bs_shim_mesh_surface: NULL argument", name);
-  *out = bs_shim_mesh3_out{};
+namespace {
+
+// mesh_surface with every exception turned into a status and a message.
+int mesh_surface_caught(const char *name, const double *points, int64_t n_points, const int32_t *tris,
+                        int64_t n_tris, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out, bs_error *err) {
   try {
-    return mesh_surface(name, points, n_points, tris, n_tris, *opts, out, err);
+    return mesh_surface(name, points, n_points, tris, n_tris, o, out, err);
   } catch (const budget_exceeded &b) {
     if (b.vertices)
       return bs_error_set(err, BS_EINPUT, "%s: the meshing time budget was exceeded %s (stopped at %zu vertices)", name,
@@ -438,4 +439,66 @@ extern "C" int bs_shim_mesh_surface(const char *name, const double *points, int6
   } catch (...) {
     return bs_error_set(err, BS_EINPUT, "%s: CGAL Mesh_3 failed (unknown exception)", name);
   }
+}
+
+// One meshing run in a child process (bs_run_in_child): the inputs, and the
+// output the child fills and the parent receives.
+struct Job {
+  const char *name;
+  const double *points;
+  int64_t n_points;
+  const int32_t *tris;
+  int64_t n_tris;
+  const bs_shim_mesh3_opts *o;
+  bs_shim_mesh3_out out;
+};
+
+int job_run(void *c, bs_error *err) {
+  Job &j = *static_cast<Job *>(c);
+  return mesh_surface_caught(j.name, j.points, j.n_points, j.tris, j.n_tris, *j.o, &j.out, err);
+}
+
+int job_send(void *c, int fd) {
+  const bs_shim_mesh3_out &r = static_cast<Job *>(c)->out;
+  if (bs_write_all(fd, &r, sizeof r)) return BS_EIO;
+  if (bs_write_all(fd, r.x, 3 * sizeof(double) * (size_t)r.n_vertices)) return BS_EIO;
+  return bs_write_all(fd, r.tets, 4 * sizeof(int32_t) * (size_t)r.n_tets);
+}
+
+int job_receive(void *c, int fd, bs_error *err) {
+  Job &j = *static_cast<Job *>(c);
+  bs_shim_mesh3_out r;
+  int rc = bs_read_all(fd, &r, sizeof r, j.name, err);
+  if (rc) return rc;
+  if (r.n_vertices < 0 || r.n_tets < 0 || r.n_tets > (int64_t)BS_SHIM_MAX_TETS || r.n_vertices > 4 * r.n_tets)
+    return bs_error_set(err, BS_EINTERNAL, "%s: the meshing process sent %lld vertices and %lld tets", j.name,
+                        (long long)r.n_vertices, (long long)r.n_tets);
+  r.x = static_cast<double *>(std::malloc(3 * sizeof(double) * (size_t)std::max<int64_t>(r.n_vertices, 1)));
+  r.tets = static_cast<int32_t *>(std::malloc(4 * sizeof(int32_t) * (size_t)std::max<int64_t>(r.n_tets, 1)));
+  if (!r.x || !r.tets) rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory for %lld tets", j.name, (long long)r.n_tets);
+  if (!rc) rc = bs_read_all(fd, r.x, 3 * sizeof(double) * (size_t)r.n_vertices, j.name, err);
+  if (!rc) rc = bs_read_all(fd, r.tets, 4 * sizeof(int32_t) * (size_t)r.n_tets, j.name, err);
+  if (rc) {
+    std::free(r.x);
+    std::free(r.tets);
+    return rc;
+  }
+  j.out = r;
+  return BS_OK;
+}
+
+} // namespace
+
+extern "C" int bs_shim_mesh_surface(const char *name, const double *points, int64_t n_points, const int32_t *tris,
+                                    int64_t n_tris, const bs_shim_mesh3_opts *opts, bs_shim_mesh3_out *out,
+                                    bs_error *err) {
+  if (!name) name = "(surface)";
+  if (!points || !tris || !opts || !out) return bs_error_set(err, BS_EINPUT, "%s: bs_shim_mesh_surface: NULL argument", name);
+  *out = bs_shim_mesh3_out{};
+  Job job{name, points, n_points, tris, n_tris, opts, bs_shim_mesh3_out{}};
+  char what[BS_ERROR_MSG / 2];
+  std::snprintf(what, sizeof what, "%s: CGAL Mesh_3", name);
+  const int rc = bs_run_in_child(what, job_run, job_send, job_receive, &job, err);
+  if (rc == BS_OK) *out = job.out;
+  return rc;
 }
