@@ -398,3 +398,31 @@ Test(mesh_surface, gmsh_path_gate) {
   bs_mesh_destroy(&m);
   refused(path, 0, 40, "under the gate of 40", "relax the gate");
 }
+
+/* CGAL 5.5's ODT smoother crashes (SIGSEGV) on the cheese at 1/50 of its
+ * diagonal, its sharp edges protected (the options are mesh3_opts's in
+ * mesh/surface_mesh.c). Mesh_3 runs in a child process: the call returns,
+ * with a mesh or with the crash named, and the caller lives on. */
+Test(mesh_surface, a_crash_inside_cgal_is_an_error_not_the_end) {
+  char path[1024];
+  soup s;
+  soup_or_skip("data/corpus/cgal/cheese.off", path, sizeof path, &s);
+  const double h = s.diag / 50;
+  bs_shim_mesh3_opts o = {.size = h, .facet_distance = h / 10, .feature_angle = BS_MESH_FEATURE_ANGLE,
+                          .smoother = BS_SHIM_SMOOTH_ODT, .smooth_iterations = 10, .perturb = 1, .exude = 1,
+                          .target_dihedral = 10, .max_rounds = 3, .scan_facet_distance = fmax(h / 25, s.diag / 900),
+                          .scan_facet_angle = 30, .scan_radius_edge = 2, .thickness_elements = 2,
+                          .size_gradation = 0.5, .min_size = h / 8};
+  bs_shim_mesh3_out r;
+  bs_error err;
+  bs_error_clear(&err);
+  const int rc = bs_shim_mesh_surface(path, s.x, s.np, s.t, s.nt, &o, &r, &err);
+  cr_log_info("cheese at h %g: rc %d, %lld tets: %s", h, rc, (long long)r.n_tets, err.msg);
+  cr_assert(rc == BS_OK || strstr(err.msg, "CGAL Mesh_3 crashed") || strstr(err.msg, "CGAL Mesh_3 ended"),
+            "neither a mesh nor the crash named: %s", err.msg);
+  if (rc == BS_OK) cr_expect_gt(r.n_tets, 0);
+  else cr_expect_null(r.x, "an error left arrays");
+  bs_shim_free(r.x);
+  bs_shim_free(r.tets);
+  soup_free(&s);
+}
