@@ -306,15 +306,21 @@ static int ob_max_step(const bs_term *t, const double *x, const double *dx, doub
 
 /* ---- step start -------------------------------------------------------------- */
 
-/* At xⁿ: the adaptive kappa (obstacles at tⁿ⁺¹), then the friction pairs
- * (obstacles at tⁿ, with the kappa in force). */
+/* At xⁿ: the obstacles at tⁿ⁺¹ (a vertex inside one: it moved over the
+ * vertex within the step, which no step can start from), the adaptive kappa,
+ * then the friction pairs (obstacles at tⁿ, with the kappa in force). */
 static int ob_begin_step(bs_term *t, bs_error *err) {
   obs_data *d = t->data;
   if (!t->step || !t->step->x_n) return 0;
   const double *xn = t->step->x_n;
   if (!finite_all(xn, 3 * (size_t)d->nv)) return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: x^n is not finite");
+  if (barrier_pass(d, xn, t->step->time, 0))
+    return bs_error_set(err, BS_EINPUT,
+                        "barrier obstacles: %lld surface vertices outside the obstacles at the step's start are inside "
+                        "one at its end: a moving barrier obstacle passed over them within the step (an obstacle's "
+                        "motion within a step is not in the CCD, docs/limitations.md)",
+                        (long long)d->st.inside);
   if (d->adaptive) {
-    barrier_pass(d, xn, t->step->time, 0);
     const double dh2 = d->dhat * d->dhat, m = fmax(d->st.min_distance, 0);
     const double d2 = fmin(m * m, dh2);
     d->kappa = bs_ipc_kappa_update(d->kappa, d->kappa_max, d->d2_prev, d2, d->d2_eps);

@@ -169,3 +169,24 @@ Test(barrier_obstacles, bad_input_is_named) {
                BS_EINPUT);
   cr_assert(strstr(err.msg, "contact.dhat"), "%s", err.msg);
 }
+
+/* A barrier obstacle that passes over vertices within one step (a slab
+ * 40 m/s fast, 1.67 m per step, starting 1 m above the box's top) stops the
+ * run with an error that says so, at the first step. */
+Test(barrier_obstacles, an_obstacle_passing_over_vertices_within_a_step_is_named) {
+  const char *text =
+      "{\"time\": {\"fps\": 24, \"frames\": 1},\n"
+      " \"bodies\": [{\"mesh\": \"box\", \"box\": {\"cells\": [1, 1, 1], \"size\": [1, 1, 1]},\n"
+      "   \"material\": {\"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}],\n"
+      " \"obstacles\": [{\"shape\": \"box\", \"center\": [0, 0, 2.5], \"half_extents\": [5, 5, 0.5],\n"
+      "   \"velocity\": [0, 0, -40], \"collision\": \"barrier\"}]}\n";
+  bs_scene *sc = parse(text);
+  bs_sim *s = NULL;
+  bs_error err = {0};
+  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
+  bs_frame_stats fs;
+  cr_assert_neq(bs_sim_advance_frame(s, &fs, &err), 0, "the obstacle passed over the box and the step ran");
+  cr_assert(strstr(err.msg, "passed over them within the step"), "%s", err.msg);
+  bs_sim_destroy(&s);
+  bs_scene_destroy(&sc);
+}
