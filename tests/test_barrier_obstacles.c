@@ -15,13 +15,7 @@
 #include "bs_runfolder.h"
 #include "bs_scene.h"
 #include "bs_sim.h"
-
-static bs_scene *parse(const char *text) {
-  bs_scene *sc = NULL;
-  bs_error err = {0};
-  cr_assert_eq(bs_scene_parse(text, "test", 0, NULL, &sc, &err), 0, "%s", err.msg);
-  return sc;
-}
+#include "sim_util.h"
 
 static int parse_fails(const char *text, bs_error *err) {
   bs_scene *sc = NULL;
@@ -53,10 +47,9 @@ Test(barrier_obstacles, box_thrown_at_a_plane_never_has_a_vertex_inside, .timeou
       "   \"material\": {\"model\": \"neo_hookean\", \"youngs\": 1e6, \"poisson\": 0.3, \"density\": 1000}}],\n"
       " \"obstacles\": [{\"shape\": \"plane\", \"normal\": [0, 0, 1], \"offset\": 0, \"collision\": \"barrier\",\n"
       "   \"friction\": 0.3}]}\n";
-  bs_scene *sc = parse(text);
-  bs_sim *s = NULL;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_from_text(text, "test", &sc);
   bs_error err = {0};
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   cr_assert_not_null(s->obstacle_barrier);
   long limited = 0;
   for (int f = 1; f <= sc->frames; f++) {
@@ -105,10 +98,9 @@ static void incline(double theta_deg, double mu, int f1, int f2, double *v1, dou
            " \"obstacles\": [{\"shape\": \"plane\", \"normal\": [%.17g, 0, %.17g], \"offset\": 0,\n"
            "   \"collision\": \"barrier\", \"friction\": %g}]}\n",
            f2, theta_deg, 5e-4 * n[0], 5e-4 * n[2], n[0], n[2], mu);
-  bs_scene *sc = parse(text);
-  bs_sim *s = NULL;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_from_text(text, "test", &sc);
   bs_error err = {0};
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   cr_assert_gt(min_phi(s), 4e-4);
   for (int f = 1; f <= f2; f++) {
     bs_frame_stats fs;
@@ -180,10 +172,9 @@ Test(barrier_obstacles, an_obstacle_passing_over_vertices_within_a_step_is_named
       "   \"material\": {\"youngs\": 1e5, \"poisson\": 0.3, \"density\": 1000}}],\n"
       " \"obstacles\": [{\"shape\": \"box\", \"center\": [0, 0, 2.5], \"half_extents\": [5, 5, 0.5],\n"
       "   \"velocity\": [0, 0, -40], \"collision\": \"barrier\"}]}\n";
-  bs_scene *sc = parse(text);
-  bs_sim *s = NULL;
+  bs_scene *sc = NULL;
+  bs_sim *s = sim_from_text(text, "test", &sc);
   bs_error err = {0};
-  cr_assert_eq(bs_sim_create(sc, &s, &err), 0, "%s", err.msg);
   bs_frame_stats fs;
   cr_assert_neq(bs_sim_advance_frame(s, &fs, &err), 0, "the obstacle passed over the box and the step ran");
   cr_assert(strstr(err.msg, "passed over them within the step"), "%s", err.msg);

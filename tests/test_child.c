@@ -60,11 +60,18 @@ static int receive(void *c, int fd, bs_error *err) {
   return rc;
 }
 
+/* The job in mode `mode` run in a child ("the sum"); its status, *err its
+ * message, *j what the parent kept. */
+static int run_mode(int mode, job *j, bs_error *err) {
+  *j = (job){.mode = mode};
+  bs_error_clear(err);
+  return bs_run_in_child("the sum", run, send, receive, j, err);
+}
+
 Test(child, results_come_back_whole) {
-  job j = {0};
+  job j;
   bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_run_in_child("sum", run, send, receive, &j, &err), BS_OK, "%s", err.msg);
+  cr_assert_eq(run_mode(0, &j, &err), BS_OK, "%s", err.msg);
   cr_assert_not_null(j.v);
   double s = 0;
   for (int i = 0; i < N; i++) s += j.v[i];
@@ -74,36 +81,32 @@ Test(child, results_come_back_whole) {
 }
 
 Test(child, the_childs_error_comes_back_as_set) {
-  job j = {.mode = 1};
+  job j;
   bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_run_in_child("sum", run, send, receive, &j, &err), BS_ENUMERIC);
+  cr_assert_eq(run_mode(1, &j, &err), BS_ENUMERIC);
   cr_expect_str_eq(err.msg, "the job's own error, value 42");
   cr_expect_null(j.v);
 }
 
 Test(child, a_crash_is_an_error_naming_the_signal) {
-  job j = {.mode = 2};
+  job j;
   bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_run_in_child("the sum", run, send, receive, &j, &err), BS_EINPUT);
+  cr_assert_eq(run_mode(2, &j, &err), BS_EINPUT);
   cr_expect(strstr(err.msg, "the sum crashed (signal 11") != NULL, "%s", err.msg);
   cr_expect_null(j.v);
 }
 
 Test(child, an_early_exit_is_an_error_naming_its_status) {
-  job j = {.mode = 3};
+  job j;
   bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_run_in_child("the sum", run, send, receive, &j, &err), BS_EINPUT);
+  cr_assert_eq(run_mode(3, &j, &err), BS_EINPUT);
   cr_expect(strstr(err.msg, "exit status 7") != NULL, "%s", err.msg);
 }
 
 Test(child, a_crash_while_sending_keeps_nothing) {
-  job j = {.mode = 4};
+  job j;
   bs_error err;
-  bs_error_clear(&err);
-  cr_assert_eq(bs_run_in_child("the sum", run, send, receive, &j, &err), BS_EINPUT);
+  cr_assert_eq(run_mode(4, &j, &err), BS_EINPUT);
   cr_expect(strstr(err.msg, "signal 11") != NULL, "%s", err.msg);
   cr_expect_null(j.v, "a half-sent result was kept");
 }
