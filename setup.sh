@@ -20,7 +20,7 @@ JOBS=${JOBS:-$(nproc)}
 
 # Debian packages bigstep needs (build, run, tests, plots).
 pkgs=(build-essential cmake pkg-config libgmsh-dev gmsh libmetis-dev libsuitesparse-dev
-      libcgal-dev libcjson-dev libcriterion-dev libopenblas0-pthread libopenblas-dev
+      libcgal-dev libeigen3-dev libcjson-dev libcriterion-dev libopenblas0-pthread libopenblas-dev
       gnuplot-nox libhypre-dev libopenmpi-dev libexpat1-dev zlib1g-dev
       petsc-dev openmpi-bin
       python3-dev python3-numpy python3-cffi python3-pytest python3-matplotlib python3-meshio)

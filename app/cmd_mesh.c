@@ -282,6 +282,22 @@ static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
   return fabs(v) / 6.0;
 }
 
+/* "holes": what closing the surface's holes did (bs_surface_report), or null
+ * when the surface was not repaired. area_fraction: of the clean surface's
+ * area; cap_volume_fraction: of its enclosed volume. */
+static void json_holes(const bs_surface_report *r) {
+  if (!r || r->tris_in == 0) {
+    printf("\"holes\": null");
+    return;
+  }
+  printf("\"holes\": {\"found\": %d, \"closed\": %d, \"faired\": %d, \"triangles\": %lld, \"area\": %.6g, "
+         "\"area_fraction\": %.6g, \"cap_volume\": %.6g, \"cap_volume_fraction\": %.6g, "
+         "\"largest_diameter\": %.6g}",
+         r->holes, r->holes_closed, r->holes_faired, (long long)r->hole_tris, r->hole_area,
+         r->area > 0 ? r->hole_area / r->area : 0.0, r->hole_cap_volume,
+         r->volume > 0 ? r->hole_cap_volume / r->volume : 0.0, r->hole_max_diameter);
+}
+
 /* The input surface of path (when it is one the shim reads) against m's
  * boundary: "surface": {volume_in, volume_change, hausdorff, ...} or null.
  * volume_in: the volume the repaired (oriented, closed) surface encloses, as
@@ -305,10 +321,13 @@ static int json_surface(const bs_mesh *m, const char *path, const bs_surface_rep
     rc = bs_shim_surface_distance(m->x, m->n_vertices, m->faces, m->n_faces, x, np, t, nt, spacing, &d1, NULL, err);
     if (!rc) rc = bs_shim_surface_distance(x, np, t, nt, m->x, m->n_vertices, m->faces, m->n_faces, spacing, &d2, NULL, err);
     const double v = bs_mesh_volume(m), d = d1 > d2 ? d1 : d2;
-    if (!rc)
+    if (!rc) {
       printf("  \"surface\": {\"volume_in\": %.10g, \"volume_change\": %.6g, \"hausdorff\": %.6g, "
-             "\"hausdorff_over_diagonal\": %.6g, \"diagonal\": %.10g, \"sample_spacing\": %.6g},\n",
+             "\"hausdorff_over_diagonal\": %.6g, \"diagonal\": %.10g, \"sample_spacing\": %.6g, ",
              v0, v0 > 0 ? (v - v0) / v0 : 0.0, d, diag > 0 ? d / diag : 0.0, diag, spacing);
+      json_holes(r);
+      printf("},\n");
+    }
   }
   bs_shim_free(x);
   bs_shim_free(t);

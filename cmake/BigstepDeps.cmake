@@ -52,6 +52,13 @@ find_package(CGAL QUIET)
 if(NOT CGAL_FOUND)
   bs_missing("CGAL" libcgal-dev)
 endif()
+# Eigen: CGAL's sparse solves for fairing the fills of closed holes
+# (shim/shim_repair.cpp), through CGAL's own CGAL::Eigen3_support target.
+find_package(Eigen3 3.1.0 QUIET)
+include(CGAL_Eigen3_support)
+if(NOT TARGET CGAL::Eigen3_support)
+  bs_missing("Eigen 3 (for CGAL's hole fairing)" libeigen3-dev)
+endif()
 
 find_path(CJSON_INCLUDE_DIR cJSON.h PATH_SUFFIXES cjson)
 find_library(CJSON_LIBRARY cjson)

@@ -205,8 +205,11 @@ int bs_shim_count_self_intersections(const double *points, int64_t n_points, con
  *      (remove_degenerate_faces);
  *   3. holes (boundary loops): with close_holes, every loop whose diameter
  *      (largest distance between two of its points) is at most max_hole
- *      times the bounding-box diagonal is triangulated and refined
- *      (triangulate_and_refine_hole); an open surface is refused otherwise;
+ *      times the bounding-box diagonal is triangulated, refined and faired
+ *      (triangulate_refine_and_fair_hole: the fill meets the surface with a
+ *      continuous tangent plane; refined only when built without Eigen);
+ *      the report gives the fills' area and the volume they add beyond
+ *      flat caps over the holes; an open surface is refused otherwise;
  *   4. self-intersections: first autorefine_and_remove_self_intersections
  *      (exact intersection curves, keeps the outer hull), kept only if the
  *      result is closed, free of intersections and encloses 50% to 105% of
@@ -240,15 +243,23 @@ typedef struct bs_surface_report {
   int64_t split_points;          /* points duplicated to make the surface manifold */
   int holes;                     /* boundary loops found (after steps 1-2)       */
   int holes_closed;              /* of them, closed                              */
+  int holes_faired;              /* of the closed, faired (0 without Eigen, or when
+                                    the fairing's solve failed: refined only)    */
   int64_t hole_tris;             /* triangles added to close them                */
   double hole_max_diameter;      /* the largest diameter and the largest         */
   double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
+  double hole_area;              /* the fills' area (units^2)                    */
+  double hole_cap_volume;        /* what closing added beyond flat caps: the volume
+                                    between the fills and the fans from each loop's
+                                    centroid to its edges, > 0 where the fills
+                                    bulge outward (units^3; compare with volume) */
   int64_t self_intersections;    /* pairs of intersecting triangles found        */
   int self_intersection_fix;     /* 0 none needed, 1 autorefinement, 2 local removal,
                                     3 local removal then autorefinement          */
   int64_t fold_tris;             /* triangles cut out around folds and re-filled */
   double volume_before;          /* enclosed (signed) before step 4, 0 if open   */
   double volume;                 /* enclosed by the clean surface (> 0)          */
+  double area;                   /* of the clean surface (units^2)               */
   double bbox_diagonal;          /* of the input points                          */
   int open_refused;              /* 1: refused as an open surface (holes not closed on
                                     request, or larger than max_hole)           */

@@ -12,8 +12,8 @@
 // removal leaves folds (neighbouring triangles at almost 0 degrees: cow, man)
 // that exact predicates accept but Gmsh takes for overlapping facets: they
 // are cut out with a ring of neighbours and re-filled. Hole filling
-// triangulates and refines without fairing (fairing needs Eigen, which
-// bigstep does not use).
+// triangulates, refines and fairs (Eigen's sparse LU, through CGAL's
+// Eigen3_support); without Eigen the fill is not faired.
 //
 // Every entry point catches every exception; nothing is printed.
 
@@ -41,6 +41,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <tuple>
 #include <iterator>
 #include <new>
 #include <set>
@@ -168,6 +169,48 @@ int refuse_open(const std::vector<Loop> &loops, const Loop &big, double limit, d
                       big.perimeter, big.edges, big.centre[0], big.centre[1], big.centre[2], what);
 }
 
+// One hole triangulated and refined (triangle sizes graded from the loop's
+// edges), then faired when CGAL has Eigen: the fill's interior vertices are
+// moved to minimise the bi-Laplacian energy with the loop and its ring held,
+// so the patch meets the surface with a continuous tangent plane instead of
+// lying across the hole like a membrane. A fairing that fails (its sparse
+// solve) leaves the refined fill, counted as not faired.
+int fill_hole(Mesh &m, const Loop &l, bs_surface_report *r, std::vector<Face> &added, bs_error *err) {
+  std::vector<Mesh::Vertex_index> verts;
+#if defined(CGAL_EIGEN3_ENABLED)
+  bool faired = std::get<0>(
+      PMP::triangulate_refine_and_fair_hole(m, l.h, std::back_inserter(added), std::back_inserter(verts)));
+#else
+  bool faired = false;
+  PMP::triangulate_and_refine_hole(m, l.h, std::back_inserter(added), std::back_inserter(verts));
+#endif
+  if (added.empty())
+    return bs_error_set(err, BS_EINPUT, "the hole of %zu edges around (%.4g, %.4g, %.4g) could not be triangulated",
+                        l.edges, l.centre[0], l.centre[1], l.centre[2]);
+  r->holes_closed++;
+  r->holes_faired += faired;
+  return BS_OK;
+}
+
+// What one fill changed: its triangles, its area, and the volume between it
+// and the flat fan of triangles from the loop's centroid to its edges (the
+// closed surface fill + reversed fan encloses sum det(a-c, b-c, d-c)/6 over
+// the fill's triangles (a, b, d): the fan's own triangles all contain c).
+// The sign is the mesh's orientation at this point; repair() makes it
+// outward once the volume's sign is known.
+void measure_fill(const Mesh &m, const Loop &l, const std::vector<Face> &added, bs_surface_report *r) {
+  const P c(l.centre[0], l.centre[1], l.centre[2]);
+  for (Face f : added) {
+    Halfedge h = m.halfedge(f);
+    const P &a = m.point(m.source(h)), &b = m.point(m.target(h)), &d = m.point(m.target(m.next(h)));
+    r->hole_area += std::sqrt(CGAL::squared_area(a, b, d));
+    r->hole_cap_volume += CGAL::volume(c, a, b, d);
+  }
+  r->hole_tris += (int64_t)added.size();
+  r->hole_max_diameter = std::max(r->hole_max_diameter, l.diameter);
+  r->hole_max_perimeter = std::max(r->hole_max_perimeter, l.perimeter);
+}
+
 // Step 3: holes, closed when asked and small enough; else refused.
 int close_holes(Mesh &m, const bs_surface_repair_opts *o, bs_surface_report *r, bs_error *err) {
   std::vector<Halfedge> border;
@@ -187,15 +230,9 @@ int close_holes(Mesh &m, const bs_surface_repair_opts *o, bs_surface_report *r, 
   }
   for (const Loop &l : loops) {
     std::vector<Face> added;
-    std::vector<Mesh::Vertex_index> verts;
-    PMP::triangulate_and_refine_hole(m, l.h, std::back_inserter(added), std::back_inserter(verts));
-    if (added.empty())
-      return bs_error_set(err, BS_EINPUT, "the hole of %zu edges around (%.4g, %.4g, %.4g) could not be triangulated",
-                          l.edges, l.centre[0], l.centre[1], l.centre[2]);
-    r->holes_closed++;
-    r->hole_tris += (int64_t)added.size();
-    r->hole_max_diameter = std::max(r->hole_max_diameter, l.diameter);
-    r->hole_max_perimeter = std::max(r->hole_max_perimeter, l.perimeter);
+    int rc = fill_hole(m, l, r, added, err);
+    if (rc) return rc;
+    measure_fill(m, l, added, r);
   }
   if (!CGAL::is_closed(m)) return bs_error_set(err, BS_EINTERNAL, "the surface is still open after closing its holes");
   return BS_OK;
@@ -340,6 +377,7 @@ int write_output(Mesh &m, double **x_out, int64_t *np_out, int32_t **t_out, int6
   *nt_out = (int64_t)nf;
   r->points_out = (int64_t)nv;
   r->tris_out = (int64_t)nf;
+  r->area = PMP::area(m);
   return BS_OK;
 }
 
@@ -357,6 +395,7 @@ int repair(const double *x, int64_t np, const int32_t *t, int64_t nt, const bs_s
   if ((rc = remove_degenerates(m, r, err)) || (rc = close_holes(m, o, r, err))) return rc;
   if (m.number_of_faces() == 0) return bs_error_set(err, BS_EINPUT, "nothing is left after removing degenerates");
   r->volume_before = PMP::volume(m);
+  if (r->volume_before < 0) r->hole_cap_volume = -r->hole_cap_volume; /* measured on an inward mesh */
   if ((rc = fix_self_intersections(m, r, err))) return rc;
   return write_output(m, x_out, np_out, t_out, nt_out, r, err);
 }

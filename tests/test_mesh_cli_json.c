@@ -1,11 +1,12 @@
 /* bigstep mesh info --json and --time-budget (issue 44): the report as one
  * JSON object (quality, gate, size chosen, alpha wrap, tetrahedral
- * remeshing, volume change and Hausdorff distance to the input surface), and
- * the budget's named error. */
+ * remeshing, volume change and Hausdorff distance to the input surface, what
+ * closing holes did), and the budget's named error. */
 #define _GNU_SOURCE
 
 #include <criterion/criterion.h>
 #include <cJSON.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +54,43 @@ Test(mesh_cli_json, info_json_of_a_wrapped_surface) {
               100 * number(j, "wrap", "volume_change"));
   cr_expect_leq(dv, 0.04);
   cr_expect_leq(d, 0.2, "Hausdorff %g over h", d);
+  cJSON_Delete(j);
+  free(out);
+  unlink(path);
+}
+
+/* The unit cube without its face z = 0 (the two triangles of quad 0 left
+ * out), written as OFF to path. */
+static void write_open_cube(const char *path) {
+  FILE *f = fopen(path, "w");
+  cr_assert_not_null(f);
+  static const int q[5][4] = {{4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  fprintf(f, "OFF\n8 10 0\n");
+  for (int i = 0; i < 8; i++) fprintf(f, "%d %d %d\n", i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  for (int k = 0; k < 5; k++)
+    fprintf(f, "3 %d %d %d\n3 %d %d %d\n", q[k][0], q[k][1], q[k][2], q[k][0], q[k][2], q[k][3]);
+  fclose(f);
+}
+
+/* A planar hole closed on request: its fill is the missing face (area 1,
+ * a sixth of the surface; nothing beyond the flat cap). */
+Test(mesh_cli_json, holes_closed_reported) {
+  char path[96], cmd[512], *out = NULL;
+  snprintf(path, sizeof path, "/tmp/bs_test_cli_json_hole_%d.off", (int)getpid());
+  write_open_cube(path);
+  snprintf(cmd, sizeof cmd, "%s mesh info %s --size 0.2 --close-holes --max-hole 1 --json", BS_BIGSTEP_EXE, path);
+  cr_assert_eq(bs_test_run(cmd, &out), 0, "%s", out);
+  cJSON *j = cJSON_Parse(out);
+  cr_assert_not_null(j, "not JSON: %s", out);
+  const cJSON *holes = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(j, "surface"), "holes");
+  cr_assert(cJSON_IsObject(holes), "%s", out);
+  cr_expect_eq(number(holes, "found", NULL), 1);
+  cr_expect_eq(number(holes, "closed", NULL), 1);
+  cr_expect_eq(number(holes, "faired", NULL), 1);
+  cr_expect(fabs(number(holes, "area", NULL) - 1) < 1e-12, "%s", out);
+  cr_expect(fabs(number(holes, "area_fraction", NULL) - 1.0 / 6) < 1e-5, "%s", out);
+  cr_expect(fabs(number(holes, "cap_volume", NULL)) < 1e-12, "%s", out);
+  cr_expect(fabs(number(j, "surface", "volume_in") - 1) < 1e-12, "%s", out);
   cJSON_Delete(j);
   free(out);
   unlink(path);

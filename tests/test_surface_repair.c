@@ -315,6 +315,76 @@ Test(surface_repair, shark_holes_closed_with_a_larger_limit) {
   bs_mesh_destroy(&m);
 }
 
+/* The unit sphere as latitude rings with the cap above z = z0 cut away:
+ * ring 0 (the hole's loop, planar at z0) down to the south pole, `rings`
+ * rings of `around` points, outward triangles. x, t sized by the caller. */
+#define CAP_RINGS 40
+#define CAP_AROUND 96
+#define CAP_POINTS (CAP_RINGS * CAP_AROUND + 1)
+#define CAP_TRIS ((2 * (CAP_RINGS - 1) + 1) * CAP_AROUND)
+static void open_sphere(double z0, double *x, int32_t *t) {
+  const double th0 = acos(z0);
+  for (int i = 0; i < CAP_RINGS; i++)
+    for (int j = 0; j < CAP_AROUND; j++) {
+      double th = th0 + (M_PI - th0) * i / CAP_RINGS, ph = 2 * M_PI * j / CAP_AROUND;
+      double *p = x + 3 * (i * CAP_AROUND + j);
+      p[0] = sin(th) * cos(ph), p[1] = sin(th) * sin(ph), p[2] = cos(th);
+    }
+  double *pole = x + 3 * (CAP_POINTS - 1);
+  pole[0] = pole[1] = 0, pole[2] = -1;
+  int32_t *q = t;
+  for (int i = 0; i < CAP_RINGS; i++)
+    for (int j = 0; j < CAP_AROUND; j++) {
+      int32_t a = i * CAP_AROUND + j, b = i * CAP_AROUND + (j + 1) % CAP_AROUND;
+      if (i + 1 == CAP_RINGS) {
+        int32_t f[3] = {a, CAP_POINTS - 1, b};
+        memcpy(q, f, sizeof f), q += 3;
+        continue;
+      }
+      int32_t c = a + CAP_AROUND, d = b + CAP_AROUND, f[6] = {a, c, b, b, c, d};
+      memcpy(q, f, sizeof f), q += 6;
+    }
+}
+
+/* Closing a hole across a curved surface: the fill is faired, so it bulges
+ * like the surface around it, and the report's accounting is exact: the
+ * enclosed volume is the open surface closed by a flat cap (the fan from the
+ * loop's centroid, here the disc at z0) plus the reported cap volume. */
+Test(surface_repair, hole_fill_faired_and_measured) {
+  static double x[3 * CAP_POINTS];
+  static int32_t t[3 * CAP_TRIS];
+  const double z0 = 0.8, h = 1 - z0, cap = M_PI * h * h * (3 - h) / 3; /* the spherical cap's volume */
+  open_sphere(z0, x, t);
+  double flat = soup_volume(x, t, CAP_TRIS); /* + the flat disc's tets, which have volume 0 about (0, 0, z0) */
+  for (int j = 0; j < CAP_AROUND; j++) {
+    const double *a = x + 3 * j, *b = x + 3 * ((j + 1) % CAP_AROUND);
+    flat += z0 * (a[0] * b[1] - a[1] * b[0]) / 6; /* the fan from (0, 0, z0), reversed: ring 0 runs clockwise */
+  }
+  double *xo = NULL;
+  int32_t *to = NULL;
+  int64_t npo = 0, nto = 0;
+  bs_surface_report r;
+  bs_error err = {0};
+  bs_surface_repair_opts o = {.close_holes = 1, .max_hole = 0.5};
+  cr_assert_eq(bs_shim_repair_surface(x, CAP_POINTS, t, CAP_TRIS, &o, &xo, &npo, &to, &nto, &r, &err), BS_OK, "%s",
+               err.msg);
+  cr_expect_eq(r.holes_closed, 1);
+  cr_expect_eq(r.holes_faired, 1, "the fill is faired");
+  cr_expect_eq(r.self_intersections, 0);
+  assert_closed_oriented(to, nto);
+  cr_expect(fabs(r.volume - soup_volume(xo, to, nto)) < 1e-12, "%.12g", r.volume);
+  cr_expect(fabs(r.volume - (flat + r.hole_cap_volume)) < 1e-9 * r.volume,
+            "volume %.12g = flat-capped %.12g + cap %.12g", r.volume, flat, r.hole_cap_volume);
+  /* A flat fill would leave out the whole cap (0); the faired one has 90% of it (0.1059 of 0.1173). */
+  cr_expect(r.hole_cap_volume > 0.8 * cap && r.hole_cap_volume < 1.05 * cap, "cap volume %.6g of the cap's %.6g",
+            r.hole_cap_volume, cap);
+  double disc = M_PI * (1 - z0 * z0), cap_area = 2 * M_PI * h;
+  cr_expect(r.hole_area > disc && r.hole_area < 1.05 * cap_area, "fill area %.6g (disc %.6g, cap %.6g)", r.hole_area,
+            disc, cap_area);
+  bs_shim_free(xo);
+  bs_shim_free(to);
+}
+
 /* bigstep mesh info prints the report; --close-holes reaches the repair. */
 Test(surface_repair, cli_close_holes) {
   char cmd[1024], *out = NULL;
@@ -325,6 +395,8 @@ Test(surface_repair, cli_close_holes) {
   snprintf(cmd, sizeof cmd, "%s mesh info %s --min-dihedral 0 --close-holes", BS_BIGSTEP_EXE, corpus("pig.off"));
   cr_expect_eq(bs_test_run(cmd, &out), 0, "%s", out);
   cr_expect(strstr(out, "holes: 7 found, 7 closed with"), "%s", out);
+  cr_expect(strstr(out, "triangles, 7 faired"), "%s", out);
+  cr_expect(strstr(out, "the fills: area") && strstr(out, "volume beyond flat caps over the holes"), "%s", out);
   cr_expect(strstr(out, "self-intersections: 3 pairs of triangles, removed by autorefinement"), "%s", out);
   free(out);
   snprintf(cmd, sizeof cmd, "%s mesh info %s --min-dihedral 0 --close-holes --max-hole 2", BS_BIGSTEP_EXE, corpus("pig.off"));
