@@ -206,8 +206,9 @@ int bs_shim_count_self_intersections(const double *points, int64_t n_points, con
  *   3. holes (boundary loops): with close_holes, every loop whose diameter
  *      (largest distance between two of its points) is at most max_hole
  *      times the bounding-box diagonal is triangulated, refined and faired
- *      (triangulate_refine_and_fair_hole: the fill meets the surface with a
- *      continuous tangent plane; refined only when built without Eigen);
+ *      (triangulate_and_refine_hole, then fair: the fill meets the surface
+ *      with a continuous tangent plane), unless the faired fill would cross
+ *      the surface or the fairing's solve fails (then it stays flat);
  *      the report gives the fills' area and the volume they add beyond
  *      flat caps over the holes; an open surface is refused otherwise;
  *   4. self-intersections: first autorefine_and_remove_self_intersections
@@ -243,8 +244,9 @@ typedef struct bs_surface_report {
   int64_t split_points;          /* points duplicated to make the surface manifold */
   int holes;                     /* boundary loops found (after steps 1-2)       */
   int holes_closed;              /* of them, closed                              */
-  int holes_faired;              /* of the closed, faired (0 without Eigen, or when
-                                    the fairing's solve failed: refined only)    */
+  int holes_faired;              /* of the closed, faired (the others: the faired
+                                    fill crossed the surface, or the fairing's solve
+                                    failed; refined and flat)                    */
   int64_t hole_tris;             /* triangles added to close them                */
   double hole_max_diameter;      /* the largest diameter and the largest         */
   double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
@@ -359,6 +361,13 @@ typedef struct bs_shim_mesh3_opts {
   double size_gradation;      /* the local size grows at most this much per unit length
                                  away from thin parts; <= 0: 0.5                         */
   double min_size;            /* the local size's floor; <= 0: h / 8                     */
+  const double *refine_at;    /* n_refine_at points (3 doubles each): the size is at most
+                                 refine_size within h of each, then grows by size_gradation
+                                 per unit length (places
+                                 where an earlier mesh of the surface pinched: mesh/
+                                 surface_mesh.c); NULL or 0: none. Borrowed for the call */
+  int64_t n_refine_at;
+  double refine_size;         /* in (0, h]                                                */
   double deadline;            /* > 0: a bs_seconds() time: Mesh_3's refinement is stopped
                                  there (a watchdog thread sets its stop flag), the
                                  optimisers get the time left as their time_limit, and past
