@@ -2,8 +2,7 @@
  * be a closed 2-manifold with the surface's number of components
  * (bs__boundary_manifold, see mesh_internal.h): no edge in more than two
  * boundary triangles, no vertex where two parts of the body touch (its
- * boundary triangles in more than one fan), no cavity or loose part; and
- * the places of those faults (bs__boundary_defects). */
+ * boundary triangles in more than one fan), no cavity or loose part. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -38,30 +37,9 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
   return n;
 }
 
-/* Every fault's place, when asked (bs__boundary_defects): a growing array;
- * n = -1 once an allocation failed. */
-typedef struct places {
-  double *at;
-  int64_t n, cap;
-} places;
-
-static void note_place(places *pl, const double p[3]) {
-  if (!pl || pl->n < 0) return;
-  if (pl->n == pl->cap) {
-    const int64_t cap = pl->cap ? 2 * pl->cap : 64;
-    double *a = realloc(pl->at, 3 * (size_t)cap * sizeof *a);
-    if (!a) {
-      pl->n = -1;
-      return;
-    }
-    pl->at = a, pl->cap = cap;
-  }
-  memcpy(pl->at + 3 * pl->n++, p, 3 * sizeof *p);
-}
-
 /* Edges of the boundary in other than two triangles: their count, the
- * first one's midpoint into at, every one's into pl (may be NULL). */
-static int32_t odd_edges(const bs_mesh *m, uint64_t *keys, double at[3], places *pl) {
+ * first one's midpoint into at. */
+static int32_t odd_edges(const bs_mesh *m, uint64_t *keys, double at[3]) {
   const size_t n = 3 * (size_t)m->n_faces;
   for (int32_t f = 0; f < m->n_faces; f++)
     for (int k = 0; k < 3; k++) keys[3 * (size_t)f + k] = bs__edge_key(m->faces[3 * f + k], m->faces[3 * f + (k + 1) % 3]);
@@ -71,22 +49,19 @@ static int32_t odd_edges(const bs_mesh *m, uint64_t *keys, double at[3], places 
     for (j = i; j < n && keys[j] == keys[i]; j++) {
     }
     if (j - i == 2) continue;
-    double mid[3];
-    for (int c = 0; c < 3; c++)
-      mid[c] = 0.5 * (m->x[3 * (size_t)(keys[i] >> 32) + c] + m->x[3 * (size_t)(keys[i] & 0xffffffffu) + c]);
-    if (!bad++) memcpy(at, mid, sizeof mid);
-    note_place(pl, mid);
+    if (!bad++)
+      for (int c = 0; c < 3; c++)
+        at[c] = 0.5 * (m->x[3 * (size_t)(keys[i] >> 32) + c] + m->x[3 * (size_t)(keys[i] & 0xffffffffu) + c]);
   }
   return bad;
 }
 
 /* Vertices whose boundary triangles make more than one fan (joined across
- * the edges through the vertex): their count, the first one into at, every
- * one into pl (may be NULL).
+ * the edges through the vertex): their count, the first one into at.
  * ptr/list: the vertex -> boundary faces CSR; scratch: 2 * max degree
  * keys, parent: max degree. */
 static int32_t pinched_vertices(const bs_mesh *m, const int32_t *ptr, const int32_t *list, uint64_t *scratch,
-                                int32_t *parent, double at[3], places *pl) {
+                                int32_t *parent, double at[3]) {
   int32_t bad = 0;
   for (int32_t v = 0; v < m->n_vertices; v++) {
     const int32_t d = ptr[v + 1] - ptr[v];
@@ -106,14 +81,12 @@ static int32_t pinched_vertices(const bs_mesh *m, const int32_t *ptr, const int3
       }
     int32_t fans = 0;
     for (int32_t i = 0; i < d; i++) fans += root(parent, i) == i;
-    if (fans < 2) continue;
-    if (!bad++) memcpy(at, m->x + 3 * (size_t)v, 3 * sizeof *at);
-    note_place(pl, m->x + 3 * (size_t)v);
+    if (fans > 1 && !bad++) memcpy(at, m->x + 3 * (size_t)v, 3 * sizeof *at);
   }
   return bad;
 }
 
-static int boundary_check(const bs_mesh *m, const char *path, int64_t components, places *pl, bs_error *err) {
+int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components, bs_error *err) {
   const int32_t nv = m->n_vertices, nf = m->n_faces;
   int32_t *ptr = calloc((size_t)nv + 2, sizeof *ptr), *list = malloc((3 * (size_t)nf + 1) * sizeof *list);
   uint64_t *keys = malloc((3 * (size_t)nf + 1) * sizeof *keys);
@@ -128,14 +101,14 @@ static int boundary_check(const bs_mesh *m, const char *path, int64_t components
   for (int32_t f = 0; f < nf; f++)
     for (int k = 0; k < 3; k++) list[ptr[m->faces[3 * f + k] + 1]++] = f;
   double e_at[3] = {0, 0, 0}, v_at[3] = {0, 0, 0};
-  const int32_t n_edges = odd_edges(m, keys, e_at, pl);
+  const int32_t n_edges = odd_edges(m, keys, e_at);
   int32_t *fan = malloc(((size_t)maxd + 1) * sizeof *fan);
   if (!fan) {
     rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory to check the mesh's boundary", path);
     goto done;
   }
   /* keys are free again: 2 * maxd <= 3 * nf */
-  const int32_t n_verts = pinched_vertices(m, ptr, list, keys, fan, v_at, pl);
+  const int32_t n_verts = pinched_vertices(m, ptr, list, keys, fan, v_at);
   free(fan);
   const int64_t n_comp = bs__soup_components(m->x, nv, m->faces, nf, 0.0, parent);
   if (n_edges || n_verts || (components > 0 && n_comp != components))
@@ -149,24 +122,6 @@ static int boundary_check(const bs_mesh *m, const char *path, int64_t components
 done:
   free(ptr), free(list), free(keys), free(parent);
   return rc;
-}
-
-int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components, bs_error *err) {
-  return boundary_check(m, path, components, NULL, err);
-}
-
-int bs__boundary_defects(const bs_mesh *m, double **at, int64_t *n, bs_error *err) {
-  places pl = {0};
-  bs_error e2;
-  bs_error_clear(&e2);
-  *at = NULL, *n = 0;
-  const int rc = boundary_check(m, "", 0, &pl, &e2);
-  if ((rc && rc != BS_EINPUT) || pl.n < 0) {
-    free(pl.at);
-    return bs_error_set(err, BS_ENOMEM, "out of memory listing the places where the mesh's boundary pinches");
-  }
-  *at = pl.at, *n = pl.n;
-  return BS_OK;
 }
 
 int bs__boundary_like_soup(const bs_mesh *m, const char *path, const double *pts, int64_t np, const int32_t *tris,

@@ -143,12 +143,6 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
  * BS_ENOMEM. */
 int bs__boundary_manifold(const bs_mesh *m, const char *path, int64_t components, bs_error *err);
 
-/* manifold.c: every place where m's boundary is not a 2-manifold (each
- * pinched vertex, each midpoint of an edge in other than two boundary
- * triangles), 3 doubles each, malloc'ed into *at (free it), their count
- * into *n (0: none, *at NULL); BS_ENOMEM. */
-int bs__boundary_defects(const bs_mesh *m, double **at, int64_t *n, bs_error *err);
-
 /* manifold.c: bs__boundary_manifold with the soup's components of at least
  * min_volume (bs__soup_components) as the count; BS_ENOMEM naming path. */
 int bs__boundary_like_soup(const bs_mesh *m, const char *path, const double *pts, int64_t np, const int32_t *tris,

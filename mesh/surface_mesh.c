@@ -30,7 +30,6 @@
  * surfaces: (3, 1, "body") and (2, 1, "surface_1"), its whole boundary.
  */
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -323,10 +322,13 @@ static int lift_mesh3(const char *path, bs_mesh **m, double h, const bs_mesh_rea
   return BS_OK;
 }
 
-/* Mesh_3's mesh at o with the default groups, checked to be a closed
- * 2-manifold like the surface. */
-static int mesh3_manifold(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
-                          const bs_shim_mesh3_opts *o, int *scan, bs_mesh **out, bs_error *err) {
+/* One Mesh_3 mesh at o: the shim's mesh with the default groups, checked
+ * manifold, held to the gate, meshed again inside its boundary when under
+ * it (hxt_inside_mesh3). *scan: whether the shim meshed it as a scan (no
+ * sharp-edge chains kept), so with o's scan criteria. */
+static int mesh3_once(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
+                      const bs_shim_mesh3_opts *o, const bs_mesh_read_opts *opts, int *scan, bs_mesh **out,
+                      bs_error *err) {
   bs_shim_mesh3_out r;
   int rc = bs_shim_mesh_surface(path, pts, np, tris, nt, o, &r, err);
   *scan = !rc && r.n_features == 0;
@@ -336,76 +338,6 @@ static int mesh3_manifold(const char *path, const double *pts, int64_t np, const
   bs_shim_free(r.x);
   bs_shim_free(r.tets);
   if (!rc) rc = manifold_like(path, *out, pts, np, tris, nt, o->size, err);
-  return rc;
-}
-
-/* A mesh whose boundary pinches (two parts of the body touching at a vertex
- * or an edge: a part thinner than the size there) is meshed again with the
- * size at most h / 2, then h / 4, around every place where it pinched
- * (bs_shim_mesh3_opts.refine_at, graded back to h), the places of each
- * round kept: finer where needed, not everywhere. */
-#define BS_MESH3_PINCH_ROUNDS 2
-
-/* Appends m's pinches to *at (count *n) and sets o to refine around them at
- * h / 2^(round + 1). 0: none found (nothing to refine), 1: o set; < 0 with
- * err: out of memory. */
-static int refine_at_pinches(const bs_mesh *m, int round, double **at, int64_t *n, bs_shim_mesh3_opts *o,
-                             bs_error *err) {
-  double *p = NULL;
-  int64_t k = 0;
-  if (bs__boundary_defects(m, &p, &k, err)) return -1;
-  if (k == 0) return 0;
-  double *all = realloc(*at, 3 * (size_t)(*n + k) * sizeof *all);
-  if (!all) {
-    free(p);
-    bs_error_set(err, BS_ENOMEM, "out of memory listing the places where the mesh pinches");
-    return -1;
-  }
-  memcpy(all + 3 * *n, p, 3 * (size_t)k * sizeof *p);
-  free(p);
-  *at = all, *n += k;
-  o->refine_at = all, o->n_refine_at = *n, o->refine_size = ldexp(o->size, -(round + 1));
-  return 1;
-}
-
-/* mesh3_manifold, then again finer around its pinches (at most
- * BS_MESH3_PINCH_ROUNDS times, within the budget). */
-static int mesh3_unpinched(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
-                           const bs_shim_mesh3_opts *o, int *scan, bs_mesh **out, bs_error *err) {
-  bs_shim_mesh3_opts oo = *o;
-  double *at = NULL;
-  int64_t n = 0;
-  int rc = BS_OK;
-  for (int round = 0;; round++) {
-    rc = mesh3_manifold(path, pts, np, tris, nt, &oo, scan, out, err);
-    if (rc != BS_EINPUT || !*out || round == BS_MESH3_PINCH_ROUNDS || bs__budget_exceeded(err)) break;
-    bs_error e2;
-    bs_error_clear(&e2);
-    const int more = refine_at_pinches(*out, round, &at, &n, &oo, &e2);
-    if (more <= 0 || bs__budget_check(path, "Mesh_3 refined around the pinches", &e2)) {
-      if (more < 0 || e2.code) *err = e2, rc = e2.code;
-      break;
-    }
-    bs_mesh_destroy(out);
-    bs_error_clear(err);
-  }
-  const size_t len = err ? strlen(err->msg) : 0;
-  if (rc && n && len < sizeof err->msg)
-    snprintf(err->msg + len, sizeof err->msg - len, "; meshed again with the size down to %.4g around the %lld places "
-             "where earlier meshes pinched", oo.refine_size, (long long)n);
-  free(at);
-  return rc;
-}
-
-/* One Mesh_3 mesh at o: the shim's mesh with the default groups, checked
- * manifold (made finer where it pinched: mesh3_unpinched), held to the
- * gate, meshed again inside its boundary when under it (hxt_inside_mesh3).
- * *scan: whether the shim meshed it as a scan (no sharp-edge chains kept),
- * so with o's scan criteria. */
-static int mesh3_once(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
-                      const bs_shim_mesh3_opts *o, const bs_mesh_read_opts *opts, int *scan, bs_mesh **out,
-                      bs_error *err) {
-  int rc = mesh3_unpinched(path, pts, np, tris, nt, o, scan, out, err);
   if (!rc && (rc = bs_mesh_dihedral_gate(*out, bs__mesh_gate(opts), path, err)) == BS_EINPUT) {
     rc = lift_mesh3(path, out, o->size, opts, err);
     if (rc == BS_EINPUT && !bs__budget_exceeded(err)) rc = hxt_inside_mesh3(path, out, opts, err);

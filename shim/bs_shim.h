@@ -361,13 +361,6 @@ typedef struct bs_shim_mesh3_opts {
   double size_gradation;      /* the local size grows at most this much per unit length
                                  away from thin parts; <= 0: 0.5                         */
   double min_size;            /* the local size's floor; <= 0: h / 8                     */
-  const double *refine_at;    /* n_refine_at points (3 doubles each): the size is at most
-                                 refine_size within h of each, then grows by size_gradation
-                                 per unit length (places
-                                 where an earlier mesh of the surface pinched: mesh/
-                                 surface_mesh.c); NULL or 0: none. Borrowed for the call */
-  int64_t n_refine_at;
-  double refine_size;         /* in (0, h]                                                */
   double deadline;            /* > 0: a bs_seconds() time: Mesh_3's refinement is stopped
                                  there (a watchdog thread sets its stop flag), the
                                  optimisers get the time left as their time_limit, and past

@@ -62,13 +62,12 @@ struct Local_size::Data {
   std::vector<Point> pts;
   std::vector<double> size;
   Local_size_opts o;
-  double plateau = 0; // the size is s(q) within this distance of q, then graded
   Kd_tree tree;
   Data(std::vector<Point> &&p, const Local_size_opts &opts)
       : pts(std::move(p)), o(opts),
         tree(boost::counting_iterator<std::size_t>(0), boost::counting_iterator<std::size_t>(pts.size()),
              Kd_tree::Splitter(), Traits(CGAL::make_property_map(std::as_const(pts)))) {
-    if (!pts.empty()) tree.build();
+    tree.build();
   }
 };
 
@@ -129,46 +128,17 @@ Local_size::Local_size(const Surface &sm, const Local_size_opts &o) {
   d_ = d;
 }
 
-Local_size::Local_size(const Local_size_opts &o) : d_(std::make_shared<Data>(std::vector<Point>(), o)) {}
-
-Local_size Local_size::refined_at(const double *at, long long n, double size) const {
-  std::vector<Point> pts;
-  pts.reserve(n > 0 ? (std::size_t)n : 0);
-  for (long long i = 0; i < n; i++) pts.emplace_back(at[3 * i], at[3 * i + 1], at[3 * i + 2]);
-  auto d = std::make_shared<Data>(std::move(pts), d_->o);
-  d->size.assign(d->pts.size(), std::min(size, d_->o.h));
-  Local_size out = *this;
-  if (spots_) { /* earlier points kept: both sets in one tree */
-    std::vector<Point> all(spots_->pts);
-    all.insert(all.end(), d->pts.begin(), d->pts.end());
-    std::vector<double> sz(spots_->size);
-    sz.insert(sz.end(), d->size.begin(), d->size.end());
-    d = std::make_shared<Data>(std::move(all), d_->o);
-    d->size = std::move(sz);
-  }
-  d->plateau = d_->o.h;
-  out.spots_ = d;
-  return out;
-}
-
 double Local_size::operator()(const Epick::Point_3 &p) const {
-  double best = nearest(*d_, p, K_QUERY, d_->o.h);
-  return spots_ ? nearest(*spots_, p, 1, best) : best;
-}
-
-double Local_size::nearest(const Data &d, const Point &p, unsigned k, double best) {
-  if (d.pts.empty()) return best;
+  const Data &d = *d_;
   Distance dist(CGAL::make_property_map(d.pts));
-  Knn search(d.tree, p, k, 0, true, dist);
-  for (const auto &nb : search)
-    best = std::min(best, d.size[nb.first] + d.o.gradation * std::max(0.0, std::sqrt(nb.second) - d.plateau));
+  Knn search(d.tree, p, K_QUERY, 0, true, dist);
+  double best = d.o.h;
+  for (const auto &nb : search) best = std::min(best, d.size[nb.first] + d.o.gradation * std::sqrt(nb.second));
   return best;
 }
 
 double Local_size::min_sample_size() const {
-  double m = d_->size.empty() ? d_->o.h : *std::min_element(d_->size.begin(), d_->size.end());
-  if (spots_ && !spots_->size.empty()) m = std::min(m, *std::min_element(spots_->size.begin(), spots_->size.end()));
-  return m;
+  return d_->size.empty() ? d_->o.h : *std::min_element(d_->size.begin(), d_->size.end());
 }
 
 double Local_size::fraction_refined() const {

@@ -13,9 +13,7 @@
 // (Dijkstra), so that sizes grow at most g per unit length away from thin
 // parts. In space the field is
 //   size(p) = min(h, min over the k nearest samples q of s(q) + g |p - q|),
-// which Mesh_3 evaluates as cell_size, facet_size and edge_size. A field can
-// also be made finer around given points (refined_at: the places where an
-// earlier mesh pinched), with the same gradation.
+// which Mesh_3 evaluates as cell_size, facet_size and edge_size.
 //
 // Lengths in the surface's units. Copies share the samples (Mesh_3 copies
 // its criteria); queries are const and thread-compatible.
@@ -42,13 +40,6 @@ public:
   Local_size(const Surface &sm, const Local_size_opts &o);
   // The field at p (floor <= size <= h).
   double operator()(const Epick::Point_3 &p) const;
-  // h everywhere (no samples): a base for refined_at.
-  explicit Local_size(const Local_size_opts &o);
-  // This field, and also at most size within h of each of the n points at
-  // (3 doubles each), graded beyond (size + gradation (|p - a| - h)): finer
-  // where an earlier mesh of the same surface went wrong. size in (0, h].
-  // Throws std::bad_alloc.
-  Local_size refined_at(const double *at, long long n, double size) const;
   // Mesh_3's field signature (dimension and index unused).
   template <class Index> double operator()(const Epick::Point_3 &p, int, const Index &) const { return (*this)(p); }
   // The samples' smallest size and the fraction of samples under h.
@@ -58,9 +49,6 @@ public:
 private:
   struct Data;
   std::shared_ptr<const Data> d_;
-  std::shared_ptr<const Data> spots_; // refined_at's points (null: none)
-  // min(best, s(q) + g |p - q|) over the k samples of d nearest to p.
-  static double nearest(const Data &d, const Epick::Point_3 &p, unsigned k, double best);
 };
 
 // A field scaled by a constant (facet_distance proportional to the size).

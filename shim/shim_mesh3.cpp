@@ -354,8 +354,7 @@ int export_mesh(const C3t3 &c3t3, const char *name, double **xo, int64_t *nvo, i
 
 // Mesh_3's refinement of the domain to the criteria of o: sizes h, or for a
 // scan (not cad) its own criteria and the thickness field
-// (shim_local_size.hpp) when o.thickness_elements > 0; finer around
-// o.refine_at when given.
+// (shim_local_size.hpp) when o.thickness_elements > 0.
 C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mesh3_opts &o, bs_shim_mesh3_out *out) {
   namespace P = CGAL::parameters;
   const double h = o.size;
@@ -371,8 +370,7 @@ C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mes
   time_left(o, "before Mesh_3's refinement");
   Watchdog watchdog(o.deadline);
   const auto options = P::mesh_3_options(P::pointer_to_stop_atomic_boolean = watchdog.flag());
-  const bool spots = o.refine_at && o.n_refine_at > 0 && o.refine_size > 0;
-  if ((cad || !(o.thickness_elements > 0)) && !spots) {
+  if (cad || !(o.thickness_elements > 0)) {
     Criteria criteria(P::edge_size = fs, P::facet_angle = fa, P::facet_size = fs, P::facet_distance = dist,
                       P::cell_radius_edge_ratio = re, P::cell_size = h);
     C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, P::no_perturb(), P::no_exude(), P::no_odt(), P::no_lloyd(),
@@ -382,9 +380,7 @@ C3t3 refine(const Surface &sm, const Domain &domain, bool cad, const bs_shim_mes
     return c3t3;
   }
   const double floor = o.min_size > 0 ? std::min(o.min_size, h) : h / 8;
-  const bs_shim::Local_size_opts lo{h, o.thickness_elements, o.size_gradation > 0 ? o.size_gradation : 0.5, floor};
-  bs_shim::Local_size field = cad || !(o.thickness_elements > 0) ? bs_shim::Local_size(lo) : bs_shim::Local_size(sm, lo);
-  if (spots) field = field.refined_at(o.refine_at, o.n_refine_at, o.refine_size);
+  const bs_shim::Local_size field(sm, {h, o.thickness_elements, o.size_gradation > 0 ? o.size_gradation : 0.5, floor});
   out->local_size_min = field.min_sample_size();
   out->local_fraction = field.fraction_refined();
   const bs_shim::Scaled_size facet{field, fs / h};

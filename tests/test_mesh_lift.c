@@ -538,47 +538,6 @@ Test(mesh_lift, sharp_edges_at_a_hairline_corner_are_not_protected) {
   bs_shim_free(out.x), bs_shim_free(out.tets);
 }
 
-/* The vertices of out within r of c. */
-static int64_t vertices_near(const bs_shim_mesh3_out *out, const double c[3], double r) {
-  int64_t n = 0;
-  for (int64_t i = 0; i < out->n_vertices; i++) {
-    const double *p = out->x + 3 * i;
-    n += (p[0] - c[0]) * (p[0] - c[0]) + (p[1] - c[1]) * (p[1] - c[1]) + (p[2] - c[2]) * (p[2] - c[2]) < r * r;
-  }
-  return n;
-}
-
-/* refine_at (where an earlier mesh pinched): the size is refine_size within
- * h of the point and grows back to h away from it; elsewhere the mesh is as
- * coarse as without it. */
-Test(mesh_lift, refined_around_given_points) {
-  static const double bx[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
-  static const int32_t bt[12 * 3] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
-                                     2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
-  static const double spot[3] = {0.5, 0.5, 1.0}; /* the top face's centre */
-  bs_error err;
-  bs_error_clear(&err);
-  bs_shim_mesh3_opts o = {.size = 0.25, .feature_angle = BS_MESH_FEATURE_ANGLE, .smoother = BS_SHIM_SMOOTH_ODT,
-                          .smooth_iterations = 10, .perturb = 1, .exude = 1, .target_dihedral = 10, .max_rounds = 3};
-  bs_shim_mesh3_out plain, fine;
-  cr_assert_eq(bs_shim_mesh_surface("box", bx, 8, bt, 12, &o, &plain, &err), BS_OK, "%s", err.msg);
-  o.refine_at = spot, o.n_refine_at = 1, o.refine_size = 0.25 / 4;
-  cr_assert_eq(bs_shim_mesh_surface("box", bx, 8, bt, 12, &o, &fine, &err), BS_OK, "%s", err.msg);
-  /* within h = 0.25 of the point the size is 0.0625, then it grows by 0.5
-   * per unit length: h again 0.625 away */
-  const double far[3] = {0.5, 0.5, 0.0};
-  const int64_t pn = vertices_near(&plain, spot, 0.2), fn = vertices_near(&fine, spot, 0.2),
-                pf = vertices_near(&plain, far, 0.3), ff = vertices_near(&fine, far, 0.3);
-  cr_log_info("vertices near the point / 1 away: plain %lld / %lld, refined %lld / %lld; tets %lld, %lld",
-              (long long)pn, (long long)pf, (long long)fn, (long long)ff, (long long)plain.n_tets,
-              (long long)fine.n_tets);
-  cr_expect_geq(fn, 4 * pn + 4, "near the point: %lld vertices against %lld", (long long)fn, (long long)pn);
-  cr_expect_leq(ff, 2 * pf + 2, "far from it: %lld vertices against %lld", (long long)ff, (long long)pf);
-  cr_expect(fabs(fine.local_size_min - 0.0625) < 1e-12, "%.6g", fine.local_size_min);
-  cr_expect_gt(fine.n_tets, plain.n_tets);
-  bs_shim_free(plain.x), bs_shim_free(plain.tets), bs_shim_free(fine.x), bs_shim_free(fine.tets);
-}
-
 /* Inside the wrap's loop: a deadline already past stops it by name. */
 Test(mesh_lift, time_budget_inside_the_alpha_wrap) {
   static const double x[8 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
