@@ -284,18 +284,18 @@ static double soup_volume(const double *p, const int32_t *t, int64_t nt) {
 
 /* "holes": what closing the surface's holes did (bs_surface_report), or null
  * when the surface was not repaired. area_fraction: of the clean surface's
- * area; cap_volume_fraction: of its enclosed volume. */
+ * area; fair_volume_fraction: of its enclosed volume. */
 static void json_holes(const bs_surface_report *r) {
   if (!r || r->tris_in == 0) {
     printf("\"holes\": null");
     return;
   }
-  printf("\"holes\": {\"found\": %d, \"closed\": %d, \"faired\": %d, \"triangles\": %lld, \"area\": %.6g, "
-         "\"area_fraction\": %.6g, \"cap_volume\": %.6g, \"cap_volume_fraction\": %.6g, "
-         "\"largest_diameter\": %.6g}",
-         r->holes, r->holes_closed, r->holes_faired, (long long)r->hole_tris, r->hole_area,
-         r->area > 0 ? r->hole_area / r->area : 0.0, r->hole_cap_volume,
-         r->volume > 0 ? r->hole_cap_volume / r->volume : 0.0, r->hole_max_diameter);
+  printf("\"holes\": {\"found\": %d, \"closed\": %d, \"triangles\": %lld, \"area\": %.6g, "
+         "\"area_fraction\": %.6g, \"cap_volume\": %.6g, \"fair_estimated\": %d, \"fair_volume\": %.6g, "
+         "\"fair_volume_fraction\": %.6g, \"largest_diameter\": %.6g}",
+         r->holes, r->holes_closed, (long long)r->hole_tris, r->hole_area, r->area > 0 ? r->hole_area / r->area : 0.0,
+         r->hole_cap_volume, r->holes_fair_estimated, r->hole_fair_volume,
+         r->volume > 0 ? r->hole_fair_volume / r->volume : 0.0, r->hole_max_diameter);
 }
 
 /* The input surface of path (when it is one the shim reads) against m's

@@ -23,14 +23,14 @@ void bs_app_print_surface_report(const char *spec, const bs_surface_report *r) {
          (long long)r->split_points);
   printf("  holes: %d found, %d closed", r->holes, r->holes_closed);
   if (r->holes_closed) {
-    printf(" with %lld triangles, %d faired (largest: diameter %.4g m = %.3g of the bounding-box diagonal, "
-           "perimeter %.4g m)",
-           (long long)r->hole_tris, r->holes_faired, r->hole_max_diameter,
+    printf(" with %lld triangles (largest: diameter %.4g m = %.3g of the bounding-box diagonal, perimeter %.4g m)",
+           (long long)r->hole_tris, r->hole_max_diameter,
            r->bbox_diagonal > 0 ? r->hole_max_diameter / r->bbox_diagonal : 0.0, r->hole_max_perimeter);
-    printf("\n  the fills: area %.4g m^2 (%.3g%% of the surface); volume beyond flat caps over the holes %.4g m^3 "
-           "(%.3g%% of the enclosed volume)",
-           r->hole_area, r->area > 0 ? 100 * r->hole_area / r->area : 0.0, r->hole_cap_volume,
-           r->volume > 0 ? 100 * r->hole_cap_volume / r->volume : 0.0);
+    printf("\n  the fills: area %.4g m^2 (%.3g%% of the surface), %.4g m^3 beyond flat caps over the holes; faired "
+           "(%d of %d), they would enclose %.4g m^3 more (%.3g%% of the enclosed volume): what closing may have left "
+           "out",
+           r->hole_area, r->area > 0 ? 100 * r->hole_area / r->area : 0.0, r->hole_cap_volume, r->holes_fair_estimated,
+           r->holes_closed, r->hole_fair_volume, r->volume > 0 ? 100 * r->hole_fair_volume / r->volume : 0.0);
   }
   printf("\n  self-intersections: %lld pairs of triangles, %s", (long long)r->self_intersections,
          fix_name(r->self_intersection_fix));

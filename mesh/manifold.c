@@ -37,6 +37,26 @@ int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, in
   return n;
 }
 
+int64_t bs__soup_label_components(const int32_t *tris, int64_t nt, int64_t np, int32_t *label) {
+  int32_t *parent = malloc(((size_t)np + 1) * sizeof *parent);
+  if (!parent) return -1;
+  for (int64_t v = 0; v < np; v++) parent[v] = (int32_t)v, label[v] = -1;
+  for (int64_t f = 0; f < nt; f++)
+    for (int k = 0; k < 3; k++) {
+      int32_t a = root(parent, tris[3 * f + k]), b = root(parent, tris[3 * f + (k + 1) % 3]);
+      if (a != b) parent[a] = b;
+    }
+  for (int64_t v = 0; v < np; v++) parent[v] = root(parent, (int32_t)v); /* every point to its root */
+  int64_t n = 0;
+  for (int64_t f = 0; f < 3 * nt; f++) {
+    const int32_t r = parent[tris[f]];
+    if (label[r] < 0) label[r] = (int32_t)n++;
+  }
+  for (int64_t f = 0; f < 3 * nt; f++) label[tris[f]] = label[parent[tris[f]]];
+  free(parent);
+  return n;
+}
+
 /* Edges of the boundary in other than two triangles: their count, the
  * first one's midpoint into at. */
 static int32_t odd_edges(const bs_mesh *m, uint64_t *keys, double at[3]) {

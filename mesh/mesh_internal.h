@@ -109,6 +109,32 @@ int bs__mesh_default_groups(const char *path, int32_t nv, const double *x, int32
 int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt,
                             const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err);
 
+/* surface_parts.c: a closed soup of several separate solids, one soup per
+ * solid. */
+typedef struct bs_soup_part {
+  double *x;       /* 3 np */
+  int32_t *tris;   /* 3 nt, 0-based into x */
+  int64_t np, nt;
+  double volume;   /* enclosed (signed: > 0 outward) */
+  double diag;     /* bounding-box diagonal */
+} bs_soup_part;
+
+/* surface_parts.c: the soup's connected components as parts (*parts, *n
+ * >= 2) when it has two or more and each encloses a positive (outward)
+ * volume of at least one regular tet of edge h (h^3 / (6 sqrt 2)) and
+ * spans at least h (its bounding-box diagonal): separate solids, each big
+ * enough to be meshed at h on its own, to be meshed one at a time so that
+ * no tet joins two of them. Else *parts NULL and *n 0 (one solid, a solid
+ * with a cavity, or parts smaller than the size: meshed whole, as before).
+ * BS_ENOMEM naming path. Free with bs__soup_parts_free. */
+int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t *tris, int64_t nt, double h,
+                    bs_soup_part **parts, int64_t *n, bs_error *err);
+void bs__soup_parts_free(bs_soup_part *parts, int64_t n);
+
+/* surface_parts.c: the n meshes as one (their vertices and tets in order,
+ * the default groups: bs__mesh_default_groups). */
+int bs__mesh_concat(const char *path, bs_mesh *const *meshes, int64_t n, bs_mesh **out, bs_error *err);
+
 /* surface_remesh.c: the "remesh" mesher (BS_SURFACE_REMESH): the closed
  * soup remeshed by CGAL at opts->size (bs_shim_remesh_surface), its volume
  * meshed by Gmsh's HXT (one thread) from those triangles
@@ -128,6 +154,11 @@ static inline int bs__cmp_u64(const void *a, const void *b) {
   uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
   return x < y ? -1 : x > y;
 }
+
+/* manifold.c: each point's connected component among the soup's triangles
+ * (0 .. k - 1; -1 for a point in no triangle) into label (np entries);
+ * returns k, -1 when out of memory. */
+int64_t bs__soup_label_components(const int32_t *tris, int64_t nt, int64_t np, int32_t *label);
 
 /* manifold.c: the number of connected components of a soup's triangles
  * (points joined by triangle edges; points in no triangle not counted)

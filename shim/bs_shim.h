@@ -205,12 +205,13 @@ int bs_shim_count_self_intersections(const double *points, int64_t n_points, con
  *      (remove_degenerate_faces);
  *   3. holes (boundary loops): with close_holes, every loop whose diameter
  *      (largest distance between two of its points) is at most max_hole
- *      times the bounding-box diagonal is triangulated, refined and faired
- *      (triangulate_and_refine_hole, then fair: the fill meets the surface
- *      with a continuous tangent plane), unless the faired fill would cross
- *      the surface or the fairing's solve fails (then it stays flat);
- *      the report gives the fills' area and the volume they add beyond
- *      flat caps over the holes; an open surface is refused otherwise;
+ *      times the bounding-box diagonal is triangulated and refined
+ *      (triangulate_and_refine_hole: a membrane across the hole); the
+ *      report gives the fills' area, their volume beyond flat caps over
+ *      the holes, and the volume a faired fill (one that meets the surface
+ *      with a continuous tangent plane: PMP::fair, measured, then undone)
+ *      would add: what the closing may have left out; an open surface is
+ *      refused otherwise;
  *   4. self-intersections: first autorefine_and_remove_self_intersections
  *      (exact intersection curves, keeps the outer hull), kept only if the
  *      result is closed, free of intersections and encloses 50% to 105% of
@@ -244,17 +245,20 @@ typedef struct bs_surface_report {
   int64_t split_points;          /* points duplicated to make the surface manifold */
   int holes;                     /* boundary loops found (after steps 1-2)       */
   int holes_closed;              /* of them, closed                              */
-  int holes_faired;              /* of the closed, faired (the others: the faired
-                                    fill crossed the surface, or the fairing's solve
-                                    failed; refined and flat)                    */
+  int holes_fair_estimated;      /* of the closed, those whose faired fill was
+                                    measured (its solve succeeded; fills with no
+                                    inner vertex have nothing to fair)          */
   int64_t hole_tris;             /* triangles added to close them                */
   double hole_max_diameter;      /* the largest diameter and the largest         */
   double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
   double hole_area;              /* the fills' area (units^2)                    */
-  double hole_cap_volume;        /* what closing added beyond flat caps: the volume
-                                    between the fills and the fans from each loop's
-                                    centroid to its edges, > 0 where the fills
-                                    bulge outward (units^3; compare with volume) */
+  double hole_cap_volume;        /* the volume between the fills and the fans from
+                                    each loop's centroid to its edges, > 0 where the
+                                    fills bulge outward (units^3; about 0 for a
+                                    membrane over a flat hole)                   */
+  double hole_fair_volume;       /* what faired fills would enclose beyond the fills
+                                    kept, > 0 outward (units^3; compare with volume):
+                                    the volume the closing may have left out     */
   int64_t self_intersections;    /* pairs of intersecting triangles found        */
   int self_intersection_fix;     /* 0 none needed, 1 autorefinement, 2 local removal,
                                     3 local removal then autorefinement          */
