@@ -21,7 +21,10 @@
  * keeps Mesh_3's surface (its volume and distance to the input) where the
  * remesh path would cut thin parts. A scan's mesh that is refused or more
  * than 1% off the surface's volume is made again with finer facet
- * distances (mesh3_path), the passing one closest to the volume kept.
+ * distances (mesh3_path), the passing one closest to the volume kept; a
+ * mesh more than BS_MESH_VOLUME_LOST off counts as its mesher's refusal
+ * (volume_kept). Separate solids (surface_parts.c) are meshed one at a
+ * time (mesh_solids) and joined.
  *
  * The size is checked against the surface first: larger than its bounding
  * box's diagonal gives no interior at all, and the tets it would make
