@@ -121,13 +121,11 @@ typedef struct bs_soup_part {
 
 /* surface_parts.c: the soup's connected components as parts (*parts, *n
  * >= 2) when it has two or more and each encloses a positive (outward)
- * volume of at least one regular tet of edge h (h^3 / (6 sqrt 2)) and
- * spans at least h (its bounding-box diagonal): separate solids, each big
- * enough to be meshed at h on its own, to be meshed one at a time so that
- * no tet joins two of them. Else *parts NULL and *n 0 (one solid, a solid
- * with a cavity, or parts smaller than the size: meshed whole, as before).
- * BS_ENOMEM naming path. Free with bs__soup_parts_free. */
-int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t *tris, int64_t nt, double h,
+ * volume: separate solids, to be meshed one at a time so that no tet joins
+ * two of them. Else *parts NULL and *n 0 (one solid, or a solid with a
+ * cavity: meshed whole). BS_ENOMEM naming path. Free with
+ * bs__soup_parts_free. */
+int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t *tris, int64_t nt,
                     bs_soup_part **parts, int64_t *n, bs_error *err);
 void bs__soup_parts_free(bs_soup_part *parts, int64_t n);
 

@@ -498,14 +498,18 @@ static int mesh_solid(const char *path, const double *pts, int64_t np, const int
 }
 
 /* Separate solids (bs__soup_solids) meshed one at a time and joined; a
- * refusal names the solid. */
+ * refusal names the solid. A solid smaller than twice the size across (its
+ * bounding-box diagonal) is meshed at half its diagonal: finer where it is
+ * needed, rather than a part with no interior at the size. */
 static int mesh_solids(const char *path, const bs_soup_part *parts, int64_t n, const bs_mesh_read_opts *opts,
                        bs_mesh **out, bs_error *err) {
   bs_mesh **m = calloc((size_t)n, sizeof *m);
   if (!m) return bs_error_set(err, BS_ENOMEM, "%s: out of memory for the meshes of its solids", path);
   int rc = BS_OK;
   for (int64_t i = 0; i < n && !rc; i++) {
-    rc = mesh_solid(path, parts[i].x, parts[i].np, parts[i].tris, parts[i].nt, opts, &m[i], err);
+    bs_mesh_read_opts o = *opts;
+    o.size = fmin(opts->size, 0.5 * parts[i].diag);
+    rc = mesh_solid(path, parts[i].x, parts[i].np, parts[i].tris, parts[i].nt, &o, &m[i], err);
     const size_t len = strlen(err->msg);
     if (rc && len < sizeof err->msg)
       snprintf(err->msg + len, sizeof err->msg - len, " (solid %lld of the surface's %lld, meshed one at a time)",
@@ -525,7 +529,7 @@ int bs__mesh_closed_surface(const char *path, const double *pts, int64_t np, con
                         (long long)nt);
   bs_soup_part *parts = NULL;
   int64_t n = 0;
-  int rc = bs__soup_solids(path, pts, np, tris, nt, opts ? opts->size : 0.0, &parts, &n, err);
+  int rc = opts ? bs__soup_solids(path, pts, np, tris, nt, &parts, &n, err) : BS_OK;
   if (!rc) rc = n > 1 ? mesh_solids(path, parts, n, opts, out, err) : mesh_solid(path, pts, np, tris, nt, opts, out, err);
   bs__soup_parts_free(parts, n);
   return rc;

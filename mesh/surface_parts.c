@@ -8,10 +8,7 @@
  * Meshed one at a time, two solids cannot be joined: a mesh of solid i only
  * has tets inside solid i's surface. A surface whose components are not all
  * outward (a cavity: a component that bounds a void inside another) is not
- * split, since a solid with a cavity must be meshed with it; nor one with a
- * part smaller than the size (boeing.off's small parts), which is meshed
- * whole as before. */
-#include <math.h>
+ * split, since a solid with a cavity must be meshed with it. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -46,7 +43,7 @@ static int extract(const double *x, int64_t np, const int32_t *tris, int64_t nt,
   return 0;
 }
 
-int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t *tris, int64_t nt, double h,
+int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t *tris, int64_t nt,
                     bs_soup_part **parts, int64_t *n_parts, bs_error *err) {
   *parts = NULL, *n_parts = 0;
   int32_t *label = malloc(((size_t)np + 1) * sizeof *label), *id = malloc(((size_t)np + 1) * sizeof *id);
@@ -57,7 +54,7 @@ int bs__soup_solids(const char *path, const double *x, int64_t np, const int32_t
   for (int64_t c = 0; !rc && k > 1 && c < k && outward; c++) {
     if (extract(x, np, tris, nt, label, (int32_t)c, id, &p[c]))
       rc = bs_error_set(err, BS_ENOMEM, "%s: out of memory splitting the surface", path);
-    else outward = p[c].volume >= h * h * h / (6.0 * sqrt(2.0)) && p[c].volume > 0 && p[c].diag >= h;
+    else outward = p[c].volume > 0;
   }
   free(label), free(id);
   if (rc || k < 2 || !outward) {

@@ -203,18 +203,24 @@ Test(mesh_wrap, non_planar_four_edge_hole) {
 
 /* Two unit cubes 0.01 apart, meshed at 0.25: one mesh per solid, so no tet
  * joins them (meshed whole, the gap was filled: one piece of volume 2.031
- * through the wrap). The corpus's bones.off is of this class. */
+ * through the wrap). A third cube, 0.2 on a side (diagonal 0.35, under
+ * twice the size), is meshed at half its diagonal rather than lost. The
+ * corpus's bones.off is of this class. */
 Test(mesh_wrap, separate_solids_closer_than_the_size_stay_apart) {
   tsoup s;
   memset(&s, 0, sizeof s);
   add_box(&s, (double[3]){0, 0, 0}, (double[3]){1, 1, 1}, 0);
   add_box(&s, (double[3]){1.01, 0, 0}, (double[3]){2.01, 1, 1}, 0);
+  add_box(&s, (double[3]){3, 0, 0}, (double[3]){3.2, 0.2, 0.2}, 0);
   char *path = temp_path("apart.off");
   write_off(path, &s);
-  bs_mesh *m = check_mesh(path, (bs_mesh_read_opts){.size = 0.25}, 2.0, 0.005);
+  bs_mesh *m = check_mesh(path, (bs_mesh_read_opts){.size = 0.25}, 2.008, 0.005);
   bs_error err;
   bs_error_clear(&err);
-  cr_expect_eq(bs__boundary_manifold(m, path, 2, &err), BS_OK, "two pieces: %s", err.msg);
+  cr_expect_eq(bs__boundary_manifold(m, path, 3, &err), BS_OK, "three pieces: %s", err.msg);
+  int32_t small = 0; /* vertices of the small cube */
+  for (int32_t v = 0; v < m->n_vertices; v++) small += m->x[3 * v] > 2.5;
+  cr_expect_geq(small, 8, "the small cube has %d vertices", small);
   double gap_lo = INFINITY, gap_hi = -INFINITY; /* no vertex inside the gap */
   for (int32_t v = 0; v < m->n_vertices; v++)
     if (m->x[3 * v] > 1 + 1e-9 && m->x[3 * v] < 1.01 - 1e-9) gap_lo = fmin(gap_lo, m->x[3 * v]), gap_hi = fmax(gap_hi, m->x[3 * v]);
