@@ -32,9 +32,11 @@ static int extract(const double *x, int64_t np, const int32_t *tris, int64_t nt,
   for (int64_t v = 0; v < np; v++)
     if (id[v] >= 0) memcpy(p->x + 3 * (size_t)id[v], x + 3 * v, 3 * sizeof *x);
   m = 0;
-  for (int64_t f = 0; f < nt; f++)
-    if (label[tris[3 * f]] == c)
-      for (int k = 0; k < 3; k++) p->tris[3 * m + k] = id[tris[3 * f + k]], k == 2 ? m++ : 0;
+  for (int64_t f = 0; f < nt; f++) {
+    if (label[tris[3 * f]] != c) continue;
+    for (int k = 0; k < 3; k++) p->tris[3 * m + k] = id[tris[3 * f + k]];
+    m++;
+  }
   p->np = n, p->nt = m;
   p->volume = bs__soup_volume(p->x, p->tris, p->nt);
   double lo[3], hi[3];
