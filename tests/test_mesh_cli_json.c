@@ -37,14 +37,22 @@ static double number(const cJSON *o, const char *a, const char *b) {
   return x->valuedouble;
 }
 
+/* `bigstep mesh info PATH ARGS --json`, which must succeed, parsed (its
+ * output into *out). */
+static cJSON *info_json(const char *path, const char *args, char **out) {
+  char cmd[512];
+  snprintf(cmd, sizeof cmd, "%s mesh info %s %s --json", BS_BIGSTEP_EXE, path, args);
+  cr_assert_eq(bs_test_run(cmd, out), 0, "%s", *out);
+  cJSON *j = cJSON_Parse(*out);
+  cr_assert_not_null(j, "not JSON: %s", *out);
+  return j;
+}
+
 Test(mesh_cli_json, info_json_of_a_wrapped_surface) {
-  char path[96], cmd[512], *out = NULL;
+  char path[96], *out = NULL;
   snprintf(path, sizeof path, "/tmp/bs_test_cli_json_%d.off", (int)getpid());
   write_two_cubes(path);
-  snprintf(cmd, sizeof cmd, "%s mesh info %s --size 0.2 --json", BS_BIGSTEP_EXE, path);
-  cr_assert_eq(bs_test_run(cmd, &out), 0, "%s", out);
-  cJSON *j = cJSON_Parse(out);
-  cr_assert_not_null(j, "not JSON: %s", out);
+  cJSON *j = info_json(path, "--size 0.2", &out);
   cr_expect(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "gate_passed")), "%s", out);
   cr_expect(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "check")), "%s", out);
   cr_expect_geq(number(j, "quality", "dihedral_min"), 10.0);
@@ -75,13 +83,10 @@ static void write_open_cube(const char *path) {
 /* A planar hole closed on request: its fill is the missing face (area 1,
  * a sixth of the surface; nothing beyond the flat cap). */
 Test(mesh_cli_json, holes_closed_reported) {
-  char path[96], cmd[512], *out = NULL;
+  char path[96], *out = NULL;
   snprintf(path, sizeof path, "/tmp/bs_test_cli_json_hole_%d.off", (int)getpid());
   write_open_cube(path);
-  snprintf(cmd, sizeof cmd, "%s mesh info %s --size 0.2 --close-holes --max-hole 1 --json", BS_BIGSTEP_EXE, path);
-  cr_assert_eq(bs_test_run(cmd, &out), 0, "%s", out);
-  cJSON *j = cJSON_Parse(out);
-  cr_assert_not_null(j, "not JSON: %s", out);
+  cJSON *j = info_json(path, "--size 0.2 --close-holes --max-hole 1", &out);
   const cJSON *holes = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(j, "surface"), "holes");
   cr_assert(cJSON_IsObject(holes), "%s", out);
   cr_expect_eq(number(holes, "found", NULL), 1);
