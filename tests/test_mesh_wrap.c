@@ -202,8 +202,7 @@ Test(mesh_wrap, non_planar_four_edge_hole) {
 }
 
 /* Two unit cubes 0.01 apart, meshed at 0.25: one mesh per solid, so no tet
- * joins them (meshed whole, the gap was filled: one piece of volume 2.031
- * through the wrap). A third cube, 0.2 on a side (diagonal 0.35, under
+ * joins them (meshed whole, the mesh had volume 2.031: the gap filled). A third cube, 0.2 on a side (diagonal 0.35, under
  * twice the size), is meshed at half its diagonal rather than lost. The
  * corpus's bones.off is of this class. */
 Test(mesh_wrap, separate_solids_closer_than_the_size_stay_apart) {
