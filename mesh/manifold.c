@@ -17,23 +17,13 @@ static int32_t root(int32_t *p, int32_t a) {
 
 int64_t bs__soup_components(const double *x, int64_t np, const int32_t *tris, int64_t nt, double min_volume,
                             int32_t *parent) {
-  for (int64_t v = 0; v < np; v++) parent[v] = (int32_t)v;
-  double *vol = calloc((size_t)np + 1, sizeof *vol);
-  char *used = calloc((size_t)np + 1, 1);
-  if (!vol || !used) {
-    free(vol), free(used);
-    return -1;
-  }
-  for (int64_t f = 0; f < nt; f++)
-    for (int k = 0; k < 3; k++) {
-      used[tris[3 * f + k]] = 1;
-      int32_t a = root(parent, tris[3 * f + k]), b = root(parent, tris[3 * f + (k + 1) % 3]);
-      if (a != b) parent[a] = b;
-    }
-  for (int64_t f = 0; f < nt; f++) vol[root(parent, tris[3 * f])] += bs__soup_volume(x, tris + 3 * f, 1);
+  const int64_t k = bs__soup_label_components(tris, nt, np, parent); /* parent: the labels */
+  double *vol = k >= 0 ? calloc((size_t)k + 1, sizeof *vol) : NULL;
+  if (!vol) return -1;
+  for (int64_t f = 0; f < nt; f++) vol[parent[tris[3 * f]]] += bs__soup_volume(x, tris + 3 * f, 1);
   int64_t n = 0;
-  for (int64_t v = 0; v < np; v++) n += used[v] && root(parent, (int32_t)v) == v && fabs(vol[v]) >= min_volume;
-  free(vol), free(used);
+  for (int64_t c = 0; c < k; c++) n += fabs(vol[c]) >= min_volume;
+  free(vol);
   return n;
 }
 

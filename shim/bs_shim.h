@@ -206,12 +206,12 @@ int bs_shim_count_self_intersections(const double *points, int64_t n_points, con
  *   3. holes (boundary loops): with close_holes, every loop whose diameter
  *      (largest distance between two of its points) is at most max_hole
  *      times the bounding-box diagonal is triangulated and refined
- *      (triangulate_and_refine_hole: a membrane across the hole); the
- *      report gives the fills' area, their volume beyond flat caps over
- *      the holes, and the volume a faired fill (one that meets the surface
- *      with a continuous tangent plane: PMP::fair, measured, then undone)
- *      would add: what the closing may have left out; an open surface is
- *      refused otherwise;
+ *      (triangulate_and_refine_hole: a membrane across the hole) and
+ *      kept so; the report gives the fills' area, their volume beyond flat
+ *      caps over the holes, and the volume the same fills would enclose
+ *      more if faired (PMP::fair: meeting the surface with a continuous
+ *      tangent plane), which the surface returned does not contain; an open
+ *      surface is refused otherwise;
  *   4. self-intersections: first autorefine_and_remove_self_intersections
  *      (exact intersection curves, keeps the outer hull), kept only if the
  *      result is closed, free of intersections and encloses 50% to 105% of
@@ -245,9 +245,9 @@ typedef struct bs_surface_report {
   int64_t split_points;          /* points duplicated to make the surface manifold */
   int holes;                     /* boundary loops found (after steps 1-2)       */
   int holes_closed;              /* of them, closed                              */
-  int holes_fair_estimated;      /* of the closed, those whose faired fill was
-                                    measured (its solve succeeded; fills with no
-                                    inner vertex have nothing to fair)          */
+  int holes_fair_estimated;      /* of the closed, those counted in
+                                    hole_fair_volume (their fairing solve succeeded;
+                                    a fill with no inner vertex has nothing to fair) */
   int64_t hole_tris;             /* triangles added to close them                */
   double hole_max_diameter;      /* the largest diameter and the largest         */
   double hole_max_perimeter;     /* perimeter of the closed holes (0: none)      */
