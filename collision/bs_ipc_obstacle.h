@@ -59,12 +59,22 @@
  * function; the evaluated ends are lowered by their rounding bound. The
  * alpha of max_step is the smallest over (b, v); 1 when nothing moves.
  *
- * Moving obstacles: the energy and the CCD use the obstacle at tⁿ⁺¹. Each
- * step's end and every line-search point are therefore outside the obstacle
- * at tⁿ⁺¹, but the motion between steps is not swept in time: an obstacle
- * that moves more than a vertex's gap in one step leaves no feasible start
- * (the step fails), and one that moves past a vertex within a step is not
- * caught (docs/limitations.md).
+ * Moving obstacles: the energy and max_step use the obstacles at
+ * step->time. The term also offers the two operations of a swept domain
+ * (bs_terms.h): sweep(x, d, t0, t1), the certified fraction of the path
+ * (x_v + a d_v, time t0 + a (t1 - t0)) against every obstacle, and carry,
+ * which moves each free surface vertex within dhat of a moving obstacle
+ * with that obstacle's material point. The integrator (bs_step.h, "Moving
+ * obstacles") uses them to sweep a step whose start a moving obstacle
+ * passes over, so that every point it stops at, and every path between
+ * them, is certified outside the obstacles at its own time. The moving
+ * CCD (bs_ccd_levelset_moving) is the additive CCD above with the rate
+ * D = lip R, R a bound of the point's speed in the obstacle's frame along
+ * the path: |d - dt v_b(x0, t0)| (v_b the obstacle's material velocity,
+ * dt = t1 - t0) plus |dt| (dv + dw r + w (|d| + v |dt|)) with the motion's
+ * bounds of bs_levelset_motion_bound_over and r = |x0 - c(t0)| + |d| +
+ * v |dt|, so a point carried with the obstacle has R = 0 for a translation;
+ * phi is evaluated with the frame at t0 + a dt.
  *
  * Friction (IPC, Li et al. 2020, section 5: lagged, smoothed Coulomb), for
  * obstacles added with mu > 0 and when step->dt > 0: at begin_step, from xⁿ
@@ -148,6 +158,12 @@ double bs_ipc_obstacle_lipschitz(const bs_levelset *ls, double *slope);
  * certifiably outside, or for non-finite input). */
 double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double x0[3],
                        const double d[3], double s, int max_iter);
+
+/* The same against ls moving from time t0 to t1 along the path: the point
+ * at x0 + a d meets the obstacle at time t0 + a (t1 - t0) (above, "Moving
+ * obstacles"). */
+double bs_ccd_levelset_moving(const bs_levelset *ls, double lip, const double x0[3], const double d[3], double t0,
+                              double t1, double s, int max_iter);
 
 int bs_term_ipc_obstacle_set_kappa(bs_term *t, double kappa, bs_error *err);
 /* on = 1 (at creation): each vertex's barrier block projected onto the PSD

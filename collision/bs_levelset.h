@@ -223,6 +223,19 @@ void bs_levelset_local_point(const bs_levelset *ls, double t, const double x[3],
 /* Velocity of the obstacle's material point at x and time t (m/s). */
 void bs_levelset_velocity(const bs_levelset *ls, double t, const double x[3], double v[3]);
 
+/* Bounds of the motion over the times between t0 and t1 (either order):
+ * v and w the largest |centre velocity| (m/s) and |angular velocity|
+ * (rad/s), dv and dw the largest change of each between two of those times
+ * (0 when the interval lies within one piece of the motion: constant
+ * velocity, one keyframe segment, or a hold; else 2 v and 2 w). All 0 for a
+ * static shape. With them, a material point's velocity at p and time t
+ * differs from the one at p0 and t0 by at most
+ * dv + dw |p - c(t)| + w (|p - p0| + v |t - t0|). */
+typedef struct bs_levelset_motion_bound {
+  double v, w, dv, dw;
+} bs_levelset_motion_bound;
+void bs_levelset_motion_bound_over(const bs_levelset *ls, double t0, double t1, bs_levelset_motion_bound *b);
+
 /* P(x) = x - phi(x) grad phi(x) into xp (may alias x); returns phi(x). See
  * the header comment for when it lands on phi = 0 and is idempotent. */
 double bs_levelset_project(const bs_levelset *ls, double t, const double x[3], double xp[3]);

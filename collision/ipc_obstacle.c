@@ -248,14 +248,27 @@ static double fall_rate(const bs_levelset *ls, const bs_levelset_frame *f, doubl
   return lip * nd * up;
 }
 
-double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double x0[3],
-                       const double d[3], double s, int max_iter) {
-  if (!finite_all(x0, 3) || !finite_all(d, 3) || !(s > 0 && s < 1) || max_iter < 1) return 0;
-  const double D = fall_rate(ls, f, lip, d);
-  double size = fmax(fabs(ls->param[0]), fmax(fabs(ls->param[1]), fabs(ls->param[2])));
-  if (ls->kind == BS_LS_GRID) size = fmax(size, fabs(ls->h) * (ls->n[0] + ls->n[1] + ls->n[2]));
-  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + sqrt(bs_dot3(d, d)) + sqrt(bs_dot3(f->c, f->c)) + size, -40);
-  const double lo0 = bs_levelset_eval_frame(ls, f, x0, NULL, NULL) - delta;
+/* The path the CCD follows: the point x0 + a d against the level set at the
+ * frame f (dt = 0) or at time t0 + a dt. */
+typedef struct ccd_path {
+  const bs_levelset *ls;
+  const bs_levelset_frame *f;
+  double t0, dt;
+  const double *x0, *d;
+} ccd_path;
+
+static double path_phi(const ccd_path *p, double a) {
+  const double y[3] = {p->x0[0] + a * p->d[0], p->x0[1] + a * p->d[1], p->x0[2] + a * p->d[2]};
+  if (p->dt == 0) return bs_levelset_eval_frame(p->ls, p->f, y, NULL, NULL);
+  bs_levelset_frame g;
+  bs_levelset_frame_at(p->ls, p->t0 + a * p->dt, &g);
+  return bs_levelset_eval_frame(p->ls, &g, y, NULL, NULL);
+}
+
+/* The additive CCD (bs_ipc_obstacle.h) along p with phi's rate D (>= 0,
+ * rounded up) and rounding bound delta. */
+static double ccd_core(const ccd_path *p, double D, double delta, double s, int max_iter) {
+  const double lo0 = path_phi(p, 0) - delta;
   if (!(lo0 > delta / (s * s))) return 0;
   if (!(D > 0)) return 1;
   const double gap = s * lo0;
@@ -264,8 +277,7 @@ double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double
     const double tn = t + (1 - s) * P / D;
     if (tn >= 1) return 1;
     if (it > 0 || t > 0) { /* evaluate the end (the first step ends >= gap by the bound) */
-      const double y[3] = {x0[0] + tn * d[0], x0[1] + tn * d[1], x0[2] + tn * d[2]};
-      const double lo = bs_levelset_eval_frame(ls, f, y, NULL, NULL) - delta;
+      const double lo = path_phi(p, tn) - delta;
       if (!(lo >= gap)) return t;
       P = lo;
     } else {
@@ -274,6 +286,50 @@ double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double
     t = tn;
   }
   return t;
+}
+
+/* The largest |parameter| of the shape (a grid's extent): a scale of phi's rounding. */
+static double shape_size(const bs_levelset *ls) {
+  double size = fmax(fabs(ls->param[0]), fmax(fabs(ls->param[1]), fabs(ls->param[2])));
+  if (ls->kind == BS_LS_GRID) size = fmax(size, fabs(ls->h) * (ls->n[0] + ls->n[1] + ls->n[2]));
+  return size;
+}
+
+double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double x0[3],
+                       const double d[3], double s, int max_iter) {
+  if (!finite_all(x0, 3) || !finite_all(d, 3) || !(s > 0 && s < 1) || max_iter < 1) return 0;
+  const double D = fall_rate(ls, f, lip, d);
+  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + sqrt(bs_dot3(d, d)) + sqrt(bs_dot3(f->c, f->c)) + shape_size(ls), -40);
+  const ccd_path p = {ls, f, 0, 0, x0, d};
+  return ccd_core(&p, D, delta, s, max_iter);
+}
+
+/* The CCD against a moving shape (bs_ipc_obstacle.h, "Moving obstacles"):
+ * phi's rate along the path is at most lip times the point's speed in the
+ * shape's frame, |d - dt v_b(x0 + a d, t0 + a dt)|, bounded from its value
+ * at a = 0 and the motion's bounds (bs_levelset_motion_bound_over). */
+double bs_ccd_levelset_moving(const bs_levelset *ls, double lip, const double x0[3], const double d[3], double t0,
+                              double t1, double s, int max_iter) {
+  if (!finite_all(x0, 3) || !finite_all(d, 3) || !isfinite(t0) || !isfinite(t1) || !(s > 0 && s < 1) || max_iter < 1)
+    return 0;
+  const double dt = t1 - t0;
+  bs_levelset_frame f0, f1;
+  bs_levelset_frame_at(ls, t0, &f0);
+  bs_levelset_frame_at(ls, t1, &f1);
+  bs_levelset_motion_bound mb;
+  bs_levelset_motion_bound_over(ls, t0, t1, &mb);
+  const double ad = fabs(dt), nd = sqrt(bs_dot3(d, d));
+  double r0[3], u[3], wr[3], rel[3];
+  for (int k = 0; k < 3; k++) r0[k] = x0[k] - f0.c[k];
+  bs_cross3(f0.w, r0, wr);
+  for (int k = 0; k < 3; k++) u[k] = f0.v[k] + wr[k], rel[k] = d[k] - dt * u[k];
+  const double r = sqrt(bs_dot3(r0, r0)) + nd + mb.v * ad;
+  const double R = sqrt(bs_dot3(rel, rel)) + ad * (mb.dv + mb.dw * r + mb.w * (nd + mb.v * ad));
+  const double D = lip * R * (1 + 64 * DBL_EPSILON) + 16 * DBL_EPSILON * (nd + ad * (mb.v + mb.w * r));
+  const double cmax = fmax(sqrt(bs_dot3(f0.c, f0.c)), sqrt(bs_dot3(f1.c, f1.c)));
+  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + nd + cmax + shape_size(ls), -40);
+  const ccd_path p = {ls, NULL, t0, dt, x0, d};
+  return ccd_core(&p, D, delta, s, max_iter);
 }
 
 static int max_step_impl(const bs_term *t, const double *x, const double *dx, double *alpha) {
@@ -304,21 +360,101 @@ static int ob_max_step(const bs_term *t, const double *x, const double *dx, doub
   return max_step_impl(t, x, dx, alpha) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
 }
 
+/* One surface vertex's certified fraction of the path (p + a dv, time
+ * t0 + a (t1 - t0)) against every obstacle (dv may be NULL: p fixed). */
+static double vertex_sweep(const obs_data *d, const double *p, const double *dv, double t0, double t1) {
+  static const double zero[3] = {0, 0, 0};
+  const double *m = dv ? dv : zero;
+  const int still = m[0] == 0 && m[1] == 0 && m[2] == 0;
+  double a = 1;
+  for (int b = 0; b < d->n_ob && a > 0; b++) {
+    const bs_levelset *ls = d->ob[b].ls;
+    if (bs_levelset_motion(ls) != BS_LS_STATIC && t1 != t0)
+      a = fmin(a, bs_ccd_levelset_moving(ls, d->ob[b].lip, p, m, t0, t1, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
+    else if (!still)
+      a = fmin(a, bs_ccd_levelset(ls, &d->frames[b], d->ob[b].lip, p, m, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
+  }
+  return a;
+}
+
+static int ob_sweep(const bs_term *t, const double *x, const double *dx, double t0, double t1, double *frac) {
+  obs_data *d = t->data;
+  const size_t n3 = 3 * (size_t)d->nv;
+  if (!finite_all(x, n3) || (dx && !finite_all(dx, n3)) || !isfinite(t0) || !isfinite(t1))
+    return BS_TERM_NOT_EVALUABLE;
+  set_frames(d, t0);
+  const int32_t n = d->n_sv;
+#pragma omp parallel for schedule(dynamic, 64) if (n > 1024)
+  for (int32_t j = 0; j < n; j++) {
+    const size_t v = (size_t)d->sv[j];
+    d->pmin[j] = vertex_sweep(d, x + 3 * v, dx ? dx + 3 * v : NULL, t0, t1);
+  }
+  double a = 1;
+  for (int32_t j = 0; j < n; j++) a = fmin(a, d->pmin[j]);
+  *frac = a;
+  d->st.ccd_calls++;
+  d->st.ccd_limited += a < 1;
+  return BS_TERM_OK;
+}
+
+/* Where the rigid motion of frame f0 to frame f1 takes the point p:
+ * M1 M0^T (p - c0) + c1. */
+static void carry_point(const bs_levelset_frame *f0, const bs_levelset_frame *f1, const double p[3], double q[3]) {
+  double y[3];
+  for (int k = 0; k < 3; k++)
+    y[k] = f0->M[k] * (p[0] - f0->c[0]) + f0->M[3 + k] * (p[1] - f0->c[1]) + f0->M[6 + k] * (p[2] - f0->c[2]);
+  for (int k = 0; k < 3; k++) q[k] = f1->c[k] + f1->M[3 * k] * y[0] + f1->M[3 * k + 1] * y[1] + f1->M[3 * k + 2] * y[2];
+}
+
+/* Vertex j's carrier: the moving obstacle within dhat of it at the frames
+ * set (the nearest), or -1. */
+static int carrier(const obs_data *d, const double *x, int32_t j) {
+  const double *p = x + 3 * (size_t)d->sv[j];
+  int best = -1;
+  double m = d->dhat;
+  for (int b = 0; b < d->n_ob; b++) {
+    if (bs_levelset_motion(d->ob[b].ls) == BS_LS_STATIC) continue;
+    const double phi = bs_levelset_eval_frame(d->ob[b].ls, &d->frames[b], p, NULL, NULL);
+    if (phi > 0 && phi < m) m = phi, best = b;
+  }
+  return best;
+}
+
+static int ob_carry(const bs_term *t, const double *x, double t0, double t1, double *z, uint8_t *carried) {
+  obs_data *d = t->data;
+  if (!finite_all(x, 3 * (size_t)d->nv) || !isfinite(t0) || !isfinite(t1)) return BS_TERM_NOT_EVALUABLE;
+  set_frames(d, t0);
+  const int32_t n = d->n_sv;
+#pragma omp parallel for schedule(static) if (n > 2048)
+  for (int32_t j = 0; j < n; j++) d->pcount[j] = carrier(d, x, j);
+  for (int32_t j = 0; j < n; j++) {
+    const int b = d->pcount[j];
+    if (b < 0) continue;
+    const size_t v = (size_t)d->sv[j];
+    bs_levelset_frame f1;
+    bs_levelset_frame_at(d->ob[b].ls, t1, &f1);
+    double q[3];
+    carry_point(&d->frames[b], &f1, x + 3 * v, q);
+    for (int k = 0; k < 3; k++) z[3 * v + k] = q[k] - x[3 * v + k];
+    carried[v] = 1;
+  }
+  return BS_TERM_OK;
+}
+
 /* ---- step start -------------------------------------------------------------- */
 
-/* At xⁿ: the obstacles at tⁿ⁺¹ (a vertex inside one: it moved over the
- * vertex within the step, which no step can start from), the adaptive kappa,
- * then the friction pairs (obstacles at tⁿ, with the kappa in force). */
+/* At xⁿ: the distances for the adaptive kappa, measured with the obstacles
+ * at tⁿ⁺¹, or at tⁿ when a moving obstacle has passed over a vertex by
+ * tⁿ⁺¹ (the integrator then sweeps it through the step: ob_sweep); then
+ * the friction pairs (obstacles at tⁿ, with the kappa in force). */
 static int ob_begin_step(bs_term *t, bs_error *err) {
   obs_data *d = t->data;
   if (!t->step || !t->step->x_n) return 0;
   const double *xn = t->step->x_n;
   if (!finite_all(xn, 3 * (size_t)d->nv)) return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: x^n is not finite");
-  if (barrier_pass(d, xn, t->step->time, 0))
+  if (barrier_pass(d, xn, t->step->time, 0) && barrier_pass(d, xn, t->step->time - t->step->dt, 0))
     return bs_error_set(err, BS_EINPUT,
-                        "barrier obstacles: %lld surface vertices outside the obstacles at the step's start are inside "
-                        "one at its end: a moving barrier obstacle passed over them within the step (an obstacle's "
-                        "motion within a step is not in the CCD, docs/limitations.md)",
+                        "barrier obstacles: %lld free surface vertices are inside an obstacle at the step's start",
                         (long long)d->st.inside);
   if (d->adaptive) {
     const double dh2 = d->dhat * d->dhat, m = fmax(d->st.min_distance, 0);
@@ -357,8 +493,8 @@ static int ob_hessian_convex(const bs_term *t, const double *x, bs_bsr *H) {
   return rc;
 }
 
-static const bs_term_ops ob_ops = {ob_value, ob_gradient, ob_hessian, ob_begin_step, ob_free,
-                                   ob_hessian_convex, NULL, ob_max_step};
+static const bs_term_ops ob_ops = {ob_value,          ob_gradient, ob_hessian,  ob_begin_step,   ob_free,
+                                   ob_hessian_convex, NULL,        ob_max_step, ob_sweep, ob_carry};
 
 static int build_vertices(obs_data *d, const bs_mesh *m, const uint8_t *mask, bs_error *err) {
   uint8_t *is = bs_calloc((size_t)m->n_vertices + 1, 1, "the barrier obstacles' surface", err);

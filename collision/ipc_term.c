@@ -582,7 +582,7 @@ static int ipc_hessian_convex(const bs_term *t, const double *x, bs_bsr *H) {
 }
 
 static const bs_term_ops ipc_ops = {ipc_value, ipc_gradient, ipc_hessian, ipc_begin_step, ipc_free,
-                                    ipc_hessian_convex, NULL, ipc_max_step};
+                                    ipc_hessian_convex, NULL, ipc_max_step, NULL, NULL};
 
 typedef struct edge_key {
   int32_t a, b, f, k; /* a < b; triangle f's k-th edge */

@@ -115,7 +115,7 @@ static int penalty_hessian_g(const bs_term *t, const double *x, const double *g,
 }
 
 static const bs_term_ops penalty_ops = {penalty_value, penalty_gradient, penalty_hessian, NULL, penalty_free, NULL,
-                                        penalty_hessian_g, NULL};
+                                        penalty_hessian_g, NULL, NULL, NULL};
 
 int bs_term_penalty_create_subset(const bs_fem *fem, const bs_step_data *step, const bs_levelset *ls, double k,
                                   int32_t n_vertices, const int32_t *vertices, bs_term **out, bs_error *err) {

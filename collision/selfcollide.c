@@ -846,7 +846,7 @@ static int self_begin_step(bs_term *t, bs_error *err) {
 }
 
 static const bs_term_ops self_ops = {self_value, self_gradient, self_hessian, self_begin_step, self_free,
-                                     self_hessian_convexified, self_hessian_g, NULL};
+                                     self_hessian_convexified, self_hessian_g, NULL, NULL, NULL};
 
 /* ---- interface faces ---------------------------------------------------
  * The excluded region of surface vertex p is the union of the tets that hold

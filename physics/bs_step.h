@@ -176,6 +176,8 @@ typedef struct bs_step_stats {
   bs_guess guess;         /* the initial guess taken (statics: BS_GUESS_XHAT)    */
   int failed;             /* the solve did not converge (reason in min)          */
   double seconds;         /* the whole step                                      */
+  int32_t sweep_stages;   /* stages of the sweep of moving obstacles (0: none;   */
+                          /* "Moving obstacles" above); its solves are in min    */
 } bs_step_stats;
 
 typedef struct bs_integrator bs_integrator;

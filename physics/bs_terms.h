@@ -45,6 +45,8 @@
 #ifndef BS_TERMS_H
 #define BS_TERMS_H
 
+#include <stdint.h>
+
 #include "bs_base.h"
 #include "bs_bsr.h"
 #include "bs_fem.h"
@@ -117,6 +119,21 @@ typedef struct bs_term_ops {
      guesses with it. A bs_term_status: NOT_EVALUABLE when it cannot run (a
      non-finite x or d). */
   int (*max_step)(const bs_term *t, const double *x, const double *d, double *alpha);
+  /* May be NULL (a term that does not depend on scripted motion in time):
+     for a term whose domain moves with time (barrier obstacles: a moving
+     obstacle), the largest s in [0, 1] such that the path
+     a -> (x + a d, time t0 + a (t1 - t0)), a in [0, s], stays in the
+     domain (d NULL: x fixed), certified as max_step is, into *s. The
+     integrator sweeps such terms from tⁿ to tⁿ⁺¹ within a step (bs_step.h,
+     "Moving obstacles"). A bs_term_status, as max_step. */
+  int (*sweep)(const bs_term *t, const double *x, const double *d, double t0, double t1, double *s);
+  /* May be NULL (with sweep): the vertices the term's moving domain
+     carries from time t0 to t1 (barrier obstacles: each free surface vertex
+     within dhat of a moving obstacle at t0, moved with the obstacle's
+     material point), their displacement written into z (3n) and
+     carried[v] set to 1; other entries untouched. For the sweep's
+     predictor. A bs_term_status. */
+  int (*carry)(const bs_term *t, const double *x, double t0, double t1, double *z, uint8_t *carried);
 } bs_term_ops;
 
 struct bs_term {

@@ -42,6 +42,12 @@ struct bs_integrator {
   int has_convexified;    /* a term offers hessian_convexified         */
   int has_hessian_g;      /* a term offers hessian_g and opts.penalty_secant */
   int has_max_step;       /* a term offers max_step (barrier contact: CCD) */
+  int has_sweep;          /* a term offers sweep (barrier obstacles)        */
+  const double *x_base;   /* where the guesses are clipped from: x_n, or sw_x after a sweep */
+  double *sw_x, *sw_z, *sw_zf; /* the sweep's point, predictor, followers' part (3n; made at first use) */
+  uint8_t *sw_mask;       /* the sweep's carried, then following, vertices (n) */
+  bs_bsr *sw_H;           /* the predictor's Hessian                        */
+  bs_linsolve *sw_lin;    /* and its solver (PCG)                           */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
   bs_step_history hist;   /* the integrator's history (hist.h: n_hist, owned) */
   size_t n_hist;          /* bs_integrator_history_doubles                    */
@@ -107,6 +113,12 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->gh);
   free(I->prev.d);
   free(I->hist.h);
+  free(I->sw_x);
+  free(I->sw_z);
+  free(I->sw_zf);
+  free(I->sw_mask);
+  bs_bsr_destroy(&I->sw_H);
+  bs_linsolve_destroy(&I->sw_lin);
   if (I->B.destroy) I->B.destroy(I->B.ctx);
   free(I);
   *pI = NULL;
@@ -215,6 +227,7 @@ int bs_integrator_create_on(const bs_step_backend *B, bs_step_data *step, int n_
     if (terms[i]->ops->hessian_convexified) I->has_convexified = 1;
     if (terms[i]->ops->hessian_g) I->has_hessian_g = 1;
     if (terms[i]->ops->max_step) I->has_max_step = 1;
+    if (terms[i]->ops->sweep) I->has_sweep = I->has_max_step = 1;
   }
   make_lists(I);
   if (mask) memcpy(I->mask, mask, (size_t)I->nv);
@@ -371,19 +384,21 @@ static int obj_max_step(const double *x, const double *d, double *alpha, void *c
   return 0;
 }
 
-/* Step 3 with barrier contact: candidate g clipped by the CCD from xⁿ,
+/* Step 3 with barrier contact: candidate g clipped by the CCD from xⁿ (or
+ * from where the sweep of moving obstacles left the step: I->x_base),
  * g <- xⁿ + alpha (g - xⁿ) on the free vertices (scripted ones keep their
  * positions), so that the guess offered is contact-free; alpha 0 (xⁿ) when
  * the CCD cannot run. I->gh is the scratch (free before the solve). */
 static void clip_guess(bs_integrator *I, double *g) {
   if (!I->has_max_step) return;
   const size_t n3 = 3 * (size_t)I->nv;
-  for (size_t i = 0; i < n3; i++) I->gh[i] = g[i] - I->x_n[i];
+  const double *b = I->x_base;
+  for (size_t i = 0; i < n3; i++) I->gh[i] = g[i] - b[i];
   double a = 0;
-  if (obj_max_step(I->x_n, I->gh, &a, I) || !(a >= 0)) a = 0;
+  if (obj_max_step(b, I->gh, &a, I) || !(a >= 0)) a = 0;
   if (a >= 1) return;
   for (size_t i = 0; i < n3; i++)
-    if (I->mask[i / 3]) g[i] = I->x_n[i] + a * I->gh[i];
+    if (I->mask[i / 3]) g[i] = b[i] + a * I->gh[i];
 }
 
 static void hook_project_gradient(const double *x, double *g, void *ctx) {
@@ -804,6 +819,155 @@ static int post_solve(bs_integrator *I, double dt, double *x, double *v, const b
   return 0;
 }
 
+/* ---- moving obstacles within a step (bs_step.h, "Moving obstacles") ---- */
+
+#define BS_SWEEP_STAGES 64 /* stages before a sweep is given up */
+
+/* The certified fraction *s of the path (x + a d, time t0 + a (t1 - t0)),
+ * a in [0, 1]: the smallest over the active terms of sweep, and of max_step
+ * along d for the terms without sweep (d NULL: x fixed, 1 for them). */
+static int path_fraction(bs_integrator *I, const double *x, const double *d, double t0, double t1, double *s) {
+  double a = 1;
+  for (int i = 0; i < I->n_terms && a > 0; i++) {
+    const bs_term *t = I->terms[i];
+    double ai = 1;
+    int rc = 0;
+    if (t->ops->sweep) rc = t->ops->sweep(t, x, d, t0, t1, &ai);
+    else if (d && t->ops->max_step) rc = t->ops->max_step(t, x, d, &ai);
+    if (rc) return rc;
+    a = fmin(a, ai);
+  }
+  *s = a;
+  return 0;
+}
+
+static int sweep_alloc(bs_integrator *I, bs_error *err) {
+  if (I->sw_lin) return 0;
+  const size_t n3 = 3 * (size_t)I->nv + 1;
+  const bs_bsr *P = I->B.pattern;
+  I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3), I->sw_zf = malloc(sizeof(double) * n3);
+  I->sw_mask = malloc((size_t)I->nv + 1);
+  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask) return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
+  int rc = bs_bsr_create(P->n, P->row_ptr, P->col, &I->sw_H, err);
+  if (!rc && I->opts.min.hessian_extra > 0) rc = bs_bsr_reserve_extra(I->sw_H, I->opts.min.hessian_extra, err);
+  return rc ? rc : bs_linsolve_create(I->sw_H, BS_LIN_PCG, &I->sw_lin, err);
+}
+
+/* The sweep's predictor from (x, t0) to t1 into z: the vertices the moving
+ * domains carry (bs_term_ops.carry) move with them, and every other free
+ * vertex by the linear response of the step's objective to that motion,
+ * H_ff z_f = -H_fc z_c (H the convexified Hessian at x, PCG to 1e-3 over
+ * the free vertices not carried). z = 0 when nothing is carried. */
+static int sweep_predictor(bs_integrator *I, const double *x, double t0, double t1, double *z, bs_error *err) {
+  const size_t nv = (size_t)I->nv, n3 = 3 * nv;
+  uint8_t *c = I->sw_mask;
+  memset(c, 0, nv);
+  memset(z, 0, sizeof(double) * n3);
+  for (int i = 0; i < I->n_terms; i++) {
+    const bs_term *t = I->terms[i];
+    if (t->ops->carry && t->ops->carry(t, x, t0, t1, z, c))
+      return bs_error_set(err, BS_ENUMERIC, "the %s term cannot say what it carries in the sweep", t->name);
+  }
+  int any = 0;
+  for (size_t v = 0; v < nv; v++) {
+    c[v] = c[v] && I->mask[v];
+    for (int k = 0; k < 3 && !c[v]; k++) z[3 * v + k] = 0;
+    any |= c[v];
+  }
+  if (!any || I->B.vecops) return 0;
+  int rc = hessian_projected(I, x, NULL, 1, I->sw_H);
+  if (rc) return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "the Hessian is not evaluable in the sweep");
+  bs_bsr_index_extra(I->sw_H);
+  double *b = I->gh, *zf = I->sw_zf;
+  bs_bsr_mul(I->sw_H, NULL, z, b);
+  for (size_t v = 0; v < nv; v++) {
+    c[v] = I->mask[v] && !c[v]; /* now: the vertices that follow */
+    for (int k = 0; k < 3; k++) b[3 * v + k] = c[v] ? -b[3 * v + k] : 0.0;
+  }
+  if ((rc = bs_linsolve_solve(I->sw_lin, I->sw_H, c, b, 1e-3, 0, zf, NULL, err))) return rc;
+  for (size_t i = 0; i < n3; i++)
+    if (c[i / 3]) z[i] = zf[i];
+  return 0;
+}
+
+/* One stage from (x, *tau): along the predictor to the time it certifies,
+ * then (when something is pushed and the step's end is not reached) the
+ * step's objective minimized there. */
+static int sweep_stage(bs_integrator *I, double *x, double *tau, double t1, bs_step_stats *acc, bs_error *err) {
+  const size_t n3 = 3 * (size_t)I->nv;
+  double *z = I->sw_z, s = 0;
+  I->step->time = *tau;
+  int rc = sweep_predictor(I, x, *tau, t1, z, err), moving = 0;
+  if (rc) return rc;
+  const double span = t1 - *tau;
+  for (size_t i = 0; i < n3; i++) moving |= z[i] != 0;
+  if ((rc = path_fraction(I, x, moving ? z : NULL, *tau, t1, &s)))
+    return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "a contact term is not evaluable on the sweep's path");
+  if (!(s > 0))
+    return bs_error_set(err, BS_ENUMERIC,
+                        "moving obstacles: the sweep of the step from t = %g s stands still at t = %g s: a vertex "
+                        "touches a moving barrier obstacle closer than the CCD can certify",
+                        I->step->time, *tau);
+  if (moving)
+    for (size_t i = 0; i < n3; i++) x[i] += fmin(s, 1.0) * z[i];
+  *tau = s >= 1 ? t1 : *tau + s * span;
+  acc->sweep_stages++;
+  if (*tau >= t1 || !moving) return 0;
+  I->step->time = *tau;
+  bs_step_stats sub;
+  memset(&sub, 0, sizeof sub);
+  if ((rc = run_solver(I, x, 1, &sub, err))) return rc;
+  sub.failed = 0; /* a stage's solve need not converge: its answer only has to be in the domain */
+  bs_step_stats_add(acc, &sub);
+  return 0;
+}
+
+/* 1 when a term's domain moves over xⁿ between t0 and t1 (a moving barrier
+ * obstacle passes over a vertex): the step is then swept; 0 when not; a
+ * negative code on errors. */
+static int sweep_needed(bs_integrator *I, double t0, double t1, bs_error *err) {
+  if (!I->has_sweep) return 0;
+  double s = 1;
+  int rc = path_fraction(I, I->x_n, NULL, t0, t1, &s);
+  if (rc) return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "a contact term is not evaluable at the step's start");
+  return s < 1;
+}
+
+/* Step 1b (needed: sweep_needed's answer): the step swept from t0 = tⁿ to
+ * t1 = tⁿ⁺¹ in stages that each stay in the terms' domains, the guesses
+ * then clipped from where the sweep ends (I->x_base; xⁿ without a sweep).
+ * The stages' solves are counted in acc. */
+static int sweep_obstacles(bs_integrator *I, int needed, double t0, double t1, bs_step_stats *acc, bs_error *err) {
+  I->x_base = I->x_n;
+  if (!needed) return 0;
+  int rc = sweep_alloc(I, err);
+  if (rc) return rc;
+  double *x = I->sw_x, tau = t0;
+  memcpy(x, I->x_n, sizeof(double) * 3 * (size_t)I->nv);
+  for (int k = 0; k < BS_SWEEP_STAGES && tau < t1 && !rc; k++) rc = sweep_stage(I, x, &tau, t1, acc, err);
+  I->step->time = t1;
+  if (rc) return rc;
+  if (tau < t1)
+    return bs_error_set(err, BS_ENUMERIC,
+                        "moving obstacles: the sweep of the step from t = %g s reached only t = %g s of %g s in %d "
+                        "stages",
+                        t0, tau, t1, BS_SWEEP_STAGES);
+  I->x_base = x;
+  return 0;
+}
+
+/* st = the main solve's statistics with the sweep's stages and their
+ * solves' counts (acc) added; the reason, guess and failure are the main
+ * solve's. */
+static void merge_sweep(bs_step_stats *st, const bs_step_stats *acc) {
+  if (!acc->sweep_stages) return;
+  const bs_step_stats main = *st;
+  *st = *acc;
+  bs_step_stats_add(st, &main);
+  st->guess = main.guess;
+  st->failed = main.failed;
+}
+
 int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double *v, bs_step_stats *st,
                        bs_error *err) {
   double t0 = bs_seconds();
@@ -814,8 +978,15 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
   if ((rc = check_finite(I, x, "position", err)) || (rc = check_finite(I, v, "velocity", err))) return rc;
   int use = 0;
   if ((rc = begin_step(I, t, dt, x, v, &use, err))) return rc;
-  /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia. */
+  /* f(xⁿ) = −∇Φ(xⁿ): every term but inertia (moving obstacles where xⁿ
+     is, at tⁿ, when they pass over it by tⁿ⁺¹: then swept). */
+  bs_step_stats sw;
+  memset(&sw, 0, sizeof sw);
+  const int needed = sweep_needed(I, t, t + dt, err);
+  if (needed < 0) return needed;
+  if (needed) I->step->time = t;
   if ((rc = potential_gradient(I, err))) return rc;
+  if ((rc = sweep_obstacles(I, needed, t, t + dt, &sw, err))) return rc;
   if (I->opts.integrator == BS_INTEGRATOR_NEWMARK && !use) newmark_start(I, dt, v);
   if ((rc = make_guesses(I, t + dt, dt, err))) return rc;
   int naive = 1;
@@ -827,6 +998,7 @@ int bs_integrator_step(bs_integrator *I, double t, double dt, double *x, double 
     return I->cb_rc;
   }
   if ((rc = run_solver(I, x, naive, st, err))) return rc;
+  merge_sweep(st, &sw);
   update_velocity(I, dt, x, v, use);
   if (I->hooks.post_solve && (rc = post_solve(I, dt, x, v, st, err))) return rc;
   if (I->n_hist) I->hist.have = 1, I->hist.dt = dt, I->hist.mark = state_mark(x, v, n3);

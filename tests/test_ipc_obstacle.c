@@ -2,7 +2,8 @@
  * gradient and Hessian of the barrier (plane, sphere, box, torus, grid) and
  * of the lagged friction against finite differences; the CCD against level
  * sets (never past the surface, exact head-on fraction for a plane, grids'
- * Lipschitz bound); the analytic shapes are distances (|grad phi| = 1 and
+ * Lipschitz bound), also against moving shapes, and the carry of vertices
+ * with a moving obstacle; the analytic shapes are distances (|grad phi| = 1 and
  * phi equal to a brute-force distance); bad input named. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -220,6 +221,102 @@ Test(ipc_obstacle, ccd_never_passes_the_surface) {
     cr_assert_gt(limited, 10, "shape %d: the CCD limited only %d motions", s, limited);
     bs_levelset_destroy(&ls);
   }
+}
+
+/* The CCD against moving shapes (a sphere translating, a box translating and
+ * turning, a torus on keyframes that turn it): for random paths, 1000 points
+ * of [0, fraction] of (x0 + a d, t0 + a dt) are outside the shape at their
+ * own time, and a point carried with a translating shape is never limited. */
+static void moving_shape(int s, bs_levelset **ls) {
+  bs_error err = {0};
+  const double c[3] = {0.1, 0, 0}, half[3] = {0.5, 0.3, 0.2}, ax[3] = {0.3, 0.1, 1};
+  const double v[3] = {3, -1, 2}, w0[3] = {0, 0, 0}, w[3] = {1, 4, -2};
+  if (s == 0) cr_assert_eq(bs_levelset_create_sphere(c, 0.5, ls, &err), 0);
+  if (s == 1) cr_assert_eq(bs_levelset_create_box(c, half, ls, &err), 0);
+  if (s == 2) cr_assert_eq(bs_levelset_create_torus(c, ax, 0.6, 0.2, ls, &err), 0);
+  if (s < 2) cr_assert_eq(bs_levelset_set_velocity(*ls, v, s ? w : w0, &err), 0, "%s", err.msg);
+  const double kt[3] = {0, 0.3, 0.5}, kd[9] = {0, 0, 0, 1, 0.5, 0, 1.2, 0.2, -0.4}, kr[9] = {0, 0, 0, 0, 1, 0, 1, 1, 0};
+  if (s == 2) cr_assert_eq(bs_levelset_set_keyframes(*ls, 3, kt, kd, kr, &err), 0, "%s", err.msg);
+}
+
+Test(ipc_obstacle, moving_ccd_never_passes_the_surface) {
+  for (int s = 0; s < 3; s++) {
+    bs_levelset *ls = NULL;
+    moving_shape(s, &ls);
+    unsigned seed = 5 + s;
+    int limited = 0, tried = 0;
+    for (int q = 0; q < 1500; q++) {
+      double p[3], dv[3];
+      const double t0 = 0.4 * rand_r(&seed) / (double)RAND_MAX, dt = 0.6 * rand_r(&seed) / (double)RAND_MAX;
+      bs_levelset_frame fr;
+      bs_levelset_frame_at(ls, t0, &fr);
+      for (int k = 0; k < 3; k++) p[k] = fr.c[k] + 2.4 * (rand_r(&seed) / (double)RAND_MAX - 0.5);
+      for (int k = 0; k < 3; k++) dv[k] = 2 * (rand_r(&seed) / (double)RAND_MAX - 0.5);
+      if (!(bs_levelset_eval(ls, t0, p, NULL, NULL) > 1e-6)) continue;
+      tried++;
+      const double f = bs_ccd_levelset_moving(ls, 1, p, dv, t0, t0 + dt, 0.1, 2000);
+      cr_assert(f >= 0 && f <= 1);
+      limited += f < 1;
+      for (int r = 0; r <= 1000; r++) {
+        const double a = f * r / 1000.0, y[3] = {p[0] + a * dv[0], p[1] + a * dv[1], p[2] + a * dv[2]};
+        cr_assert_gt(bs_levelset_eval(ls, t0 + a * dt, y, NULL, NULL), 0, "shape %d, path %d at %g of %g", s, q, a, f);
+      }
+    }
+    cr_assert_gt(limited, 50, "shape %d: the CCD limited only %d of %d paths", s, limited, tried);
+    bs_levelset_destroy(&ls);
+  }
+  /* carried with the translating sphere, 1e-4 from it: never limited */
+  bs_levelset *ls = NULL;
+  moving_shape(0, &ls);
+  const double p[3] = {0.1 + 0.3, -0.1, 0.2 + 0.5001}, d[3] = {3 * 0.2, -1 * 0.2, 2 * 0.2}; /* centre at 0.1 s + 0.5001 z */
+  cr_assert_eq(bs_ccd_levelset_moving(ls, 1, p, d, 0.1, 0.3, 0.1, 2000), 1.0);
+  /* and held still, the sphere coming at it: stopped before contact */
+  const double z[3] = {0, 0, 0}, q[3] = {0.1 + 0.6 + 0.5, -0.2, 0.4};
+  const double f = bs_ccd_levelset_moving(ls, 1, q, z, 0, 1, 0.1, 2000);
+  cr_assert(f > 0 && f < 1, "%g", f);
+  cr_assert_gt(bs_levelset_eval(ls, f, q, NULL, NULL), 0);
+  bs_levelset_destroy(&ls);
+}
+
+/* carry moves a vertex within dhat of a moving obstacle with the obstacle's
+ * material point: its phi at t1 equals its phi at t0; the others stay. */
+Test(ipc_obstacle, carry_keeps_the_distance_to_a_moving_obstacle) {
+  bs_error err = {0};
+  bs_levelset *ls = NULL;
+  const double c[3] = {0.5, 0.5, -0.25}, half[3] = {0.6, 0.6, 0.25}, v[3] = {0.3, 0.1, 2}, w[3] = {0.5, -1, 2};
+  cr_assert_eq(bs_levelset_create_box(c, half, &ls, &err), 0);
+  cr_assert_eq(bs_levelset_set_velocity(ls, v, w, &err), 0);
+  fix f;
+  fix_make(&f, 0.02, 0.05, ls, 0); /* the box's bottom 0.02 above the obstacle's top: z0 jittered by 1e-3 */
+  const bs_term_ops *ops = f.t->ops;
+  cr_assert_not_null(ops->carry);
+  double *z = calloc((size_t)f.n3, sizeof(double));
+  uint8_t *carried = calloc((size_t)f.n3 / 3, 1);
+  const double t0 = 0.0, t1 = 0.004;
+  f.step.time = t0;
+  cr_assert_eq(ops->carry(f.t, f.x, t0, t1, z, carried), BS_TERM_OK);
+  int n = 0;
+  for (int v3 = 0; v3 < f.n3 / 3; v3++) {
+    const double *p = f.x + 3 * v3, q[3] = {p[0] + z[3 * v3], p[1] + z[3 * v3 + 1], p[2] + z[3 * v3 + 2]};
+    const double phi0 = bs_levelset_eval(ls, t0, p, NULL, NULL);
+    if (!carried[v3]) {
+      cr_assert_geq(phi0, 0.05, "vertex %d within dhat, not carried", v3);
+      cr_assert_eq(z[3 * v3] == 0 && z[3 * v3 + 1] == 0 && z[3 * v3 + 2] == 0, 1, "vertex %d moved", v3);
+      continue;
+    }
+    n++;
+    cr_assert(phi0 > 0 && phi0 < 0.05, "vertex %d carried at phi %g", v3, phi0);
+    cr_assert_float_eq(bs_levelset_eval(ls, t1, q, NULL, NULL), phi0, 1e-12, "vertex %d", v3);
+  }
+  cr_assert_eq(n, 9, "the box's 9 bottom vertices are carried, got %d", n);
+  double a = 0;
+  cr_assert_eq(ops->sweep(f.t, f.x, z, t0, t1, &a), BS_TERM_OK);
+  cr_assert_gt(a, 0.9, "the carried path is certified only to %g", a);
+  cr_assert_eq(ops->sweep(f.t, f.x, NULL, t0, 0.05, &a), BS_TERM_OK);
+  cr_assert(a < 1, "held still, the obstacle passes over the box by t = 0.05: %g", a);
+  free(z);
+  free(carried);
+  fix_free(&f);
 }
 
 Test(ipc_obstacle, grid_lipschitz_bound_and_ccd) {

@@ -80,7 +80,7 @@ static int load_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   (void)t, (void)x, (void)H;
   return BS_TERM_OK;
 }
-static const bs_term_ops load_ops = {load_value, load_gradient, load_hessian, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops load_ops = {load_value, load_gradient, load_hessian, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
 
 /* Element t's 10 rest nodes, its 14-point rest cache; the cube's corner lo. */
 static void element(const bs_sim *s, int32_t t, double X[30], bs_tet10_rest *r) {
