@@ -19,6 +19,26 @@
  *  5. vⁿ⁺¹ = (xⁿ⁺¹ − xⁿ)/Δt (the integrator's update, below), then the
  *     post-solve hooks (friction).
  *
+ * Moving obstacles. A term whose domain moves in time (bs_terms.h: sweep
+ * and carry; barrier obstacles that move) is evaluated at step->time, which
+ * is tⁿ⁺¹ for the solve. When its domain at tⁿ⁺¹ no longer holds xⁿ (a
+ * moving obstacle passes over a vertex within the step), the step is swept
+ * before step 3: f(xⁿ) is taken with the obstacles at tⁿ; then from
+ * (x, τ) = (xⁿ, tⁿ), each stage moves x along a predictor z while the time
+ * goes from τ to tⁿ⁺¹, as far as every term certifies the path
+ * (x + a z, τ + a (tⁿ⁺¹ − τ)) (sweep for the moving terms, max_step for
+ * the others), and, when it stops short of tⁿ⁺¹ with something pushed,
+ * minimizes the step's objective with step->time at the τ reached. z
+ * carries the vertices within dhat of a moving obstacle with it and moves
+ * the other free vertices by the linear response, H_ff z_f = −H_fc z_c (H
+ * the convexified Hessian at x; PCG). The guesses of step 3 are then
+ * clipped from where the sweep ends instead of from xⁿ, so every point the
+ * step stops at and every path between them is in the domains at their own
+ * times. st->sweep_stages counts the stages and st->min includes their
+ * solves. A sweep that cannot move (a vertex closer to a moving obstacle
+ * than the CCD certifies) or that has not reached tⁿ⁺¹ after 64 stages is
+ * BS_ENUMERIC, naming the times.
+ *
  * Time integrators (opts.integrator, the scene's solver.integrator): each
  * step minimizes one incremental potential
  *     E(x) = 1/(2 c Δt²) ‖x − x̃‖²_M + Φ(x),
