@@ -167,6 +167,9 @@ static int on_frame(const bs_sim *s, const bs_frame_stats *fs, void *ctx, bs_err
   printf("frame %d/%d  newton %ld  cg %ld  |grad E| %.2e  inverted %d", fs->frame, s->scene->frames, fs->iterations,
          fs->cg_iterations, fs->grad_max, m.inverted);
   if (s->obstacles) printf("  inside obstacles %d (depth %.2e m)", m.penetrating, m.max_depth);
+  long sweep = 0; /* stages of moving obstacles swept within steps (bs_step.h) */
+  for (int k = 0; k < fs->n_steps; k++) sweep += fs->steps[k].st.sweep_stages;
+  if (sweep) printf("  swept in %ld stages", sweep);
   printf("  peak %.0f MiB  %.3f s%s", bs_peak_rss() / 1048576.0, fs->seconds, fs->failed ? "  FAILED STEPS" : "");
   print_progress(c, s, fs->frame);
   if (!c->tty || fs->frame == s->scene->frames) putchar('\n');
