@@ -51,10 +51,12 @@
  * certified lower bound phi - delta is >= the gap s phi_lo(0); the result is
  * the last accepted fraction (1 when a step passes 1; at most
  * BS_IPC_CCD_ITER steps, the cap returning the last accepted fraction).
- * delta = 2^-40 (|x_v| + |d_v| + |c_b| + size_b) bounds phi's rounding
- * (about 2000 ulps of the magnitudes involved; for grids also the largest
- * |node value|), and a start with phi_lo(0) <= delta / s^2 certifies
- * nothing: fraction 0. Over [0, result] phi stays >= s^2 phi_lo(0) > 0:
+ * delta(y) = 2^-40 (|y| + |c_b| + size_b) bounds the rounding of phi at
+ * the point y evaluated (about 2000 ulps of the magnitudes involved; a
+ * grid's size_b is its extent, which bounds its node values), and a start
+ * with phi_lo(0) <= delta(x_v) / s^2 certifies nothing: fraction 0 (the
+ * length of d does not enter: a long search direction does not make a
+ * small gap uncertifiable). Over [0, result] phi stays >= s^2 phi_lo(0) > 0:
  * between accepted points by the Lipschitz bound, which holds for the true
  * function; the evaluated ends are lowered by their rounding bound. The
  * alpha of max_step is the smallest over (b, v); 1 when nothing moves.

@@ -249,27 +249,33 @@ static double fall_rate(const bs_levelset *ls, const bs_levelset_frame *f, doubl
 }
 
 /* The path the CCD follows: the point x0 + a d against the level set at the
- * frame f (dt = 0) or at time t0 + a dt. */
+ * frame f (dt = 0) or at time t0 + a dt; cs bounds |c| + the shape's size
+ * over the path (for the rounding bound). */
 typedef struct ccd_path {
   const bs_levelset *ls;
   const bs_levelset_frame *f;
-  double t0, dt;
+  double t0, dt, cs;
   const double *x0, *d;
 } ccd_path;
 
-static double path_phi(const ccd_path *p, double a) {
+/* A certified lower bound of phi at the path's point a: phi evaluated there
+ * minus its rounding bound 2^-40 (|y| + cs), about 2000 ulps of the
+ * magnitudes involved (for grids also the largest |node value|, in cs). */
+static double path_lower(const ccd_path *p, double a) {
   const double y[3] = {p->x0[0] + a * p->d[0], p->x0[1] + a * p->d[1], p->x0[2] + a * p->d[2]};
-  if (p->dt == 0) return bs_levelset_eval_frame(p->ls, p->f, y, NULL, NULL);
+  const double delta = ldexp(sqrt(bs_dot3(y, y)) + p->cs, -40);
+  if (p->dt == 0) return bs_levelset_eval_frame(p->ls, p->f, y, NULL, NULL) - delta;
   bs_levelset_frame g;
   bs_levelset_frame_at(p->ls, p->t0 + a * p->dt, &g);
-  return bs_levelset_eval_frame(p->ls, &g, y, NULL, NULL);
+  return bs_levelset_eval_frame(p->ls, &g, y, NULL, NULL) - delta;
 }
 
 /* The additive CCD (bs_ipc_obstacle.h) along p with phi's rate D (>= 0,
- * rounded up) and rounding bound delta. */
-static double ccd_core(const ccd_path *p, double D, double delta, double s, int max_iter) {
-  const double lo0 = path_phi(p, 0) - delta;
-  if (!(lo0 > delta / (s * s))) return 0;
+ * rounded up). A start whose bound is within 1/s^2 of its own rounding
+ * certifies nothing: 0. */
+static double ccd_core(const ccd_path *p, double D, double s, int max_iter) {
+  const double lo0 = path_lower(p, 0), delta0 = ldexp(sqrt(bs_dot3(p->x0, p->x0)) + p->cs, -40);
+  if (!(lo0 > delta0 / (s * s))) return 0;
   if (!(D > 0)) return 1;
   const double gap = s * lo0;
   double t = 0, P = lo0;
@@ -277,7 +283,7 @@ static double ccd_core(const ccd_path *p, double D, double delta, double s, int 
     const double tn = t + (1 - s) * P / D;
     if (tn >= 1) return 1;
     if (it > 0 || t > 0) { /* evaluate the end (the first step ends >= gap by the bound) */
-      const double lo = path_phi(p, tn) - delta;
+      const double lo = path_lower(p, tn);
       if (!(lo >= gap)) return t;
       P = lo;
     } else {
@@ -298,10 +304,8 @@ static double shape_size(const bs_levelset *ls) {
 double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double lip, const double x0[3],
                        const double d[3], double s, int max_iter) {
   if (!finite_all(x0, 3) || !finite_all(d, 3) || !(s > 0 && s < 1) || max_iter < 1) return 0;
-  const double D = fall_rate(ls, f, lip, d);
-  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + sqrt(bs_dot3(d, d)) + sqrt(bs_dot3(f->c, f->c)) + shape_size(ls), -40);
-  const ccd_path p = {ls, f, 0, 0, x0, d};
-  return ccd_core(&p, D, delta, s, max_iter);
+  const ccd_path p = {ls, f, 0, 0, sqrt(bs_dot3(f->c, f->c)) + shape_size(ls), x0, d};
+  return ccd_core(&p, fall_rate(ls, f, lip, d), s, max_iter);
 }
 
 /* The CCD against a moving shape (bs_ipc_obstacle.h, "Moving obstacles"):
@@ -326,10 +330,9 @@ double bs_ccd_levelset_moving(const bs_levelset *ls, double lip, const double x0
   const double r = sqrt(bs_dot3(r0, r0)) + nd + mb.v * ad;
   const double R = sqrt(bs_dot3(rel, rel)) + ad * (mb.dv + mb.dw * r + mb.w * (nd + mb.v * ad));
   const double D = lip * R * (1 + 64 * DBL_EPSILON) + 16 * DBL_EPSILON * (nd + ad * (mb.v + mb.w * r));
-  const double cmax = fmax(sqrt(bs_dot3(f0.c, f0.c)), sqrt(bs_dot3(f1.c, f1.c)));
-  const double delta = ldexp(sqrt(bs_dot3(x0, x0)) + nd + cmax + shape_size(ls), -40);
-  const ccd_path p = {ls, NULL, t0, dt, x0, d};
-  return ccd_core(&p, D, delta, s, max_iter);
+  const double cmax = fmax(sqrt(bs_dot3(f0.c, f0.c)), sqrt(bs_dot3(f1.c, f1.c))) + mb.v * ad; /* |c| on the path */
+  const ccd_path p = {ls, NULL, t0, dt, cmax + shape_size(ls), x0, d};
+  return ccd_core(&p, D, s, max_iter);
 }
 
 static int max_step_impl(const bs_term *t, const double *x, const double *dx, double *alpha) {

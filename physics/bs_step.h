@@ -28,7 +28,8 @@
  * goes from τ to tⁿ⁺¹, as far as every term certifies the path
  * (x + a z, τ + a (tⁿ⁺¹ − τ)) (sweep for the moving terms, max_step for
  * the others), and, when it stops short of tⁿ⁺¹ with something pushed,
- * minimizes the step's objective with step->time at the τ reached. z
+ * minimizes the step's objective with step->time at the τ reached, for at
+ * most 8 iterations (the stage only has to make room for the next one). z
  * carries the vertices within dhat of a moving obstacle with it and moves
  * the other free vertices by the linear response, H_ff z_f = −H_fc z_c (H
  * the convexified Hessian at x; PCG). The guesses of step 3 are then

@@ -821,7 +821,8 @@ static int post_solve(bs_integrator *I, double dt, double *x, double *v, const b
 
 /* ---- moving obstacles within a step (bs_step.h, "Moving obstacles") ---- */
 
-#define BS_SWEEP_STAGES 64 /* stages before a sweep is given up */
+#define BS_SWEEP_STAGES 64    /* stages before a sweep is given up                       */
+#define BS_SWEEP_STAGE_ITER 8 /* Newton iterations of a stage's solve (it only makes room) */
 
 /* The certified fraction *s of the path (x + a d, time t0 + a (t1 - t0)),
  * a in [0, 1]: the smallest over the active terms of sweep, and of max_step
@@ -892,7 +893,9 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
 
 /* One stage from (x, *tau): along the predictor to the time it certifies,
  * then (when something is pushed and the step's end is not reached) the
- * step's objective minimized there. */
+ * step's objective minimized there, for at most BS_SWEEP_STAGE_ITER
+ * iterations: the stage's answer only has to make room for the next one
+ * (the step's own solve converges as usual). */
 static int sweep_stage(bs_integrator *I, double *x, double *tau, double t1, bs_step_stats *acc, bs_error *err) {
   const size_t n3 = 3 * (size_t)I->nv;
   double *z = I->sw_z, s = 0;
@@ -916,7 +919,11 @@ static int sweep_stage(bs_integrator *I, double *x, double *tau, double t1, bs_s
   I->step->time = *tau;
   bs_step_stats sub;
   memset(&sub, 0, sizeof sub);
-  if ((rc = run_solver(I, x, 1, &sub, err))) return rc;
+  const int keep = I->opts.min.max_iter;
+  I->opts.min.max_iter = keep < BS_SWEEP_STAGE_ITER ? keep : BS_SWEEP_STAGE_ITER;
+  rc = run_solver(I, x, 1, &sub, err);
+  I->opts.min.max_iter = keep;
+  if (rc) return rc;
   sub.failed = 0; /* a stage's solve need not converge: its answer only has to be in the domain */
   bs_step_stats_add(acc, &sub);
   return 0;
