@@ -180,7 +180,8 @@ static void fr_free(void *p) {
 }
 
 /* The Hessian is PSD as it stands (bs_ipc_friction.h). */
-static const bs_term_ops fr_ops = {fr_value, fr_gradient, fr_hessian, fr_begin_step, fr_free, fr_hessian, NULL, NULL, NULL, NULL};
+static const bs_term_ops fr_ops = {fr_value, fr_gradient, fr_hessian, fr_begin_step, fr_free, fr_hessian, NULL, NULL,
+                                   NULL, NULL};
 
 int bs_term_ipc_friction_create(bs_term *barrier, double mu, double eps_v, bs_term **out, bs_error *err) {
   if (!out) return bs_error_set(err, BS_EINPUT, "barrier friction: out is NULL");

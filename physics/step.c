@@ -846,9 +846,10 @@ static int sweep_alloc(bs_integrator *I, bs_error *err) {
   if (I->sw_lin) return 0;
   const size_t n3 = 3 * (size_t)I->nv + 1;
   const bs_bsr *P = I->B.pattern;
-  I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3), I->sw_zf = malloc(sizeof(double) * n3);
-  I->sw_mask = malloc((size_t)I->nv + 1);
-  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask) return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
+  I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3);
+  I->sw_zf = malloc(sizeof(double) * n3), I->sw_mask = malloc((size_t)I->nv + 1);
+  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask)
+    return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
   int rc = bs_bsr_create(P->n, P->row_ptr, P->col, &I->sw_H, err);
   if (!rc && I->opts.min.hessian_extra > 0) rc = bs_bsr_reserve_extra(I->sw_H, I->opts.min.hessian_extra, err);
   return rc ? rc : bs_linsolve_create(I->sw_H, BS_LIN_PCG, &I->sw_lin, err);

@@ -96,7 +96,8 @@ static int inertia_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   add_mass_diagonal(t->fem, inertia_weight(t->step), H);
   return BS_TERM_OK;
 }
-static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops inertia_ops = {inertia_value, inertia_gradient, inertia_hessian, NULL, NULL, NULL, NULL,
+                                        NULL, NULL, NULL};
 
 int bs_term_inertia_create(const bs_fem *fem, const bs_step_data *step, bs_term **out, bs_error *err) {
   int st = bs_term_create("inertia", &inertia_ops, fem, step, NULL, out, err);
@@ -137,7 +138,8 @@ static int gravity_gradient(const bs_term *t, const double *x, double *E, double
   return gravity_value(t, x, E);
 }
 static int gravity_hessian(const bs_term *t, const double *x, bs_bsr *H) { return BS_TERM_OK; }
-static const bs_term_ops gravity_ops = {gravity_value, gravity_gradient, gravity_hessian, NULL, free, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops gravity_ops = {gravity_value, gravity_gradient, gravity_hessian, NULL, free, NULL, NULL,
+                                        NULL, NULL, NULL};
 
 int bs_term_gravity_create(const bs_fem *fem, const bs_step_data *step, const double g[3], bs_term **out,
                            bs_error *err) {
@@ -192,7 +194,8 @@ static int elastic_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   bs_fem_elastic_hessian_auto(t->fem, x, d->vmax, 1.0, H);
   return BS_TERM_OK;
 }
-static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, elastic_free, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops elastic_ops = {elastic_value, elastic_gradient, elastic_hessian, NULL, elastic_free, NULL,
+                                        NULL, NULL, NULL, NULL};
 
 int bs_term_elastic_create_step(const bs_fem *fem, const bs_step_data *step, bs_psd_mode project_psd, bs_term **out,
                                 bs_error *err) {

@@ -57,7 +57,8 @@ static int spring_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   return BS_TERM_OK;
 }
 
-static const bs_term_ops spring_ops = {spring_value, spring_gradient, spring_hessian, NULL, free, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops spring_ops = {spring_value, spring_gradient, spring_hessian, NULL, free, NULL, NULL, NULL,
+                                       NULL, NULL};
 
 typedef struct osc {
   bs_mesh *mesh;

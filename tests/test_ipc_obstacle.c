@@ -268,7 +268,8 @@ Test(ipc_obstacle, moving_ccd_never_passes_the_surface) {
   /* carried with the translating sphere, 1e-4 from it: never limited */
   bs_levelset *ls = NULL;
   moving_shape(0, &ls);
-  const double p[3] = {0.1 + 0.3, -0.1, 0.2 + 0.5001}, d[3] = {3 * 0.2, -1 * 0.2, 2 * 0.2}; /* centre at 0.1 s + 0.5001 z */
+  /* the centre at 0.1 s plus 0.5001 along z; the sphere's motion over 0.2 s */
+  const double p[3] = {0.1 + 0.3, -0.1, 0.2 + 0.5001}, d[3] = {3 * 0.2, -1 * 0.2, 2 * 0.2};
   cr_assert_eq(bs_ccd_levelset_moving(ls, 1, p, d, 0.1, 0.3, 0.1, 2000), 1.0);
   /* and held still, the sphere coming at it: stopped before contact */
   const double z[3] = {0, 0, 0}, q[3] = {0.1 + 0.6 + 0.5, -0.2, 0.4};

@@ -39,7 +39,8 @@ static int count_step(bs_term *t, bs_error *err) {
   if (++steps_begun == stop_at) stop_flag = 1;
   return 0;
 }
-static const bs_term_ops stopper_ops = {zero_value, zero_gradient, zero_hessian, count_step, NULL, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops stopper_ops = {zero_value, zero_gradient, zero_hessian, count_step, NULL, NULL, NULL, NULL,
+                                        NULL, NULL};
 
 /* The end of frame 1 as the frame callback saw it. */
 typedef struct seen {

@@ -245,7 +245,8 @@ static int floor_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   }
   return BS_TERM_OK;
 }
-static const bs_term_ops floor_ops = {floor_value, floor_gradient, floor_hessian, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops floor_ops = {floor_value, floor_gradient, floor_hessian, NULL, NULL, NULL, NULL, NULL, NULL,
+                                      NULL};
 
 /* One step of a box at rest 1 cm above the floor under gravity (inertia,
  * gravity, elasticity and the floor). The free-fall guess and the first

@@ -75,7 +75,8 @@ static int spring_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   return BS_TERM_OK;
 }
 
-static const bs_term_ops spring_ops = {spring_value, spring_gradient, spring_hessian, NULL, free, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops spring_ops = {spring_value, spring_gradient, spring_hessian, NULL, free, NULL, NULL, NULL,
+                                       NULL, NULL};
 
 /* Step 2: finite differences. The gradient against central differences of E
  * along a random direction p, and the Hessian against differences of the

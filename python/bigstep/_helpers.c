@@ -142,7 +142,8 @@ static int bspy_t_hessian(const bs_term *t, const double *x, bs_bsr *H) {
   return bspy_py_hessian(((const bspy_term *)t->data)->py, t, x, H);
 }
 
-static const bs_term_ops bspy_term_ops = {bspy_t_value, bspy_t_gradient, bspy_t_hessian, NULL, free, NULL, NULL, NULL, NULL, NULL};
+static const bs_term_ops bspy_term_ops = {bspy_t_value, bspy_t_gradient, bspy_t_hessian, NULL, free, NULL, NULL, NULL,
+                                          NULL, NULL};
 
 int bspy_add_term(bs_sim *s, const char *name, void *py, int dynamic_only, int quadratic, int external,
                   bs_error *err) {
