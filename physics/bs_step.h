@@ -37,7 +37,7 @@
  * step stops at and every path between them is in the domains at their own
  * times. st->sweep_stages counts the stages and st->min includes their
  * solves. A sweep that cannot move (a vertex closer to a moving obstacle
- * than the CCD certifies) or that has not reached tⁿ⁺¹ after 64 stages is
+ * than the CCD certifies) or that has not reached tⁿ⁺¹ after 256 stages is
  * BS_ENUMERIC, naming the times.
  *
  * Time integrators (opts.integrator, the scene's solver.integrator): each

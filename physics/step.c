@@ -821,7 +821,7 @@ static int post_solve(bs_integrator *I, double dt, double *x, double *v, const b
 
 /* ---- moving obstacles within a step (bs_step.h, "Moving obstacles") ---- */
 
-#define BS_SWEEP_STAGES 64    /* stages before a sweep is given up                       */
+#define BS_SWEEP_STAGES 256   /* stages before a sweep is given up (fig14: up to 56)     */
 #define BS_SWEEP_STAGE_ITER 8 /* Newton iterations of a stage's solve (it only makes room) */
 
 /* The certified fraction *s of the path (x + a d, time t0 + a (t1 - t0)),
