@@ -30,7 +30,9 @@ typedef struct obs_data {
   int32_t *sv;       /* free surface vertices, ascending */
   int n_ob, cap_ob;
   ob_entry *ob;
-  bs_levelset_frame *frames; /* per obstacle, at the evaluation time */
+  bs_levelset_frame *frames;  /* per obstacle, at the evaluation time (a path's start) */
+  bs_levelset_frame *frames1; /* per obstacle, at a path's end (set_path)                */
+  bs_levelset_motion_bound *motion; /* per obstacle, over the path's times (set_path)    */
   double dhat, kappa, eps_v;
   int project, adaptive;
   double kappa_max, d2_eps, d2_prev;
@@ -49,6 +51,16 @@ static double eval_time(const bs_term *t) { return t->step ? t->step->time : 0.0
 
 static void set_frames(obs_data *d, double time) {
   for (int b = 0; b < d->n_ob; b++) bs_levelset_frame_at(d->ob[b].ls, time, &d->frames[b]);
+}
+
+/* The frames at t0 and t1 and the motions' bounds between them, once per
+ * path (sweep, carry) rather than once per vertex. */
+static void set_path(obs_data *d, double t0, double t1) {
+  set_frames(d, t0);
+  for (int b = 0; b < d->n_ob && t1 != t0; b++) { /* t1 = t0: the line search's CCD needs the frames only */
+    bs_levelset_frame_at(d->ob[b].ls, t1, &d->frames1[b]);
+    bs_levelset_motion_bound_over(d->ob[b].ls, t0, t1, &d->motion[b]);
+  }
 }
 
 static int finite_all(const double *x, size_t n) {
@@ -312,92 +324,83 @@ double bs_ccd_levelset(const bs_levelset *ls, const bs_levelset_frame *f, double
  * phi's rate along the path is at most lip times the point's speed in the
  * shape's frame, |d - dt v_b(x0 + a d, t0 + a dt)|, bounded from its value
  * at a = 0 and the motion's bounds (bs_levelset_motion_bound_over). */
-double bs_ccd_levelset_moving(const bs_levelset *ls, double lip, const double x0[3], const double d[3], double t0,
-                              double t1, double s, int max_iter) {
+static double ccd_moving(const bs_levelset *ls, double lip, const bs_levelset_frame *f0, const bs_levelset_frame *f1,
+                         const bs_levelset_motion_bound *mb, const double x0[3], const double d[3], double t0,
+                         double t1, double s, int max_iter) {
   if (!finite_all(x0, 3) || !finite_all(d, 3) || !isfinite(t0) || !isfinite(t1) || !(s > 0 && s < 1) || max_iter < 1)
     return 0;
-  const double dt = t1 - t0;
+  const double dt = t1 - t0, ad = fabs(dt), nd = sqrt(bs_dot3(d, d));
+  double r0[3], u[3], wr[3], rel[3];
+  for (int k = 0; k < 3; k++) r0[k] = x0[k] - f0->c[k];
+  bs_cross3(f0->w, r0, wr);
+  for (int k = 0; k < 3; k++) u[k] = f0->v[k] + wr[k], rel[k] = d[k] - dt * u[k];
+  const double r = sqrt(bs_dot3(r0, r0)) + nd + mb->v * ad;
+  const double R = sqrt(bs_dot3(rel, rel)) + ad * (mb->dv + mb->dw * r + mb->w * (nd + mb->v * ad));
+  const double D = lip * R * (1 + 64 * DBL_EPSILON) + 16 * DBL_EPSILON * (nd + ad * (mb->v + mb->w * r));
+  const double cmax = fmax(sqrt(bs_dot3(f0->c, f0->c)), sqrt(bs_dot3(f1->c, f1->c))) + mb->v * ad; /* |c| on the path */
+  const ccd_path p = {ls, NULL, t0, dt, cmax + shape_size(ls), x0, d};
+  return ccd_core(&p, D, s, max_iter);
+}
+
+double bs_ccd_levelset_moving(const bs_levelset *ls, double lip, const double x0[3], const double d[3], double t0,
+                              double t1, double s, int max_iter) {
+  if (!isfinite(t0) || !isfinite(t1)) return 0;
   bs_levelset_frame f0, f1;
   bs_levelset_frame_at(ls, t0, &f0);
   bs_levelset_frame_at(ls, t1, &f1);
   bs_levelset_motion_bound mb;
   bs_levelset_motion_bound_over(ls, t0, t1, &mb);
-  const double ad = fabs(dt), nd = sqrt(bs_dot3(d, d));
-  double r0[3], u[3], wr[3], rel[3];
-  for (int k = 0; k < 3; k++) r0[k] = x0[k] - f0.c[k];
-  bs_cross3(f0.w, r0, wr);
-  for (int k = 0; k < 3; k++) u[k] = f0.v[k] + wr[k], rel[k] = d[k] - dt * u[k];
-  const double r = sqrt(bs_dot3(r0, r0)) + nd + mb.v * ad;
-  const double R = sqrt(bs_dot3(rel, rel)) + ad * (mb.dv + mb.dw * r + mb.w * (nd + mb.v * ad));
-  const double D = lip * R * (1 + 64 * DBL_EPSILON) + 16 * DBL_EPSILON * (nd + ad * (mb.v + mb.w * r));
-  const double cmax = fmax(sqrt(bs_dot3(f0.c, f0.c)), sqrt(bs_dot3(f1.c, f1.c))) + mb.v * ad; /* |c| on the path */
-  const ccd_path p = {ls, NULL, t0, dt, cmax + shape_size(ls), x0, d};
-  return ccd_core(&p, D, s, max_iter);
-}
-
-static int max_step_impl(const bs_term *t, const double *x, const double *dx, double *alpha) {
-  obs_data *d = t->data;
-  const size_t n3 = 3 * (size_t)d->nv;
-  if (!finite_all(x, n3) || !finite_all(dx, n3)) return 1;
-  set_frames(d, eval_time(t));
-  const int32_t n = d->n_sv;
-#pragma omp parallel for schedule(dynamic, 64) if (n > 1024)
-  for (int32_t j = 0; j < n; j++) {
-    const int32_t v = d->sv[j];
-    const double *p = x + 3 * (size_t)v, *dv = dx + 3 * (size_t)v;
-    double a = 1;
-    if (dv[0] != 0 || dv[1] != 0 || dv[2] != 0)
-      for (int b = 0; b < d->n_ob && a > 0; b++)
-        a = fmin(a, bs_ccd_levelset(d->ob[b].ls, &d->frames[b], d->ob[b].lip, p, dv, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
-    d->pmin[j] = a;
-  }
-  double a = 1;
-  for (int32_t j = 0; j < n; j++) a = fmin(a, d->pmin[j]);
-  *alpha = a;
-  d->st.ccd_calls++;
-  d->st.ccd_limited += a < 1;
-  return 0;
-}
-
-static int ob_max_step(const bs_term *t, const double *x, const double *dx, double *alpha) {
-  return max_step_impl(t, x, dx, alpha) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
+  return ccd_moving(ls, lip, &f0, &f1, &mb, x0, d, t0, t1, s, max_iter);
 }
 
 /* One surface vertex's certified fraction of the path (p + a dv, time
- * t0 + a (t1 - t0)) against every obstacle (dv may be NULL: p fixed). */
-static double vertex_sweep(const obs_data *d, const double *p, const double *dv, double t0, double t1) {
+ * t0 + a (t1 - t0)) against every obstacle, with the frames and bounds of
+ * set_path (dv may be NULL: p fixed; t0 = t1: the line search's CCD, the
+ * obstacles fixed at t0). */
+static double vertex_path(const obs_data *d, const double *p, const double *dv, double t0, double t1) {
   static const double zero[3] = {0, 0, 0};
   const double *m = dv ? dv : zero;
   const int still = m[0] == 0 && m[1] == 0 && m[2] == 0;
   double a = 1;
   for (int b = 0; b < d->n_ob && a > 0; b++) {
-    const bs_levelset *ls = d->ob[b].ls;
-    if (bs_levelset_motion(ls) != BS_LS_STATIC && t1 != t0)
-      a = fmin(a, bs_ccd_levelset_moving(ls, d->ob[b].lip, p, m, t0, t1, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
+    const ob_entry *o = &d->ob[b];
+    if (bs_levelset_motion(o->ls) != BS_LS_STATIC && t1 != t0)
+      a = fmin(a, ccd_moving(o->ls, o->lip, &d->frames[b], &d->frames1[b], &d->motion[b], p, m, t0, t1, BS_IPC_CCD_S,
+                             BS_IPC_CCD_ITER));
     else if (!still)
-      a = fmin(a, bs_ccd_levelset(ls, &d->frames[b], d->ob[b].lip, p, m, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
+      a = fmin(a, bs_ccd_levelset(o->ls, &d->frames[b], o->lip, p, m, BS_IPC_CCD_S, BS_IPC_CCD_ITER));
   }
   return a;
 }
 
-static int ob_sweep(const bs_term *t, const double *x, const double *dx, double t0, double t1, double *frac) {
+/* The smallest vertex_path over the free surface vertices into *frac (1
+ * when nothing moves); 1 (not evaluable) for a non-finite x, dx or time. */
+static int path_impl(const bs_term *t, const double *x, const double *dx, double t0, double t1, double *frac) {
   obs_data *d = t->data;
   const size_t n3 = 3 * (size_t)d->nv;
-  if (!finite_all(x, n3) || (dx && !finite_all(dx, n3)) || !isfinite(t0) || !isfinite(t1))
-    return BS_TERM_NOT_EVALUABLE;
-  set_frames(d, t0);
+  if (!finite_all(x, n3) || (dx && !finite_all(dx, n3)) || !isfinite(t0) || !isfinite(t1)) return 1;
+  set_path(d, t0, t1);
   const int32_t n = d->n_sv;
 #pragma omp parallel for schedule(dynamic, 64) if (n > 1024)
   for (int32_t j = 0; j < n; j++) {
     const size_t v = (size_t)d->sv[j];
-    d->pmin[j] = vertex_sweep(d, x + 3 * v, dx ? dx + 3 * v : NULL, t0, t1);
+    d->pmin[j] = vertex_path(d, x + 3 * v, dx ? dx + 3 * v : NULL, t0, t1);
   }
   double a = 1;
   for (int32_t j = 0; j < n; j++) a = fmin(a, d->pmin[j]);
   *frac = a;
   d->st.ccd_calls++;
   d->st.ccd_limited += a < 1;
-  return BS_TERM_OK;
+  return 0;
+}
+
+static int ob_max_step(const bs_term *t, const double *x, const double *dx, double *alpha) {
+  const double time = eval_time(t);
+  return path_impl(t, x, dx, time, time, alpha) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
+}
+
+static int ob_sweep(const bs_term *t, const double *x, const double *dx, double t0, double t1, double *frac) {
+  return path_impl(t, x, dx, t0, t1, frac) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
 }
 
 /* Where the rigid motion of frame f0 to frame f1 takes the point p:
@@ -426,18 +429,16 @@ static int carrier(const obs_data *d, const double *x, int32_t j) {
 static int ob_carry(const bs_term *t, const double *x, double t0, double t1, double *z, uint8_t *carried) {
   obs_data *d = t->data;
   if (!finite_all(x, 3 * (size_t)d->nv) || !isfinite(t0) || !isfinite(t1)) return BS_TERM_NOT_EVALUABLE;
-  set_frames(d, t0);
+  set_path(d, t0, t1);
   const int32_t n = d->n_sv;
 #pragma omp parallel for schedule(static) if (n > 2048)
-  for (int32_t j = 0; j < n; j++) d->pcount[j] = carrier(d, x, j);
+  for (int32_t j = 0; j < n; j++) d->pcount[j] = carrier(d, x, j); /* pcount as scratch: the carrier */
   for (int32_t j = 0; j < n; j++) {
     const int b = d->pcount[j];
     if (b < 0) continue;
     const size_t v = (size_t)d->sv[j];
-    bs_levelset_frame f1;
-    bs_levelset_frame_at(d->ob[b].ls, t1, &f1);
     double q[3];
-    carry_point(&d->frames[b], &f1, x + 3 * v, q);
+    carry_point(&d->frames[b], &d->frames1[b], x + 3 * v, q);
     for (int k = 0; k < 3; k++) z[3 * v + k] = q[k] - x[3 * v + k];
     carried[v] = 1;
   }
@@ -478,6 +479,8 @@ static void ob_free(void *p) {
   free(d->sv);
   free(d->ob);
   free(d->frames);
+  free(d->frames1);
+  free(d->motion);
   free(d->pe);
   free(d->bad);
   free(d->pmin);
@@ -581,7 +584,11 @@ int bs_term_ipc_obstacle_add(bs_term *t, const bs_levelset *ls, double mu, int i
     if (o) d->ob = o;
     bs_levelset_frame *f = realloc(d->frames, sizeof *f * (size_t)cap);
     if (f) d->frames = f;
-    if (!o || !f) return bs_error_set(err, BS_ENOMEM, "obstacle %d (%s): out of memory", index, kind);
+    bs_levelset_frame *f1 = realloc(d->frames1, sizeof *f1 * (size_t)cap);
+    if (f1) d->frames1 = f1;
+    bs_levelset_motion_bound *mb = realloc(d->motion, sizeof *mb * (size_t)cap);
+    if (mb) d->motion = mb;
+    if (!o || !f || !f1 || !mb) return bs_error_set(err, BS_ENOMEM, "obstacle %d (%s): out of memory", index, kind);
     d->cap_ob = cap;
   }
   d->ob[d->n_ob++] = (ob_entry){ls, mu, lip, index};
@@ -666,7 +673,8 @@ int bs_term_ipc_obstacle_detect(bs_term *t, const double *x, bs_ipc_obstacle_sta
 
 int bs_term_ipc_obstacle_max_step(bs_term *t, const double *x, const double *dx, double *alpha, bs_error *err) {
   if (not_ob(t, err)) return BS_EINPUT;
-  if (max_step_impl(t, x, dx, alpha))
+  const double time = eval_time(t);
+  if (path_impl(t, x, dx, time, time, alpha))
     return bs_error_set(err, BS_ENUMERIC, "barrier obstacles: CCD on non-finite positions or motion");
   return 0;
 }

@@ -526,18 +526,6 @@ void bs_levelset_velocity(const bs_levelset *ls, double t, const double x[3], do
   for (int k = 0; k < 3; k++) v[k] = f.v[k] + wr[k];
 }
 
-/* Keyframe segment i's velocities (world frame), as bs_levelset_frame_at's. */
-static void key_segment_speeds(const bs_levelset *ls, int i, double *v, double *w) {
-  const double span = ls->key_t[i + 1] - ls->key_t[i], *da = ls->key_d + 3 * i, *db = da + 3;
-  const double *qa = ls->key_q + 4 * i, *qb = qa + 4;
-  double qa_inv[4] = {qa[0], -qa[1], -qa[2], -qa[3]}, qr[4], u[3];
-  quat_mul(qa_inv, qb, qr);
-  quat_log(qr, u);
-  const double dd[3] = {db[0] - da[0], db[1] - da[1], db[2] - da[2]};
-  *v = sqrt(bs_dot3(dd, dd)) / span;
-  *w = sqrt(bs_dot3(u, u)) / span; /* |Ra u| = |u| */
-}
-
 void bs_levelset_motion_bound_over(const bs_levelset *ls, double t0, double t1, bs_levelset_motion_bound *b) {
   memset(b, 0, sizeof *b);
   const double lo = fmin(t0, t1), hi = fmax(t0, t1);
@@ -552,10 +540,10 @@ void bs_levelset_motion_bound_over(const bs_levelset *ls, double t0, double t1, 
   int pieces = (lo <= kt[0]) + (hi >= kt[n - 1]); /* the holds, at rest */
   for (int i = 0; i + 1 < n; i++) {
     if (kt[i + 1] < lo || kt[i] > hi) continue;
-    double v, w;
-    key_segment_speeds(ls, i, &v, &w);
-    b->v = fmax(b->v, v);
-    b->w = fmax(b->w, w);
+    bs_levelset_frame f; /* the segment's (constant) velocities: its frame at its middle */
+    bs_levelset_frame_at(ls, 0.5 * (kt[i] + kt[i + 1]), &f);
+    b->v = fmax(b->v, sqrt(bs_dot3(f.v, f.v)));
+    b->w = fmax(b->w, sqrt(bs_dot3(f.w, f.w)));
     pieces++;
   }
   if (pieces > 1) b->dv = 2 * b->v, b->dw = 2 * b->w;

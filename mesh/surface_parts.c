@@ -71,7 +71,8 @@ int bs__mesh_concat(const char *path, bs_mesh *const *meshes, int64_t n, bs_mesh
   int64_t nv = 0, nt = 0;
   for (int64_t i = 0; i < n; i++) nv += meshes[i]->n_vertices, nt += meshes[i]->n_tets;
   if (nv > BS_MESH_MAX_TETS || nt > BS_MESH_MAX_TETS)
-    return bs_error_set(err, BS_EINPUT, "%s: %lld tets exceed the 32-bit index range", path, (long long)nt);
+    return bs_error_set(err, BS_EINPUT, "%s: %lld vertices and %lld tets exceed the 32-bit index range", path,
+                        (long long)nv, (long long)nt);
   double *x = malloc((3 * (size_t)nv + 1) * sizeof *x);
   int32_t *t = malloc((4 * (size_t)nt + 1) * sizeof *t);
   int rc = BS_OK;
