@@ -897,7 +897,8 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
  * step's objective minimized there, for at most BS_SWEEP_STAGE_ITER
  * iterations: the stage's answer only has to make room for the next one
  * (the step's own solve converges as usual). */
-static int sweep_stage(bs_integrator *I, double *x, double *tau, double t1, bs_step_stats *acc, bs_error *err) {
+static int sweep_stage(bs_integrator *I, double *x, double *tau, double t0, double t1, bs_step_stats *acc,
+                       bs_error *err) {
   const size_t n3 = 3 * (size_t)I->nv;
   double *z = I->sw_z, s = 0;
   I->step->time = *tau;
@@ -909,9 +910,9 @@ static int sweep_stage(bs_integrator *I, double *x, double *tau, double t1, bs_s
     return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "a contact term is not evaluable on the sweep's path");
   if (!(s > 0))
     return bs_error_set(err, BS_ENUMERIC,
-                        "moving obstacles: the sweep of the step from t = %g s stands still at t = %g s: a vertex "
-                        "touches a moving barrier obstacle closer than the CCD can certify",
-                        I->step->time, *tau);
+                        "moving obstacles: the sweep of the step from t = %g s to %g s stands still at t = %g s: a "
+                        "vertex touches a moving barrier obstacle closer than the CCD can certify",
+                        t0, t1, *tau);
   if (moving)
     for (size_t i = 0; i < n3; i++) x[i] += fmin(s, 1.0) * z[i];
   *tau = s >= 1 ? t1 : *tau + s * span;
@@ -952,7 +953,7 @@ static int sweep_obstacles(bs_integrator *I, int needed, double t0, double t1, b
   if (rc) return rc;
   double *x = I->sw_x, tau = t0;
   memcpy(x, I->x_n, sizeof(double) * 3 * (size_t)I->nv);
-  for (int k = 0; k < BS_SWEEP_STAGES && tau < t1 && !rc; k++) rc = sweep_stage(I, x, &tau, t1, acc, err);
+  for (int k = 0; k < BS_SWEEP_STAGES && tau < t1 && !rc; k++) rc = sweep_stage(I, x, &tau, t0, t1, acc, err);
   I->step->time = t1;
   if (rc) return rc;
   if (tau < t1)

@@ -310,6 +310,119 @@ Test(step, a_term_whose_hessian_is_not_evaluable_stops_the_solve) {
   cr_expect_eq(st.min.iterations, 0);
 }
 
+/* ---- a term whose domain moves in time: the sweep (bs_step.h) --------- */
+
+/* A term with no energy whose domain closes in time: over a path from t0
+ * to t1 > t0 that starts before t_free it certifies only the fraction
+ * `frac`; from t_free on, or at a fixed time, the whole path. It carries
+ * nothing, so the sweep moves no vertex: only its time runs. */
+typedef struct gate_data {
+  double t_free, frac;
+  int calls;
+  double t0_last;
+} gate_data;
+
+static int gate_value(const bs_term *t, const double *x, double *E) {
+  (void)t, (void)x;
+  *E = 0;
+  return BS_TERM_OK;
+}
+static int gate_gradient(const bs_term *t, const double *x, double *E, double *g) {
+  (void)g;
+  return gate_value(t, x, E);
+}
+static int gate_hessian(const bs_term *t, const double *x, bs_bsr *H) {
+  (void)t, (void)x, (void)H;
+  return BS_TERM_OK;
+}
+static int gate_sweep(const bs_term *t, const double *x, const double *d, double t0, double t1, double *s) {
+  (void)x, (void)d;
+  gate_data *g = t->data;
+  g->calls++;
+  cr_assert_geq(t0, g->t0_last, "the sweep's time ran backwards: %g after %g", t0, g->t0_last);
+  g->t0_last = t0;
+  *s = t1 > t0 && t0 < g->t_free ? g->frac : 1.0;
+  return BS_TERM_OK;
+}
+static const bs_term_ops gate_ops = {gate_value, gate_gradient, gate_hessian, NULL, NULL, NULL, NULL, NULL, gate_sweep,
+                                     NULL};
+
+/* One step of a falling box (1 / 24 s), with the gate term when g is not
+ * NULL; x and v (*n3 = 3n, malloc'ed) the state after it; the step's
+ * status. */
+static int gate_step(gate_data *g, bs_step_stats *st, double **x, double **v, size_t *n3, bs_error *err) {
+  sys s;
+  double hi[3] = {1, 0.5, 0.5}, grav[3] = {0, -9.8, 0};
+  sys_create(&s, hi, 3, 2, 2, 0, 1e5, grav, 1, NULL, 1e-8);
+  bs_term gate = {.name = "gate", .ops = &gate_ops, .fem = s.fem, .step = &s.step, .data = g};
+  bs_term *terms[4] = {s.terms[0], s.terms[1], s.terms[2], &gate};
+  bs_integrator_destroy(&s.I);
+  bs_integrator_opts o;
+  bs_integrator_opts_default(&o);
+  o.min.tol = 1e-8;
+  cr_assert_eq(bs_integrator_create(s.fem, &s.step, g ? 4 : 3, terms, s.mask, NULL, NULL, &o, &s.I, err), 0, "%s",
+               err->msg);
+  *n3 = 3 * (size_t)s.mesh->n_vertices;
+  *x = malloc(sizeof(double) * *n3), *v = calloc(*n3, sizeof(double));
+  memcpy(*x, s.mesh->x, sizeof(double) * *n3);
+  memset(st, 0, sizeof *st);
+  const int rc = bs_integrator_step(s.I, 0, 1.0 / 24, *x, *v, st, err);
+  st->min.reason_text = NULL;
+  sys_destroy(&s);
+  return rc;
+}
+
+Test(step, a_sweep_runs_the_time_to_the_steps_end_in_stages) {
+  const double dt = 1.0 / 24;
+  gate_data g = {.t_free = 0.7 * dt, .frac = 0.5};
+  bs_step_stats st, st0;
+  bs_error err;
+  double *x, *v, *x0, *v0;
+  size_t n3, n30;
+  cr_assert_eq(gate_step(&g, &st, &x, &v, &n3, &err), 0, "%s", err.msg);
+  cr_assert_eq(gate_step(NULL, &st0, &x0, &v0, &n30, &err), 0, "%s", err.msg);
+  cr_assert_eq(n3, n30);
+  /* stages from t = 0, dt / 2 and 3 dt / 4: half the path, half the rest,
+     then (past t_free) the whole rest */
+  cr_expect_eq(st.sweep_stages, 3, "%d stages", st.sweep_stages);
+  cr_expect_eq(st0.sweep_stages, 0);
+  cr_expect_eq(g.t0_last, 0.75 * dt, "the last stage started at %g s", g.t0_last);
+  cr_expect_eq(st.failed, 0);
+  /* nothing was carried, so the step is the step without the term, bit for bit */
+  cr_expect_arr_eq(x, x0, sizeof(double) * n3, "a sweep that moves nothing changed the step's x");
+  cr_expect_arr_eq(v, v0, sizeof(double) * n3, "a sweep that moves nothing changed the step's v");
+  cr_expect_lt(x[1], -0.01, "the box did not fall: y = %g", x[1]);
+  free(x), free(v), free(x0), free(v0);
+}
+
+Test(step, a_sweep_that_cannot_move_is_named) {
+  gate_data g = {.t_free = 1, .frac = 0};
+  bs_step_stats st;
+  bs_error err;
+  double *x, *v;
+  size_t n3;
+  cr_assert_eq(gate_step(&g, &st, &x, &v, &n3, &err), BS_ENUMERIC, "%s", err.msg);
+  cr_log_info("%s\n", err.msg);
+  cr_expect(strstr(err.msg, "the sweep of the step from t = 0 s to 0.0416667 s stands still at t = 0 s") != NULL,
+            "%s", err.msg);
+  free(x), free(v);
+}
+
+Test(step, a_sweep_that_does_not_reach_the_steps_end_is_named) {
+  gate_data g = {.t_free = 1, .frac = 1e-3};
+  bs_step_stats st;
+  bs_error err;
+  double *x, *v;
+  size_t n3;
+  cr_assert_eq(gate_step(&g, &st, &x, &v, &n3, &err), BS_ENUMERIC, "%s", err.msg);
+  cr_log_info("%s\n", err.msg);
+  /* 256 stages of a thousandth of what is left: 1 - 0.999^256 = 22.6% of the step */
+  cr_expect(strstr(err.msg, "reached only t = 0.0094") != NULL && strstr(err.msg, "in 256 stages") != NULL, "%s",
+            err.msg);
+  cr_expect_eq(g.calls, 257, "%d calls: the check at the start and one per stage", g.calls);
+  free(x), free(v);
+}
+
 /* The previous-step guess's bookkeeping (bs_step.h, step 3): the xmin face
  * of a bar is scripted to move at 1 m/s along x and drags the bar; a
  * post-solve hook stops the free vertices (a stand-in for friction). Every
