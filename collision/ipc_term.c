@@ -502,6 +502,27 @@ static int ipc_max_step(const bs_term *t, const double *x, const double *dx, dou
   return max_step_impl(t->data, x, dx, alpha) ? BS_TERM_NOT_EVALUABLE : BS_TERM_OK;
 }
 
+/* The sweep's predictor (bs_terms.h, carry): each vertex of an active pair
+ * at x that has a carried vertex is carried with the first of them, in
+ * pair order (deterministic). */
+static int ipc_carry(const bs_term *t, const double *x, double t0, double t1, double *z, uint8_t *carried) {
+  (void)t0, (void)t1;
+  ipc_data *d = t->data;
+  if (detect(d, x)) return BS_TERM_NOT_EVALUABLE;
+  for (int64_t i = 0; i < d->n_pairs; i++) {
+    const int32_t *v = d->pairs[i].v;
+    int src = -1;
+    for (int k = 0; k < 4 && src < 0; k++)
+      if (carried[v[k]]) src = k;
+    for (int k = 0; k < 4 && src >= 0; k++)
+      if (!carried[v[k]]) {
+        carried[v[k]] = 1;
+        memcpy(z + 3 * (size_t)v[k], z + 3 * (size_t)v[src], 3 * sizeof *z);
+      }
+  }
+  return BS_TERM_OK;
+}
+
 /* ---- step start ------------------------------------------------------------ */
 
 static void rebuild(ipc_data *d, const double *x) {
@@ -582,7 +603,7 @@ static int ipc_hessian_convex(const bs_term *t, const double *x, bs_bsr *H) {
 }
 
 static const bs_term_ops ipc_ops = {ipc_value, ipc_gradient, ipc_hessian, ipc_begin_step, ipc_free,
-                                    ipc_hessian_convex, NULL, ipc_max_step, NULL, NULL};
+                                    ipc_hessian_convex, NULL, ipc_max_step, NULL, ipc_carry};
 
 typedef struct edge_key {
   int32_t a, b, f, k; /* a < b; triangle f's k-th edge */

@@ -30,9 +30,14 @@
  * the others), and, when it stops short of tⁿ⁺¹ with something pushed,
  * minimizes the step's objective with step->time at the τ reached, for at
  * most 8 iterations (the stage only has to make room for the next one). z
- * carries the vertices within dhat of a moving obstacle with it and moves
- * the other free vertices by the linear response, H_ff z_f = −H_fc z_c (H
- * the convexified Hessian at x; PCG). The guesses of step 3 are then
+ * carries the vertices within dhat of a moving obstacle with it (the
+ * terms' carry); then each body with a carried vertex (a connected
+ * component of the pattern's graph; none with a vertex that is not free)
+ * moves rigidly, by the mean displacement of its carried vertices, and so
+ * does, until none is added, each body that a term carries along with a
+ * carried one (barrier contact: in an active pair with it); the other free
+ * vertices move by the linear response, H_ff z_f = −H_fc z_c (H the
+ * convexified Hessian at x; PCG). The guesses of step 3 are then
  * clipped from where the sweep ends instead of from xⁿ, so every point the
  * step stops at and every path between them is in the domains at their own
  * times. st->sweep_stages counts the stages and st->min includes their

@@ -127,12 +127,16 @@ typedef struct bs_term_ops {
      integrator sweeps such terms from tⁿ to tⁿ⁺¹ within a step (bs_step.h,
      "Moving obstacles"). A bs_term_status, as max_step. */
   int (*sweep)(const bs_term *t, const double *x, const double *d, double t0, double t1, double *s);
-  /* May be NULL (with sweep): the vertices the term's moving domain
-     carries from time t0 to t1 (barrier obstacles: each free surface vertex
-     within dhat of a moving obstacle at t0, moved with the obstacle's
-     material point), their displacement written into z (3n) and
-     carried[v] set to 1; other entries untouched. For the sweep's
-     predictor. A bs_term_status. */
+  /* May be NULL. For the sweep's predictor (bs_step.h, "Moving
+     obstacles"). A term with sweep: the vertices its moving domain carries
+     from time t0 to t1 (barrier obstacles: each free surface vertex within
+     dhat of a moving obstacle at t0, moved with the obstacle's material
+     point), their displacement written into z (3n) and carried[v] set to 1;
+     other entries untouched. A term without sweep: the vertices it carries
+     along with those already carried (barrier contact: every vertex of an
+     active pair at x that has a carried vertex gets that vertex's z and is
+     marked), other entries untouched; called again while the integrator's
+     closure adds vertices. A bs_term_status. */
   int (*carry)(const bs_term *t, const double *x, double t0, double t1, double *z, uint8_t *carried);
 } bs_term_ops;
 

@@ -46,6 +46,10 @@ struct bs_integrator {
   const double *x_base;   /* where the guesses are clipped from: x_n, or sw_x after a sweep */
   double *sw_x, *sw_z, *sw_zf; /* the sweep's point, predictor, followers' part (3n; made at first use) */
   uint8_t *sw_mask;       /* the sweep's carried, then following, vertices (n) */
+  int32_t *sw_body;       /* per vertex: its body (a component of the pattern's graph) */
+  int32_t n_bodies;
+  double *sw_bt;          /* per body: its translation in the predictor (3) */
+  int32_t *sw_bn;         /* per body: its carried vertices, or -1 (not rigid: a vertex not free) */
   bs_bsr *sw_H;           /* the predictor's Hessian                        */
   bs_linsolve *sw_lin;    /* and its solver (PCG)                           */
   bs_previous_step prev;  /* the last step's displacement (prev.d: 3n, owned) */
@@ -117,6 +121,9 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->sw_z);
   free(I->sw_zf);
   free(I->sw_mask);
+  free(I->sw_body);
+  free(I->sw_bt);
+  free(I->sw_bn);
   bs_bsr_destroy(&I->sw_H);
   bs_linsolve_destroy(&I->sw_lin);
   if (I->B.destroy) I->B.destroy(I->B.ctx);
@@ -842,17 +849,93 @@ static int path_fraction(bs_integrator *I, const double *x, const double *d, dou
   return 0;
 }
 
+static int32_t body_root(int32_t *up, int32_t v) {
+  while (up[v] != v) v = up[v] = up[up[v]];
+  return v;
+}
+
+/* I->sw_body: each vertex's body, the connected components of the
+ * pattern's graph (vertices that share a tet), numbered in vertex order. */
+static void label_bodies(bs_integrator *I) {
+  const bs_bsr *P = I->B.pattern;
+  int32_t *up = I->sw_body;
+  for (int32_t v = 0; v < I->nv; v++) up[v] = v;
+  for (int32_t v = 0; v < I->nv; v++)
+    for (int32_t s = P->row_ptr[v]; s < P->row_ptr[v + 1]; s++) {
+      const int32_t a = body_root(up, v), b = body_root(up, P->col[s]);
+      if (a != b) up[a > b ? a : b] = a < b ? a : b;
+    }
+  int32_t n = 0;
+  for (int32_t v = 0; v < I->nv; v++) up[v] = up[v] == v ? n++ : up[up[v]];
+  I->n_bodies = n;
+}
+
 static int sweep_alloc(bs_integrator *I, bs_error *err) {
   if (I->sw_lin) return 0;
   const size_t n3 = 3 * (size_t)I->nv + 1;
   const bs_bsr *P = I->B.pattern;
   I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3);
   I->sw_zf = malloc(sizeof(double) * n3), I->sw_mask = malloc((size_t)I->nv + 1);
-  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask)
+  I->sw_body = malloc(sizeof(int32_t) * ((size_t)I->nv + 1)), I->sw_bt = malloc(sizeof(double) * n3);
+  I->sw_bn = malloc(sizeof(int32_t) * ((size_t)I->nv + 1));
+  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask || !I->sw_body || !I->sw_bt || !I->sw_bn)
     return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
+  if (!I->B.vecops) label_bodies(I);
   int rc = bs_bsr_create(P->n, P->row_ptr, P->col, &I->sw_H, err);
   if (!rc && I->opts.min.hessian_extra > 0) rc = bs_bsr_reserve_extra(I->sw_H, I->opts.min.hessian_extra, err);
   return rc ? rc : bs_linsolve_create(I->sw_H, BS_LIN_PCG, &I->sw_lin, err);
+}
+
+/* The bodies with a carried vertex (c) move rigidly in z, each by the mean
+ * displacement of its carried vertices, unless one of its vertices is not
+ * free (I->mask); returns the vertices carried then. */
+static int32_t carry_bodies(bs_integrator *I, double *z, uint8_t *c) {
+  const int32_t nb = I->n_bodies, *body = I->sw_body;
+  double *t = I->sw_bt;
+  int32_t *n = I->sw_bn, marked = 0;
+  memset(n, 0, sizeof(int32_t) * (size_t)nb);
+  memset(t, 0, sizeof(double) * 3 * (size_t)nb);
+  for (int32_t v = 0; v < I->nv; v++) {
+    if (!I->mask[v]) n[body[v]] = -1;
+    if (!c[v] || n[body[v]] < 0) continue;
+    n[body[v]]++;
+    for (int k = 0; k < 3; k++) t[3 * body[v] + k] += z[3 * (size_t)v + k];
+  }
+  for (int32_t v = 0; v < I->nv; v++) {
+    const int32_t b = body[v];
+    if (n[b] > 0) {
+      c[v] = 1;
+      for (int k = 0; k < 3; k++) z[3 * (size_t)v + k] = t[3 * b + k] / n[b];
+    }
+    marked += c[v] != 0;
+  }
+  return marked;
+}
+
+/* Calls the carry of the terms with (moving: 1) or without sweep. */
+static int terms_carry(bs_integrator *I, int moving, const double *x, double t0, double t1, double *z, uint8_t *c,
+                       bs_error *err) {
+  for (int i = 0; i < I->n_terms; i++) {
+    const bs_term *t = I->terms[i];
+    if (t->ops->carry && moving == (t->ops->sweep != NULL) && t->ops->carry(t, x, t0, t1, z, c))
+      return bs_error_set(err, BS_ENUMERIC, "the %s term cannot say what it carries in the sweep", t->name);
+  }
+  return 0;
+}
+
+/* What the sweep carries from (x, t0) to t1 (bs_term_ops.carry): the
+ * vertices of the moving domains; their bodies (carry_bodies); and, until
+ * no vertex is added, what the other terms carry along with those (barrier
+ * contact: the vertices of its active pairs) and their bodies. */
+static int sweep_carry(bs_integrator *I, const double *x, double t0, double t1, double *z, uint8_t *c, bs_error *err) {
+  int rc = terms_carry(I, 1, x, t0, t1, z, c, err);
+  if (rc || I->B.vecops) return rc;
+  int32_t marked = carry_bodies(I, z, c), before = -1;
+  for (int pass = 0; pass < I->n_bodies && marked > before && !rc; pass++) {
+    before = marked;
+    if (!(rc = terms_carry(I, 0, x, t0, t1, z, c, err))) marked = carry_bodies(I, z, c);
+  }
+  return rc;
 }
 
 /* The sweep's predictor from (x, t0) to t1 into z: the vertices the moving
@@ -865,11 +948,8 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
   uint8_t *c = I->sw_mask;
   memset(c, 0, nv);
   memset(z, 0, sizeof(double) * n3);
-  for (int i = 0; i < I->n_terms; i++) {
-    const bs_term *t = I->terms[i];
-    if (t->ops->carry && t->ops->carry(t, x, t0, t1, z, c))
-      return bs_error_set(err, BS_ENUMERIC, "the %s term cannot say what it carries in the sweep", t->name);
-  }
+  int rc = sweep_carry(I, x, t0, t1, z, c, err);
+  if (rc) return rc;
   int any = 0;
   for (size_t v = 0; v < nv; v++) {
     c[v] = c[v] && I->mask[v];
@@ -877,7 +957,7 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
     any |= c[v];
   }
   if (!any || I->B.vecops) return 0;
-  int rc = hessian_projected(I, x, NULL, 1, I->sw_H);
+  rc = hessian_projected(I, x, NULL, 1, I->sw_H);
   if (rc) return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "the Hessian is not evaluable in the sweep");
   bs_bsr_index_extra(I->sw_H);
   double *b = I->gh, *zf = I->sw_zf;
