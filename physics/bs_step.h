@@ -37,7 +37,10 @@
  * does, until none is added, each body that a term carries along with a
  * carried one (barrier contact: in an active pair with it); the other free
  * vertices move by the linear response, H_ff z_f = −H_fc z_c (H the
- * convexified Hessian at x; PCG). The guesses of step 3 are then
+ * convexified Hessian at x; PCG). When that predictor is limited, the one
+ * without rigid bodies (the moving domains' vertices and the linear
+ * response) is tried too, and the one certified further is taken (a body
+ * carried whole can be blocked where its parts give). The guesses of step 3 are then
  * clipped from where the sweep ends instead of from xⁿ, so every point the
  * step stops at and every path between them is in the domains at their own
  * times. st->sweep_stages counts the stages and st->min includes their

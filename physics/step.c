@@ -44,7 +44,7 @@ struct bs_integrator {
   int has_max_step;       /* a term offers max_step (barrier contact: CCD) */
   int has_sweep;          /* a term offers sweep (barrier obstacles)        */
   const double *x_base;   /* where the guesses are clipped from: x_n, or sw_x after a sweep */
-  double *sw_x, *sw_z, *sw_zf; /* the sweep's point, predictor, followers' part (3n; made at first use) */
+  double *sw_x, *sw_z, *sw_z2, *sw_zf; /* the sweep's point, predictors (rigid, not), followers' part (3n) */
   uint8_t *sw_mask;       /* the sweep's carried, then following, vertices (n) */
   int32_t *sw_body;       /* per vertex: its body (a component of the pattern's graph) */
   int32_t n_bodies;
@@ -119,6 +119,7 @@ void bs_integrator_destroy(bs_integrator **pI) {
   free(I->hist.h);
   free(I->sw_x);
   free(I->sw_z);
+  free(I->sw_z2);
   free(I->sw_zf);
   free(I->sw_mask);
   free(I->sw_body);
@@ -874,11 +875,11 @@ static int sweep_alloc(bs_integrator *I, bs_error *err) {
   if (I->sw_lin) return 0;
   const size_t n3 = 3 * (size_t)I->nv + 1;
   const bs_bsr *P = I->B.pattern;
-  I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3);
+  I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3), I->sw_z2 = malloc(sizeof(double) * n3);
   I->sw_zf = malloc(sizeof(double) * n3), I->sw_mask = malloc((size_t)I->nv + 1);
   I->sw_body = malloc(sizeof(int32_t) * ((size_t)I->nv + 1)), I->sw_bt = malloc(sizeof(double) * n3);
   I->sw_bn = malloc(sizeof(int32_t) * ((size_t)I->nv + 1));
-  if (!I->sw_x || !I->sw_z || !I->sw_zf || !I->sw_mask || !I->sw_body || !I->sw_bt || !I->sw_bn)
+  if (!I->sw_x || !I->sw_z || !I->sw_z2 || !I->sw_zf || !I->sw_mask || !I->sw_body || !I->sw_bt || !I->sw_bn)
     return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
   if (!I->B.vecops) label_bodies(I);
   int rc = bs_bsr_create(P->n, P->row_ptr, P->col, &I->sw_H, err);
@@ -888,7 +889,8 @@ static int sweep_alloc(bs_integrator *I, bs_error *err) {
 
 /* The bodies with a carried vertex (c) move rigidly in z, each by the mean
  * displacement of its carried vertices, unless one of its vertices is not
- * free (I->mask); returns the vertices carried then. */
+ * free (I->mask): then only its vertices a moving domain carries (c = 2)
+ * stay carried. Returns the vertices carried then. */
 static int32_t carry_bodies(bs_integrator *I, double *z, uint8_t *c) {
   const int32_t nb = I->n_bodies, *body = I->sw_body;
   double *t = I->sw_bt;
@@ -906,6 +908,9 @@ static int32_t carry_bodies(bs_integrator *I, double *z, uint8_t *c) {
     if (n[b] > 0) {
       c[v] = 1;
       for (int k = 0; k < 3; k++) z[3 * (size_t)v + k] = t[3 * b + k] / n[b];
+    } else if (c[v] == 1) { /* carried along by a term, in a body that is not rigid: left to the response */
+      c[v] = 0;
+      for (int k = 0; k < 3; k++) z[3 * (size_t)v + k] = 0;
     }
     marked += c[v] != 0;
   }
@@ -927,28 +932,39 @@ static int terms_carry(bs_integrator *I, int moving, const double *x, double t0,
  * vertices of the moving domains; their bodies (carry_bodies); and, until
  * no vertex is added, what the other terms carry along with those (barrier
  * contact: the vertices of its active pairs) and their bodies. */
-static int sweep_carry(bs_integrator *I, const double *x, double t0, double t1, double *z, uint8_t *c, bs_error *err) {
+static int sweep_carry(bs_integrator *I, const double *x, double t0, double t1, int rigid, double *z, uint8_t *c,
+                       int *grew, bs_error *err) {
+  *grew = 0;
   int rc = terms_carry(I, 1, x, t0, t1, z, c, err);
-  if (rc || I->B.vecops) return rc;
+  if (rc || !rigid || I->B.vecops) return rc;
+  int32_t first = 0;
+  for (int32_t v = 0; v < I->nv; v++) {
+    c[v] = c[v] ? 2 : 0; /* carried by a moving domain */
+    first += c[v] != 0;
+  }
   int32_t marked = carry_bodies(I, z, c), before = -1;
   for (int pass = 0; pass < I->n_bodies && marked > before && !rc; pass++) {
     before = marked;
     if (!(rc = terms_carry(I, 0, x, t0, t1, z, c, err))) marked = carry_bodies(I, z, c);
   }
+  *grew = marked > first;
   return rc;
 }
 
-/* The sweep's predictor from (x, t0) to t1 into z: the vertices the moving
- * domains carry (bs_term_ops.carry) move with them, and every other free
- * vertex by the linear response of the step's objective to that motion,
- * H_ff z_f = -H_fc z_c (H the convexified Hessian at x, PCG to 1e-3 over
- * the free vertices not carried). z = 0 when nothing is carried. */
-static int sweep_predictor(bs_integrator *I, const double *x, double t0, double t1, double *z, bs_error *err) {
+/* The sweep's predictor from (x, t0) to t1 into z: the vertices the terms
+ * carry (sweep_carry; with rigid, their bodies too) move with them, and
+ * every other free vertex by the linear response of the step's objective
+ * to that motion, H_ff z_f = -H_fc z_c (H the convexified Hessian at x,
+ * assembled once per stage: *H_done; PCG to 1e-3 over the free vertices
+ * not carried). z = 0 when nothing is carried. *grew: rigid added vertices
+ * (else the predictor is the one without rigid). */
+static int sweep_predictor(bs_integrator *I, const double *x, double t0, double t1, int rigid, double *z, int *grew,
+                           int *H_done, bs_error *err) {
   const size_t nv = (size_t)I->nv, n3 = 3 * nv;
   uint8_t *c = I->sw_mask;
   memset(c, 0, nv);
   memset(z, 0, sizeof(double) * n3);
-  int rc = sweep_carry(I, x, t0, t1, z, c, err);
+  int rc = sweep_carry(I, x, t0, t1, rigid, z, c, grew, err);
   if (rc) return rc;
   int any = 0;
   for (size_t v = 0; v < nv; v++) {
@@ -957,9 +973,12 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
     any |= c[v];
   }
   if (!any || I->B.vecops) return 0;
-  rc = hessian_projected(I, x, NULL, 1, I->sw_H);
-  if (rc) return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "the Hessian is not evaluable in the sweep");
-  bs_bsr_index_extra(I->sw_H);
+  if (!*H_done) {
+    rc = hessian_projected(I, x, NULL, 1, I->sw_H);
+    if (rc) return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "the Hessian is not evaluable in the sweep");
+    bs_bsr_index_extra(I->sw_H);
+    *H_done = 1;
+  }
   double *b = I->gh, *zf = I->sw_zf;
   bs_bsr_mul(I->sw_H, NULL, z, b);
   for (size_t v = 0; v < nv; v++) {
@@ -972,6 +991,35 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
   return 0;
 }
 
+/* A predictor (rigid or not) from (x, tau) into z, *moving (z != 0) and
+ * the fraction *s of the path to t1 that the terms certify. */
+static int sweep_try(bs_integrator *I, const double *x, double tau, double t1, int rigid, double *z, int *grew,
+                     int *H_done, int *moving, double *s, bs_error *err) {
+  int rc = sweep_predictor(I, x, tau, t1, rigid, z, grew, H_done, err);
+  if (rc) return rc;
+  *moving = 0;
+  for (size_t i = 0; i < 3 * (size_t)I->nv; i++) *moving |= z[i] != 0;
+  if ((rc = path_fraction(I, x, *moving ? z : NULL, tau, t1, s)))
+    return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "a contact term is not evaluable on the sweep's path");
+  return 0;
+}
+
+/* The stage's predictor into *z (I->sw_z or I->sw_z2): the rigid one
+ * (bodies carried whole), and when it is limited and differs, the one
+ * without, whichever the terms certify further (a body carried whole may
+ * be blocked, a pile against a wall, where its parts can give). */
+static int sweep_choose(bs_integrator *I, const double *x, double tau, double t1, double **z, int *moving, double *s,
+                        bs_error *err) {
+  int grew = 0, H_done = 0, moving2 = 0, grew2 = 0;
+  double s2 = 0;
+  *z = I->sw_z;
+  int rc = sweep_try(I, x, tau, t1, 1, *z, &grew, &H_done, moving, s, err);
+  if (rc || !grew || *s >= 1) return rc;
+  if ((rc = sweep_try(I, x, tau, t1, 0, I->sw_z2, &grew2, &H_done, &moving2, &s2, err))) return rc;
+  if (s2 > *s) *z = I->sw_z2, *moving = moving2, *s = s2;
+  return 0;
+}
+
 /* One stage from (x, *tau): along the predictor to the time it certifies,
  * then (when something is pushed and the step's end is not reached) the
  * step's objective minimized there, for at most BS_SWEEP_STAGE_ITER
@@ -980,14 +1028,12 @@ static int sweep_predictor(bs_integrator *I, const double *x, double t0, double 
 static int sweep_stage(bs_integrator *I, double *x, double *tau, double t0, double t1, bs_step_stats *acc,
                        bs_error *err) {
   const size_t n3 = 3 * (size_t)I->nv;
-  double *z = I->sw_z, s = 0;
+  double *z = NULL, s = 0;
+  int moving = 0;
   I->step->time = *tau;
-  int rc = sweep_predictor(I, x, *tau, t1, z, err), moving = 0;
+  int rc = sweep_choose(I, x, *tau, t1, &z, &moving, &s, err);
   if (rc) return rc;
   const double span = t1 - *tau;
-  for (size_t i = 0; i < n3; i++) moving |= z[i] != 0;
-  if ((rc = path_fraction(I, x, moving ? z : NULL, *tau, t1, &s)))
-    return rc < 0 ? rc : bs_error_set(err, BS_ENUMERIC, "a contact term is not evaluable on the sweep's path");
   if (!(s > 0))
     return bs_error_set(err, BS_ENUMERIC,
                         "moving obstacles: the sweep of the step from t = %g s to %g s stands still at t = %g s: a "
