@@ -248,22 +248,33 @@ static int floor_hessian(const bs_term *t, const double *x, bs_bsr *H) {
 static const bs_term_ops floor_ops = {floor_value, floor_gradient, floor_hessian, NULL, NULL, NULL, NULL, NULL, NULL,
                                       NULL};
 
+/* A 1 x 0.5 x 0.5 box of 3 x 2 x 2 cells under gravity (inertia, gravity,
+ * elasticity), its integrator made with `extra` as a fourth term when not
+ * NULL (its fem and step set here), to tolerance tol. */
+static void box_with_term(sys *s, bs_term *extra, double tol) {
+  double hi[3] = {1, 0.5, 0.5}, g[3] = {0, -9.8, 0};
+  sys_create(s, hi, 3, 2, 2, 0, 1e5, g, 1, NULL, tol);
+  bs_term *terms[4] = {s->terms[0], s->terms[1], s->terms[2], extra};
+  if (!extra) return;
+  extra->fem = s->fem, extra->step = &s->step;
+  bs_integrator_destroy(&s->I);
+  bs_integrator_opts o;
+  bs_integrator_opts_default(&o);
+  o.min.tol = tol;
+  bs_error err;
+  cr_assert_eq(bs_integrator_create(s->fem, &s->step, 4, terms, s->mask, NULL, NULL, &o, &s->I, &err), 0, "%s",
+               err.msg);
+}
+
 /* One step of a box at rest 1 cm above the floor under gravity (inertia,
  * gravity, elasticity and the floor). The free-fall guess and the first
  * Newton step, about 1.5 cm down, both lie below the floor. st->min.reason_text
  * is copied to reason (the minimizer is gone on return). */
 static void floor_step(floor_data *fd, bs_step_stats *st, double *ymin, char reason[512]) {
   sys s;
-  double hi[3] = {1, 0.5, 0.5}, g[3] = {0, -9.8, 0};
-  sys_create(&s, hi, 3, 2, 2, 0, 1e5, g, 1, NULL, 1e-6);
-  bs_term floor = {.name = "floor", .ops = &floor_ops, .fem = s.fem, .step = &s.step, .data = fd};
-  bs_term *terms[4] = {s.terms[0], s.terms[1], s.terms[2], &floor};
-  bs_integrator_destroy(&s.I);
-  bs_integrator_opts o;
-  bs_integrator_opts_default(&o);
-  o.min.tol = 1e-6;
+  bs_term floor = {.name = "floor", .ops = &floor_ops, .data = fd};
+  box_with_term(&s, &floor, 1e-6);
   bs_error err;
-  cr_assert_eq(bs_integrator_create(s.fem, &s.step, 4, terms, s.mask, NULL, NULL, &o, &s.I, &err), 0, "%s", err.msg);
   size_t n3 = 3 * (size_t)s.mesh->n_vertices;
   double *x = malloc(sizeof(double) * n3), *v = calloc(n3, sizeof(double));
   memcpy(x, s.mesh->x, sizeof(double) * n3);
@@ -352,16 +363,8 @@ static const bs_term_ops gate_ops = {gate_value, gate_gradient, gate_hessian, NU
  * status. */
 static int gate_step(gate_data *g, bs_step_stats *st, double **x, double **v, size_t *n3, bs_error *err) {
   sys s;
-  double hi[3] = {1, 0.5, 0.5}, grav[3] = {0, -9.8, 0};
-  sys_create(&s, hi, 3, 2, 2, 0, 1e5, grav, 1, NULL, 1e-8);
-  bs_term gate = {.name = "gate", .ops = &gate_ops, .fem = s.fem, .step = &s.step, .data = g};
-  bs_term *terms[4] = {s.terms[0], s.terms[1], s.terms[2], &gate};
-  bs_integrator_destroy(&s.I);
-  bs_integrator_opts o;
-  bs_integrator_opts_default(&o);
-  o.min.tol = 1e-8;
-  cr_assert_eq(bs_integrator_create(s.fem, &s.step, g ? 4 : 3, terms, s.mask, NULL, NULL, &o, &s.I, err), 0, "%s",
-               err->msg);
+  bs_term gate = {.name = "gate", .ops = &gate_ops, .data = g};
+  box_with_term(&s, g ? &gate : NULL, 1e-8);
   *n3 = 3 * (size_t)s.mesh->n_vertices;
   *x = malloc(sizeof(double) * *n3), *v = calloc(*n3, sizeof(double));
   memcpy(*x, s.mesh->x, sizeof(double) * *n3);
