@@ -461,7 +461,9 @@ static int mesh_with_meshers(const char *path, const double *pts, int64_t np, co
 /* Every mesher refused the clean surface (a boundary that is not a closed
  * 2-manifold where parts touch, the gate on thin walls, a surface that
  * folds once remeshed): its alpha wrap at h meshed instead
- * (bs__surface_wrap, how 2). On refusal the first message stays. */
+ * (bs__surface_wrap, how 2). On refusal the first message stays, and the
+ * report's surface (points, triangles, volume) is the repaired one again:
+ * the wrap's attempt is kept only in its wrap_* fields. */
 static int mesh_wrap(const char *path, const double *pts, int64_t np, const int32_t *tris, int64_t nt, double h,
                      double diag, const bs_mesh_read_opts *opts, bs_mesh **out, bs_error *err) {
   double *wp = NULL, volume = 0;
@@ -469,7 +471,9 @@ static int mesh_wrap(const char *path, const double *pts, int64_t np, const int3
   int64_t nwp = 0, nwt = 0;
   bs_error e2;
   bs_error_clear(&e2);
-  int rc = bs__surface_wrap(path, pts, np, tris, nt, h, 2, 0, &wp, &nwp, &wt, &nwt, opts ? opts->report : NULL, &e2);
+  bs_surface_report *rep = opts ? opts->report : NULL, before = {0};
+  if (rep) before = *rep;
+  int rc = bs__surface_wrap(path, pts, np, tris, nt, h, 2, 0, &wp, &nwp, &wt, &nwt, rep, &e2);
   if (!rc) {
     volume = fabs(bs__soup_volume(wp, wt, nwt));
     rc = mesh_with_meshers(path, wp, nwp, wt, nwt, h, diag, volume, opts, out, &e2);
@@ -481,7 +485,10 @@ static int mesh_wrap(const char *path, const double *pts, int64_t np, const int3
     return BS_OK;
   }
   if (rc != BS_EINPUT || bs__budget_exceeded(&e2)) *err = e2;
-  if (opts && opts->report) opts->report->wrapped = 0;
+  if (rep) {
+    rep->wrapped = 0;
+    rep->points_out = before.points_out, rep->tris_out = before.tris_out, rep->volume = before.volume;
+  }
   return rc;
 }
 

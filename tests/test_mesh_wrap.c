@@ -228,6 +228,49 @@ Test(mesh_wrap, separate_solids_closer_than_the_size_stay_apart) {
   unlink(path);
 }
 
+/* A unit cube with a fin 0.04 thick and 2 long on one side (an extruded L:
+ * volume 1.08), meshed at 0.25 (the fin is h / 6 thick): whether a mesher
+ * takes it or every one, the wrap's mesh too, refuses it (today: "the mesh's
+ * boundary is not a closed 2-manifold"), the report keeps the surface the
+ * repair made, not the wrap's that was tried and dropped. */
+Test(mesh_wrap, a_refused_wrap_leaves_the_report_on_the_repaired_surface) {
+  static const double xz[8][2] = {{0, 0}, {1, 0}, {1, 0.48}, {3, 0.48}, {3, 0.52}, {1, 0.52}, {1, 1}, {0, 1}};
+  static const int cap[6][3] = {{0, 1, 2}, {0, 2, 5}, {0, 5, 6}, {0, 6, 7}, {2, 3, 4}, {2, 4, 5}};
+  tsoup s;
+  memset(&s, 0, sizeof s);
+  for (int y = 0; y < 2; y++)
+    for (int i = 0; i < 8; i++) add_point(&s, xz[i][0], y, xz[i][1]);
+  for (int k = 0; k < 6; k++) {
+    add_tri(&s, cap[k][0], cap[k][1], cap[k][2]);
+    add_tri(&s, cap[k][0] + 8, cap[k][2] + 8, cap[k][1] + 8);
+  }
+  for (int i = 0; i < 8; i++) {
+    const int j = (i + 1) % 8;
+    add_tri(&s, i, j + 8, j);
+    add_tri(&s, i, i + 8, j + 8);
+  }
+  char *path = temp_path("fin.off");
+  write_off(path, &s);
+  bs_surface_report rep = {0};
+  bs_error err;
+  bs_error_clear(&err);
+  bs_mesh *m = NULL;
+  const int rc = bs_mesh_read(path, &(bs_mesh_read_opts){.size = 0.25, .report = &rep}, &m, &err);
+  cr_log_info("%s: rc %d, %s; report: %lld triangles, volume %g, wrapped %d (alpha %g)", path, rc, err.msg,
+              (long long)rep.tris_out, rep.volume, rep.wrapped, rep.wrap_alpha);
+  if (rc) {
+    cr_expect_eq(rc, BS_EINPUT, "%s", err.msg);
+    cr_expect_eq(rep.wrapped, 0);
+    cr_expect_eq(rep.tris_out, 28, "the report shows %lld triangles, the repaired surface has 28",
+                 (long long)rep.tris_out);
+    cr_expect_float_eq(rep.volume, 1.08, 1e-12, "the report's volume %g is not the surface's 1.08", rep.volume);
+  } else {
+    cr_expect_float_eq(bs_mesh_volume(m), 1.08, 0.0108, "a mesh of volume %g", bs_mesh_volume(m));
+  }
+  bs_mesh_destroy(&m);
+  unlink(path);
+}
+
 /* The two cubes as a binary STL (every triangle its own points): the same
  * repair and wrap path as OFF. */
 Test(mesh_wrap, stl_written_by_the_test) {
