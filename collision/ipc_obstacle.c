@@ -270,12 +270,16 @@ typedef struct ccd_path {
   const double *x0, *d;
 } ccd_path;
 
+/* The rounding bound of phi at the point y of path p: 2^-40 (|y| + cs),
+ * about 2000 ulps of the magnitudes involved (for grids also the largest
+ * |node value|, in cs). */
+static double path_delta(const ccd_path *p, const double y[3]) { return ldexp(sqrt(bs_dot3(y, y)) + p->cs, -40); }
+
 /* A certified lower bound of phi at the path's point a: phi evaluated there
- * minus its rounding bound 2^-40 (|y| + cs), about 2000 ulps of the
- * magnitudes involved (for grids also the largest |node value|, in cs). */
+ * minus its rounding bound (path_delta). */
 static double path_lower(const ccd_path *p, double a) {
   const double y[3] = {p->x0[0] + a * p->d[0], p->x0[1] + a * p->d[1], p->x0[2] + a * p->d[2]};
-  const double delta = ldexp(sqrt(bs_dot3(y, y)) + p->cs, -40);
+  const double delta = path_delta(p, y);
   if (p->dt == 0) return bs_levelset_eval_frame(p->ls, p->f, y, NULL, NULL) - delta;
   bs_levelset_frame g;
   bs_levelset_frame_at(p->ls, p->t0 + a * p->dt, &g);
@@ -286,7 +290,7 @@ static double path_lower(const ccd_path *p, double a) {
  * rounded up). A start whose bound is within 1/s^2 of its own rounding
  * certifies nothing: 0. */
 static double ccd_core(const ccd_path *p, double D, double s, int max_iter) {
-  const double lo0 = path_lower(p, 0), delta0 = ldexp(sqrt(bs_dot3(p->x0, p->x0)) + p->cs, -40);
+  const double lo0 = path_lower(p, 0), delta0 = path_delta(p, p->x0);
   if (!(lo0 > delta0 / (s * s))) return 0;
   if (!(D > 0)) return 1;
   const double gap = s * lo0;

@@ -48,7 +48,7 @@ struct bs_integrator {
   uint8_t *sw_mask;       /* the sweep's carried, then following, vertices (n) */
   int32_t *sw_body;       /* per vertex: its body (a component of the pattern's graph) */
   int32_t n_bodies;
-  double *sw_bt;          /* per body: its translation in the predictor (3) */
+  double *sw_bt;          /* per body (n_bodies): its translation in the predictor (3) */
   int32_t *sw_bn;         /* per body: its carried vertices, or -1 (not rigid: a vertex not free) */
   bs_bsr *sw_H;           /* the predictor's Hessian                        */
   bs_linsolve *sw_lin;    /* and its solver (PCG)                           */
@@ -877,20 +877,25 @@ static int sweep_alloc(bs_integrator *I, bs_error *err) {
   const bs_bsr *P = I->B.pattern;
   I->sw_x = malloc(sizeof(double) * n3), I->sw_z = malloc(sizeof(double) * n3), I->sw_z2 = malloc(sizeof(double) * n3);
   I->sw_zf = malloc(sizeof(double) * n3), I->sw_mask = malloc((size_t)I->nv + 1);
-  I->sw_body = malloc(sizeof(int32_t) * ((size_t)I->nv + 1)), I->sw_bt = malloc(sizeof(double) * n3);
-  I->sw_bn = malloc(sizeof(int32_t) * ((size_t)I->nv + 1));
+  I->sw_body = malloc(sizeof(int32_t) * ((size_t)I->nv + 1));
+  if (I->sw_body && !I->B.vecops) label_bodies(I);
+  I->sw_bt = malloc(sizeof(double) * (3 * (size_t)I->n_bodies + 1));
+  I->sw_bn = malloc(sizeof(int32_t) * ((size_t)I->n_bodies + 1));
   if (!I->sw_x || !I->sw_z || !I->sw_z2 || !I->sw_zf || !I->sw_mask || !I->sw_body || !I->sw_bt || !I->sw_bn)
     return bs_error_set(err, BS_ENOMEM, "out of memory for the sweep of moving obstacles");
-  if (!I->B.vecops) label_bodies(I);
   int rc = bs_bsr_create(P->n, P->row_ptr, P->col, &I->sw_H, err);
   if (!rc && I->opts.min.hessian_extra > 0) rc = bs_bsr_reserve_extra(I->sw_H, I->opts.min.hessian_extra, err);
   return rc ? rc : bs_linsolve_create(I->sw_H, BS_LIN_PCG, &I->sw_lin, err);
 }
 
+/* The sweep's marks of carried vertices (I->sw_mask while the predictor is
+ * made): by a term along with others, or by a moving domain itself. */
+enum { SWEEP_ALONG = 1, SWEEP_BY_DOMAIN = 2 };
+
 /* The bodies with a carried vertex (c) move rigidly in z, each by the mean
  * displacement of its carried vertices, unless one of its vertices is not
- * free (I->mask): then only its vertices a moving domain carries (c = 2)
- * stay carried. Returns the vertices carried then. */
+ * free (I->mask): then only its vertices a moving domain carries
+ * (SWEEP_BY_DOMAIN) stay carried. Returns the vertices carried then. */
 static int32_t carry_bodies(bs_integrator *I, double *z, uint8_t *c) {
   const int32_t nb = I->n_bodies, *body = I->sw_body;
   double *t = I->sw_bt;
@@ -906,9 +911,9 @@ static int32_t carry_bodies(bs_integrator *I, double *z, uint8_t *c) {
   for (int32_t v = 0; v < I->nv; v++) {
     const int32_t b = body[v];
     if (n[b] > 0) {
-      c[v] = 1;
+      c[v] = SWEEP_ALONG;
       for (int k = 0; k < 3; k++) z[3 * (size_t)v + k] = t[3 * b + k] / n[b];
-    } else if (c[v] == 1) { /* carried along by a term, in a body that is not rigid: left to the response */
+    } else if (c[v] == SWEEP_ALONG) { /* carried along in a body that is not rigid: left to the response */
       c[v] = 0;
       for (int k = 0; k < 3; k++) z[3 * (size_t)v + k] = 0;
     }
@@ -939,7 +944,7 @@ static int sweep_carry(bs_integrator *I, const double *x, double t0, double t1, 
   if (rc || !rigid || I->B.vecops) return rc;
   int32_t first = 0;
   for (int32_t v = 0; v < I->nv; v++) {
-    c[v] = c[v] ? 2 : 0; /* carried by a moving domain */
+    c[v] = c[v] ? SWEEP_BY_DOMAIN : 0;
     first += c[v] != 0;
   }
   int32_t marked = carry_bodies(I, z, c), before = -1;

@@ -398,32 +398,33 @@ Test(step, a_sweep_runs_the_time_to_the_steps_end_in_stages) {
   free(x), free(v), free(x0), free(v0);
 }
 
-Test(step, a_sweep_that_cannot_move_is_named) {
-  gate_data g = {.t_free = 1, .frac = 0};
+/* One step with the gate g that must fail: BS_ENUMERIC, its message into
+ * err. */
+static void gate_fails(gate_data *g, bs_error *err) {
   bs_step_stats st;
-  bs_error err;
   double *x, *v;
   size_t n3;
-  cr_assert_eq(gate_step(&g, &st, &x, &v, &n3, &err), BS_ENUMERIC, "%s", err.msg);
-  cr_log_info("%s\n", err.msg);
+  cr_assert_eq(gate_step(g, &st, &x, &v, &n3, err), BS_ENUMERIC, "%s", err->msg);
+  cr_log_info("%s\n", err->msg);
+  free(x), free(v);
+}
+
+Test(step, a_sweep_that_cannot_move_is_named) {
+  gate_data g = {.t_free = 1, .frac = 0};
+  bs_error err;
+  gate_fails(&g, &err);
   cr_expect(strstr(err.msg, "the sweep of the step from t = 0 s to 0.0416667 s stands still at t = 0 s") != NULL,
             "%s", err.msg);
-  free(x), free(v);
 }
 
 Test(step, a_sweep_that_does_not_reach_the_steps_end_is_named) {
   gate_data g = {.t_free = 1, .frac = 1e-3};
-  bs_step_stats st;
   bs_error err;
-  double *x, *v;
-  size_t n3;
-  cr_assert_eq(gate_step(&g, &st, &x, &v, &n3, &err), BS_ENUMERIC, "%s", err.msg);
-  cr_log_info("%s\n", err.msg);
+  gate_fails(&g, &err);
   /* 256 stages of a thousandth of what is left: 1 - 0.999^256 = 22.6% of the step */
   cr_expect(strstr(err.msg, "reached only t = 0.0094") != NULL && strstr(err.msg, "in 256 stages") != NULL, "%s",
             err.msg);
   cr_expect_eq(g.calls, 257, "%d calls: the check at the start and one per stage", g.calls);
-  free(x), free(v);
 }
 
 /* The previous-step guess's bookkeeping (bs_step.h, step 3): the xmin face
